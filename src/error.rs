@@ -1,0 +1,83 @@
+//! The library's one error type.
+//!
+//! Errors carry what went wrong, not which file: the caller (the CLI or the
+//! batch runner) knows the paths and prefixes them (`error: <file>: <cause>`).
+
+use std::io;
+
+/// What kind of failure an [`Error`] is; the CLI maps each to an exit code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorKind {
+    /// The input is unusable (exit code 2).
+    BadInput,
+    /// The input was fine but no valid mesh could be made (exit code 3).
+    Meshing,
+    /// Reading or writing a file failed (exit code 4).
+    Io,
+}
+
+/// Everything that can go wrong in triwild.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The input file could not be read.
+    #[error("cannot read input: {0}")]
+    Read(#[source] io::Error),
+    /// The input path is a directory.
+    #[error("is a directory, not an SVG file")]
+    IsDirectory,
+    /// The input file is empty.
+    #[error("empty file")]
+    EmptyFile,
+    /// The input is not an SVG document (binary data, HTML, broken XML, ...).
+    #[error("not a valid SVG document: {0}")]
+    NotSvg(String),
+    /// The SVG parsed but holds nothing to mesh.
+    #[error("no geometry: the drawing has no paths, shapes or points to mesh")]
+    NoGeometry,
+    /// A coordinate is NaN, infinite, or outside the range the mesher represents.
+    #[error("bad coordinate: {0}")]
+    BadCoordinate(String),
+    /// A parameter is out of range.
+    #[error("invalid parameter: {0}")]
+    InvalidParams(String),
+    /// A meshing stage failed.
+    #[error("meshing failed in stage {stage}: {message}")]
+    Meshing {
+        /// The pipeline stage (`baseline`, `bsp`, ...).
+        stage: &'static str,
+        /// What went wrong.
+        message: String,
+    },
+    /// Writing an output file failed.
+    #[error("cannot write output: {0}")]
+    Write(#[source] io::Error),
+}
+
+impl Error {
+    /// The class of this error, for exit codes and batch reports.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            Error::Read(_) | Error::Write(_) => ErrorKind::Io,
+            Error::IsDirectory
+            | Error::EmptyFile
+            | Error::NotSvg(_)
+            | Error::NoGeometry
+            | Error::BadCoordinate(_)
+            | Error::InvalidParams(_) => ErrorKind::BadInput,
+            Error::Meshing { .. } => ErrorKind::Meshing,
+        }
+    }
+
+    /// A meshing error in `stage`.
+    pub fn meshing(stage: &'static str, message: impl Into<String>) -> Self {
+        Error::Meshing {
+            stage,
+            message: message.into(),
+        }
+    }
+}
+
+/// `Result` with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,162 @@
+//! The mesh as delivered to a solver: nodes, elements of one order, physical groups.
+//!
+//! Every mesher's result is turned into a [`FemMesh`] before output; the writers
+//! (`output`) and the region tagging (`regions`) work on it and nothing else.
+//! Node ordering of elements follows gmsh: triangles list their corners
+//! counter-clockwise, then the high-order nodes (type 9: edge 0→1, 1→2, 2→0
+//! midpoints; type 21: two nodes per edge at 1/3 and 2/3 in that edge order, then
+//! the centre). Lines list their two ends, then interior nodes in order along the line
+//! (gmsh type 8: end, end, middle; type 26: end, end, 1/3, 2/3).
+
+use kurbo::Point;
+
+/// Geometric order of the elements (1 linear, 2 quadratic, 3 cubic).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Order {
+    /// Straight 3-node triangles (gmsh type 2) and 2-node lines (type 1).
+    Linear = 1,
+    /// 6-node triangles (type 9) and 3-node lines (type 8).
+    Quadratic = 2,
+    /// 10-node triangles (type 21) and 4-node lines (type 26).
+    Cubic = 3,
+}
+
+impl Order {
+    /// Nodes per triangle.
+    pub fn triangle_nodes(self) -> usize {
+        match self {
+            Order::Linear => 3,
+            Order::Quadratic => 6,
+            Order::Cubic => 10,
+        }
+    }
+    /// Nodes per line element.
+    pub fn line_nodes(self) -> usize {
+        self as usize + 1
+    }
+}
+
+/// What kind of feature a line element lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LineKind {
+    /// A primary feature (curved in curved output).
+    Primary,
+    /// A secondary feature (approximated within ε).
+    Secondary,
+    /// A constrained edge of the CDT baseline (flattened input).
+    Constraint,
+}
+
+/// A mesh ready for output.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FemMesh {
+    /// Element order; `triangles` has `order.triangle_nodes()` entries per element.
+    pub order: Option<Order>,
+    /// All nodes (corners and high-order nodes).
+    pub nodes: Vec<Point>,
+    /// Flat triangle connectivity, `order.triangle_nodes()` node indices per triangle.
+    pub triangles: Vec<u32>,
+    /// Physical surface of each triangle: an index into `surfaces`.
+    pub triangle_group: Vec<u32>,
+    /// Physical surface names (each becomes a gmsh physical group of dimension 2).
+    pub surfaces: Vec<String>,
+    /// Flat line connectivity, `order.line_nodes()` node indices per line.
+    pub lines: Vec<u32>,
+    /// Physical curve of each line: an index into `curves`.
+    pub line_group: Vec<u32>,
+    /// Kind of each line (for previews and statistics).
+    pub line_kind: Vec<LineKind>,
+    /// Physical curve names (each becomes a gmsh physical group of dimension 1).
+    pub curves: Vec<String>,
+}
+
+impl FemMesh {
+    /// The element order (linear when unset).
+    pub fn order(&self) -> Order {
+        self.order.unwrap_or(Order::Linear)
+    }
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len() / self.order().triangle_nodes()
+    }
+    /// Number of line elements.
+    pub fn line_count(&self) -> usize {
+        self.lines.len() / self.order().line_nodes()
+    }
+    /// Node indices of triangle `i`.
+    pub fn triangle(&self, i: usize) -> &[u32] {
+        let n = self.order().triangle_nodes();
+        &self.triangles[i * n..(i + 1) * n]
+    }
+    /// Node indices of line `i`.
+    pub fn line(&self, i: usize) -> &[u32] {
+        let n = self.order().line_nodes();
+        &self.lines[i * n..(i + 1) * n]
+    }
+    /// The three corner positions of triangle `i`.
+    pub fn corners(&self, i: usize) -> [Point; 3] {
+        let t = self.triangle(i);
+        [self.nodes[t[0] as usize], self.nodes[t[1] as usize], self.nodes[t[2] as usize]]
+    }
+}
+
+/// A constrained edge of a linear mesh: a chain piece of some input feature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeatureEdge {
+    /// The two vertices (indices into [`LinearMesh::vertices`]).
+    pub v: [u32; 2],
+    /// The shape the feature came from.
+    pub shape: crate::svg::ShapeId,
+    /// What kind of feature it is.
+    pub kind: LineKind,
+}
+
+/// The common product of every linear mesher: straight triangles and the feature
+/// edges they conform to.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LinearMesh {
+    /// Vertex positions.
+    pub vertices: Vec<Point>,
+    /// Counter-clockwise triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Feature edges; each is an edge of the triangulation.
+    pub edges: Vec<FeatureEdge>,
+}
+
+impl FemMesh {
+    /// A linear FemMesh with one physical surface `surface` and one physical curve
+    /// per shape that has feature edges (named with `shape_name`).
+    pub fn from_linear(
+        mesh: &LinearMesh,
+        surface: &str,
+        shape_name: impl Fn(crate::svg::ShapeId) -> String,
+    ) -> FemMesh {
+        let mut curves: Vec<String> = Vec::new();
+        let mut curve_of: std::collections::HashMap<crate::svg::ShapeId, u32> =
+            std::collections::HashMap::new();
+        let mut lines = Vec::with_capacity(mesh.edges.len() * 2);
+        let mut line_group = Vec::with_capacity(mesh.edges.len());
+        let mut line_kind = Vec::with_capacity(mesh.edges.len());
+        for e in &mesh.edges {
+            let g = *curve_of.entry(e.shape).or_insert_with(|| {
+                curves.push(shape_name(e.shape));
+                (curves.len() - 1) as u32
+            });
+            lines.extend_from_slice(&e.v);
+            line_group.push(g);
+            line_kind.push(e.kind);
+        }
+        FemMesh {
+            order: Some(Order::Linear),
+            nodes: mesh.vertices.clone(),
+            triangles: mesh.triangles.iter().flatten().copied().collect(),
+            triangle_group: vec![0; mesh.triangles.len()],
+            surfaces: vec![surface.to_owned()],
+            lines,
+            line_group,
+            line_kind,
+            curves,
+        }
+    }
+}

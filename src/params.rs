@@ -1,0 +1,285 @@
+//! Meshing parameters (DESIGN "Coordinates and parameters").
+//!
+//! Every length is given either relative to `d`, the diagonal of the input's
+//! bounding box, or in absolute user units; [`Params::resolve`] turns them into
+//! absolute [`Resolved`] values once `d` is known.
+
+use crate::{Error, Result};
+
+/// A length, relative to the bounding-box diagonal `d` or absolute.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Length {
+    /// A fraction of `d`.
+    Rel(f64),
+    /// User units (after all SVG transforms).
+    Abs(f64),
+}
+
+impl Length {
+    /// The absolute value for a drawing of diagonal `d`.
+    pub fn resolve(self, d: f64) -> f64 {
+        match self {
+            Length::Rel(r) => r * d,
+            Length::Abs(a) => a,
+        }
+    }
+
+    fn value(self) -> f64 {
+        match self {
+            Length::Rel(v) | Length::Abs(v) => v,
+        }
+    }
+}
+
+/// Which mesher builds the linear mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mesher {
+    /// spade's constrained Delaunay triangulation with refinement: the baseline.
+    Cdt,
+    /// The exact BSP mesher of TriWild (DESIGN `bsp`).
+    Bsp,
+}
+
+/// All meshing parameters. Start from [`Params::DEFAULT`] and use the `with_*` builders.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct Params {
+    /// Feature envelope μ: distance that separates primary features (§4.3.1).
+    /// Default 1e-3·d. Larger: fewer primary features, coarser meshes.
+    pub mu: Length,
+    /// Envelope ε for secondary features (§4.4.1). Default 2e-3·d (2μ).
+    pub eps: Length,
+    /// Numerical tolerance ε_m for degenerate and straight curves (§4.4). Default 1e-8·d.
+    pub eps_m: Length,
+    /// Target edge length l. Default d/20.
+    pub l: Length,
+    /// Minimal edge length l_m; curvature above 2/l_m is not primary (§4.3.1). Default 1e-4·d.
+    pub l_min: Length,
+    /// Padding of the meshed box around the input. Default 0.05·d (the reference's).
+    pub padding: Length,
+    /// Minimal angle α in degrees the optimizer aims for; also the turning bound of
+    /// a primary section (Theorem 4.4). Default 10.
+    pub alpha_deg: f64,
+    /// AMIPS energy at which linear optimization stops. Default 10.
+    pub stop_energy: f64,
+    /// AMIPS energy at which curved optimization stops. Default 20.
+    pub stop_energy_curved: f64,
+    /// Maximum linear optimization passes. Default 80.
+    pub max_passes: u32,
+    /// Maximum curved optimization passes. Default 10.
+    pub max_passes_curved: u32,
+    /// Minimum angle (degrees) the CDT baseline refines to. Default 25.
+    pub cdt_min_angle_deg: f64,
+    /// Vertex budget of the CDT baseline's refinement, so it always terminates. Default 200 000.
+    pub max_vertices: u32,
+    /// The linear mesher. Default [`Mesher::Cdt`] until the TriWild stages land.
+    pub mesher: Mesher,
+    /// Run the full mesh validator after every stage (slow). Default false.
+    pub paranoid: bool,
+}
+
+impl Params {
+    /// The paper's defaults (DESIGN "Coordinates and parameters").
+    pub const DEFAULT: Params = Params {
+        mu: Length::Rel(1e-3),
+        eps: Length::Rel(2e-3),
+        eps_m: Length::Rel(1e-8),
+        l: Length::Rel(0.05),
+        l_min: Length::Rel(1e-4),
+        padding: Length::Rel(0.05),
+        alpha_deg: 10.0,
+        stop_energy: 10.0,
+        stop_energy_curved: 20.0,
+        max_passes: 80,
+        max_passes_curved: 10,
+        cdt_min_angle_deg: 25.0,
+        max_vertices: 200_000,
+        mesher: Mesher::Cdt,
+        paranoid: false,
+    };
+
+    /// Set the feature envelope μ.
+    pub fn with_mu(mut self, mu: Length) -> Self {
+        self.mu = mu;
+        self
+    }
+    /// Set the envelope ε.
+    pub fn with_eps(mut self, eps: Length) -> Self {
+        self.eps = eps;
+        self
+    }
+    /// Set the numerical tolerance ε_m.
+    pub fn with_eps_m(mut self, eps_m: Length) -> Self {
+        self.eps_m = eps_m;
+        self
+    }
+    /// Set the target edge length l.
+    pub fn with_l(mut self, l: Length) -> Self {
+        self.l = l;
+        self
+    }
+    /// Set the minimal edge length l_m.
+    pub fn with_l_min(mut self, l_min: Length) -> Self {
+        self.l_min = l_min;
+        self
+    }
+    /// Set the box padding.
+    pub fn with_padding(mut self, padding: Length) -> Self {
+        self.padding = padding;
+        self
+    }
+    /// Set α in degrees.
+    pub fn with_alpha_deg(mut self, alpha_deg: f64) -> Self {
+        self.alpha_deg = alpha_deg;
+        self
+    }
+    /// Set the CDT baseline's minimum angle.
+    pub fn with_cdt_min_angle_deg(mut self, deg: f64) -> Self {
+        self.cdt_min_angle_deg = deg;
+        self
+    }
+    /// Set the CDT baseline's vertex budget.
+    pub fn with_max_vertices(mut self, n: u32) -> Self {
+        self.max_vertices = n;
+        self
+    }
+    /// Choose the mesher.
+    pub fn with_mesher(mut self, mesher: Mesher) -> Self {
+        self.mesher = mesher;
+        self
+    }
+    /// Set the optimization stop rules.
+    pub fn with_stop(mut self, energy: f64, max_passes: u32) -> Self {
+        self.stop_energy = energy;
+        self.max_passes = max_passes;
+        self
+    }
+    /// Set the curved optimization stop rules.
+    pub fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
+        self.stop_energy_curved = energy;
+        self.max_passes_curved = max_passes;
+        self
+    }
+    /// Turn the paranoid validator on or off.
+    pub fn with_paranoid(mut self, paranoid: bool) -> Self {
+        self.paranoid = paranoid;
+        self
+    }
+
+    /// Check every parameter's range.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParams`] naming the first bad parameter.
+    pub fn validate(&self) -> Result<()> {
+        let lengths = [
+            ("mu", self.mu),
+            ("eps", self.eps),
+            ("eps-m", self.eps_m),
+            ("edge-length", self.l),
+            ("min-edge-length", self.l_min),
+            ("padding", self.padding),
+        ];
+        for (name, len) in lengths {
+            let v = len.value();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidParams(format!(
+                    "--{name} must be a positive finite number, got {v}"
+                )));
+            }
+        }
+        if !(self.alpha_deg > 0.0 && self.alpha_deg < 60.0) {
+            return Err(Error::InvalidParams(format!(
+                "--alpha must be in (0, 60) degrees, got {}",
+                self.alpha_deg
+            )));
+        }
+        if !(self.cdt_min_angle_deg >= 0.0 && self.cdt_min_angle_deg <= 34.0) {
+            return Err(Error::InvalidParams(format!(
+                "--cdt-min-angle must be in [0, 34] degrees (refinement may not terminate above), got {}",
+                self.cdt_min_angle_deg
+            )));
+        }
+        if self.max_vertices < 16 {
+            return Err(Error::InvalidParams(format!(
+                "--max-vertices must be at least 16, got {}",
+                self.max_vertices
+            )));
+        }
+        for (name, e) in [
+            ("stop-energy", self.stop_energy),
+            ("stop-energy-curved", self.stop_energy_curved),
+        ] {
+            if !(e.is_finite() && e >= 1.0) {
+                return Err(Error::InvalidParams(format!(
+                    "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Absolute values for a drawing whose bounding-box diagonal is `d`.
+    pub fn resolve(&self, d: f64) -> Resolved {
+        Resolved {
+            d,
+            mu: self.mu.resolve(d),
+            eps: self.eps.resolve(d),
+            eps_m: self.eps_m.resolve(d),
+            l: self.l.resolve(d),
+            l_min: self.l_min.resolve(d),
+            padding: self.padding.resolve(d),
+            alpha: self.alpha_deg.to_radians(),
+        }
+    }
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params::DEFAULT
+    }
+}
+
+/// Absolute parameter values for one drawing (user units, radians).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Resolved {
+    /// Diagonal of the input's bounding box.
+    pub d: f64,
+    /// Feature envelope μ.
+    pub mu: f64,
+    /// Secondary envelope ε.
+    pub eps: f64,
+    /// Numerical tolerance ε_m.
+    pub eps_m: f64,
+    /// Target edge length l.
+    pub l: f64,
+    /// Minimal edge length l_m.
+    pub l_min: f64,
+    /// Box padding.
+    pub padding: f64,
+    /// α in radians.
+    pub alpha: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_resolve_relative_to_d() {
+        Params::DEFAULT.validate().unwrap();
+        let r = Params::DEFAULT.resolve(200.0);
+        assert_eq!(r.l, 10.0);
+        assert_eq!(r.mu, 0.2);
+        assert_eq!(r.eps, 0.4);
+    }
+
+    #[test]
+    fn bad_values_are_rejected() {
+        assert!(Params::DEFAULT.with_mu(Length::Rel(0.0)).validate().is_err());
+        assert!(Params::DEFAULT.with_l(Length::Abs(f64::NAN)).validate().is_err());
+        assert!(Params::DEFAULT.with_cdt_min_angle_deg(40.0).validate().is_err());
+        assert!(Params::DEFAULT.with_alpha_deg(-1.0).validate().is_err());
+    }
+}

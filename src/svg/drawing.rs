@@ -1,0 +1,193 @@
+//! The loader's product: shapes and their feature soup, in f64 output coordinates.
+
+use kurbo::{CubicBez, Line, Point, Rect};
+
+/// Index of a [`Shape`] in [`Drawing::shapes`].
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+pub struct ShapeId(pub u32);
+
+impl std::fmt::Debug for ShapeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "s{}", self.0)
+    }
+}
+
+/// SVG fill rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FillRule {
+    /// `nonzero` (the SVG default).
+    NonZero,
+    /// `evenodd`.
+    EvenOdd,
+}
+
+/// One drawable SVG element after usvg's normalisation.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Shape {
+    /// The SVG `id` attribute, if the element (or its nearest named ancestor `<use>`) had one.
+    pub svg_id: Option<String>,
+    /// Index of the element in document order among drawable elements (0-based).
+    pub element_index: u32,
+    /// Paint order: later shapes are painted on top of earlier ones.
+    pub paint_order: u32,
+    /// Whether the shape has a fill (any paint: colour, gradient or pattern).
+    pub filled: bool,
+    /// Whether the shape has a stroke.
+    pub stroked: bool,
+    /// The fill rule (meaningful when `filled`).
+    pub fill_rule: FillRule,
+    /// The fill colour as RGB, when the fill is a plain colour.
+    pub fill_colour: Option<[u8; 3]>,
+    /// The outline: one entry per subpath, in output coordinates.
+    pub subpaths: Vec<Subpath>,
+}
+
+impl Shape {
+    /// The name used for physical groups: the SVG id, else `shape-N` (N = element index).
+    pub fn name(&self) -> String {
+        match &self.svg_id {
+            Some(id) if !id.is_empty() => id.clone(),
+            _ => format!("shape-{}", self.element_index),
+        }
+    }
+}
+
+/// One piece of a subpath: a straight segment or a cubic Bézier (quadratics are elevated).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Segment {
+    /// A straight segment.
+    Line(Line),
+    /// A cubic Bézier curve.
+    Cubic(CubicBez),
+}
+
+impl Segment {
+    /// Start point.
+    pub fn start(&self) -> Point {
+        match self {
+            Segment::Line(l) => l.p0,
+            Segment::Cubic(c) => c.p0,
+        }
+    }
+    /// End point.
+    pub fn end(&self) -> Point {
+        match self {
+            Segment::Line(l) => l.p1,
+            Segment::Cubic(c) => c.p3,
+        }
+    }
+    /// The control points (2 for a line, 4 for a cubic).
+    pub fn control_points(&self) -> Vec<Point> {
+        match self {
+            Segment::Line(l) => vec![l.p0, l.p1],
+            Segment::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+        }
+    }
+    /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3).
+    pub fn to_cubic(&self) -> CubicBez {
+        match self {
+            Segment::Line(l) => CubicBez::new(l.p0, l.p0.lerp(l.p1, 1.0 / 3.0), l.p0.lerp(l.p1, 2.0 / 3.0), l.p1),
+            Segment::Cubic(c) => *c,
+        }
+    }
+}
+
+/// A subpath: a chain of segments, each starting where the previous ends.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Subpath {
+    /// The segments, in order. Empty for an isolated point (a lone `M`, or a
+    /// zero-length subpath), which is then given by `start`.
+    pub segments: Vec<Segment>,
+    /// The first point.
+    pub start: Point,
+    /// Whether the subpath was closed with `Z` (the closing segment, if not of
+    /// zero length, is included in `segments`).
+    pub closed: bool,
+}
+
+impl Subpath {
+    /// The straight segment SVG adds when filling an open subpath (end → start),
+    /// if the subpath is open and its ends differ.
+    pub fn implicit_closing_segment(&self) -> Option<Line> {
+        let end = self.segments.last()?.end();
+        (!self.closed && end != self.start).then(|| Line::new(end, self.start))
+    }
+}
+
+impl serde::Serialize for Subpath {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut st = s.serialize_struct("Subpath", 2)?;
+        st.serialize_field("segments", &self.segments.len())?;
+        st.serialize_field("closed", &self.closed)?;
+        st.end()
+    }
+}
+
+/// The geometry of one input feature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FeatureGeom {
+    /// An isolated point.
+    Point(Point),
+    /// A straight segment.
+    Line(Line),
+    /// A cubic Bézier.
+    Cubic(CubicBez),
+}
+
+/// Where a feature came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub struct FeatureSource {
+    /// The shape.
+    pub shape: ShapeId,
+    /// Subpath index within the shape.
+    pub subpath: u32,
+    /// Segment index within the subpath (`u32::MAX` for the implicit closing segment).
+    pub segment: u32,
+}
+
+impl FeatureSource {
+    /// Segment index used for the implicit closing segment of a filled open subpath.
+    pub const IMPLICIT_CLOSE: u32 = u32::MAX;
+}
+
+/// One input feature: a point, segment or cubic, tagged with its source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feature {
+    /// The geometry, in output coordinates.
+    pub geom: FeatureGeom,
+    /// Its source.
+    pub source: FeatureSource,
+}
+
+/// A loaded drawing: the shapes and the feature soup that the meshers consume.
+///
+/// Guarantees (what later stages may assume): every coordinate is finite and
+/// its magnitude is at most [`Drawing::MAX_COORD`]; y is flipped (y = −y_svg);
+/// there is at least one feature; `bbox` contains every feature's control points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Drawing {
+    /// Drawable shapes in document (paint) order.
+    pub shapes: Vec<Shape>,
+    /// The feature soup: every segment of every subpath, plus isolated points, plus
+    /// the implicit closing segment of each open subpath of a filled shape.
+    pub features: Vec<Feature>,
+    /// Bounding box of all control points.
+    pub bbox: Rect,
+    /// Warnings for the user (skipped text, ignored images, ...).
+    pub warnings: Vec<String>,
+}
+
+impl Drawing {
+    /// Largest accepted coordinate magnitude (user units). Far beyond any drawing,
+    /// and small enough that squares and products stay finite in f64.
+    pub const MAX_COORD: f64 = 1e15;
+
+    /// The diagonal `d` of the bounding box (the unit of relative parameters);
+    /// 1.0 for a drawing that is a single point.
+    pub fn diagonal(&self) -> f64 {
+        let d = self.bbox.width().hypot(self.bbox.height());
+        if d > 0.0 { d } else { 1.0 }
+    }
+}
