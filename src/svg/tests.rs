@@ -363,6 +363,8 @@ fn non_svg_inputs_are_not_svg() {
     let xhtml = b"<html xmlns='http://www.w3.org/1999/xhtml'><body/></html>";
     assert!(not_svg(xhtml).contains("<html>"));
     assert!(not_svg(b"<?xml version='1.0'?><foo/>").contains("<foo>"));
+    let zero = b"<svg xmlns='http://www.w3.org/2000/svg' width='0' height='10'><rect width='5' height='5'/></svg>";
+    assert!(not_svg(zero).contains("invalid size"));
     let png = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x01";
     assert!(not_svg(png).contains("PNG"));
     assert!(not_svg(&[0x1f, 0x8b, 8, 0, 0, 0]).contains("gzip"));
@@ -701,4 +703,16 @@ mod fuzz {
             check(&data);
         }
     }
+}
+
+#[test]
+fn root_viewbox_maps_to_the_viewport() {
+    let doc = r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="200" viewBox="0 0 100 100"><rect width="10" height="10"/></svg>"#;
+    let d = load_bytes(doc.as_bytes()).expect("loads");
+    assert!(
+        close(d.bbox.origin(), Point::new(0.0, -20.0)),
+        "{:?}",
+        d.bbox
+    );
+    assert!((d.bbox.width() - 20.0).abs() < 1e-9);
 }
