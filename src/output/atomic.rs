@@ -117,7 +117,7 @@ mod tests {
 
     fn scratch(name: &str) -> PathBuf {
         let d = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("target/test-out/unit-atomic")
+            .join("target/tmp/unit-atomic")
             .join(name);
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).expect("create scratch dir");
