@@ -27,9 +27,10 @@ fn temp_in(dir: &Path, path: &Path) -> io::Result<tempfile::NamedTempFile> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let prefix = format!(".{stem}.");
+    // ".out.msh.tmpXXXXXX": hidden, and matched by the repository's `*.msh.tmp*` ignore rule.
+    let prefix = format!(".{stem}.tmp");
     let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
+    builder.prefix(&prefix);
     #[cfg(unix)]
     {
         // NamedTempFile defaults to 0o600; a finished output file should get the

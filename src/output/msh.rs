@@ -338,10 +338,15 @@ fn header<W: Write>(w: &mut W, version: &str, binary: bool) -> io::Result<()> {
     w.write_all(b"$EndMeshFormat\n")
 }
 
-/// A name as gmsh reads it: inside double quotes, on one line.
+/// Longest physical name gmsh documents (longer ones may not read back).
+const MAX_NAME_CHARS: usize = 127;
+
+/// A name as gmsh reads it: inside double quotes, on one line, at most
+/// [`MAX_NAME_CHARS`] characters.
 fn quoted(name: &str) -> String {
     let clean: String = name
         .chars()
+        .take(MAX_NAME_CHARS)
         .map(|c| match c {
             '"' => '\'',
             c if c.is_control() => ' ',
@@ -635,5 +640,6 @@ mod tests {
     #[test]
     fn names_are_quoted_safely() {
         assert_eq!(quoted("a\"b\nc"), "\"a'b c\"");
+        assert_eq!(quoted(&"é".repeat(200)).chars().count(), MAX_NAME_CHARS + 2);
     }
 }

@@ -535,6 +535,37 @@ fn certify(coef: &[f64], n: usize) -> Certificate {
 mod tests {
     use super::*;
 
+    /// gmsh nodes of the straight order-`p` triangle with corners `c`.
+    fn straight(p: usize, c: [P; 3]) -> Vec<P> {
+        let at = |i: usize, j: usize, t: f64| lin(&[(1.0 - t, c[i]), (t, c[j])]);
+        let mut x = c.to_vec();
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            x.extend((1..p).map(|s| at(i, j, s as f64 / p as f64)));
+        }
+        if p == 3 {
+            x.push(lin(&[
+                (1.0 / 3.0, c[0]),
+                (1.0 / 3.0, c[1]),
+                (1.0 / 3.0, c[2]),
+            ]));
+        }
+        x
+    }
+
+    #[test]
+    fn straight_elements_have_constant_jacobian() {
+        let c = [[0.5, -1.0], [3.0, 0.25], [-0.75, 2.0]];
+        let twice_area =
+            (c[1][0] - c[0][0]) * (c[2][1] - c[0][1]) - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
+        for p in 1..=3 {
+            let det = jacobian_bernstein(p, &straight(p, c));
+            assert_eq!(det.len(), multi_indices(2 * (p - 1)).len());
+            for d in det {
+                assert!((d - twice_area).abs() < 1e-12 * twice_area, "p={p}: {d}");
+            }
+        }
+    }
+
     #[test]
     fn flat_enumerates_in_order() {
         for k in 0..5 {
