@@ -25,7 +25,8 @@ pub enum FillRule {
 /// One drawable SVG element after usvg's normalisation.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Shape {
-    /// The SVG `id` attribute, if the element (or its nearest named ancestor `<use>`) had one.
+    /// The SVG `id` attribute, if the element (or its nearest named ancestor `<use>`,
+    /// or for glyph outlines its `<text>` element) had one.
     pub svg_id: Option<String>,
     /// Index of the element in document order among drawable elements (0-based).
     pub element_index: u32,
@@ -87,7 +88,12 @@ impl Segment {
     /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3).
     pub fn to_cubic(&self) -> CubicBez {
         match self {
-            Segment::Line(l) => CubicBez::new(l.p0, l.p0.lerp(l.p1, 1.0 / 3.0), l.p0.lerp(l.p1, 2.0 / 3.0), l.p1),
+            Segment::Line(l) => CubicBez::new(
+                l.p0,
+                l.p0.lerp(l.p1, 1.0 / 3.0),
+                l.p0.lerp(l.p1, 2.0 / 3.0),
+                l.p1,
+            ),
             Segment::Cubic(c) => *c,
         }
     }
