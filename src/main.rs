@@ -1,5 +1,9 @@
 //! The `triwild` command line: argument parsing, logging and printing only.
-#![allow(clippy::print_stdout, clippy::print_stderr, reason = "the binary talks to the user")]
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "the binary talks to the user"
+)]
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -308,7 +312,10 @@ fn features_one(args: &FeaturesArgs, quiet: bool) -> ExitCode {
         }
     }
     let fs = FeatureSet::build(&drawing, &params.resolve(drawing.diagonal()));
-    let output = args.output.clone().unwrap_or_else(|| input.with_extension("features.json"));
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| input.with_extension("features.json"));
     let json = features::to_json(&fs).to_string();
     if let Err(e) = std::fs::write(&output, json) {
         return fail(&output, Error::Write(e));
@@ -319,7 +326,8 @@ fn features_one(args: &FeaturesArgs, quiet: bool) -> ExitCode {
         }
     }
     if args.stats {
-        let stats = serde_json::json!({"input": input, "counts": fs.counts, "timing_ms": fs.timing});
+        let stats =
+            serde_json::json!({"input": input, "counts": fs.counts, "timing_ms": fs.timing});
         println!("{stats}");
     }
     ExitCode::SUCCESS

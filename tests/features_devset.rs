@@ -19,11 +19,17 @@ fn devset_dir() -> PathBuf {
         return d.into();
     }
     let sibling = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev");
-    if sibling.is_dir() { sibling } else { PathBuf::from("/work/shared/data/svg-dev") }
+    if sibling.is_dir() {
+        sibling
+    } else {
+        PathBuf::from("/work/shared/data/svg-dev")
+    }
 }
 
 fn svg_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
     let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
     entries.sort();
     for p in entries {
@@ -56,7 +62,10 @@ fn devset_feature_sets_keep_every_invariant() {
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
         let c = fs.counts;
-        println!("{name}\t{}\t{}\t{}\t{}\t{ms:.1}", c.sections, c.primary, c.secondary_segments, c.points);
+        println!(
+            "{name}\t{}\t{}\t{}\t{}\t{ms:.1}",
+            c.sections, c.primary, c.secondary_segments, c.points
+        );
         let defects = features_check::check(&fs);
         if !defects.is_empty() {
             println!("  {} defects, first: {}", defects.len(), defects[0]);

@@ -113,7 +113,10 @@ mod tests {
             Class::Lines(vec![Line::new(c.p0, c.p3)])
         );
         let bent = CubicBez::new((0.0, 0.0), (1.0, 1e-3), (2.0, 0.0), (3.0, 0.0));
-        assert_eq!(classify(&FeatureGeom::Cubic(bent), 1e-8), Class::Curve(bent));
+        assert_eq!(
+            classify(&FeatureGeom::Cubic(bent), 1e-8),
+            Class::Curve(bent)
+        );
     }
 
     #[test]
@@ -133,6 +136,9 @@ mod tests {
     #[test]
     fn short_line_is_a_point() {
         let l = Line::new((5.0, 5.0), (5.0, 5.0 + 1e-9));
-        assert!(matches!(classify(&FeatureGeom::Line(l), 1e-8), Class::Point(_)));
+        assert!(matches!(
+            classify(&FeatureGeom::Line(l), 1e-8),
+            Class::Point(_)
+        ));
     }
 }

@@ -20,9 +20,15 @@ impl Grid {
     pub(super) fn new(bounds: Rect, cell: f64, expected_items: usize) -> Grid {
         let (w, h) = (bounds.width().max(0.0), bounds.height().max(0.0));
         let max_cells = 4.0 * expected_items as f64 + 16.0;
-        let mut cell = if cell.is_finite() && cell > 0.0 { cell } else { 1.0 };
+        let mut cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
         // Area bound, and a per-axis bound (a long thin drawing).
-        cell = cell.max((w * h / max_cells).sqrt()).max(w.max(h) / max_cells);
+        cell = cell
+            .max((w * h / max_cells).sqrt())
+            .max(w.max(h) / max_cells);
         if !(cell.is_finite() && cell > 0.0) {
             cell = 1.0;
         }

@@ -374,7 +374,11 @@ impl FeatureSet {
         let primary_sections = assemble_primary(&sections, &primary, drawing);
         counts.primary = primary_sections.len();
         counts.secondary_polylines = simplified.polylines.len();
-        counts.secondary_segments = simplified.polylines.iter().map(|p| p.points.len() - 1).sum();
+        counts.secondary_segments = simplified
+            .polylines
+            .iter()
+            .map(|p| p.points.len() - 1)
+            .sum();
         counts.points = points.len();
         timing.simplify_ms = ms(t);
         timing.total_ms = ms(start);
@@ -402,7 +406,10 @@ impl FeatureSet {
             let polyline = PolylineId(u32::try_from(i).expect("internal: polyline count fits u32"));
             for (k, w) in p.points.windows(2).enumerate() {
                 let index = u32::try_from(k).expect("internal: polyline length fits u32");
-                segments.push((Line::new(w[0], w[1]), SegmentTag::Secondary { polyline, index }));
+                segments.push((
+                    Line::new(w[0], w[1]),
+                    SegmentTag::Secondary { polyline, index },
+                ));
             }
         }
         ConformingInput {
@@ -413,7 +420,11 @@ impl FeatureSet {
 }
 
 /// Build the primary sections with their adjacency.
-fn assemble_primary(sections: &[Section], primary: &[bool], drawing: &Drawing) -> Vec<PrimarySection> {
+fn assemble_primary(
+    sections: &[Section],
+    primary: &[bool],
+    drawing: &Drawing,
+) -> Vec<PrimarySection> {
     use std::collections::HashMap;
     let mut out = Vec::new();
     for (i, s) in sections.iter().enumerate() {
@@ -439,7 +450,11 @@ fn assemble_primary(sections: &[Section], primary: &[bool], drawing: &Drawing) -
         }
     }
     let pick = |i: usize, p: Point, out: &[PrimarySection]| -> Option<SectionId> {
-        let others: Vec<u32> = at[&key(p)].iter().copied().filter(|&j| j as usize != i).collect();
+        let others: Vec<u32> = at[&key(p)]
+            .iter()
+            .copied()
+            .filter(|&j| j as usize != i)
+            .collect();
         let me = out[i].source;
         let same_subpath = others.iter().copied().find(|&j| {
             let o = out[j as usize].source;

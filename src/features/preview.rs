@@ -24,7 +24,9 @@ pub fn to_svg(fs: &FeatureSet, drawing: &Drawing) -> String {
         -b.y1 - pad,
         b.width() + 2.0 * pad,
         b.height() + 2.0 * pad,
-        (1000.0 * (b.height() + 2.0 * pad) / (b.width() + 2.0 * pad)).clamp(10.0, 10_000.0).round(),
+        (1000.0 * (b.height() + 2.0 * pad) / (b.width() + 2.0 * pad))
+            .clamp(10.0, 10_000.0)
+            .round(),
     );
     let style = |colour: &str, width: f64| {
         format!(

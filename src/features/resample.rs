@@ -106,10 +106,8 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                 let bend_ok =
                     end_tangent_angle(&ctrl) < r.alpha && curvature_bounded(&ctrl, 2.0 / r.l_min);
                 let m = 0.5 * (a + b);
-                let can_split = depth < MAX_DEPTH
-                    && out.len() + stack.len() < MAX_SECTIONS
-                    && m > a
-                    && m < b;
+                let can_split =
+                    depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
                 let done = (shape_ok && bend_ok) || (shape_ok && len <= r.mu) || !can_split;
                 if done {
                     out.push(Piece {
@@ -151,7 +149,7 @@ mod tests {
     #[test]
     fn line_pieces_are_no_longer_than_l_and_share_end_points() {
         let r = Params::DEFAULT.resolve(20.0);
-        let l = Line::new((0.0, 0.0), (10.0, 0.5));
+        let l = Line::new((0.0, 0.0), (10.0, 0.0));
         let ps = resample(&Parent::Line(l), 0.0, 1.0, &r);
         assert_eq!(ps.len(), 10);
         assert_eq!(ps[0].ctrl.p0, l.p0);

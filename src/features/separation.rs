@@ -23,7 +23,7 @@
 
 use super::grid::Grid;
 use super::resample::point_segment_distance;
-use super::{FeaturePoint, Section, SecondaryPolyline};
+use super::{FeaturePoint, SecondaryPolyline, Section};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;
@@ -41,7 +41,9 @@ fn ctrl_points(c: &CubicBez) -> [Point; 4] {
 
 fn ctrl_box(c: &CubicBez) -> Rect {
     let ps = ctrl_points(c);
-    ps[1..].iter().fold(Rect::from_points(ps[0], ps[0]), |r, p| r.union_pt(*p))
+    ps[1..]
+        .iter()
+        .fold(Rect::from_points(ps[0], ps[0]), |r, p| r.union_pt(*p))
 }
 
 fn orient(a: Point, b: Point, c: Point) -> f64 {
@@ -87,7 +89,10 @@ pub(super) fn hull_distance(a: &[Point; 4], b: &[Point; 4]) -> f64 {
     let mut d = f64::INFINITY;
     for (i, j) in PAIRS {
         for (k, l) in PAIRS {
-            d = d.min(segment_distance(Line::new(a[i], a[j]), Line::new(b[k], b[l])));
+            d = d.min(segment_distance(
+                Line::new(a[i], a[j]),
+                Line::new(b[k], b[l]),
+            ));
         }
     }
     d
@@ -111,7 +116,11 @@ fn shared_end(a: &CubicBez, b: &CubicBez) -> Option<Point> {
 
 /// The chord of `c` oriented from its end `q`.
 fn chord_from(c: &CubicBez, q: Point) -> Line {
-    if c.p0 == q { Line::new(c.p0, c.p3) } else { Line::new(c.p3, c.p0) }
+    if c.p0 == q {
+        Line::new(c.p0, c.p3)
+    } else {
+        Line::new(c.p3, c.p0)
+    }
 }
 
 /// The part of `l` (which starts at the shared point) farther than `r` from its start.
@@ -163,14 +172,22 @@ pub(super) fn merge_points(points: Vec<FeaturePoint>, mu: f64) -> Vec<FeaturePoi
     let mut out = Vec::new();
     for (p, m) in points.iter().zip(moved.positions) {
         if seen.insert(key(m)) {
-            out.push(FeaturePoint { pos: m, source: p.source });
+            out.push(FeaturePoint {
+                pos: m,
+                source: p.source,
+            });
         }
     }
     out
 }
 
 /// Decide, for every section, whether it is primary.
-pub(super) fn separate(sections: &[Section], points: &[FeaturePoint], mu: f64, alpha: f64) -> Vec<bool> {
+pub(super) fn separate(
+    sections: &[Section],
+    points: &[FeaturePoint],
+    mu: f64,
+    alpha: f64,
+) -> Vec<bool> {
     let n = sections.len();
     let boxes = sections
         .iter()
@@ -224,7 +241,9 @@ fn cluster(pos: &[Point], fixed: &[bool], mu: f64) -> Clusters {
             .map(|j| j as usize)
             .filter(|&j| !done[j] && pos[j].distance(pos[i]) < mu)
             .collect();
-        let sum = members.iter().fold(kurbo::Vec2::ZERO, |a, &j| a + pos[j].to_vec2());
+        let sum = members
+            .iter()
+            .fold(kurbo::Vec2::ZERO, |a, &j| a + pos[j].to_vec2());
         let c = (sum / members.len() as f64).to_point();
         let all_same = members.iter().all(|&j| pos[j] == pos[i]);
         for &j in &members {
@@ -265,9 +284,8 @@ pub(super) fn simplify(
             prev = None;
             continue;
         }
-        let continues = prev.is_some_and(|p| {
-            sections[p].feature == s.feature && sections[p].ctrl.p3 == s.ctrl.p0
-        });
+        let continues = prev
+            .is_some_and(|p| sections[p].feature == s.feature && sections[p].ctrl.p3 == s.ctrl.p0);
         match runs.last_mut() {
             Some((_, pts)) if continues => pts.push(s.ctrl.p3),
             _ => runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3])),
@@ -281,7 +299,10 @@ pub(super) fn simplify(
         .filter(|(_, p)| **p)
         .flat_map(|(s, _)| [key(s.ctrl.p0), key(s.ctrl.p3)])
         .collect();
-    let flat: Vec<Point> = runs.iter().flat_map(|(_, pts)| pts.iter().copied()).collect();
+    let flat: Vec<Point> = runs
+        .iter()
+        .flat_map(|(_, pts)| pts.iter().copied())
+        .collect();
     let fixed: Vec<bool> = flat.iter().map(|p| fixed_keys.contains(&key(*p))).collect();
     let clusters = cluster(&flat, &fixed, mu);
     let mut k = 0;
@@ -307,7 +328,12 @@ pub(super) fn simplify(
             let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
             let bad = near.into_iter().any(|j| {
                 let l = segs[j as usize];
-                let c = CubicBez::new(l.p0, l.p0.lerp(l.p1, 1.0 / 3.0), l.p0.lerp(l.p1, 2.0 / 3.0), l.p1);
+                let c = CubicBez::new(
+                    l.p0,
+                    l.p0.lerp(l.p1, 1.0 / 3.0),
+                    l.p0.lerp(l.p1, 2.0 / 3.0),
+                    l.p1,
+                );
                 violates(&s.ctrl, &c, mu, alpha)
             });
             if bad {
@@ -324,10 +350,16 @@ pub(super) fn simplify(
         let source = drawing.features[feature as usize].source;
         if pts.len() < 2 {
             if !points.iter().any(|p| p.pos == pts[0]) {
-                points.push(FeaturePoint { pos: pts[0], source });
+                points.push(FeaturePoint {
+                    pos: pts[0],
+                    source,
+                });
             }
         } else {
-            polylines.push(SecondaryPolyline { points: pts, source });
+            polylines.push(SecondaryPolyline {
+                points: pts,
+                source,
+            });
         }
     }
     Simplified {
@@ -362,7 +394,10 @@ mod tests {
         assert!(!violates(&a, &seg((0.0, 0.0), (0.0, 1.0)), 0.01, alpha));
         assert!(!violates(&a, &seg((1.0, 0.0), (2.0, 0.0)), 0.01, alpha));
         // 30° corner: points of a beyond 1.01μ are within μ of b.
-        let b = seg((0.0, 0.0), (30f64.to_radians().cos(), 30f64.to_radians().sin()));
+        let b = seg(
+            (0.0, 0.0),
+            (30f64.to_radians().cos(), 30f64.to_radians().sin()),
+        );
         assert!(violates(&a, &b, 0.01, alpha));
         // Folding back on itself.
         assert!(violates(&a, &seg((0.0, 0.0), (0.5, 0.0)), 0.01, alpha));

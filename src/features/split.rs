@@ -93,7 +93,11 @@ fn total_turn(c: &CubicBez, t0: f64, t1: f64) -> (f64, f64) {
     let mut sign = d.eval(mid).to_vec2().cross(dd.eval(mid).to_vec2()).signum();
     let cross_sum: f64 = dirs.windows(2).map(|w| w[0].cross(w[1])).sum();
     if d.eval(mid).to_vec2().cross(dd.eval(mid).to_vec2()) == 0.0 {
-        sign = if cross_sum == 0.0 { 0.0 } else { cross_sum.signum() };
+        sign = if cross_sum == 0.0 {
+            0.0
+        } else {
+            cross_sum.signum()
+        };
     }
     if sign == 0.0 {
         return (0.0, 0.0);
@@ -127,7 +131,10 @@ fn bisecting_parameter(c: &CubicBez, t0: f64, t1: f64, turn: f64, sign: f64) -> 
     // is below 180°, minus that mean above.
     let half = 0.5 * sign * turn;
     let u = d0.normalize();
-    let m = Vec2::new(u.x * half.cos() - u.y * half.sin(), u.x * half.sin() + u.y * half.cos());
+    let m = Vec2::new(
+        u.x * half.cos() - u.y * half.sin(),
+        u.x * half.sin() + u.y * half.cos(),
+    );
     let (a, b, e) = hodograph(&piece);
     let (ca, cb, ce) = (m.cross(a), m.cross(b), m.cross(e));
     let mut best: Option<f64> = None;
@@ -216,7 +223,10 @@ mod tests {
         let (turn, _) = total_turn(&c, 0.0, 1.0);
         assert!(turn > PI, "turn {turn}");
         let s = split(&c);
-        assert!(s.intervals.iter().any(|iv| (iv[1] - 0.5).abs() < 1e-9), "{s:?}");
+        assert!(
+            s.intervals.iter().any(|iv| (iv[1] - 0.5).abs() < 1e-9),
+            "{s:?}"
+        );
         for iv in &s.intervals {
             assert!(total_turn(&c, iv[0], iv[1]).0 < PI);
         }
@@ -229,6 +239,9 @@ mod tests {
         let s = split(&c);
         assert_eq!(s.intervals, vec![[0.0, 1.0]]);
         let (turn, sign) = total_turn(&c, 0.0, 1.0);
-        assert!((turn - PI / 2.0).abs() < 1e-9 && sign > 0.0, "{turn} {sign}");
+        assert!(
+            (turn - PI / 2.0).abs() < 1e-9 && sign > 0.0,
+            "{turn} {sign}"
+        );
     }
 }

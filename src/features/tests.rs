@@ -25,10 +25,19 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
         for p in ps {
             bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
         }
-        let source = FeatureSource { shape: ShapeId(0), subpath: 0, segment: k as u32 };
+        let source = FeatureSource {
+            shape: ShapeId(0),
+            subpath: 0,
+            segment: k as u32,
+        };
         features.push(Feature { geom: g, source });
     }
-    Drawing { shapes: Vec::new(), features, bbox: bbox.expect("test drawing has a feature"), warnings: Vec::new() }
+    Drawing {
+        shapes: Vec::new(),
+        features,
+        bbox: bbox.expect("test drawing has a feature"),
+        warnings: Vec::new(),
+    }
 }
 
 fn build(geoms: Vec<FeatureGeom>, params: Params) -> (FeatureSet, Drawing) {
@@ -43,12 +52,15 @@ const K: f64 = 0.552_284_749_830_793_4; // 4/3·(√2 − 1): the usual quarter-
 
 /// A circle as four cubics, starting at angle `phase`.
 fn circle(c: Point, r: f64, phase: f64) -> Vec<FeatureGeom> {
+    let q = std::f64::consts::FRAC_PI_2;
+    let u: Vec<Vec2> = (0..4)
+        .map(|k| Vec2::from_angle(phase + k as f64 * q))
+        .collect();
+    let perp = |u: Vec2| Vec2::new(-u.y, u.x);
     (0..4)
-        .map(|q| {
-            let a0 = phase + q as f64 * std::f64::consts::FRAC_PI_2;
-            let a1 = a0 + std::f64::consts::FRAC_PI_2;
-            let (u0, u1) = (Vec2::from_angle(a0), Vec2::from_angle(a1));
-            let perp = |u: Vec2| Vec2::new(-u.y, u.x);
+        .map(|k| {
+            let (u0, u1) = (u[k], u[(k + 1) % 4]);
+            // End points computed once, so consecutive cubics share them bit for bit.
             FeatureGeom::Cubic(CubicBez::new(
                 c + u0 * r,
                 c + (u0 + perp(u0) * K) * r,
@@ -68,7 +80,10 @@ fn cubic(p: [(f64, f64); 4]) -> FeatureGeom {
 }
 
 fn secondary_points(fs: &FeatureSet) -> Vec<Point> {
-    fs.secondary.iter().flat_map(|s| s.points.iter().copied()).collect()
+    fs.secondary
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .collect()
 }
 
 // ---------- analytic cases ----------
@@ -86,7 +101,11 @@ fn circle_splits_land_at_sixteenths_and_all_is_primary() {
         assert_eq!(s.source.segment, (i / 16) as u32);
         let n = fs.primary.len() as u32;
         assert_eq!(s.next, Some(SectionId((i as u32 + 1) % n)), "next of {i}");
-        assert_eq!(s.prev, Some(SectionId((i as u32 + n - 1) % n)), "prev of {i}");
+        assert_eq!(
+            s.prev,
+            Some(SectionId((i as u32 + n - 1) % n)),
+            "prev of {i}"
+        );
     }
     let ci = fs.conforming_input();
     assert_eq!(ci.segments.len(), 64);
@@ -102,7 +121,10 @@ fn s_curve_is_cut_at_its_inflection() {
         let (fs, _) = build(vec![cubic(c)], Params::DEFAULT);
         assert_eq!(fs.counts.inflection_splits, 1);
         assert!(fs.secondary.is_empty());
-        let cut = fs.primary.iter().position(|s| (s.t[0] - t_infl).abs() < 1e-12);
+        let cut = fs
+            .primary
+            .iter()
+            .position(|s| (s.t[0] - t_infl).abs() < 1e-12);
         let cut = cut.expect("a section starts at the inflection");
         assert_eq!(fs.primary[cut - 1].t[1], fs.primary[cut].t[0]);
         // Curvature signs differ on the two sides.
@@ -131,19 +153,31 @@ fn loop_cubic_is_secondary_only_near_its_self_crossing() {
     let x = bez(&cc, lo);
     let r = fs.params.l + fs.params.mu;
     for p in secondary_points(&fs) {
-        assert!(p.distance(x) <= 2.0 * r, "secondary point {p:?} far from the crossing {x:?}");
+        assert!(
+            p.distance(x) <= 2.0 * r,
+            "secondary point {p:?} far from the crossing {x:?}"
+        );
     }
 }
 
 #[test]
 fn cusp_cubic_is_cut_at_the_cusp_and_secondary_around_it() {
-    let (fs, _) = build(vec![cubic([(0.0, 0.0), (2.0, 2.0), (0.0, 2.0), (2.0, 0.0)])], Params::DEFAULT);
+    let (fs, _) = build(
+        vec![cubic([(0.0, 0.0), (2.0, 2.0), (0.0, 2.0), (2.0, 0.0)])],
+        Params::DEFAULT,
+    );
     assert!(fs.counts.inflection_splits >= 1);
     let cusp = Point::new(1.0, 1.5);
-    assert!(secondary_points(&fs).iter().any(|p| p.distance(cusp) <= 1e-12));
+    assert!(
+        secondary_points(&fs)
+            .iter()
+            .any(|p| p.distance(cusp) <= fs.params.mu)
+    );
     for s in &fs.primary {
         assert!(!(s.t[0] < 0.5 && s.t[1] > 0.5));
-        assert!(s.ctrl.p0.distance(cusp) >= fs.params.mu && s.ctrl.p3.distance(cusp) >= fs.params.mu);
+        assert!(
+            s.ctrl.p0.distance(cusp) >= fs.params.mu && s.ctrl.p3.distance(cusp) >= fs.params.mu
+        );
     }
     assert!(fs.primary.iter().any(|s| s.t[0] == 0.0) && fs.primary.iter().any(|s| s.t[1] == 1.0));
 }
@@ -151,7 +185,15 @@ fn cusp_cubic_is_cut_at_the_cusp_and_secondary_around_it() {
 #[test]
 fn degenerate_cubic_becomes_a_point() {
     let (fs, _) = build(
-        vec![cubic([(1.0, 1.0), (1.0, 1.0 + 1e-12), (1.0 + 1e-12, 1.0), (1.0, 1.0)]), line((0.0, 0.0), (5.0, 0.0))],
+        vec![
+            cubic([
+                (1.0, 1.0),
+                (1.0, 1.0 + 1e-12),
+                (1.0 + 1e-12, 1.0),
+                (1.0, 1.0),
+            ]),
+            line((0.0, 0.0), (5.0, 0.0)),
+        ],
         Params::DEFAULT,
     );
     assert_eq!(fs.counts.degenerate, 1);
@@ -162,7 +204,10 @@ fn degenerate_cubic_becomes_a_point() {
 
 #[test]
 fn straight_cubic_becomes_a_segment() {
-    let (fs, _) = build(vec![cubic([(0.0, 0.0), (1.0, 2.0), (2.0, 4.0), (3.0, 6.0)])], Params::DEFAULT);
+    let (fs, _) = build(
+        vec![cubic([(0.0, 0.0), (1.0, 2.0), (2.0, 4.0), (3.0, 6.0)])],
+        Params::DEFAULT,
+    );
     assert_eq!(fs.counts.straight, 1);
     assert_eq!(fs.primary.len(), 20);
     for s in &fs.primary {
@@ -174,7 +219,9 @@ fn straight_cubic_becomes_a_segment() {
 }
 
 fn abs_params(mu: f64, l: f64) -> Params {
-    Params::DEFAULT.with_mu(Length::Abs(mu)).with_l(Length::Abs(l))
+    Params::DEFAULT
+        .with_mu(Length::Abs(mu))
+        .with_l(Length::Abs(l))
 }
 
 #[test]
@@ -211,7 +258,10 @@ fn touching_circles_are_secondary_only_near_the_contact() {
     assert!(!fs.secondary.is_empty());
     // The gap between the circles at height y is about y², below μ for |y| < √μ ≈ 0.067.
     for p in secondary_points(&fs) {
-        assert!(p.to_vec2().hypot() < 0.5, "secondary point {p:?} far from the contact");
+        assert!(
+            p.to_vec2().hypot() < 0.5,
+            "secondary point {p:?} far from the contact"
+        );
     }
     assert!(fs.primary.len() >= 100, "{}", fs.primary.len());
 }
@@ -219,7 +269,10 @@ fn touching_circles_are_secondary_only_near_the_contact() {
 #[test]
 fn isolated_point_demotes_the_section_it_sits_next_to() {
     let (fs, _) = build(
-        vec![line((0.0, 0.0), (10.0, 0.0)), FeatureGeom::Point(Point::new(5.5, 0.05))],
+        vec![
+            line((0.0, 0.0), (10.0, 0.0)),
+            FeatureGeom::Point(Point::new(5.5, 0.05)),
+        ],
         abs_params(0.1, 1.0),
     );
     assert_eq!(fs.primary.len(), 9);
@@ -228,15 +281,61 @@ fn isolated_point_demotes_the_section_it_sits_next_to() {
 
 #[test]
 fn json_has_the_documented_fields() {
-    let (fs, _) = build(vec![line((0.0, 0.0), (10.0, 0.0)), line((0.0, 0.05), (3.0, 0.05))], abs_params(0.1, 1.0));
+    let (fs, _) = build(
+        vec![
+            line((0.0, 0.0), (10.0, 0.0)),
+            line((0.0, 0.05), (3.0, 0.05)),
+        ],
+        abs_params(0.1, 1.0),
+    );
     let v = to_json(&fs);
-    for k in ["d", "params", "counts", "timing_ms", "points", "point_sources", "primary", "secondary"] {
+    for k in [
+        "d",
+        "params",
+        "counts",
+        "timing_ms",
+        "points",
+        "point_sources",
+        "primary",
+        "secondary",
+    ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     assert_eq!(v["params"]["mu"], 0.1);
     assert_eq!(v["primary"][0]["ctrl"].as_array().map(Vec::len), Some(4));
-    assert_eq!(v["primary"].as_array().map(Vec::len), Some(fs.primary.len()));
-    assert!(v["secondary"][0]["points"].as_array().is_some_and(|a| a.len() >= 2));
+    assert_eq!(
+        v["primary"].as_array().map(Vec::len),
+        Some(fs.primary.len())
+    );
+    assert!(
+        v["secondary"][0]["points"]
+            .as_array()
+            .is_some_and(|a| a.len() >= 2)
+    );
+}
+
+#[test]
+fn checker_reports_tampered_sets() {
+    let (fs, _) = build(
+        vec![line((0.0, 0.0), (10.0, 0.0)), line((0.0, 0.5), (10.0, 0.5))],
+        abs_params(0.1, 1.0),
+    );
+    let mut t = fs.clone();
+    t.params.l = 0.5;
+    assert!(check(&t).iter().any(|d| d.contains("length")));
+    let mut t = fs.clone();
+    t.params.mu = 0.6;
+    assert!(check(&t).iter().any(|d| d.contains("< μ")));
+    let mut t = fs.clone();
+    t.primary[3].ctrl.p1.y += 0.01;
+    assert!(check(&t).iter().any(|d| d.contains("restricted")));
+    let (circ, _) = build(circle(Point::ZERO, 1.0, 0.0), Params::DEFAULT);
+    let mut t = circ.clone();
+    t.params.alpha = 1f64.to_radians();
+    assert!(check(&t).iter().any(|d| d.contains("turns")));
+    let mut t = circ;
+    t.params.mu = 1e-4;
+    assert!(check(&t).iter().any(|d| d.contains("chord")));
 }
 
 // ---------- property test ----------
@@ -262,7 +361,7 @@ fn geom() -> impl Strategy<Value = FeatureGeom> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 96, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn random_soups_keep_every_invariant(geoms in prop::collection::vec(geom(), 1..6)) {

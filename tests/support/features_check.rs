@@ -6,11 +6,15 @@
 
 use super::*;
 
-
 fn controls(p: &Parent) -> [Point; 4] {
     match *p {
         Parent::Cubic(c) => [c.p0, c.p1, c.p2, c.p3],
-        Parent::Line(l) => [l.p0, l.p0.lerp(l.p1, 1.0 / 3.0), l.p0.lerp(l.p1, 2.0 / 3.0), l.p1],
+        Parent::Line(l) => [
+            l.p0,
+            l.p0.lerp(l.p1, 1.0 / 3.0),
+            l.p0.lerp(l.p1, 2.0 / 3.0),
+            l.p1,
+        ],
     }
 }
 
@@ -31,13 +35,18 @@ pub(super) fn bez_d(c: &[Point; 4], t: f64) -> Vec2 {
 
 pub(super) fn bez_dd(c: &[Point; 4], t: f64) -> Vec2 {
     let v = |p: Point| p.to_vec2();
-    ((v(c[2]) - v(c[1]) * 2.0 + v(c[0])) * (1.0 - t) + (v(c[3]) - v(c[2]) * 2.0 + v(c[1])) * t) * 6.0
+    ((v(c[2]) - v(c[1]) * 2.0 + v(c[0])) * (1.0 - t) + (v(c[3]) - v(c[2]) * 2.0 + v(c[1])) * t)
+        * 6.0
 }
 
 fn pt_seg(p: Point, a: Point, b: Point) -> f64 {
     let d = b - a;
     let l2 = d.hypot2();
-    let s = if l2 == 0.0 { 0.0 } else { ((p - a).dot(d) / l2).clamp(0.0, 1.0) };
+    let s = if l2 == 0.0 {
+        0.0
+    } else {
+        ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+    };
     p.distance(a + d * s)
 }
 
@@ -46,11 +55,19 @@ fn cross3(a: Point, b: Point, c: Point) -> f64 {
 }
 
 fn seg_seg(a: Point, b: Point, c: Point, d: Point) -> f64 {
-    let (o1, o2, o3, o4) = (cross3(a, b, c), cross3(a, b, d), cross3(c, d, a), cross3(c, d, b));
+    let (o1, o2, o3, o4) = (
+        cross3(a, b, c),
+        cross3(a, b, d),
+        cross3(c, d, a),
+        cross3(c, d, b),
+    );
     if o1 * o2 < 0.0 && o3 * o4 < 0.0 {
         return 0.0;
     }
-    pt_seg(a, c, d).min(pt_seg(b, c, d)).min(pt_seg(c, a, b)).min(pt_seg(d, a, b))
+    pt_seg(a, c, d)
+        .min(pt_seg(b, c, d))
+        .min(pt_seg(c, a, b))
+        .min(pt_seg(d, a, b))
 }
 
 const N: usize = 64;
@@ -76,7 +93,9 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
         if !(t0 < t1) {
             bad.push(format!("p{i}: empty interval {t0}..{t1}"));
         }
-        let ts: Vec<f64> = (0..=N).map(|k| t0 + (t1 - t0) * k as f64 / N as f64).collect();
+        let ts: Vec<f64> = (0..=N)
+            .map(|k| t0 + (t1 - t0) * k as f64 / N as f64)
+            .collect();
         let pts: Vec<Point> = ts.iter().map(|&t| bez(&pc, t)).collect();
         let own = [s.ctrl.p0, s.ctrl.p1, s.ctrl.p2, s.ctrl.p3];
         let scale = 1e-9 * (r.d + pts[0].to_vec2().hypot());
@@ -84,7 +103,9 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
             let u = k as f64 / 4.0;
             let e = bez(&own, u).distance(bez(&pc, t0 + (t1 - t0) * u));
             if e > scale {
-                bad.push(format!("p{i}: ctrl is not the parent restricted (off by {e})"));
+                bad.push(format!(
+                    "p{i}: ctrl is not the parent restricted (off by {e})"
+                ));
             }
         }
         // Length.
@@ -98,15 +119,24 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
         let back = (0..=16)
             .map(|k| {
                 let q = a.lerp(b, k as f64 / 16.0);
-                pts.windows(2).map(|w| pt_seg(q, w[0], w[1])).fold(f64::INFINITY, f64::min)
+                pts.windows(2)
+                    .map(|w| pt_seg(q, w[0], w[1]))
+                    .fold(f64::INFINITY, f64::min)
             })
             .fold(0.0, f64::max);
         if dev.max(back) > r.mu * (1.0 + 1e-9) {
-            bad.push(format!("p{i}: chord {} away from the curve > μ = {}", dev.max(back), r.mu));
+            bad.push(format!(
+                "p{i}: chord {} away from the curve > μ = {}",
+                dev.max(back),
+                r.mu
+            ));
         }
         if !s.parent.is_line() {
             // Constant-sign curvature and turn < α.
-            let dets: Vec<f64> = ts.iter().map(|&t| bez_d(&pc, t).cross(bez_dd(&pc, t))).collect();
+            let dets: Vec<f64> = ts
+                .iter()
+                .map(|&t| bez_d(&pc, t).cross(bez_dd(&pc, t)))
+                .collect();
             let m = dets.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let tol = 1e-6 * m + 1e-300;
             if dets.iter().any(|v| *v > tol) && dets.iter().any(|v| *v < -tol) {
@@ -116,7 +146,10 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
             if tans.iter().any(|v| v.hypot2() == 0.0) {
                 bad.push(format!("p{i}: zero derivative"));
             }
-            let turn: f64 = tans.windows(2).map(|w| w[0].cross(w[1]).atan2(w[0].dot(w[1])).abs()).sum();
+            let turn: f64 = tans
+                .windows(2)
+                .map(|w| w[0].cross(w[1]).atan2(w[0].dot(w[1])).abs())
+                .sum();
             if turn >= r.alpha {
                 bad.push(format!("p{i}: turns {} ≥ α", turn.to_degrees()));
             }
@@ -131,8 +164,16 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
                 bad.push(format!("p{i}: curvature {kmax} ≫ 2/l_m"));
             }
         }
-        let bbox = pts.iter().fold(Rect::from_points(a, a), |r, p| r.union_pt(*p));
-        items.push(Item { samples: pts, a, b, bbox, primary: Some(i) });
+        let bbox = pts
+            .iter()
+            .fold(Rect::from_points(a, a), |r, p| r.union_pt(*p));
+        items.push(Item {
+            samples: pts,
+            a,
+            b,
+            bbox,
+            primary: Some(i),
+        });
     }
     for pl in &fs.secondary {
         if pl.points.len() < 2 {
@@ -140,11 +181,23 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
         }
         for w in pl.points.windows(2) {
             let samples = (0..=8).map(|k| w[0].lerp(w[1], k as f64 / 8.0)).collect();
-            items.push(Item { samples, a: w[0], b: w[1], bbox: Rect::from_points(w[0], w[1]), primary: None });
+            items.push(Item {
+                samples,
+                a: w[0],
+                b: w[1],
+                bbox: Rect::from_points(w[0], w[1]),
+                primary: None,
+            });
         }
     }
     for p in &fs.points {
-        items.push(Item { samples: vec![p.pos], a: p.pos, b: p.pos, bbox: Rect::from_points(p.pos, p.pos), primary: None });
+        items.push(Item {
+            samples: vec![p.pos],
+            a: p.pos,
+            b: p.pos,
+            bbox: Rect::from_points(p.pos, p.pos),
+            primary: None,
+        });
     }
     // Pairs involving a primary section, by a sweep on x.
     let mut order: Vec<usize> = (0..items.len()).collect();
@@ -161,7 +214,10 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
             if x.bbox.y0 > y.bbox.y1 + r.mu || y.bbox.y0 > x.bbox.y1 + r.mu {
                 continue;
             }
-            let name = |it: &Item| it.primary.map_or("secondary/point".to_string(), |k| format!("p{k}"));
+            let name = |it: &Item| {
+                it.primary
+                    .map_or("secondary/point".to_string(), |k| format!("p{k}"))
+            };
             let shared = [x.a, x.b].iter().any(|p| *p == y.a || *p == y.b);
             if shared {
                 // Adjacent: must not overlap (collinear, same direction from the shared point).
@@ -180,7 +236,10 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
                 if it.samples.len() == 1 {
                     p.distance(it.samples[0])
                 } else {
-                    it.samples.windows(2).map(|w| pt_seg(p, w[0], w[1])).fold(f64::INFINITY, f64::min)
+                    it.samples
+                        .windows(2)
+                        .map(|w| pt_seg(p, w[0], w[1]))
+                        .fold(f64::INFINITY, f64::min)
                 }
             };
             let mut dmin = seg_seg(x.a, x.b, y.a, y.b);
@@ -197,4 +256,3 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
     }
     bad
 }
-
