@@ -108,7 +108,7 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                 let m = 0.5 * (a + b);
                 let can_split =
                     depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
-                let done = (shape_ok && bend_ok) || (shape_ok && len <= r.mu) || !can_split;
+                let done = (shape_ok && (bend_ok || len <= r.mu)) || !can_split;
                 if done {
                     out.push(Piece {
                         t0: a,

@@ -90,7 +90,7 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
     for (i, s) in fs.primary.iter().enumerate() {
         let pc = controls(&s.parent);
         let [t0, t1] = s.t;
-        if !(t0 < t1) {
+        if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) {
             bad.push(format!("p{i}: empty interval {t0}..{t1}"));
         }
         let ts: Vec<f64> = (0..=N)
