@@ -103,18 +103,21 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                 let ctrl = parent.restrict(a, b);
                 let len = polygon_length(&ctrl);
                 let shape_ok = len <= r.l && chord_deviation(&ctrl) <= r.mu;
-                let bend_ok =
-                    end_tangent_angle(&ctrl) < r.alpha && curvature_bounded(&ctrl, 2.0 / r.l_min);
+                let turn_ok = end_tangent_angle(&ctrl) < r.alpha;
+                let curvature_ok = curvature_bounded(&ctrl, 2.0 / r.l_min);
                 let m = 0.5 * (a + b);
                 let can_split =
                     depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
-                let done = (shape_ok && (bend_ok || len <= r.mu)) || !can_split;
+                // Too curved and already short: secondary. A turn of α or more with bounded
+                // curvature always goes away by halving (turn ≤ length · 2/l_m).
+                let eligible = shape_ok && turn_ok && curvature_ok;
+                let done = eligible || (shape_ok && !curvature_ok && len <= r.mu) || !can_split;
                 if done {
                     out.push(Piece {
                         t0: a,
                         t1: b,
                         ctrl,
-                        eligible: shape_ok && bend_ok,
+                        eligible,
                     });
                 } else {
                     stack.push((m, b, depth + 1));

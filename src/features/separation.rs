@@ -133,6 +133,13 @@ fn trimmed(l: Line, r: f64) -> Option<Line> {
 /// module doc). `alpha` is the turning bound in radians.
 pub(super) fn violates(a: &CubicBez, b: &CubicBez, mu: f64, alpha: f64) -> bool {
     let Some(q) = shared_end(a, b) else {
+        // Boxes farther apart than μ: hulls are too.
+        let (ra, rb) = (ctrl_box(a), ctrl_box(b));
+        let gap_x = (rb.x0 - ra.x1).max(ra.x0 - rb.x1);
+        let gap_y = (rb.y0 - ra.y1).max(ra.y0 - rb.y1);
+        if gap_x >= mu || gap_y >= mu {
+            return false;
+        }
         return hull_distance(&ctrl_points(a), &ctrl_points(b)) < mu;
     };
     let (ca, cb) = (chord_from(a, q), chord_from(b, q));
