@@ -22,6 +22,7 @@
 
 pub mod baseline;
 pub mod error;
+pub mod features;
 pub mod fem;
 pub mod output;
 pub mod params;

@@ -35,7 +35,27 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Preprocess the features only: write the primary / secondary FeatureSet as JSON.
+    Features(FeaturesArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+struct FeaturesArgs {
+    /// Input SVG file.
+    input: PathBuf,
+    /// Output JSON file [default: the input's path with extension .features.json].
+    #[arg(short, long, value_name = "OUT.json")]
+    output: Option<PathBuf>,
+    /// Also write an SVG picture: primary red, secondary green, points black, input grey.
+    #[arg(long, value_name = "OUT.svg")]
+    preview: Option<PathBuf>,
+    /// Print counts and the preprocessing time as one JSON object on stdout.
+    #[arg(long)]
+    stats: bool,
+    #[command(flatten)]
+    params: ParamArgs,
+}
 
 #[derive(Args, Debug, Clone)]
 struct LogArgs {
@@ -270,11 +290,54 @@ fn mesh_one(args: &MeshArgs, quiet: bool) -> ExitCode {
     }
 }
 
+/// `triwild features`: load, preprocess, write the JSON (and preview).
+fn features_one(args: &FeaturesArgs, quiet: bool) -> ExitCode {
+    use triwild::features::{self, FeatureSet};
+    let input = &args.input;
+    let params = args.params.to_params();
+    let fail = |path: &Path, err: Error| {
+        eprintln!("error: {}: {err}", path.display());
+        exit_code(err.kind())
+    };
+    if let Err(e) = params.validate() {
+        return fail(input, e);
+    }
+    let drawing = match triwild::svg::load_file(input) {
+        Ok(d) => d,
+        Err(e) => return fail(input, e),
+    };
+    if !quiet {
+        for w in &drawing.warnings {
+            eprintln!("warning: {}: {w}", input.display());
+        }
+    }
+    let fs = FeatureSet::build(&drawing, &params.resolve(drawing.diagonal()));
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| input.with_extension("features.json"));
+    let json = features::to_json(&fs).to_string();
+    if let Err(e) = std::fs::write(&output, json) {
+        return fail(&output, Error::Write(e));
+    }
+    if let Some(p) = &args.preview {
+        if let Err(e) = std::fs::write(p, features::to_svg(&fs, &drawing)) {
+            return fail(p, Error::Write(e));
+        }
+    }
+    if args.stats {
+        let stats =
+            serde_json::json!({"input": input, "counts": fs.counts, "timing_ms": fs.timing});
+        println!("{stats}");
+    }
+    ExitCode::SUCCESS
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     init_logging(&cli.log);
     match &cli.command {
         None => mesh_one(&cli.mesh, cli.log.quiet),
-        Some(c) => match *c {},
+        Some(Command::Features(args)) => features_one(args, cli.log.quiet),
     }
 }
