@@ -21,8 +21,11 @@
 //! ```
 
 pub mod baseline;
+pub mod bsp;
 pub mod error;
+pub mod exact;
 pub mod fem;
+pub mod mesh;
 pub mod output;
 pub mod params;
 pub mod pipeline;

@@ -85,9 +85,21 @@ pub fn segment_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> S
         // Collinear: intersect the parameter ranges along a → b.
         let (ka, kb) = (along(a, a, b), along(b, a, b));
         let (kc, kd) = (along(c, a, b), along(d, a, b));
-        let (lo_cd, hi_cd) = if kc <= kd { ((kc, c), (kd, d)) } else { ((kd, d), (kc, c)) };
-        let (lo, lo_p) = if lo_cd.0 > ka { (lo_cd.0, lo_cd.1) } else { (ka, a) };
-        let (hi, hi_p) = if hi_cd.0 < kb { (hi_cd.0, hi_cd.1) } else { (kb, b) };
+        let (lo_cd, hi_cd) = if kc <= kd {
+            ((kc, c), (kd, d))
+        } else {
+            ((kd, d), (kc, c))
+        };
+        let (lo, lo_p) = if lo_cd.0 > ka {
+            (lo_cd.0, lo_cd.1)
+        } else {
+            (ka, a)
+        };
+        let (hi, hi_p) = if hi_cd.0 < kb {
+            (hi_cd.0, hi_cd.1)
+        } else {
+            (kb, b)
+        };
         return match lo.cmp(&hi) {
             std::cmp::Ordering::Less => SegmentIntersection::Overlap(lo_p.clone(), hi_p.clone()),
             std::cmp::Ordering::Equal => SegmentIntersection::Touching(lo_p.clone()),
@@ -179,21 +191,46 @@ mod tests {
         let r = segment_intersection(&q(0.0, 0.0), &q(1.0, 1.0), &q(2.0, 2.0), &q(3.0, 3.0));
         assert_eq!(r, SI::Disjoint);
         // Parallel, not collinear.
-        let r = segment_intersection(&q(0.0, 0.0), &q(1.0, 1.0), &q(0.0, 1e-300), &q(1.0, 1.0 + f64::EPSILON));
+        let r = segment_intersection(
+            &q(0.0, 0.0),
+            &q(1.0, 1.0),
+            &q(0.0, 1e-300),
+            &q(1.0, 1.0 + f64::EPSILON),
+        );
         assert_eq!(r, SI::Disjoint);
         // Nearly parallel, crossing far from the origin of either segment.
-        let r = segment_intersection(&q(0.0, 0.0), &q(1.0, 1.0), &q(0.0, 1e-17), &q(1.0, 1.0 - 1e-16));
+        let r = segment_intersection(
+            &q(0.0, 0.0),
+            &q(1.0, 1.0),
+            &q(0.0, 1e-17),
+            &q(1.0, 1.0 - 1e-16),
+        );
         assert!(matches!(r, SI::Crossing(_)), "{r:?}");
     }
 
     #[test]
     fn segment_line_cases() {
         let (p, qq) = (q(0.0, 0.0), q(1.0, 0.0));
-        assert_eq!(segment_line(&q(5.0, -1.0), &q(5.0, 1.0), &p, &qq), SegmentLine::Point(q(5.0, 0.0)));
-        assert_eq!(segment_line(&q(5.0, 0.0), &q(5.0, 1.0), &p, &qq), SegmentLine::Point(q(5.0, 0.0)));
-        assert_eq!(segment_line(&q(5.0, 0.0), &q(-5.0, 0.0), &p, &qq), SegmentLine::Contained);
-        assert_eq!(segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &qq), SegmentLine::Disjoint);
-        assert_eq!(segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &p), SegmentLine::Disjoint);
+        assert_eq!(
+            segment_line(&q(5.0, -1.0), &q(5.0, 1.0), &p, &qq),
+            SegmentLine::Point(q(5.0, 0.0))
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 0.0), &q(5.0, 1.0), &p, &qq),
+            SegmentLine::Point(q(5.0, 0.0))
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 0.0), &q(-5.0, 0.0), &p, &qq),
+            SegmentLine::Contained
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &qq),
+            SegmentLine::Disjoint
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &p),
+            SegmentLine::Disjoint
+        );
     }
 
     fn pt() -> impl Strategy<Value = PointQ> {

@@ -28,7 +28,5 @@ mod rational;
 pub use intersect::{
     SegmentIntersection, SegmentLine, line_intersection, segment_intersection, segment_line,
 };
-pub use predicates::{
-    Orientation, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter,
-};
+pub use predicates::{Orientation, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter};
 pub use rational::PointQ;

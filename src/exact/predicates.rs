@@ -172,7 +172,10 @@ mod tests {
         let a = p(1e-300, 1e-300);
         let b = p(3e-300, 3e-300);
         let c = p(2e-300, 2e-300);
-        assert_eq!(orient2d(a, b, c).sign(), reference(&q(a.x, a.y), &q(b.x, b.y), &q(c.x, c.y)));
+        assert_eq!(
+            orient2d(a, b, c).sign(),
+            reference(&q(a.x, a.y), &q(b.x, b.y), &q(c.x, c.y))
+        );
         let c2 = p(2e-300, super::super::rational::next_up(2e-300));
         assert_eq!(orient2d(a, b, c2), Orientation::CounterClockwise);
         let big = p(1e250, -1e250);

@@ -88,13 +88,17 @@ impl TriMesh {
         for (key, sides) in &edges {
             match sides[..] {
                 [(f, _)] => {
-                    let i = self.edge_index(f, key.lo, key.hi).expect("internal: edge of f");
+                    let i = self
+                        .edge_index(f, key.lo, key.hi)
+                        .expect("internal: edge of f");
                     if self.neighbours(f)[i].is_none() {
                         boundary.push(*key);
                     }
                 }
                 [(f, a), (g, b)] if a != b => {
-                    let i = self.edge_index(f, key.lo, key.hi).expect("internal: edge of f");
+                    let i = self
+                        .edge_index(f, key.lo, key.hi)
+                        .expect("internal: edge of f");
                     if self.neighbours(f)[i] != Some(g) {
                         out.push(Defect::UnlinkedEdge(*key));
                     }
@@ -212,15 +216,36 @@ mod tests {
         m.link_all();
         m.set_neighbour(f0, 0, Some(inv)); // asymmetric: inv does not share edge 0 of f0
         m.add_edge_tag(b, d, FeatureOn::Secondary { polyline: 1 });
-        m.add_edge_tag(a, b, FeatureOn::Primary { section: 0, t: [0.0, f64::NAN] });
+        m.add_edge_tag(
+            a,
+            b,
+            FeatureOn::Primary {
+                section: 0,
+                t: [0.0, f64::NAN],
+            },
+        );
         let defects = m.check();
         let has = |d: &Defect| defects.contains(d);
-        assert!(has(&Defect::NotCounterClockwise(inv, Orientation::Clockwise)), "{defects:?}");
+        assert!(
+            has(&Defect::NotCounterClockwise(inv, Orientation::Clockwise)),
+            "{defects:?}"
+        );
         assert!(has(&Defect::AsymmetricAdjacency(f0, 0)), "{defects:?}");
-        assert!(has(&Defect::TJunction(EdgeKey::new(a, c), mid)), "{defects:?}");
+        assert!(
+            has(&Defect::TJunction(EdgeKey::new(a, c), mid)),
+            "{defects:?}"
+        );
         assert!(has(&Defect::IsolatedVertex(lonely)), "{defects:?}");
         assert!(has(&Defect::BadEdgeTag(EdgeKey::new(a, b))), "{defects:?}");
-        assert!(!has(&Defect::DanglingEdgeTag(EdgeKey::new(b, d))), "b-d is an edge of inv");
-        assert!(defects.iter().any(|d| matches!(d, Defect::NonManifoldEdge(_))), "{defects:?}");
+        assert!(
+            !has(&Defect::DanglingEdgeTag(EdgeKey::new(b, d))),
+            "b-d is an edge of inv"
+        );
+        assert!(
+            defects
+                .iter()
+                .any(|d| matches!(d, Defect::NonManifoldEdge(_))),
+            "{defects:?}"
+        );
     }
 }

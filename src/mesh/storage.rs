@@ -219,9 +219,7 @@ impl TriMesh {
     /// The exact position as a rational point.
     pub fn point_q(&self, v: VertexId) -> PointQ {
         let d = self.vdata(v);
-        d.exact
-            .clone()
-            .unwrap_or_else(|| PointQ::from_point(d.pos))
+        d.exact.clone().unwrap_or_else(|| PointQ::from_point(d.pos))
     }
 
     /// Move a vertex to an `f64` position (drops the rational one).
@@ -441,8 +439,28 @@ mod tests {
         let mut m = TriMesh::new();
         let a = m.add_vertex(Point::new(0.0, 0.0), VertexTag::default());
         let b = m.add_vertex(Point::new(1.0, 0.0), VertexTag::default());
-        m.add_edge_tag(b, a, FeatureOn::Primary { section: 2, t: [0.75, 0.25] });
-        m.add_edge_tag(a, b, FeatureOn::Primary { section: 2, t: [0.25, 0.75] });
-        assert_eq!(m.edge_tags(a, b), &[FeatureOn::Primary { section: 2, t: [0.25, 0.75] }]);
+        m.add_edge_tag(
+            b,
+            a,
+            FeatureOn::Primary {
+                section: 2,
+                t: [0.75, 0.25],
+            },
+        );
+        m.add_edge_tag(
+            a,
+            b,
+            FeatureOn::Primary {
+                section: 2,
+                t: [0.25, 0.75],
+            },
+        );
+        assert_eq!(
+            m.edge_tags(a, b),
+            &[FeatureOn::Primary {
+                section: 2,
+                t: [0.25, 0.75]
+            }]
+        );
     }
 }

@@ -124,7 +124,9 @@ mod tests {
                 m.add_vertex(Point::new(a.cos(), a.sin()), VertexTag::default())
             })
             .collect();
-        let faces: Vec<_> = (0..6).map(|k| m.add_face([c, ring[k], ring[(k + 1) % 6]])).collect();
+        let faces: Vec<_> = (0..6)
+            .map(|k| m.add_face([c, ring[k], ring[(k + 1) % 6]]))
+            .collect();
         m.link_all();
         let mut around = m.incident_faces(c);
         around.sort();
