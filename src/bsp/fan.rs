@@ -1,7 +1,7 @@
 //! Triangulating convex cells, tagging segment edges, rounding vertices.
 
 use super::{BspInput, SegmentTag};
-use crate::exact::{Orientation, PointQ, orient2d_q};
+use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
 use crate::{Error, Result};
 use std::cmp::Ordering;
@@ -100,9 +100,15 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                     if w == u {
                         continue;
                     }
+                    let on_line = match mesh.exact(w) {
+                        None => orient2d(seg.a, seg.b, mesh.position(w)),
+                        Some(qw) => orient2d_q(&qa, &qb, qw),
+                    };
+                    if on_line != Orientation::Collinear {
+                        continue;
+                    }
                     let qw = mesh.point_q(w);
-                    if orient2d_q(&qa, &qb, &qw) != Orientation::Collinear
-                        || qw.cmp_along_q(&qu, &qa, &qb) != Ordering::Greater
+                    if qw.cmp_along_q(&qu, &qa, &qb) != Ordering::Greater
                         || qw.cmp_along_q(&qb, &qa, &qb) == Ordering::Greater
                     {
                         continue;
@@ -158,13 +164,9 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         let mut changed = false;
         for v in rational {
             let p = mesh.position(v);
-            let pq = PointQ::from_point(p);
-            let ok = star[v.0 as usize].iter().all(|&f| {
-                let q = mesh
-                    .face(f)
-                    .map(|x| if x == v { pq.clone() } else { mesh.point_q(x) });
-                orient2d_q(&q[0], &q[1], &q[2]) == Orientation::CounterClockwise
-            });
+            let ok = star[v.0 as usize]
+                .iter()
+                .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise);
             if ok {
                 mesh.set_position(v, p);
                 changed = true;

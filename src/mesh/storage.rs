@@ -3,6 +3,7 @@
 use super::ids::{FaceId, VertexId};
 use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use kurbo::Point;
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 /// What a vertex stands for. All false for an ordinary (Steiner) vertex.
@@ -222,6 +223,34 @@ impl TriMesh {
         d.exact.clone().unwrap_or_else(|| PointQ::from_point(d.pos))
     }
 
+    /// The exact position, borrowed when the vertex is rational.
+    pub fn point_q_ref(&self, v: VertexId) -> Cow<'_, PointQ> {
+        let d = self.vdata(v);
+        match &d.exact {
+            Some(q) => Cow::Borrowed(q),
+            None => Cow::Owned(PointQ::from_point(d.pos)),
+        }
+    }
+
+    /// The exact orientation of face `f` if vertex `v` were at the `f64` point `p`.
+    pub fn orientation_if_moved(&self, f: FaceId, v: VertexId, p: Point) -> Orientation {
+        let ids = self.face(f);
+        let rational = ids.iter().any(|&x| x != v && self.vdata(x).exact.is_some());
+        if !rational {
+            let [a, b, c] = ids.map(|x| if x == v { p } else { self.vdata(x).pos });
+            return orient2d(a, b, c);
+        }
+        let pq = PointQ::from_point(p);
+        let q = ids.map(|x| {
+            if x == v {
+                Cow::Borrowed(&pq)
+            } else {
+                self.point_q_ref(x)
+            }
+        });
+        orient2d_q(&q[0], &q[1], &q[2])
+    }
+
     /// Move a vertex to an `f64` position (drops the rational one).
     pub fn set_position(&mut self, v: VertexId, pos: Point) {
         let d = self.vdata_mut(v);
@@ -366,7 +395,11 @@ impl TriMesh {
         if da.exact.is_none() && db.exact.is_none() && dc.exact.is_none() {
             orient2d(da.pos, db.pos, dc.pos)
         } else {
-            orient2d_q(&self.point_q(a), &self.point_q(b), &self.point_q(c))
+            orient2d_q(
+                &self.point_q_ref(a),
+                &self.point_q_ref(b),
+                &self.point_q_ref(c),
+            )
         }
     }
 
