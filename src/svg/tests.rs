@@ -318,7 +318,8 @@ fn missing_file_is_a_read_error() {
     let dir = tempfile::tempdir().expect("tempdir");
     let err = load_file(&dir.path().join("nope.svg")).expect_err("missing file");
     assert!(matches!(err, Error::Read(_)));
-    assert_eq!(err.kind(), ErrorKind::Io);
+    // A path that names no file is a bad argument (exit 2), not a failing disk.
+    assert_eq!(err.kind(), ErrorKind::BadInput);
     assert!(err.to_string().contains("No such file"), "{err}");
 }
 
