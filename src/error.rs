@@ -39,6 +39,9 @@ pub enum Error {
     /// A coordinate is NaN, infinite, or outside the range the mesher represents.
     #[error("bad coordinate: {0}")]
     BadCoordinate(String),
+    /// The input is not a gmsh mesh this library reads (`triwild check`).
+    #[error("not a readable gmsh mesh: {0}")]
+    BadMesh(String),
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),
@@ -67,6 +70,7 @@ impl Error {
             | Error::NotSvg(_)
             | Error::NoGeometry
             | Error::BadCoordinate(_)
+            | Error::BadMesh(_)
             | Error::InvalidParams(_) => ErrorKind::BadInput,
             Error::Meshing { .. } => ErrorKind::Meshing,
         }

@@ -22,10 +22,12 @@
 
 pub mod baseline;
 pub mod bsp;
+pub mod curve;
 pub mod error;
 pub mod exact;
 pub mod features;
 pub mod fem;
+pub mod input;
 pub mod mesh;
 pub mod output;
 pub mod params;

@@ -1,0 +1,27 @@
+//! Curved elements: Lagrange nodes and certified Jacobians (thesis §4.4.2-4.4.3,
+//! DESIGN "Curved elements").
+//!
+//! Owns the geometry of high-order triangles:
+//! - [`lagrange`]: the quadratic (gmsh type 9) and cubic (type 21) Lagrange nodes of a
+//!   triangle with at most one curved edge, and the exact conversions between Lagrange
+//!   nodes and Bézier control nets;
+//! - [`bernstein`]: scalar polynomials on a triangle in Bernstein form (bounds,
+//!   evaluation, exact subdivision);
+//! - [`jacobian`]: the Bernstein coefficients of `det J` computed from the map's
+//!   derivatives, and their certification by subdivision;
+//! - [`certify`]: a whole mesh's validity, Jacobian ratio and exact area (what
+//!   `triwild check` prints).
+//!
+//! Guarantee to the later stages: an element is valid only if [`jacobian::certify`]
+//! says [`jacobian::Validity::Certified`], which proves `det J > 0` on the whole
+//! element. The curved optimization and the least-squares fit (issue 6, items 3 and
+//! 6) will build on these.
+
+pub mod bernstein;
+pub mod certify;
+pub mod jacobian;
+pub mod lagrange;
+
+pub use certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
+pub use jacobian::{Certificate, CertifyOptions, Validity};
+pub use lagrange::CurvedEdge;
