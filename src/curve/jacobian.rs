@@ -427,17 +427,25 @@ mod tests {
 
     #[test]
     fn near_invalid_needs_subdivision() {
-        // a bulge that makes the coefficients negative while det J stays positive
-        let n = curved_element(-0.55);
+        // an edge bulging into the element: a negative coefficient, det J still positive
+        let n = curved_element(-0.3);
         let det = det_cubic(&n);
+        assert!(det.min_coeff() < 0.0);
+        assert!(dense_min(&n, 60) > 0.0);
         let c = certify(&det, 0.0, &CertifyOptions::VALIDITY);
-        let dense_min = dense_min(&n, 60);
-        if det.min_coeff() <= 0.0 && dense_min > 0.0 {
-            assert!(c.pieces > 1);
-        }
-        if c.is_certified() {
-            assert!(dense_min > 0.0);
-        }
+        assert!(c.is_certified() && c.pieces > 1, "{c:?}");
+        // tightening refines the ratio bound upwards but never above the truth
+        let t = certify(&det, 0.0, &CertifyOptions::DEFAULT);
+        assert!(t.ratio() >= c.ratio() && t.lower <= dense_min(&n, 60));
+        // bulging further inverts it
+        let n = curved_element(-0.5);
+        assert!(dense_min(&n, 60) < 0.0);
+        let c = certify(&det_cubic(&n), 0.0, &CertifyOptions::DEFAULT);
+        assert_eq!(c.validity, Validity::Inverted);
+        // with no subdivision allowed, the negative coefficient is not a proof either way
+        let n = curved_element(-0.3);
+        let c = certify(&det_cubic(&n), 0.0, &CertifyOptions { max_depth: 0, ..CertifyOptions::VALIDITY });
+        assert_eq!(c.validity, Validity::Uncertain);
     }
 
     fn dense_min(n: &[Point; 10], k: usize) -> f64 {
