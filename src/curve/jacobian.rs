@@ -154,12 +154,15 @@ pub struct Certificate {
 
 impl Certificate {
     /// `lower / upper`: a certified lower bound of `min det J / max det J` (1 for a
-    /// straight triangle, ≤ 0 for an invalid element).
+    /// straight triangle, ≤ 0 for an invalid element; −1 when `det J` is nowhere
+    /// positive, 0 when it is zero everywhere). Always finite.
     pub fn ratio(&self) -> f64 {
         if self.upper > 0.0 {
             self.lower / self.upper
+        } else if self.lower < 0.0 {
+            -1.0
         } else {
-            f64::NEG_INFINITY
+            0.0
         }
     }
 
