@@ -35,6 +35,10 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
+#[allow(
+    clippy::large_enum_variant,
+    reason = "parsed once per run; boxing would only add noise"
+)]
 enum Command {
     /// Preprocess the features only: write the primary / secondary FeatureSet as JSON.
     Features(FeaturesArgs),
@@ -382,7 +386,11 @@ fn check_one(args: &CheckArgs) -> ExitCode {
         println!(
             "{}: {}",
             input.display(),
-            if r.valid { "valid".to_owned() } else { format!("INVALID ({})", r.reasons.join(", ")) }
+            if r.valid {
+                "valid".to_owned()
+            } else {
+                format!("INVALID ({})", r.reasons.join(", "))
+            }
         );
         println!(
             "  triangles: {} ({}), {} curved, {} invalid",
@@ -392,7 +400,10 @@ fn check_one(args: &CheckArgs) -> ExitCode {
             m.invalid()
         );
         if let Some(w) = m.worst_element {
-            println!("  min Jacobian ratio: {:.6} (triangle {w})", m.min_detj_ratio);
+            println!(
+                "  min Jacobian ratio: {:.6} (triangle {w})",
+                m.min_detj_ratio
+            );
         }
         println!("  area: {}", m.total_area);
     }

@@ -14,7 +14,9 @@ use triwild::fem::{LineKind, Order};
 use triwild::output::{MshOptions, MshVersion, write_msh};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("check-cmd").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("check-cmd")
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
@@ -27,9 +29,8 @@ fn check(path: &Path) -> (i32, serde_json::Value) {
         .arg(path)
         .output()
         .expect("run triwild");
-    let v = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!("{e}: {}", String::from_utf8_lossy(&out.stdout))
-    });
+    let v = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)));
     (out.status.code().expect("exit code"), v)
 }
 
@@ -70,7 +71,10 @@ fn quadratic() -> (FemMesh, f64) {
         Point::new(0.6, 0.6),
         Point::new(0.0, 0.5),
     ];
-    (mesh(Order::Quadratic, nodes, (0..6).collect(), vec![1, 2, 4]), 0.5 + 2.0 / 3.0 * 0.2)
+    (
+        mesh(Order::Quadratic, nodes, (0..6).collect(), vec![1, 2, 4]),
+        0.5 + 2.0 / 3.0 * 0.2,
+    )
 }
 
 /// A quarter disk: triangle (0,0), (1,0), (0,1) with edge 1→2 the usual cubic arc;
@@ -79,17 +83,32 @@ fn quadratic() -> (FemMesh, f64) {
 fn cubic() -> (FemMesh, f64) {
     let k = 0.551_915_024_494;
     let arc = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
-    let e = triwild::curve::CurvedEdge { edge: 1, curve: arc, t0: 0.0, t1: 1.0 };
+    let e = triwild::curve::CurvedEdge {
+        edge: 1,
+        curve: arc,
+        t0: 0.0,
+        t1: 1.0,
+    };
     let n = triwild::curve::lagrange::cubic_nodes(
-        [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)],
+        [
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(0.0, 1.0),
+        ],
         Some(&e),
     );
-    let m = mesh(Order::Cubic, n.to_vec(), (0..10).collect(), vec![1, 2, 5, 6]);
+    let m = mesh(
+        Order::Cubic,
+        n.to_vec(),
+        (0..10).collect(),
+        vec![1, 2, 5, 6],
+    );
     (m, arc.signed_area())
 }
 
 fn num(v: &serde_json::Value, k: &str) -> f64 {
-    v[k].as_f64().unwrap_or_else(|| panic!("{k} missing in {v}"))
+    v[k].as_f64()
+        .unwrap_or_else(|| panic!("{k} missing in {v}"))
 }
 
 #[test]
@@ -97,11 +116,18 @@ fn valid_meshes_of_every_order_and_format() {
     let out = support::out_dir("check_cmd");
     let (q, q_area) = quadratic();
     let (c, c_area) = cubic();
-    let cases = [("square", square(), 1.0, true), ("quadratic", q, q_area, false), ("cubic", c, c_area, false)];
+    let cases = [
+        ("square", square(), 1.0, true),
+        ("quadratic", q, q_area, false),
+        ("cubic", c, c_area, false),
+    ];
     for (name, m, area, straight) in cases {
         for (version, v) in [(MshVersion::V41, "41"), (MshVersion::V22, "22")] {
             for binary in [false, true] {
-                let p = out.join(format!("{name}-v{v}-{}.msh", if binary { "bin" } else { "ascii" }));
+                let p = out.join(format!(
+                    "{name}-v{v}-{}.msh",
+                    if binary { "bin" } else { "ascii" }
+                ));
                 write_msh(&m, &p, MshOptions { version, binary }).expect("write");
                 let (code, j) = check(&p);
                 assert_eq!(code, 0, "{name}: {j}");
@@ -109,7 +135,10 @@ fn valid_meshes_of_every_order_and_format() {
                 assert_eq!(j["invalid"], 0);
                 assert_eq!(j["triangles"].as_u64(), Some(m.triangle_count() as u64));
                 let a = num(&j, "total_area");
-                assert!((a - area).abs() < 1e-13 * area, "{name}: area {a} vs {area}");
+                assert!(
+                    (a - area).abs() < 1e-13 * area,
+                    "{name}: area {a} vs {area}"
+                );
                 let r = num(&j, "min_detj_ratio");
                 if straight {
                     assert!((r - 1.0).abs() < 1e-12);
@@ -127,14 +156,22 @@ fn valid_meshes_of_every_order_and_format() {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..=50 {
         for k in 0..=50 - i {
-            let v = det.eval([1.0 - (i + k) as f64 / 50.0, i as f64 / 50.0, k as f64 / 50.0]);
+            let v = det.eval([
+                1.0 - (i + k) as f64 / 50.0,
+                i as f64 / 50.0,
+                k as f64 / 50.0,
+            ]);
             lo = lo.min(v);
             hi = hi.max(v);
         }
     }
     let (_, j) = check(&out.join("cubic-v41-ascii.msh"));
     let r = num(&j, "min_detj_ratio");
-    assert!(r <= lo / hi + 1e-12 && r > lo / hi - 2e-3, "{r} vs {}", lo / hi);
+    assert!(
+        r <= lo / hi + 1e-12 && r > lo / hi - 2e-3,
+        "{r} vs {}",
+        lo / hi
+    );
 }
 
 #[test]
@@ -154,7 +191,12 @@ fn invalid_meshes_exit_1() {
     for p in &mut m4.nodes {
         p.y = 0.0;
     }
-    for (name, m, inverted) in [("mixed", m1, 1), ("p2", m2, 1), ("p3", m3, 1), ("flat", m4, 0)] {
+    for (name, m, inverted) in [
+        ("mixed", m1, 1),
+        ("p2", m2, 1),
+        ("p3", m3, 1),
+        ("flat", m4, 0),
+    ] {
         let p = dir.join(format!("{name}.msh"));
         write_msh(&m, &p, MshOptions::DEFAULT).expect("write");
         let (code, j) = check(&p);
@@ -176,7 +218,10 @@ fn unreadable_exit_2() {
     let cases: [(&str, &[u8]); 3] = [
         ("garbage.msh", b"not a mesh at all"),
         ("svg.msh", b"<svg xmlns='http://www.w3.org/2000/svg'/>"),
-        ("truncated.msh", b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n"),
+        (
+            "truncated.msh",
+            b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n",
+        ),
     ];
     for (name, bytes) in cases {
         let p = dir.join(name);

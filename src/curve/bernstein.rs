@@ -31,7 +31,8 @@ pub fn lattice(n: usize) -> impl Iterator<Item = [usize; 3]> {
     (0..=n).flat_map(move |k| (0..=n - k).map(move |j| [n - j - k, j, k]))
 }
 
-/// `n! / (a! b! c!)` for `n ≤ 4` (as f64; exact).
+/// `n! / (a! b! c!)` for `n ≤ 8` (as f64; exact).
+#[cfg(test)]
 pub(crate) fn multinomial(a: [usize; 3]) -> f64 {
     const FACT: [f64; 9] = [1.0, 1.0, 2.0, 6.0, 24.0, 120.0, 720.0, 5040.0, 40320.0];
     FACT[a[0] + a[1] + a[2]] / (FACT[a[0]] * FACT[a[1]] * FACT[a[2]])
@@ -75,7 +76,10 @@ impl BernsteinTri {
 
     /// Largest coefficient: an upper bound of the polynomial on the triangle.
     pub fn max_coeff(&self) -> f64 {
-        self.coeffs().iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        self.coeffs()
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// The values at the three corners (exact: they are coefficients).
@@ -176,8 +180,9 @@ impl BernsteinTri {
 fn step(c: &mut [f64; len(MAX_DEGREE)], m: usize, p: [f64; 3]) {
     for k in 0..m {
         for j in 0..m - k {
-            c[index(m - 1, j, k)] =
-                p[0] * c[index(m, j, k)] + p[1] * c[index(m, j + 1, k)] + p[2] * c[index(m, j, k + 1)];
+            c[index(m - 1, j, k)] = p[0] * c[index(m, j, k)]
+                + p[1] * c[index(m, j + 1, k)]
+                + p[2] * c[index(m, j, k + 1)];
         }
     }
 }

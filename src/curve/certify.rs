@@ -73,7 +73,9 @@ pub fn certify_mesh<'a>(
         if idx.len() != order.triangle_nodes() {
             return None;
         }
-        idx.iter().map(|&i| nodes.get(i as usize).copied()).collect()
+        idx.iter()
+            .map(|&i| nodes.get(i as usize).copied())
+            .collect()
     };
     // Pass 1: orientation by the corner triangles.
     let (mut ccw, mut cw) = (0usize, 0usize);
@@ -89,12 +91,19 @@ pub fn certify_mesh<'a>(
     }
     let sign = if cw > ccw { -1.0 } else { 1.0 };
     let diag = {
-        let (mut lo, mut hi) = (Point::new(f64::INFINITY, f64::INFINITY), Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY));
+        let (mut lo, mut hi) = (
+            Point::new(f64::INFINITY, f64::INFINITY),
+            Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
         for p in nodes {
             lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
             hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
         }
-        if nodes.is_empty() { 0.0 } else { (hi - lo).hypot() }
+        if nodes.is_empty() {
+            0.0
+        } else {
+            (hi - lo).hypot()
+        }
     };
     let mut r = MeshCheck {
         triangles: 0,
@@ -256,7 +265,11 @@ mod tests {
     fn linear_square() {
         let nodes = square_nodes();
         let tris: Vec<u32> = vec![0, 1, 2, 0, 2, 3];
-        let r = certify_mesh(&nodes, tris.chunks(3).map(|t| (Order::Linear, t)), &CertifyOptions::DEFAULT);
+        let r = certify_mesh(
+            &nodes,
+            tris.chunks(3).map(|t| (Order::Linear, t)),
+            &CertifyOptions::DEFAULT,
+        );
         assert!(r.is_valid(), "{r:?}");
         assert_eq!((r.triangles, r.certified, r.curved), (2, 2, 0));
         assert!((r.total_area - 1.0).abs() < 1e-15);
@@ -264,15 +277,27 @@ mod tests {
         assert_eq!(r.orientation, "ccw");
         // both clockwise: still valid, area positive
         let cw: Vec<u32> = vec![0, 2, 1, 0, 3, 2];
-        let r = certify_mesh(&nodes, cw.chunks(3).map(|t| (Order::Linear, t)), &CertifyOptions::DEFAULT);
+        let r = certify_mesh(
+            &nodes,
+            cw.chunks(3).map(|t| (Order::Linear, t)),
+            &CertifyOptions::DEFAULT,
+        );
         assert!(r.is_valid() && r.orientation == "cw" && (r.total_area - 1.0).abs() < 1e-15);
         // mixed: invalid
         let mixed: Vec<u32> = vec![0, 1, 2, 0, 3, 2];
-        let r = certify_mesh(&nodes, mixed.chunks(3).map(|t| (Order::Linear, t)), &CertifyOptions::DEFAULT);
+        let r = certify_mesh(
+            &nodes,
+            mixed.chunks(3).map(|t| (Order::Linear, t)),
+            &CertifyOptions::DEFAULT,
+        );
         assert!(!r.is_valid() && r.inverted == 1 && r.orientation == "mixed");
         // out-of-range index
         let bad: Vec<u32> = vec![0, 1, 9];
-        let r = certify_mesh(&nodes, bad.chunks(3).map(|t| (Order::Linear, t)), &CertifyOptions::DEFAULT);
+        let r = certify_mesh(
+            &nodes,
+            bad.chunks(3).map(|t| (Order::Linear, t)),
+            &CertifyOptions::DEFAULT,
+        );
         assert_eq!((r.malformed, r.invalid()), (1, 1));
         // empty
         let r = certify_mesh(&nodes, std::iter::empty(), &CertifyOptions::DEFAULT);
@@ -284,13 +309,34 @@ mod tests {
         // Triangle (0,0),(1,0),(0,1) whose edge 0→1 bulges down along a cubic: the
         // area is the triangle's plus the area between the chord and the cubic.
         let c = CubicBez::new((0.0, 0.0), (0.3, -0.3), (0.7, -0.3), (1.0, 0.0));
-        let e = CurvedEdge { edge: 0, curve: c, t0: 0.0, t1: 1.0 };
-        let n = cubic_nodes([Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)], Some(&e));
+        let e = CurvedEdge {
+            edge: 0,
+            curve: c,
+            t0: 0.0,
+            t1: 1.0,
+        };
+        let n = cubic_nodes(
+            [
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.0, 1.0),
+            ],
+            Some(&e),
+        );
         let idx: Vec<u32> = (0..10).collect();
-        let r = certify_mesh(&n, std::iter::once((Order::Cubic, &idx[..])), &CertifyOptions::DEFAULT);
+        let r = certify_mesh(
+            &n,
+            std::iter::once((Order::Cubic, &idx[..])),
+            &CertifyOptions::DEFAULT,
+        );
         // area under a cubic Bézier with y0 = y3 = 0: -(3/20)(... ) via Green: 3/10 · 0.3 · ... computed by kurbo
         let seg_area = kurbo::ParamCurveArea::signed_area(&c).abs(); // closed by the chord (y = 0)
-        assert!((r.total_area - (0.5 + seg_area)).abs() < 1e-14, "{} vs {}", r.total_area, 0.5 + seg_area);
+        assert!(
+            (r.total_area - (0.5 + seg_area)).abs() < 1e-14,
+            "{} vs {}",
+            r.total_area,
+            0.5 + seg_area
+        );
         assert_eq!((r.curved, r.certified), (1, 1));
         assert!(r.min_detj_ratio > 0.0 && r.min_detj_ratio < 1.0);
     }

@@ -21,7 +21,7 @@
 //! `rtol · max` of sampled extremes, so `lower / upper`, the Jacobian ratio, is a
 //! certified lower bound of `min det J / max det J`, tight to about `rtol`.
 
-use super::bernstein::{self, BernsteinTri, index, len, lattice, multinomial};
+use super::bernstein::{self, BernsteinTri, index, lattice, len};
 use super::lagrange;
 use crate::fem::Order;
 use kurbo::{Point, Vec2};
@@ -68,16 +68,56 @@ fn det_of_net(net: &[Vec2], n: usize) -> BernsteinTri {
         deta[i] = n as f64 * (net[index(n, j, k + 1)] - base);
     }
     let mut d = [0.0; len(bernstein::MAX_DEGREE)];
-    for (ia, a) in lattice(m).enumerate() {
-        let wa = multinomial(a);
-        for (ib, b) in lattice(m).enumerate() {
-            let g = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-            let w = wa * multinomial(b) / multinomial(g);
-            d[index(2 * m, g[1], g[2])] += w * dxi[ia].cross(deta[ib]);
-        }
+    let table: &[(u8, u8, u8, f64)] = if m == 2 { &PRODUCT_2 } else { &PRODUCT_1 };
+    for &(g, ia, ib, w) in table {
+        d[g as usize] += w * dxi[ia as usize].cross(deta[ib as usize]);
     }
     BernsteinTri::new(&d[..len(2 * m)])
 }
+
+/// The Bernstein product rule for two degree-`m` polynomials as a table of
+/// (index of γ in degree 2m, index of α, index of β, C(m,α) C(m,β) / C(2m,γ)).
+const fn product_table<const N: usize>(m: usize) -> [(u8, u8, u8, f64); N] {
+    const FACT: [f64; 5] = [1.0, 1.0, 2.0, 6.0, 24.0];
+    let mut out = [(0u8, 0u8, 0u8, 0.0f64); N];
+    let mut i = 0;
+    // enumerate α, β in lattice order (k outer, j inner)
+    let mut ka = 0;
+    while ka <= m {
+        let mut ja = 0;
+        while ja <= m - ka {
+            let a = [m - ja - ka, ja, ka];
+            let mut kb = 0;
+            while kb <= m {
+                let mut jb = 0;
+                while jb <= m - kb {
+                    let b = [m - jb - kb, jb, kb];
+                    let g = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+                    let ca = FACT[m] / (FACT[a[0]] * FACT[a[1]] * FACT[a[2]]);
+                    let cb = FACT[m] / (FACT[b[0]] * FACT[b[1]] * FACT[b[2]]);
+                    let cg = FACT[2 * m] / (FACT[g[0]] * FACT[g[1]] * FACT[g[2]]);
+                    out[i] = (
+                        index(2 * m, g[1], g[2]) as u8,
+                        index(m, ja, ka) as u8,
+                        index(m, jb, kb) as u8,
+                        ca * cb / cg,
+                    );
+                    i += 1;
+                    jb += 1;
+                }
+                kb += 1;
+            }
+            ja += 1;
+        }
+        ka += 1;
+    }
+    out
+}
+
+/// Product table for two linear factors (quadratic elements).
+const PRODUCT_1: [(u8, u8, u8, f64); 9] = product_table::<9>(1);
+/// Product table for two quadratic factors (cubic elements).
+const PRODUCT_2: [(u8, u8, u8, f64); 36] = product_table::<36>(2);
 
 /// The exact signed area of the element whose `det J` is `det` (∫ det J over the
 /// reference triangle of area 1/2).
@@ -174,7 +214,10 @@ impl Certificate {
 
 /// The absolute zero tolerance of [`CertifyOptions::zero_rel`] for these nodes.
 pub fn zero_abs(nodes: &[Point], zero_rel: f64) -> f64 {
-    let (mut lo, mut hi) = (Vec2::new(f64::INFINITY, f64::INFINITY), Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY));
+    let (mut lo, mut hi) = (
+        Vec2::new(f64::INFINITY, f64::INFINITY),
+        Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
     for p in nodes {
         lo = Vec2::new(lo.x.min(p.x), lo.y.min(p.y));
         hi = Vec2::new(hi.x.max(p.x), hi.y.max(p.y));
@@ -187,7 +230,11 @@ pub fn zero_abs(nodes: &[Point], zero_rel: f64) -> f64 {
 
 /// Certify the Lagrange triangle `nodes` (gmsh order) of the given order.
 /// `None` if `nodes` does not hold that order's node count.
-pub fn certify_element(order: Order, nodes: &[Point], opts: &CertifyOptions) -> Option<Certificate> {
+pub fn certify_element(
+    order: Order,
+    nodes: &[Point],
+    opts: &CertifyOptions,
+) -> Option<Certificate> {
     let det = det_lagrange(order, nodes)?;
     Some(certify(&det, zero_abs(nodes, opts.zero_rel), opts))
 }
@@ -195,6 +242,18 @@ pub fn certify_element(order: Order, nodes: &[Point], opts: &CertifyOptions) -> 
 /// Certify `det > zero` on the whole triangle (see the module doc for the guarantees).
 pub fn certify(det: &BernsteinTri, zero: f64, opts: &CertifyOptions) -> Certificate {
     const UNIT: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    if opts.rtol == f64::INFINITY && det.min_coeff() > zero {
+        // Fast path of the validity-only check: the first coefficients decide.
+        let v = det.corner_values();
+        return Certificate {
+            validity: Validity::Certified,
+            lower: det.min_coeff(),
+            upper: det.max_coeff(),
+            sampled_min: v[0].min(v[1]).min(v[2]),
+            sampled_max: v[0].max(v[1]).max(v[2]),
+            pieces: 1,
+        };
+    }
     let mut smin = f64::INFINITY;
     let mut smax = f64::NEG_INFINITY;
     let mut lower = f64::INFINITY;
@@ -205,15 +264,23 @@ pub fn certify(det: &BernsteinTri, zero: f64, opts: &CertifyOptions) -> Certific
     let mut unresolved = false;
     while !level.is_empty() {
         pieces += level.len();
-        // Samples: the corner values (exact coefficients) and the centroid.
+        // Samples: the corner values (exact coefficients), the edge midpoints and
+        // the centroid.
+        const SAMPLES: [[f64; 3]; 4] = [
+            [0.5, 0.5, 0.0],
+            [0.0, 0.5, 0.5],
+            [0.5, 0.0, 0.5],
+            [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+        ];
         for (p, _) in &level {
-            for v in p.corner_values() {
+            for v in p
+                .corner_values()
+                .into_iter()
+                .chain(SAMPLES.map(|l| p.eval(l)))
+            {
                 smin = smin.min(v);
                 smax = smax.max(v);
             }
-            let c = p.eval([1.0 / 3.0; 3]);
-            smin = smin.min(c);
-            smax = smax.max(c);
         }
         if smin <= zero {
             // Proved invalid: the bounds are those of the current pieces.
@@ -271,6 +338,7 @@ pub fn certify(det: &BernsteinTri, zero: f64, opts: &CertifyOptions) -> Certific
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::curve::bernstein::multinomial;
     use crate::curve::lagrange::{CUBIC_REF, CurvedEdge, cubic_nodes, quadratic_nodes};
     use kurbo::CubicBez;
     use nalgebra::{DMatrix, DVector};
@@ -340,7 +408,11 @@ mod tests {
             t1: 1.0,
         };
         cubic_nodes(
-            [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.4, 0.9)],
+            [
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.4, 0.9),
+            ],
             Some(&e),
         )
     }
@@ -357,7 +429,11 @@ mod tests {
 
     #[test]
     fn straight_elements_have_constant_det() {
-        let c = [Point::new(1.0, 1.0), Point::new(3.0, 1.5), Point::new(1.5, 4.0)];
+        let c = [
+            Point::new(1.0, 1.0),
+            Point::new(3.0, 1.5),
+            Point::new(1.5, 4.0),
+        ];
         let want = (c[1] - c[0]).cross(c[2] - c[0]);
         for det in [
             det_linear(&c),
@@ -369,7 +445,11 @@ mod tests {
             }
             assert!((area(&det) - want / 2.0).abs() < 1e-12);
         }
-        let cert = certify(&det_cubic(&cubic_nodes(c, None)), 0.0, &CertifyOptions::DEFAULT);
+        let cert = certify(
+            &det_cubic(&cubic_nodes(c, None)),
+            0.0,
+            &CertifyOptions::DEFAULT,
+        );
         assert!(cert.is_certified());
         assert!((cert.ratio() - 1.0).abs() < 1e-12);
         assert_eq!(cert.pieces, 1);
@@ -391,7 +471,12 @@ mod tests {
                     * l[2].powi(b[2] as i32);
             }
         }
-        m.lu().solve(&v).expect("Bernstein collocation matrix is invertible").iter().copied().collect()
+        m.lu()
+            .solve(&v)
+            .expect("Bernstein collocation matrix is invertible")
+            .iter()
+            .copied()
+            .collect()
     }
 
     #[test]
@@ -418,7 +503,11 @@ mod tests {
     #[test]
     fn edge_node_across_opposite_side_is_inverted() {
         let mut n = cubic_nodes(
-            [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)],
+            [
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.0, 1.0),
+            ],
             None,
         );
         // push the first node of edge 0→1 far across the opposite corner
@@ -447,7 +536,14 @@ mod tests {
         assert_eq!(c.validity, Validity::Inverted);
         // with no subdivision allowed, the negative coefficient is not a proof either way
         let n = curved_element(-0.3);
-        let c = certify(&det_cubic(&n), 0.0, &CertifyOptions { max_depth: 0, ..CertifyOptions::VALIDITY });
+        let c = certify(
+            &det_cubic(&n),
+            0.0,
+            &CertifyOptions {
+                max_depth: 0,
+                ..CertifyOptions::VALIDITY
+            },
+        );
         assert_eq!(c.validity, Validity::Uncertain);
     }
 
@@ -470,14 +566,19 @@ mod tests {
             t0: 0.0,
             t1: 1.0,
         };
-        let c = [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+        let c = [
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(0.0, 1.0),
+        ];
         let q = quadratic_nodes(c, Some(&e));
         let qnet = lagrange::quadratic_to_bezier(&q);
-        let cub: [Point; 10] =
-            std::array::from_fn(|i| lagrange::eval_net(&qnet, 2, {
+        let cub: [Point; 10] = std::array::from_fn(|i| {
+            lagrange::eval_net(&qnet, 2, {
                 let r = CUBIC_REF[i];
                 [1.0 - r[0] - r[1], r[0], r[1]]
-            }));
+            })
+        });
         let (dq, dc) = (det_quadratic(&q), det_cubic(&cub));
         for l in [[0.2, 0.3, 0.5], [0.7, 0.1, 0.2], [0.0, 0.5, 0.5]] {
             assert!((dq.eval(l) - dc.eval(l)).abs() < 1e-10);

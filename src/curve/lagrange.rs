@@ -317,7 +317,10 @@ mod tests {
             assert!(close(p, e.at(s), 1e-12), "s {s}: {p:?} vs {:?}", e.at(s));
         }
         // centre is the mean of the other nine
-        let m = n[..9].iter().fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2()) / 9.0;
+        let m = n[..9]
+            .iter()
+            .fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2())
+            / 9.0;
         assert!(close(n[9], m.to_point(), 1e-15));
     }
 
@@ -354,7 +357,11 @@ mod tests {
         // the net evaluates to the Lagrange map everywhere
         for (xi, eta) in [(0.1, 0.2), (0.5, 0.25), (0.3, 0.6)] {
             let l = [1.0 - xi - eta, xi, eta];
-            assert!(close(eval_net(&net, 3, l), eval_cubic_lagrange(&n, xi, eta), 1e-12));
+            assert!(close(
+                eval_net(&net, 3, l),
+                eval_cubic_lagrange(&n, xi, eta),
+                1e-12
+            ));
         }
         // the curved edge's control points are the piece's own control points
         let piece = e.curve.subsegment(e.t0..e.t1);

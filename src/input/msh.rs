@@ -385,7 +385,11 @@ impl<'a> Reader<'a> {
         self.major = match version.as_str() {
             "2" | "2.0" | "2.1" | "2.2" => 2,
             "4.1" => 4,
-            v => return self.err(format!("MSH version {v} is not supported (2.2 and 4.1 are)")),
+            v => {
+                return self.err(format!(
+                    "MSH version {v} is not supported (2.2 and 4.1 are)"
+                ));
+            }
         };
         let binary = match f[1] {
             "0" => false,
@@ -479,7 +483,10 @@ impl<'a> Reader<'a> {
         }
         let mut triangle_blocks = Vec::with_capacity(elems.blocks.len());
         for (order, physical, tags) in elems.blocks {
-            let idx = tags.iter().map(|&t| nodes.get(t)).collect::<R<Vec<u32>>>()?;
+            let idx = tags
+                .iter()
+                .map(|&t| nodes.get(t))
+                .collect::<R<Vec<u32>>>()?;
             triangle_blocks.push(TriangleBlock {
                 order,
                 physical,
@@ -560,7 +567,11 @@ impl<'a> Reader<'a> {
             for _ in 0..n {
                 tags.push(self.size()?);
             }
-            let extra = if parametric { dim.clamp(0, 3) as usize } else { 0 };
+            let extra = if parametric {
+                dim.clamp(0, 3) as usize
+            } else {
+                0
+            };
             for tag in tags {
                 let (x, y, z) = (self.float()?, self.float()?, self.float()?);
                 for _ in 0..extra {
@@ -647,7 +658,9 @@ impl<'a> Reader<'a> {
                 Mode::Ascii => (0, 1, None),
             };
             if follow == 0 || follow > total - read {
-                return self.err(format!("element group of {follow} exceeds the declared count"));
+                return self.err(format!(
+                    "element group of {follow} exceeds the declared count"
+                ));
             }
             for _ in 0..follow {
                 self.int()?; // element tag
@@ -701,7 +714,9 @@ mod tests {
     use crate::output::{MshOptions, MshVersion};
 
     fn fixture(name: &str) -> Vec<u8> {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name);
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures")
+            .join(name);
         std::fs::read(p).expect("fixture")
     }
 
@@ -721,11 +736,21 @@ mod tests {
             if let Some(a) = &first {
                 assert_eq!(a.nodes.len(), m.nodes.len(), "{f}");
                 assert_eq!(a.triangle_count(), m.triangle_count(), "{f}");
-                let pa: Vec<Point> = a.triangles().flat_map(|(_, t)| t.iter().map(|&i| a.nodes[i as usize])).collect();
-                let pm: Vec<Point> = m.triangles().flat_map(|(_, t)| t.iter().map(|&i| m.nodes[i as usize])).collect();
+                let pa: Vec<Point> = a
+                    .triangles()
+                    .flat_map(|(_, t)| t.iter().map(|&i| a.nodes[i as usize]))
+                    .collect();
+                let pm: Vec<Point> = m
+                    .triangles()
+                    .flat_map(|(_, t)| t.iter().map(|&i| m.nodes[i as usize]))
+                    .collect();
                 assert_eq!(pa.len(), pm.len(), "{f}");
                 // gmsh's ASCII files print 16 significant digits
-                let worst = pa.iter().zip(&pm).map(|(a, b)| (*a - *b).hypot()).fold(0.0, f64::max);
+                let worst = pa
+                    .iter()
+                    .zip(&pm)
+                    .map(|(a, b)| (*a - *b).hypot())
+                    .fold(0.0, f64::max);
                 assert!(worst < 1e-13, "{f}: nodes differ by {worst}");
             } else {
                 first = Some(m);
@@ -781,7 +806,15 @@ mod tests {
         let good = {
             let dir = tempfile::tempdir().expect("tempdir");
             let p = dir.path().join("m.msh");
-            crate::output::write_msh(&two_orders(), &p, MshOptions { version: MshVersion::V41, binary: true }).expect("write");
+            crate::output::write_msh(
+                &two_orders(),
+                &p,
+                MshOptions {
+                    version: MshVersion::V41,
+                    binary: true,
+                },
+            )
+            .expect("write");
             std::fs::read(p).expect("read")
         };
         // every truncation is an error, never a panic
@@ -813,7 +846,10 @@ mod tests {
             $Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n$EndNodes\n\
             $Elements\n3\n1 15 2 0 1 1\n2 3 2 5 5 1 2 3 4\n3 2 2 7 7 1 2 3\n$EndElements\n";
         let m = read_msh(text).expect("read");
-        assert_eq!((m.other_elements, m.unsupported_2d, m.triangle_count()), (1, 1, 1));
+        assert_eq!(
+            (m.other_elements, m.unsupported_2d, m.triangle_count()),
+            (1, 1, 1)
+        );
         assert_eq!(m.triangle_blocks[0].physical, Some(7));
     }
 }
