@@ -21,6 +21,7 @@
 //! ```
 
 pub mod baseline;
+pub mod batch;
 pub mod error;
 pub mod fem;
 pub mod output;
