@@ -14,13 +14,16 @@ fn bin() -> Command {
 
 /// A fresh scratch directory under target/test-tmp for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-errors").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli-errors")
+        .join(name);
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).unwrap();
     dir
 }
 
-const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00";
+const PNG_MAGIC: &[u8] =
+    b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00";
 
 struct Case {
     name: &'static str,
@@ -80,11 +83,26 @@ fn bad_input_gets_one_line_an_exit_code_and_no_output() {
         let out = bin().arg(&input).arg("-o").arg(&output).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-        assert_eq!(out.status.code(), Some(case.code), "{}: exit code; stderr: {stderr}", case.name);
-        assert_eq!(lines.len(), 1, "{}: exactly one line on stderr, got: {stderr}", case.name);
+        assert_eq!(
+            out.status.code(),
+            Some(case.code),
+            "{}: exit code; stderr: {stderr}",
+            case.name
+        );
+        assert_eq!(
+            lines.len(),
+            1,
+            "{}: exactly one line on stderr, got: {stderr}",
+            case.name
+        );
         let named = if case.names_output { &output } else { &input };
         let prefix = format!("error: {}: ", named.display());
-        assert!(lines[0].starts_with(&prefix), "{}: `{}` should start with `{prefix}`", case.name, lines[0]);
+        assert!(
+            lines[0].starts_with(&prefix),
+            "{}: `{}` should start with `{prefix}`",
+            case.name,
+            lines[0]
+        );
         assert!(
             lines[0].to_lowercase().contains(case.cause),
             "{}: `{}` should mention `{}`",
@@ -114,7 +132,10 @@ fn an_existing_output_is_left_untouched_on_failure() {
 fn usage_errors_exit_2() {
     let out = bin().output().unwrap();
     assert_eq!(out.status.code(), Some(2));
-    let out = bin().args(["x.svg", "--edge-length", "-1"]).output().unwrap();
+    let out = bin()
+        .args(["x.svg", "--edge-length", "-1"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let out = bin().args(["x.svg", "--no-such-flag"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
@@ -125,7 +146,13 @@ fn help_documents_exit_codes_and_defaults() {
     let out = bin().arg("--help").output().unwrap();
     assert!(out.status.success());
     let help = String::from_utf8_lossy(&out.stdout);
-    for needle in ["Exit codes", "[default: 0.05]", "[default: 4.1]", "--stats", "--preview"] {
+    for needle in [
+        "Exit codes",
+        "[default: 0.05]",
+        "[default: 4.1]",
+        "--stats",
+        "--preview",
+    ] {
         assert!(help.contains(needle), "--help should mention {needle}");
     }
 }

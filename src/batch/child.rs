@@ -284,6 +284,9 @@ pub fn run_child(
         .arg("--stats")
         .arg("--")
         .arg(input)
+        // The batch keeps only the panic message; symbolizing a backtrace
+        // costs seconds and memory, and under a memory limit it may not finish.
+        .env("RUST_BACKTRACE", "0")
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());

@@ -25,7 +25,10 @@ fn element_types(order: Order) -> (i32, i32) {
 }
 
 fn invalid(msg: String) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidInput, format!("malformed mesh: {msg}"))
+    io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("malformed mesh: {msg}"),
+    )
 }
 
 /// Check everything the writers rely on, so they never index out of bounds.
@@ -178,7 +181,9 @@ impl Layout {
         for (g, elems) in bucket(&mesh.triangle_group, mesh.surfaces.len()) {
             let bbox = BBox::of(
                 mesh,
-                elems.iter().flat_map(|&t| mesh.triangle(t as usize).iter().copied()),
+                elems
+                    .iter()
+                    .flat_map(|&t| mesh.triangle(t as usize).iter().copied()),
             );
             let tag = g as i32 + 1;
             entities.push(Entity {
@@ -193,7 +198,9 @@ impl Layout {
         for (g, elems) in bucket(&mesh.line_group, mesh.curves.len()) {
             let bbox = BBox::of(
                 mesh,
-                elems.iter().flat_map(|&l| mesh.line(l as usize).iter().copied()),
+                elems
+                    .iter()
+                    .flat_map(|&l| mesh.line(l as usize).iter().copied()),
             );
             let tag = g as i32 + 1;
             entities.push(Entity {
@@ -389,7 +396,14 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
     for dim in [1, 2] {
         for e in layout.entities.iter().filter(|e| e.dim == dim) {
             o.int(e.tag)?;
-            for v in [e.bbox.min[0], e.bbox.min[1], 0.0, e.bbox.max[0], e.bbox.max[1], 0.0] {
+            for v in [
+                e.bbox.min[0],
+                e.bbox.min[1],
+                0.0,
+                e.bbox.max[0],
+                e.bbox.max[1],
+                0.0,
+            ] {
                 o.float(v)?;
             }
             match e.physical {

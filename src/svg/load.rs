@@ -145,8 +145,7 @@ fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, 
         .map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
     let root = doc.root_element();
     let name = root.tag_name();
-    if !name.name().eq_ignore_ascii_case("svg")
-        || !matches!(name.namespace(), None | Some(SVG_NS))
+    if !name.name().eq_ignore_ascii_case("svg") || !matches!(name.namespace(), None | Some(SVG_NS))
     {
         let hint = if name.name().eq_ignore_ascii_case("html") {
             " (an HTML page?)"
@@ -212,9 +211,9 @@ fn xml_error_message(text: &str, e: &roxmltree::Error) -> String {
     }
     match e {
         roxmltree::Error::NoRootNode => "no XML element: not an XML document".into(),
-        roxmltree::Error::EntityReferenceLoop(pos) => format!(
-            "XML entity expansion too deep or too large at {pos} (entity bomb?)"
-        ),
+        roxmltree::Error::EntityReferenceLoop(pos) => {
+            format!("XML entity expansion too deep or too large at {pos} (entity bomb?)")
+        }
         roxmltree::Error::NodesLimitReached => "too many XML nodes".into(),
         _ => format!("broken XML: {e}"),
     }
@@ -236,9 +235,13 @@ fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
         } else if name == "text" {
             let index = text_index;
             text_index += 1;
-            let hidden = node.ancestors().filter(roxmltree::Node::is_element).any(|a| {
-                NOT_RENDERED.contains(&a.tag_name().name()) || a.attribute("display") == Some("none")
-            });
+            let hidden = node
+                .ancestors()
+                .filter(roxmltree::Node::is_element)
+                .any(|a| {
+                    NOT_RENDERED.contains(&a.tag_name().name())
+                        || a.attribute("display") == Some("none")
+                });
             let content: String = node
                 .descendants()
                 .filter_map(|n| n.text())
@@ -281,7 +284,12 @@ pub(super) fn font_database() -> Arc<fontdb::Database> {
                 .map(|p| (*p).to_owned())
                 .or_else(|| families.first().cloned())
         };
-        if let Some(f) = pick(&["DejaVu Serif", "Liberation Serif", "Noto Serif", "FreeSerif"]) {
+        if let Some(f) = pick(&[
+            "DejaVu Serif",
+            "Liberation Serif",
+            "Noto Serif",
+            "FreeSerif",
+        ]) {
             db.set_serif_family(f);
         }
         if let Some(f) = pick(&["DejaVu Sans", "Liberation Sans", "Noto Sans", "FreeSans"]) {
