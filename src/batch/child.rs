@@ -172,6 +172,20 @@ fn remove_output(output: &Path) {
     }
 }
 
+/// `thread 'main' (1234) panicked at ...` without the `(1234)`, which
+/// changes from run to run (reports of two runs should compare equal).
+fn without_thread_id(line: &str) -> String {
+    if let Some(open) = line.find("' (") {
+        let rest = &line[open + 3..];
+        if let Some(close) = rest.find(") panicked") {
+            if rest[..close].bytes().all(|b| b.is_ascii_digit()) {
+                return format!("{}'{}", &line[..open], &rest[close + 1..]);
+            }
+        }
+    }
+    line.to_string()
+}
+
 /// The message to report from a child's stderr: the panic message, else the
 /// last `error:` line, else the last line.
 fn message_of(stderr: &str) -> Option<String> {
@@ -181,9 +195,10 @@ fn message_of(stderr: &str) -> Option<String> {
         .filter(|l| !l.is_empty())
         .collect();
     let pick = if let Some(i) = lines.iter().rposition(|l| l.contains("panicked at")) {
+        let head = without_thread_id(lines[i]);
         match lines.get(i + 1) {
-            Some(next) if !next.starts_with("note:") => format!("{} {next}", lines[i]),
-            _ => lines[i].to_string(),
+            Some(next) if !next.starts_with("note:") => format!("{head} {next}"),
+            _ => head,
         }
     } else if let Some(l) = lines.iter().rev().find(|l| l.starts_with("error:")) {
         (*l).to_string()
@@ -451,6 +466,11 @@ mod tests {
     fn messages() {
         let panic =
             "thread 'main' panicked at src/main.rs:3:5:\nboom\nnote: run with `RUST_BACKTRACE=1`\n";
+        assert_eq!(
+            message_of(panic).as_deref(),
+            Some("thread 'main' panicked at src/main.rs:3:5: boom")
+        );
+        let panic = "thread 'main' (4242) panicked at src/main.rs:3:5:\nboom\n";
         assert_eq!(
             message_of(panic).as_deref(),
             Some("thread 'main' panicked at src/main.rs:3:5: boom")
