@@ -22,6 +22,7 @@
 
 pub mod baseline;
 pub mod bsp;
+pub mod batch;
 pub mod error;
 pub mod exact;
 pub mod features;
