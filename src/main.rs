@@ -1,5 +1,9 @@
 //! The `triwild` command line: argument parsing, logging and printing only.
-#![allow(clippy::print_stdout, clippy::print_stderr, reason = "the binary talks to the user")]
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "the binary talks to the user"
+)]
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};

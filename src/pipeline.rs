@@ -166,7 +166,8 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
     let resolved = params.resolve(drawing.diagonal());
     let mesh = match params.mesher {
         Mesher::Cdt => {
-            let linear = times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
+            let linear =
+                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
             FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name())
         }
         Mesher::Bsp => {
