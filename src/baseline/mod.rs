@@ -224,7 +224,7 @@ fn extract(
         let [a, b, c] = f.vertices().map(|v| v.fix().index());
         let t = [index(a)?, index(b)?, index(c)?];
         let o = orient([vertices[a], vertices[b], vertices[c]]);
-        if !(o > 0.0) {
+        if o.is_nan() || o <= 0.0 {
             return Err(Error::meshing(
                 "baseline",
                 format!(
