@@ -21,8 +21,8 @@
 //! ```
 
 pub mod baseline;
-pub mod bsp;
 pub mod batch;
+pub mod bsp;
 pub mod error;
 pub mod exact;
 pub mod features;
