@@ -31,7 +31,9 @@ use crate::{Drawing, Error, LinearMesh, Params, Result};
 use input::{FlattenParams, PlanarInput, Pow2Scale};
 use kurbo::Point;
 use spade::handles::FixedVertexHandle;
-use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
 use std::collections::HashSet;
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
@@ -86,7 +88,11 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
     ];
     let n_corners = corners.len() as u32;
     let mut vertices: Vec<Point2<f64>> = Vec::with_capacity(planar.points.len() + 4);
-    for p in corners.iter().map(|&c| scale.point(c)).chain(planar.points.iter().copied()) {
+    for p in corners
+        .iter()
+        .map(|&c| scale.point(c))
+        .chain(planar.points.iter().copied())
+    {
         debug_assert!(
             spade::validate_coordinate(p.x).is_ok() && spade::validate_coordinate(p.y).is_ok(),
             "internal: coordinate {p:?} out of spade's range"
@@ -156,8 +162,15 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
 }
 
 /// Turn the refined triangulation back into user units and check it.
-fn extract(cdt: &Cdt, scale: Pow2Scale, planar: &PlanarInput, n_corners: u32) -> Result<LinearMesh> {
-    let index = |i: usize| u32::try_from(i).map_err(|_| Error::meshing("baseline", "more than 2^32 vertices"));
+fn extract(
+    cdt: &Cdt,
+    scale: Pow2Scale,
+    planar: &PlanarInput,
+    n_corners: u32,
+) -> Result<LinearMesh> {
+    let index = |i: usize| {
+        u32::try_from(i).map_err(|_| Error::meshing("baseline", "more than 2^32 vertices"))
+    };
     let vertices: Vec<Point> = cdt
         .vertices()
         .map(|v| scale.unpoint(Point::new(v.position().x, v.position().y)))
@@ -238,7 +251,9 @@ fn attribute_edges(cdt: &Cdt, planar: &PlanarInput, n_corners: u32) -> Result<Ve
 /// cycles; it is also bounded by the vertex count.
 fn walk_constraint_chain(cdt: &Cdt, from: u32, to: u32, chain: &mut Vec<u32>) -> Option<()> {
     let pos = |i: u32| {
-        let p = cdt.vertex(FixedVertexHandle::from_index(i as usize)).position();
+        let p = cdt
+            .vertex(FixedVertexHandle::from_index(i as usize))
+            .position();
         kurbo::Vec2::new(p.x, p.y)
     };
     let (p0, p1) = (pos(from), pos(to));
@@ -251,7 +266,10 @@ fn walk_constraint_chain(cdt: &Cdt, from: u32, to: u32, chain: &mut Vec<u32>) ->
         }
         let pw = pos(w);
         let mut best: Option<(f64, u32)> = None;
-        for e in cdt.vertex(FixedVertexHandle::from_index(w as usize)).out_edges() {
+        for e in cdt
+            .vertex(FixedVertexHandle::from_index(w as usize))
+            .out_edges()
+        {
             if !e.is_constraint_edge() {
                 continue;
             }

@@ -76,7 +76,10 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
     let mut directed: HashSet<(u32, u32)> = HashSet::new();
     for t in &mesh.triangles {
         for k in 0..3 {
-            assert!(directed.insert((t[k], t[(k + 1) % 3])), "edge used twice in one direction");
+            assert!(
+                directed.insert((t[k], t[(k + 1) % 3])),
+                "edge used twice in one direction"
+            );
         }
     }
     // The triangles tile the padded box.
@@ -136,7 +139,11 @@ fn unit_square_meets_the_angle_and_conforms() {
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
     // The four sides are covered exactly by feature edges.
-    assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12, "{}", feature_length(&mesh, 0));
+    assert!(
+        (feature_length(&mesh, 0) - 4.0).abs() < 1e-12,
+        "{}",
+        feature_length(&mesh, 0)
+    );
     // The target length l = d/20 bounds the triangles' size (area cap).
     let l = Params::DEFAULT.resolve(d.diagonal()).l;
     for t in &mesh.triangles {
@@ -148,7 +155,10 @@ fn unit_square_meets_the_angle_and_conforms() {
 
 #[test]
 fn crossing_lines_are_split_at_the_crossing() {
-    let d = drawing(&[(0, line((0.0, 0.0), (1.0, 1.0))), (1, line((0.0, 1.0), (1.0, 0.0)))]);
+    let d = drawing(&[
+        (0, line((0.0, 0.0), (1.0, 1.0))),
+        (1, line((0.0, 1.0), (1.0, 0.0))),
+    ]);
     let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
@@ -160,7 +170,11 @@ fn crossing_lines_are_split_at_the_crossing() {
     for s in [0, 1] {
         assert!((feature_length(&mesh, s) - 2f64.sqrt()).abs() < 1e-9);
         // Each diagonal passes through the crossing vertex.
-        assert!(mesh.edges.iter().any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0])));
+        assert!(
+            mesh.edges
+                .iter()
+                .any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0]))
+        );
     }
 }
 
@@ -175,10 +189,15 @@ fn an_edge_shared_by_two_shapes_is_listed_for_each() {
     assert!((feature_length(&mesh, 1) - 1.0).abs() < 1e-12);
     let mut per_edge: HashMap<(u32, u32), usize> = HashMap::new();
     for e in &mesh.edges {
-        *per_edge.entry((e.v[0].min(e.v[1]), e.v[0].max(e.v[1]))).or_default() += 1;
+        *per_edge
+            .entry((e.v[0].min(e.v[1]), e.v[0].max(e.v[1])))
+            .or_default() += 1;
     }
     assert!(per_edge.values().all(|&k| k <= 2));
-    assert_eq!(per_edge.values().filter(|&&k| k == 2).count(), mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count());
+    assert_eq!(
+        per_edge.values().filter(|&&k| k == 2).count(),
+        mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count()
+    );
 }
 
 #[test]
