@@ -15,6 +15,7 @@ use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
 use crate::optimize::energy::{Amips2, CurveJet, along_curve, amips_free};
 use kurbo::{Point, Vec2};
 use nalgebra::Vector2;
+use std::cmp::Ordering;
 
 /// Newton iterations per smoothing.
 const NEWTON_ITERATIONS: usize = 10;
@@ -41,7 +42,7 @@ fn ring_energy(mesh: &TriMesh, v: VertexId, faces: &[FaceId], p: Point) -> Optio
             mesh.position(fv[(i + 1) % 3]),
             mesh.position(fv[(i + 2) % 3]),
         );
-        sum = sum.add(amips_free(p, b, c)?);
+        sum = sum + amips_free(p, b, c)?;
     }
     Some(sum)
 }
@@ -97,7 +98,7 @@ impl SmoothPlan {
                         break;
                     }
                 }
-                if !(e.value < e0.value) {
+                if e.value.partial_cmp(&e0.value) != Some(Ordering::Less) {
                     return Err(Reject::NoChange);
                 }
                 (p, None)
@@ -107,7 +108,7 @@ impl SmoothPlan {
                 let (lo, hi) = (along[0].1.min(along[1].1), along[0].1.max(along[1].1));
                 let margin = 1e-3 * (hi - lo);
                 let (lo, hi) = (lo + margin, hi - margin);
-                if !(lo < hi) {
+                if lo.partial_cmp(&hi) != Some(Ordering::Less) {
                     return Err(Reject::NoChange);
                 }
                 let e_at = |t: f64| {
@@ -153,7 +154,7 @@ impl SmoothPlan {
                     }
                 }
                 let value = e.expect("internal: valid energy").value;
-                if !(value < base) {
+                if value.partial_cmp(&base) != Some(Ordering::Less) {
                     return Err(Reject::NoChange);
                 }
                 (s.parent.eval(tc), Some((section, tc)))

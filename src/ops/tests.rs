@@ -311,7 +311,6 @@ fn random_ops_on_delaunay_meshes_keep_every_invariant() {
             *total.rejected.entry(r).or_default() += n;
         }
     }
-    eprintln!("{total:?}");
     // Every operation kind got applied, and the feature rules did refuse some.
     assert!(total.applied[..4].iter().all(|&n| n > 10), "{total:?}");
     assert!(
@@ -336,7 +335,6 @@ fn random_ops_on_bsp_meshes_keep_every_invariant() {
         applied_round += t.applied[4];
         applied += t.applied.iter().sum::<usize>();
     }
-    eprintln!("bsp applied {applied} round {applied_round}");
     assert!(applied > 300, "{applied}");
     let _ = applied_round;
 }

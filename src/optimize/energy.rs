@@ -43,16 +43,19 @@ pub struct Amips2 {
     pub hess: Matrix2<f64>,
 }
 
-impl Amips2 {
+impl std::ops::Add for Amips2 {
+    type Output = Amips2;
     /// The sum of two (for a one-ring).
-    pub fn add(self, o: Amips2) -> Amips2 {
+    fn add(self, o: Amips2) -> Amips2 {
         Amips2 {
             value: self.value + o.value,
             grad: self.grad + o.grad,
             hess: self.hess + o.hess,
         }
     }
+}
 
+impl Amips2 {
     /// Zero energy, gradient and Hessian.
     pub const ZERO: Amips2 = Amips2 {
         value: 0.0,
@@ -235,7 +238,7 @@ mod tests {
             let e = ring
                 .iter()
                 .map(|&(b, c)| amips_free(jet.pos, b, c).expect("ccw"))
-                .fold(Amips2::ZERO, Amips2::add);
+                .fold(Amips2::ZERO, |a, b| a + b);
             along_curve(&e, &jet)
         };
         for t in [0.2, 0.5, 0.7] {
