@@ -288,6 +288,7 @@ mod tests {
         assert_eq!(m, before);
         {
             let mut tx = Transaction::new(&mut m);
+            tx.take_edge_tags(a, c);
             tx.replace_faces(&[f, g], &[[a, b, d], [b, c, d]]);
             tx.commit();
         }

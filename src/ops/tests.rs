@@ -338,3 +338,198 @@ fn random_ops_on_bsp_meshes_keep_every_invariant() {
     assert!(applied > 300, "{applied}");
     let _ = applied_round;
 }
+
+fn primary_edges(mesh: &TriMesh) -> Vec<(EdgeKey, u32, [f64; 2])> {
+    let mut out: Vec<_> = mesh
+        .tagged_edges()
+        .flat_map(|(k, tags)| {
+            tags.iter().filter_map(move |t| match *t {
+                FeatureOn::Primary { section, t } => Some((k, section, t)),
+                FeatureOn::Secondary { .. } => None,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out
+}
+
+#[test]
+fn split_of_a_primary_edge_puts_its_vertex_at_the_curve_midpoint() {
+    let (mut mesh, ctx) = delaunay_mesh(1, EnergyRule::Ignore);
+    let (key, section, t) = primary_edges(&mesh)[0];
+    let out = try_split(&mut mesh, &ctx, key.lo, key.hi);
+    let Outcome::Applied(change) = out else {
+        panic!("{out:?}")
+    };
+    let m = change.new_vertex.expect("split adds a vertex");
+    let tm = 0.5 * (t[0] + t[1]);
+    assert_eq!(
+        mesh.position(m),
+        ctx.sections[section as usize].parent.eval(tm)
+    );
+    assert_eq!(
+        mesh.edge_tags(key.lo, m),
+        &[FeatureOn::Primary {
+            section,
+            t: [t[0], tm]
+        }]
+    );
+    assert!(mesh.edge_tags(key.lo, key.hi).is_empty());
+    assert_eq!(on_curve::off_curve(&mesh, &ctx, m), Some(0.0));
+}
+
+#[test]
+fn feature_edges_are_never_swapped_and_endpoints_never_collapse() {
+    let (mut mesh, ctx) = delaunay_mesh(2, EnergyRule::Ignore);
+    let before = mesh.clone();
+    for (key, _, _) in primary_edges(&mesh) {
+        assert_eq!(
+            try_swap(&mut mesh, &ctx, key.lo, key.hi),
+            Outcome::Rejected(Reject::FeatureRule)
+        );
+        for (u, v) in [(key.lo, key.hi), (key.hi, key.lo)] {
+            if mesh.vertex_tag(v).section_endpoint {
+                assert_eq!(
+                    try_collapse(&mut mesh, &ctx, u, v),
+                    Outcome::Rejected(Reject::FixedVertex)
+                );
+            }
+        }
+    }
+    assert_eq!(mesh, before);
+    // A primary vertex may not leave its curve through an off-curve edge.
+    let v = mesh
+        .vertices()
+        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .expect("an interior curve vertex");
+    let r = ring(&mesh, v);
+    let off_edge = r
+        .neighbours
+        .iter()
+        .copied()
+        .find(|&w| mesh.edge_tags(v, w).is_empty())
+        .expect("an untagged edge");
+    assert_eq!(
+        try_collapse(&mut mesh, &ctx, off_edge, v),
+        Outcome::Rejected(Reject::FeatureRule)
+    );
+    assert_eq!(mesh, before);
+}
+
+#[test]
+fn smoothing_moves_a_primary_vertex_along_its_curve() {
+    let (mut mesh, ctx) = delaunay_mesh(3, EnergyRule::Ignore);
+    let mut moved = 0;
+    let verts: Vec<VertexId> = mesh.vertices().collect();
+    for v in verts {
+        let Role::Primary { section, t, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+            continue;
+        };
+        if let Outcome::Applied(_) = try_smooth(&mut mesh, &ctx, v) {
+            let Role::Primary { t: t2, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+                panic!("still primary")
+            };
+            assert_ne!(t, t2);
+            assert_eq!(
+                mesh.position(v),
+                ctx.sections[section as usize].parent.eval(t2)
+            );
+            moved += 1;
+        }
+    }
+    assert!(moved > 0);
+    assert!(mesh.check().is_empty());
+}
+
+#[test]
+fn smoothing_improves_a_bad_free_vertex() {
+    let (mut mesh, ctx) = delaunay_mesh(4, EnergyRule::NoWorseMax);
+    let v = mesh
+        .vertices()
+        .find(|&v| role(&mesh, v, &ring(&mesh, v)) == Role::Free)
+        .expect("a free vertex");
+    let faces = ring(&mesh, v).faces;
+    let e0 = max_energy(&mesh, &faces);
+    let mut applied = 0;
+    for _ in 0..3 {
+        applied += usize::from(try_smooth(&mut mesh, &ctx, v).is_applied());
+    }
+    assert!(max_energy(&mesh, &faces) <= e0);
+    assert!(applied >= 1 || e0 < 1.5, "{e0}");
+}
+
+#[test]
+fn rational_vertices_of_a_bsp_mesh_round_or_stay_valid() {
+    let (mut mesh, ctx) = bsp_mesh(11, EnergyRule::Ignore);
+    let mesh_r = {
+        let mut input = BspInput::default();
+        input.segments.push(BspSegment {
+            a: Point::new(0.1, 0.1),
+            b: Point::new(0.9, 0.7),
+            tag: SegmentTag::Secondary { polyline: 0 },
+        });
+        input.segments.push(BspSegment {
+            a: Point::new(0.1, 0.8),
+            b: Point::new(0.8, 0.05),
+            tag: SegmentTag::Secondary { polyline: 1 },
+        });
+        let opts = BspOptions::DEFAULT.with_round(false);
+        bsp::build(&input, Rect::new(0.0, 0.0, 1.0, 1.0), &opts)
+            .expect("bsp")
+            .0
+    };
+    let ctx_r = Context {
+        envelope: Envelope::new(
+            &[
+                vec![Point::new(0.1, 0.1), Point::new(0.9, 0.7)],
+                vec![Point::new(0.1, 0.8), Point::new(0.8, 0.05)],
+            ],
+            0.01,
+            0.01,
+        ),
+        ..ctx.clone()
+    };
+    let mut mesh_r = mesh_r;
+    let rational: Vec<VertexId> = mesh_r
+        .vertices()
+        .filter(|&v| mesh_r.is_rational(v))
+        .collect();
+    assert!(!rational.is_empty());
+    for v in rational {
+        let out = try_round(&mut mesh_r, &ctx_r, v);
+        assert!(out.is_applied(), "{out:?}");
+        assert!(!mesh_r.is_rational(v));
+    }
+    assert!(mesh_r.check().is_empty());
+    let v = mesh.vertices().next().expect("a vertex");
+    if !mesh.is_rational(v) {
+        assert_eq!(
+            try_round(&mut mesh, &ctx, v),
+            Outcome::Rejected(Reject::NoChange)
+        );
+    }
+}
+
+#[test]
+fn smoothing_snaps_a_chord_vertex_onto_its_curve_and_never_away() {
+    let (mut mesh, ctx) = delaunay_mesh(5, EnergyRule::Ignore);
+    let v = mesh
+        .vertices()
+        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .expect("an interior curve vertex");
+    let Role::Primary { along, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+        unreachable!()
+    };
+    // Put v on the chord of its neighbours, as the BSP leaves such vertices.
+    let chord = mesh
+        .position(along[0].0)
+        .midpoint(mesh.position(along[1].0));
+    let p = mesh.position(v).lerp(chord, 0.5);
+    mesh.set_position(v, p);
+    assert!(mesh.check().is_empty());
+    let off0 = on_curve::off_curve(&mesh, &ctx, v).expect("primary");
+    assert!(off0 > 1e-4, "{off0}");
+    let out = try_smooth(&mut mesh, &ctx, v);
+    assert!(out.is_applied(), "{out:?}");
+    assert!(on_curve::off_curve(&mesh, &ctx, v).expect("primary") <= ctx.on_curve_abs);
+}
