@@ -4,7 +4,7 @@
 //! Each operation has the four steps of STYLE "Local operations and
 //! invariants": a plan that reads `&TriMesh` only and runs the topological and
 //! feature checks (link condition, §4.4.1 feature rules); a tentative change
-//! through a [`Transaction`]; the invariants of [`invariants`] run on the new
+//! through a [`Transaction`](crate::mesh::Transaction); the invariants of [`invariants`] run on the new
 //! faces only; then commit, or drop the transaction, which rolls the mesh
 //! back bit for bit. Every `try_*` returns an [`Outcome`]; a rejection is a
 //! value naming the refusing rule, never an error.

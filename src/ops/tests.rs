@@ -533,3 +533,17 @@ fn smoothing_snaps_a_chord_vertex_onto_its_curve_and_never_away() {
     assert!(out.is_applied(), "{out:?}");
     assert!(on_curve::off_curve(&mesh, &ctx, v).expect("primary") <= ctx.on_curve_abs);
 }
+
+#[test]
+fn curvature_refuses_pieces_that_turn_too_much_or_leave_the_section() {
+    let (_, mut ctx) = delaunay_mesh(0, EnergyRule::Ignore);
+    assert!(curvature::holds(&ctx, 0, [0.1, 0.4]));
+    assert!(curvature::holds(&ctx, 1, [1.0, 0.5]));
+    assert!(!curvature::holds(&ctx, 0, [0.2, 0.7]), "leaves section 0");
+    assert!(!curvature::holds(&ctx, 7, [0.1, 0.2]), "unknown section");
+    assert!(!curvature::holds(&ctx, 0, [0.3, 0.3]), "empty piece");
+    ctx.sections[0].t = [0.0, 1.0];
+    // The whole cubic turns about 27°, more than α = 15°.
+    assert!(!curvature::holds(&ctx, 0, [0.0, 1.0]));
+    assert!(curvature::holds(&ctx, 0, [0.0, 0.5]));
+}
