@@ -349,7 +349,7 @@ fn primary_edges(mesh: &TriMesh) -> Vec<(EdgeKey, u32, [f64; 2])> {
             })
         })
         .collect();
-    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out.sort_by_key(|e| e.0);
     out
 }
 
