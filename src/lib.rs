@@ -28,6 +28,8 @@ pub mod exact;
 pub mod features;
 pub mod fem;
 pub mod mesh;
+pub mod ops;
+pub mod optimize;
 pub mod output;
 pub mod params;
 pub mod pipeline;
