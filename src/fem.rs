@@ -97,7 +97,11 @@ impl FemMesh {
     /// The three corner positions of triangle `i`.
     pub fn corners(&self, i: usize) -> [Point; 3] {
         let t = self.triangle(i);
-        [self.nodes[t[0] as usize], self.nodes[t[1] as usize], self.nodes[t[2] as usize]]
+        [
+            self.nodes[t[0] as usize],
+            self.nodes[t[1] as usize],
+            self.nodes[t[2] as usize],
+        ]
     }
 }
 

@@ -277,9 +277,24 @@ mod tests {
 
     #[test]
     fn bad_values_are_rejected() {
-        assert!(Params::DEFAULT.with_mu(Length::Rel(0.0)).validate().is_err());
-        assert!(Params::DEFAULT.with_l(Length::Abs(f64::NAN)).validate().is_err());
-        assert!(Params::DEFAULT.with_cdt_min_angle_deg(40.0).validate().is_err());
+        assert!(
+            Params::DEFAULT
+                .with_mu(Length::Rel(0.0))
+                .validate()
+                .is_err()
+        );
+        assert!(
+            Params::DEFAULT
+                .with_l(Length::Abs(f64::NAN))
+                .validate()
+                .is_err()
+        );
+        assert!(
+            Params::DEFAULT
+                .with_cdt_min_angle_deg(40.0)
+                .validate()
+                .is_err()
+        );
         assert!(Params::DEFAULT.with_alpha_deg(-1.0).validate().is_err());
     }
 }

@@ -87,7 +87,12 @@ impl Segment {
     /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3).
     pub fn to_cubic(&self) -> CubicBez {
         match self {
-            Segment::Line(l) => CubicBez::new(l.p0, l.p0.lerp(l.p1, 1.0 / 3.0), l.p0.lerp(l.p1, 2.0 / 3.0), l.p1),
+            Segment::Line(l) => CubicBez::new(
+                l.p0,
+                l.p0.lerp(l.p1, 1.0 / 3.0),
+                l.p0.lerp(l.p1, 2.0 / 3.0),
+                l.p1,
+            ),
             Segment::Cubic(c) => *c,
         }
     }
