@@ -59,6 +59,8 @@ impl Error {
     /// The class of this error, for exit codes and batch reports.
     pub fn kind(&self) -> ErrorKind {
         match self {
+            // A path that names no file is a bad argument, not a failing disk.
+            Error::Read(e) if e.kind() == io::ErrorKind::NotFound => ErrorKind::BadInput,
             Error::Read(_) | Error::Write(_) => ErrorKind::Io,
             Error::IsDirectory
             | Error::EmptyFile

@@ -1,0 +1,230 @@
+//! Tests of the CDT baseline through [`triangulate`].
+
+use super::*;
+use crate::quality::Quality;
+use crate::svg::{Feature, FeatureGeom, FeatureSource, FillRule, Shape};
+use crate::{FemMesh, Length};
+use kurbo::{CubicBez, Line, Rect};
+use proptest::prelude::*;
+use std::collections::{HashMap, HashSet};
+
+fn shape(i: u32) -> Shape {
+    Shape {
+        svg_id: None,
+        element_index: i,
+        paint_order: i,
+        filled: true,
+        stroked: false,
+        fill_rule: FillRule::NonZero,
+        fill_colour: None,
+        subpaths: Vec::new(),
+    }
+}
+
+/// A drawing of `features`, each tagged with its shape index.
+fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
+    let n_shapes = features.iter().map(|f| f.0 + 1).max().unwrap_or(0);
+    let mut bbox: Option<Rect> = None;
+    let mut add = |p: Point| bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
+    for (_, g) in features {
+        match *g {
+            FeatureGeom::Point(p) => add(p),
+            FeatureGeom::Line(l) => [l.p0, l.p1].into_iter().for_each(&mut add),
+            FeatureGeom::Cubic(c) => [c.p0, c.p1, c.p2, c.p3].into_iter().for_each(&mut add),
+        }
+    }
+    Drawing {
+        shapes: (0..n_shapes).map(shape).collect(),
+        features: features
+            .iter()
+            .enumerate()
+            .map(|(i, &(s, geom))| Feature {
+                geom,
+                source: FeatureSource {
+                    shape: ShapeId(s),
+                    subpath: 0,
+                    segment: i as u32,
+                },
+            })
+            .collect(),
+        bbox: bbox.unwrap_or_default(),
+        warnings: Vec::new(),
+    }
+}
+
+fn line(a: (f64, f64), b: (f64, f64)) -> FeatureGeom {
+    FeatureGeom::Line(Line::new(a, b))
+}
+
+/// The unit square as four segments of shape 0.
+fn square(scale: f64) -> Vec<(u32, FeatureGeom)> {
+    let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| (x * scale, y * scale));
+    (0..4).map(|i| (0, line(c[i], c[(i + 1) % 4]))).collect()
+}
+
+/// Every check the baseline promises; returns the mesh's quality.
+fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
+    let n = mesh.vertices.len() as u32;
+    assert!(mesh.vertices.iter().all(|p| p.is_finite()));
+    // Strictly CCW (exactly), indices in range.
+    for t in &mesh.triangles {
+        assert!(t.iter().all(|&i| i < n), "{t:?}");
+        let p = t.map(|i| mesh.vertices[i as usize]);
+        assert!(orient(p) > 0.0, "not CCW: {p:?}");
+    }
+    // Every edge has at most two triangles, one on each side.
+    let mut directed: HashSet<(u32, u32)> = HashSet::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            assert!(directed.insert((t[k], t[(k + 1) % 3])), "edge used twice in one direction");
+        }
+    }
+    // The triangles tile the padded box.
+    let r = params.resolve(d.diagonal());
+    let bx = input::padded_box(d, r.padding);
+    let area: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            0.5 * (b - a).cross(c - a)
+        })
+        .sum();
+    assert!(
+        (area - bx.area()).abs() <= 1e-9 * bx.area(),
+        "area {area} vs box {}",
+        bx.area()
+    );
+    // Feature edges are mesh edges.
+    for e in &mesh.edges {
+        assert_eq!(e.kind, LineKind::Constraint);
+        assert!(
+            directed.contains(&(e.v[0], e.v[1])) || directed.contains(&(e.v[1], e.v[0])),
+            "feature edge {e:?} is not a mesh edge"
+        );
+    }
+    // Input points and segment ends are mesh vertices (up to the ε_m merge).
+    let tol = r.eps_m * (1.0 + 1e-9);
+    let near_vertex = |p: Point| mesh.vertices.iter().any(|&v| (v - p).hypot() <= tol);
+    for f in &d.features {
+        let ends = match f.geom {
+            FeatureGeom::Point(p) => vec![p],
+            FeatureGeom::Line(l) => vec![l.p0, l.p1],
+            FeatureGeom::Cubic(c) => vec![c.p0, c.p3],
+        };
+        for p in ends {
+            assert!(near_vertex(p), "input point {p:?} is not a mesh vertex");
+        }
+    }
+    let fem = FemMesh::from_linear(mesh, "domain", |s| format!("{s:?}"));
+    Quality::of(&fem)
+}
+
+/// Total length of the feature edges of `shape`.
+fn feature_length(mesh: &LinearMesh, shape: u32) -> f64 {
+    mesh.edges
+        .iter()
+        .filter(|e| e.shape == ShapeId(shape))
+        .map(|e| (mesh.vertices[e.v[0] as usize] - mesh.vertices[e.v[1] as usize]).hypot())
+        .sum()
+}
+
+#[test]
+fn unit_square_meets_the_angle_and_conforms() {
+    let d = drawing(&square(1.0));
+    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let q = check(&d, &Params::DEFAULT, &mesh);
+    assert!(q.min_angle_deg >= 25.0, "{q:?}");
+    // The four sides are covered exactly by feature edges.
+    assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12, "{}", feature_length(&mesh, 0));
+    // The target length l = d/20 bounds the triangles' size (area cap).
+    let l = Params::DEFAULT.resolve(d.diagonal()).l;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        assert!(0.5 * (b - a).cross(c - a) <= equilateral_area(l) * (1.0 + 1e-9));
+    }
+    assert!(mesh.triangles.len() > 500, "{}", mesh.triangles.len());
+}
+
+#[test]
+fn crossing_lines_are_split_at_the_crossing() {
+    let d = drawing(&[(0, line((0.0, 0.0), (1.0, 1.0))), (1, line((0.0, 1.0), (1.0, 0.0)))]);
+    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let q = check(&d, &Params::DEFAULT, &mesh);
+    assert!(q.min_angle_deg >= 25.0, "{q:?}");
+    let centre = Point::new(0.5, 0.5);
+    let at_centre: Vec<u32> = (0..mesh.vertices.len() as u32)
+        .filter(|&i| (mesh.vertices[i as usize] - centre).hypot() < 1e-12)
+        .collect();
+    assert_eq!(at_centre.len(), 1);
+    for s in [0, 1] {
+        assert!((feature_length(&mesh, s) - 2f64.sqrt()).abs() < 1e-9);
+        // Each diagonal passes through the crossing vertex.
+        assert!(mesh.edges.iter().any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0])));
+    }
+}
+
+#[test]
+fn an_edge_shared_by_two_shapes_is_listed_for_each() {
+    let mut f = square(1.0);
+    f.push((1, line((1.0, 1.0), (1.0, 0.0)))); // shape 1 repeats the right side, reversed
+    let d = drawing(&f);
+    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    check(&d, &Params::DEFAULT, &mesh);
+    assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12);
+    assert!((feature_length(&mesh, 1) - 1.0).abs() < 1e-12);
+    let mut per_edge: HashMap<(u32, u32), usize> = HashMap::new();
+    for e in &mesh.edges {
+        *per_edge.entry((e.v[0].min(e.v[1]), e.v[0].max(e.v[1]))).or_default() += 1;
+    }
+    assert!(per_edge.values().all(|&k| k <= 2));
+    assert_eq!(per_edge.values().filter(|&&k| k == 2).count(), mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count());
+}
+
+#[test]
+fn a_single_point_gets_a_box() {
+    let d = drawing(&[(0, FeatureGeom::Point(Point::new(3.0, -2.0)))]);
+    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let q = check(&d, &Params::DEFAULT, &mesh);
+    assert!(mesh.edges.is_empty());
+    assert!(q.min_angle_deg >= 25.0, "{q:?}");
+}
+
+/// A circle of radius `r` at the origin as kurbo's cubics (shape 0).
+fn circle(r: f64) -> Vec<(u32, FeatureGeom)> {
+    use kurbo::{PathEl, Shape as _};
+    let mut out = Vec::new();
+    let mut last = Point::ZERO;
+    for el in kurbo::Circle::new(Point::ZERO, r).path_elements(1e-9 * r) {
+        match el {
+            PathEl::MoveTo(p) => last = p,
+            PathEl::CurveTo(a, b, c) => {
+                out.push((0, FeatureGeom::Cubic(CubicBez::new(last, a, b, c))));
+                last = c;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn a_circle_of_cubics_is_flattened_within_mu() {
+    let d = drawing(&circle(1.0));
+    let params = Params::DEFAULT;
+    let mesh = triangulate(&d, &params).unwrap();
+    let quality = check(&d, &params, &mesh);
+    assert!(quality.min_angle_deg >= 25.0, "{quality:?}");
+    let mu = params.resolve(d.diagonal()).mu;
+    // Every feature vertex is on the circle (up to kurbo's 1e-9 approximation), and
+    // the polygon is within μ of it.
+    for e in &mesh.edges {
+        for &v in &e.v {
+            let r = mesh.vertices[v as usize].to_vec2().hypot();
+            assert!((r - 1.0).abs() <= 1e-8, "{r}");
+        }
+        let mid = mesh.vertices[e.v[0] as usize].midpoint(mesh.vertices[e.v[1] as usize]);
+        assert!(1.0 - mid.to_vec2().hypot() <= mu, "{mid:?}");
+    }
+    assert!((feature_length(&mesh, 0) - 2.0 * std::f64::consts::PI).abs() < 1e-2);
+}

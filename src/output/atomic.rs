@@ -1,0 +1,182 @@
+//! Atomic file creation: write into a temporary file next to the target, then rename.
+//!
+//! Guarantees: the target path either keeps its old content (or stays absent) or
+//! holds the complete new content; a failure at any point (the writer returns an
+//! error, the disk fills up, the rename is refused) removes the temporary file.
+
+use crate::{Error, Result};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Buffer size of the writers: large enough that a million-triangle mesh is a
+/// few thousand system calls.
+const BUFFER_BYTES: usize = 1 << 20;
+
+/// The directory a file at `path` is created in (`.` for a bare file name).
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// A temporary file in `dir`, named after `path` so a leftover (after a crash) is recognisable.
+fn temp_in(dir: &Path, path: &Path) -> io::Result<tempfile::NamedTempFile> {
+    let stem = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let prefix = format!(".{stem}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        // NamedTempFile defaults to 0o600; a finished output file should get the
+        // usual permissions (0o666 restricted by the umask), like `File::create`.
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    builder.tempfile_in(dir)
+}
+
+/// Fail early, with a message a user can act on, when no file can be created at `path`.
+fn check_target(path: &Path) -> io::Result<PathBuf> {
+    let dir = parent_dir(path);
+    match std::fs::metadata(&dir) {
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {
+            return Err(io::Error::new(
+                io::ErrorKind::NotFound,
+                format!("directory {} does not exist", dir.display()),
+            ));
+        }
+        Err(e) => {
+            return Err(io::Error::new(
+                e.kind(),
+                format!("cannot access directory {}: {e}", dir.display()),
+            ));
+        }
+        Ok(m) if !m.is_dir() => {
+            return Err(io::Error::new(
+                io::ErrorKind::NotADirectory,
+                format!("{} is not a directory", dir.display()),
+            ));
+        }
+        Ok(_) => {}
+    }
+    if path.is_dir() {
+        return Err(io::Error::new(
+            io::ErrorKind::IsADirectory,
+            format!("{} is a directory", path.display()),
+        ));
+    }
+    Ok(dir)
+}
+
+/// Check that a file can be created at `path`: creates and removes a temporary
+/// file in its directory.
+pub(crate) fn check_writable(path: &Path) -> Result<()> {
+    let dir = check_target(path).map_err(Error::Write)?;
+    let tmp = temp_in(&dir, path).map_err(|e| {
+        Error::Write(io::Error::new(
+            e.kind(),
+            format!("directory {} is not writable: {e}", dir.display()),
+        ))
+    })?;
+    tmp.close().map_err(Error::Write)
+}
+
+/// Create `path` with the bytes `write` produces, atomically.
+///
+/// `write` gets a buffered writer on a temporary file in the target directory; the
+/// file is flushed, synced and renamed onto `path` only if `write` succeeds.
+pub(crate) fn write_atomic<F>(path: &Path, write: F) -> Result<()>
+where
+    F: FnOnce(&mut BufWriter<&mut File>) -> io::Result<()>,
+{
+    let dir = check_target(path).map_err(Error::Write)?;
+    let mut tmp = temp_in(&dir, path).map_err(|e| {
+        Error::Write(io::Error::new(
+            e.kind(),
+            format!("cannot create a file in {}: {e}", dir.display()),
+        ))
+    })?;
+    {
+        let mut w = BufWriter::with_capacity(BUFFER_BYTES, tmp.as_file_mut());
+        write(&mut w).map_err(Error::Write)?;
+        w.flush().map_err(Error::Write)?;
+    }
+    tmp.as_file().sync_all().map_err(Error::Write)?;
+    tmp.persist(path).map_err(|e| Error::Write(e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("target/test-out/unit-atomic")
+            .join(name);
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("create scratch dir");
+        d
+    }
+
+    fn entries(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .expect("read dir")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn failure_midway_keeps_old_file_and_leaves_no_temp() {
+        let d = scratch("midway");
+        let p = d.join("out.msh");
+        std::fs::write(&p, b"old content").expect("seed file");
+        let err = write_atomic(&p, |w| {
+            w.write_all(&vec![b'x'; 3 * BUFFER_BYTES])?;
+            Err(io::Error::other("disk on fire"))
+        })
+        .expect_err("the writer failed");
+        assert!(matches!(err, Error::Write(_)));
+        assert_eq!(std::fs::read(&p).expect("read"), b"old content");
+        assert_eq!(entries(&d), vec!["out.msh".to_owned()]);
+    }
+
+    #[test]
+    fn success_replaces_file() {
+        let d = scratch("success");
+        let p = d.join("out.msh");
+        std::fs::write(&p, b"old").expect("seed file");
+        write_atomic(&p, |w| w.write_all(b"new")).expect("write");
+        assert_eq!(std::fs::read(&p).expect("read"), b"new");
+        assert_eq!(entries(&d), vec!["out.msh".to_owned()]);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).expect("meta").permissions().mode();
+            assert_eq!(mode & 0o600, 0o600);
+        }
+    }
+
+    #[test]
+    fn check_writable_messages() {
+        let d = scratch("check");
+        let missing = d.join("nope/out.msh");
+        let e = check_writable(&missing).expect_err("missing dir");
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert!(!d.join("nope").exists());
+        let e = check_writable(&d).expect_err("a directory");
+        assert!(e.to_string().contains("is a directory"), "{e}");
+        std::fs::write(d.join("file"), b"").expect("seed");
+        let e = check_writable(&d.join("file/out.msh")).expect_err("parent is a file");
+        assert!(e.to_string().contains("not a directory"), "{e}");
+        check_writable(&d.join("ok.msh")).expect("writable");
+        assert_eq!(entries(&d), vec!["file".to_owned()]);
+    }
+}

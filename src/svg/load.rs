@@ -1,0 +1,298 @@
+//! Bytes → usvg tree: decoding, XML sanity checks, the usvg call and its limits,
+//! and error messages a user can act on.
+//!
+//! Safety limits come from roxmltree and usvg themselves (verified by tests):
+//! entity expansion stops at depth 10 / 255 references per entity ("billion
+//! laughs"), `<use>` self-references are skipped, and the expanded element tree
+//! is capped at 1,000,000 elements and 1024 levels of nesting. usvg recurses
+//! along the element nesting, so the parse runs on its own thread with a large
+//! stack; a panic inside usvg becomes a [`Error::NotSvg`] instead of unwinding
+//! into the caller.
+
+use crate::{Error, Result};
+use std::collections::HashSet;
+use std::sync::{Arc, OnceLock};
+use usvg::{fontdb, roxmltree};
+
+/// The SVG namespace.
+const SVG_NS: &str = "http://www.w3.org/2000/svg";
+
+/// Stack size of the parsing thread (usvg recurses once per nesting level, up to 1024).
+const PARSE_STACK_BYTES: usize = 256 << 20;
+
+/// What the XML pre-pass learned that the usvg tree does not keep.
+#[derive(Debug, Default)]
+pub(super) struct XmlFacts {
+    /// Ids of `<use>` elements (their usvg group carries the id to anonymous children).
+    pub(super) use_ids: HashSet<String>,
+    /// Text elements that should render: (index among all `<text>` elements, id, text snippet).
+    pub(super) texts: Vec<TextElement>,
+}
+
+/// A `<text>` element outside `<defs>`, clip paths, masks and the like.
+#[derive(Debug)]
+pub(super) struct TextElement {
+    /// Index among all `<text>` elements, in document order.
+    pub(super) index: usize,
+    /// The `id` attribute, if any.
+    pub(super) id: Option<String>,
+    /// The first characters of its content.
+    pub(super) snippet: String,
+}
+
+impl TextElement {
+    /// How a warning names this element.
+    pub(super) fn label(&self) -> String {
+        match &self.id {
+            Some(id) => format!("text element '{id}'"),
+            None => format!("text element #{} (\"{}\")", self.index, self.snippet),
+        }
+    }
+}
+
+/// Parse `data` into a usvg tree plus the facts of the XML pre-pass.
+pub(super) fn parse(data: &[u8]) -> Result<(usvg::Tree, XmlFacts)> {
+    let text = decode(data)?;
+    let fontdb = font_database();
+    let work = move || parse_text(&text, fontdb);
+    let spawned = std::thread::Builder::new()
+        .name("triwild-svg-parse".into())
+        .stack_size(PARSE_STACK_BYTES)
+        .spawn(work);
+    match spawned {
+        Ok(handle) => handle.join().unwrap_or_else(|_| {
+            Err(Error::NotSvg(
+                "the SVG parser (usvg) crashed on this input".into(),
+            ))
+        }),
+        // No thread available: parse on the caller's stack.
+        Err(_) => parse_text(&decode(data)?, font_database()),
+    }
+}
+
+/// Bytes → text, recognising common non-SVG inputs on the way.
+fn decode(data: &[u8]) -> Result<String> {
+    if data.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::EmptyFile);
+    }
+    if let Some(what) = binary_format(data) {
+        return Err(Error::NotSvg(what));
+    }
+    if let Some(units) = utf16_units(data) {
+        return String::from_utf16(&units)
+            .map_err(|_| Error::NotSvg("broken UTF-16 text (invalid surrogate pairs)".into()));
+    }
+    let text = std::str::from_utf8(data).map_err(|e| {
+        Error::NotSvg(format!(
+            "not UTF-8 text (invalid byte at offset {}); binary data or a legacy encoding",
+            e.valid_up_to()
+        ))
+    })?;
+    Ok(text.strip_prefix('\u{feff}').unwrap_or(text).to_owned())
+}
+
+/// A readable name for well-known binary formats, by their magic bytes.
+fn binary_format(data: &[u8]) -> Option<String> {
+    const MAGIC: &[(&[u8], &str)] = &[
+        (
+            &[0x1f, 0x8b],
+            "gzip-compressed data (an .svgz file?); compressed SVG is not supported, decompress it first (gunzip)",
+        ),
+        (b"\x89PNG\r\n\x1a\n", "a PNG image, not an SVG document"),
+        (&[0xff, 0xd8, 0xff], "a JPEG image, not an SVG document"),
+        (b"GIF8", "a GIF image, not an SVG document"),
+        (b"%PDF", "a PDF document, not an SVG document"),
+        (b"PK\x03\x04", "a ZIP archive, not an SVG document"),
+    ];
+    MAGIC
+        .iter()
+        .find(|(magic, _)| data.starts_with(magic))
+        .map(|(_, what)| (*what).to_owned())
+        .or_else(|| {
+            (data.len() >= 12 && &data[..4] == b"RIFF" && &data[8..12] == b"WEBP")
+                .then(|| "a WebP image, not an SVG document".to_owned())
+        })
+}
+
+/// UTF-16 code units if `data` starts with a UTF-16 byte-order mark.
+fn utf16_units(data: &[u8]) -> Option<Vec<u16>> {
+    let (body, little) = match data {
+        [0xff, 0xfe, rest @ ..] => (rest, true),
+        [0xfe, 0xff, rest @ ..] => (rest, false),
+        _ => return None,
+    };
+    Some(
+        body.chunks(2)
+            .map(|c| {
+                let pair = [c[0], c.get(1).copied().unwrap_or(0)];
+                if little {
+                    u16::from_le_bytes(pair)
+                } else {
+                    u16::from_be_bytes(pair)
+                }
+            })
+            .collect(),
+    )
+}
+
+/// Text → XML document → checks → usvg tree.
+fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, XmlFacts)> {
+    let xml_opt = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(text, xml_opt)
+        .map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
+    let root = doc.root_element();
+    let name = root.tag_name();
+    if !name.name().eq_ignore_ascii_case("svg")
+        || !matches!(name.namespace(), None | Some(SVG_NS))
+    {
+        let hint = if name.name().eq_ignore_ascii_case("html") {
+            " (an HTML page?)"
+        } else {
+            ""
+        };
+        return Err(Error::NotSvg(format!(
+            "the root element is <{}>, not <svg>{hint}",
+            name.name()
+        )));
+    }
+    let facts = xml_facts(&doc);
+    let opt = usvg::Options {
+        fontdb,
+        image_href_resolver: usvg::ImageHrefResolver {
+            // Images are not geometry: never decode or read them.
+            resolve_data: Box::new(|_, _, _| None),
+            resolve_string: Box::new(|_, _| None),
+        },
+        ..usvg::Options::default()
+    };
+    let tree =
+        usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| Error::NotSvg(usvg_error_message(&e)))?;
+    Ok((tree, facts))
+}
+
+/// usvg's error, made readable.
+fn usvg_error_message(e: &usvg::Error) -> String {
+    match e {
+        usvg::Error::ParsingFailed(roxmltree::Error::NodesLimitReached) => {
+            "too many elements or too deep nesting after expanding <use> references \
+             (usvg's safety limits: 1,000,000 elements, 1024 levels)"
+                .into()
+        }
+        usvg::Error::ParsingFailed(roxmltree::Error::NoRootNode) => {
+            "the document has no <svg> root element".into()
+        }
+        usvg::Error::ParsingFailed(e) => format!("broken XML: {e}"),
+        usvg::Error::ElementsLimitReached => {
+            "more than 1,000,000 elements (usvg's safety limit)".into()
+        }
+        usvg::Error::InvalidSize => {
+            "the <svg> element has an invalid size (zero or negative width/height, or a bad viewBox)"
+                .into()
+        }
+        usvg::Error::NotAnUtf8Str => "not UTF-8 text".into(),
+        usvg::Error::SvgzFeatureNotEnabled | usvg::Error::MalformedGZip => {
+            "gzip-compressed data (an .svgz file?); compressed SVG is not supported".into()
+        }
+    }
+}
+
+/// roxmltree's error, with a hint when the input looks like HTML.
+fn xml_error_message(text: &str, e: &roxmltree::Error) -> String {
+    let head: String = text
+        .trim_start()
+        .chars()
+        .take(64)
+        .collect::<String>()
+        .to_ascii_lowercase();
+    if head.starts_with("<!doctype html") || head.starts_with("<html") {
+        return format!("an HTML page, not an SVG document (XML error: {e})");
+    }
+    match e {
+        roxmltree::Error::NoRootNode => "no XML element: not an XML document".into(),
+        roxmltree::Error::EntityReferenceLoop(pos) => format!(
+            "XML entity expansion too deep or too large at {pos} (entity bomb?)"
+        ),
+        roxmltree::Error::NodesLimitReached => "too many XML nodes".into(),
+        _ => format!("broken XML: {e}"),
+    }
+}
+
+/// What the usvg tree forgets: which groups are `<use>` elements, and which text elements exist.
+fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
+    const NOT_RENDERED: &[&str] = &[
+        "defs", "clipPath", "mask", "pattern", "marker", "symbol", "title", "desc", "metadata",
+    ];
+    let mut facts = XmlFacts::default();
+    let mut text_index = 0;
+    for node in doc.descendants().filter(roxmltree::Node::is_element) {
+        let name = node.tag_name().name();
+        if name == "use" {
+            if let Some(id) = node.attribute("id") {
+                facts.use_ids.insert(id.to_owned());
+            }
+        } else if name == "text" {
+            let index = text_index;
+            text_index += 1;
+            let hidden = node.ancestors().filter(roxmltree::Node::is_element).any(|a| {
+                NOT_RENDERED.contains(&a.tag_name().name()) || a.attribute("display") == Some("none")
+            });
+            let content: String = node
+                .descendants()
+                .filter_map(|n| n.text())
+                .collect::<String>();
+            let content = content.split_whitespace().collect::<Vec<_>>().join(" ");
+            if hidden || content.is_empty() {
+                continue;
+            }
+            let mut snippet: String = content.chars().take(20).collect();
+            if content.chars().count() > 20 {
+                snippet.push('…');
+            }
+            facts.texts.push(TextElement {
+                index,
+                id: node.attribute("id").map(str::to_owned),
+                snippet,
+            });
+        }
+    }
+    facts
+}
+
+/// The system fonts, loaded once per process.
+///
+/// Generic families (serif, sans-serif, ...) are pointed at fonts that exist
+/// here, so that text with an unknown `font-family` still gets outlines.
+pub(super) fn font_database() -> Arc<fontdb::Database> {
+    static DB: OnceLock<Arc<fontdb::Database>> = OnceLock::new();
+    DB.get_or_init(|| {
+        let mut db = fontdb::Database::new();
+        db.load_system_fonts();
+        let families: Vec<String> = db
+            .faces()
+            .filter_map(|f| f.families.first().map(|(name, _)| name.clone()))
+            .collect();
+        let pick = |preferred: &[&str]| {
+            preferred
+                .iter()
+                .find(|p| families.iter().any(|f| f == *p))
+                .map(|p| (*p).to_owned())
+                .or_else(|| families.first().cloned())
+        };
+        if let Some(f) = pick(&["DejaVu Serif", "Liberation Serif", "Noto Serif", "FreeSerif"]) {
+            db.set_serif_family(f);
+        }
+        if let Some(f) = pick(&["DejaVu Sans", "Liberation Sans", "Noto Sans", "FreeSans"]) {
+            db.set_sans_serif_family(f.clone());
+            db.set_cursive_family(f.clone());
+            db.set_fantasy_family(f);
+        }
+        if let Some(f) = pick(&["DejaVu Sans Mono", "Liberation Mono", "Noto Sans Mono"]) {
+            db.set_monospace_family(f);
+        }
+        Arc::new(db)
+    })
+    .clone()
+}

@@ -1,0 +1,102 @@
+//! Shapes → the feature soup ([`Drawing::features`]), its bounding box, and the
+//! whole-drawing checks (not empty, extent representable in f64).
+
+use super::drawing::{Drawing, Feature, FeatureGeom, FeatureSource, Segment, Shape, ShapeId};
+use crate::{Error, Result};
+use kurbo::Rect;
+
+/// Smallest accepted ratio of the bbox diagonal to the largest coordinate
+/// magnitude: below it, f64 cannot resolve the drawing's details.
+pub(super) const MIN_RELATIVE_EXTENT: f64 = 1e-12;
+
+/// Assemble a [`Drawing`] from shapes: features, bbox and the whole-drawing checks.
+///
+/// # Errors
+/// [`Error::NoGeometry`] without any feature, [`Error::BadCoordinate`] when the
+/// drawing is too small for its distance from the origin.
+pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Drawing> {
+    let features = features(&shapes);
+    let Some(first) = features.first() else {
+        return Err(Error::NoGeometry);
+    };
+    let start = match first.geom {
+        FeatureGeom::Point(p) => p,
+        FeatureGeom::Line(l) => l.p0,
+        FeatureGeom::Cubic(c) => c.p0,
+    };
+    let mut bbox = Rect::from_points(start, start);
+    for f in &features {
+        for p in control_points(&f.geom) {
+            bbox = bbox.union_pt(p);
+        }
+    }
+    let diagonal = bbox.width().hypot(bbox.height());
+    let magnitude = [bbox.x0, bbox.x1, bbox.y0, bbox.y1]
+        .into_iter()
+        .fold(0.0_f64, |m, c| m.max(c.abs()));
+    if diagonal > 0.0 && diagonal < MIN_RELATIVE_EXTENT * magnitude {
+        return Err(Error::BadCoordinate(format!(
+            "the drawing is too small for its position to be meshed in double precision: \
+             its extent {diagonal:e} is below {MIN_RELATIVE_EXTENT:e} times its distance \
+             {magnitude:e} from the origin; translate it closer to the origin"
+        )));
+    }
+    Ok(Drawing {
+        shapes,
+        features,
+        bbox,
+        warnings,
+    })
+}
+
+/// Control points of a feature.
+fn control_points(g: &FeatureGeom) -> impl Iterator<Item = kurbo::Point> {
+    let (pts, n) = match *g {
+        FeatureGeom::Point(p) => ([p; 4], 1),
+        FeatureGeom::Line(l) => ([l.p0, l.p1, l.p1, l.p1], 2),
+        FeatureGeom::Cubic(c) => ([c.p0, c.p1, c.p2, c.p3], 4),
+    };
+    pts.into_iter().take(n)
+}
+
+/// The feature soup: every segment, a point per segment-less subpath, and the
+/// implicit closing segment of each open subpath of a filled shape.
+pub(super) fn features(shapes: &[Shape]) -> Vec<Feature> {
+    let mut out = Vec::new();
+    for (si, shape) in shapes.iter().enumerate() {
+        let shape_id = ShapeId(u32::try_from(si).unwrap_or(u32::MAX));
+        for (pi, sub) in shape.subpaths.iter().enumerate() {
+            let source = |segment: u32| FeatureSource {
+                shape: shape_id,
+                subpath: u32::try_from(pi).unwrap_or(u32::MAX),
+                segment,
+            };
+            if sub.segments.is_empty() {
+                out.push(Feature {
+                    geom: FeatureGeom::Point(sub.start),
+                    source: source(0),
+                });
+                continue;
+            }
+            for (k, seg) in sub.segments.iter().enumerate() {
+                let geom = match *seg {
+                    Segment::Line(l) => FeatureGeom::Line(l),
+                    Segment::Cubic(c) => FeatureGeom::Cubic(c),
+                };
+                out.push(Feature {
+                    geom,
+                    source: source(u32::try_from(k).unwrap_or(u32::MAX - 1)),
+                });
+            }
+            if shape.filled {
+                if let Some(line) = sub.implicit_closing_segment() {
+                    out.push(Feature {
+                        geom: FeatureGeom::Line(line),
+                        source: source(FeatureSource::IMPLICIT_CLOSE),
+                    });
+                }
+            }
+        }
+    }
+    out
+}

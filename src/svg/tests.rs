@@ -1,0 +1,611 @@
+//! Unit tests of the SVG loader, through its own API (`load_bytes`, `load_file`).
+
+use super::*;
+use crate::ErrorKind;
+use kurbo::{ParamCurve, Point};
+
+/// Wrap `body` in an `<svg>` root with a 100×100 user space (no viewBox scaling).
+fn svg(body: &str) -> String {
+    format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" width="100" height="100">{body}</svg>"#
+    )
+}
+
+fn load(body: &str) -> Drawing {
+    load_bytes(svg(body).as_bytes()).expect("test SVG loads")
+}
+
+fn load_err(doc: &str) -> Error {
+    load_bytes(doc.as_bytes()).expect_err("test SVG must be rejected")
+}
+
+fn count(sub: &Subpath) -> (usize, usize) {
+    let lines = sub
+        .segments
+        .iter()
+        .filter(|s| matches!(s, Segment::Line(_)))
+        .count();
+    (lines, sub.segments.len() - lines)
+}
+
+fn close(a: Point, b: Point) -> bool {
+    (a - b).hypot() < 1e-9
+}
+
+#[test]
+fn rounded_rect_is_four_cubics_and_four_lines() {
+    let d = load(r#"<rect x="10" y="10" width="50" height="30" rx="5" ry="4"/>"#);
+    assert_eq!(d.shapes.len(), 1);
+    let subs = &d.shapes[0].subpaths;
+    assert_eq!(subs.len(), 1);
+    assert!(subs[0].closed);
+    assert_eq!(count(&subs[0]), (4, 4));
+    assert_eq!(d.features.len(), 8);
+    assert!(close(d.bbox.origin(), Point::new(10.0, -40.0)));
+    assert!((d.bbox.width() - 50.0).abs() < 1e-9 && (d.bbox.height() - 30.0).abs() < 1e-9);
+}
+
+#[test]
+fn circle_is_four_cubics() {
+    let d = load(r#"<circle cx="50" cy="50" r="20"/>"#);
+    let sub = &d.shapes[0].subpaths[0];
+    assert!(sub.closed);
+    assert_eq!(count(sub), (0, 4));
+    for seg in &sub.segments {
+        let c = seg.to_cubic();
+        for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            let r = (c.eval(t) - Point::new(50.0, -50.0)).hypot();
+            assert!((r - 20.0).abs() < 0.1, "radius {r}");
+        }
+    }
+}
+
+#[test]
+fn ellipse_line_polyline_polygon() {
+    let d = load(
+        r#"<ellipse cx="50" cy="50" rx="20" ry="10"/>
+           <line x1="0" y1="0" x2="10" y2="10" stroke="black"/>
+           <polyline points="0,0 10,0 10,10" fill="none" stroke="black"/>
+           <polygon points="0,0 10,0 10,10"/>"#,
+    );
+    assert_eq!(d.shapes.len(), 4);
+    assert_eq!(count(&d.shapes[0].subpaths[0]), (0, 4));
+    assert_eq!(count(&d.shapes[1].subpaths[0]), (1, 0));
+    assert_eq!(count(&d.shapes[2].subpaths[0]), (2, 0));
+    assert!(!d.shapes[2].subpaths[0].closed);
+    assert_eq!(count(&d.shapes[3].subpaths[0]), (3, 0));
+    assert!(d.shapes[3].subpaths[0].closed);
+    let idx: Vec<u32> = d.shapes.iter().map(|s| s.element_index).collect();
+    assert_eq!(idx, [0, 1, 2, 3]);
+}
+
+#[test]
+fn y_is_flipped() {
+    let d = load(r#"<path d="M 1 2 L 10 20" stroke="black"/>"#);
+    let FeatureGeom::Line(l) = d.features[0].geom else {
+        panic!("expected a line, got {:?}", d.features[0].geom)
+    };
+    assert_eq!((l.p0, l.p1), (Point::new(1.0, -2.0), Point::new(10.0, -20.0)));
+}
+
+#[test]
+fn transforms_are_applied() {
+    let d = load(
+        r#"<g transform="translate(10,20) scale(2)">
+             <rect x="1" y="1" width="1" height="1" transform="rotate(90 1 1)"/>
+           </g>"#,
+    );
+    // rect (1..2, 1..2) rotated 90° about (1,1) -> (0..1, 1..2); then scale 2, translate.
+    assert!(close(d.bbox.origin(), Point::new(10.0, -24.0)), "{:?}", d.bbox);
+    assert!(close(Point::new(d.bbox.x1, d.bbox.y1), Point::new(12.0, -22.0)));
+}
+
+#[test]
+fn nested_svg_and_use_are_positioned() {
+    let d = load(
+        r##"<svg x="10" y="10" width="20" height="20" viewBox="0 0 10 10">
+              <rect width="10" height="10"/>
+            </svg>
+            <defs><rect id="r" width="5" height="5"/></defs>
+            <use id="u" xlink:href="#r" x="50" y="60"/>"##,
+    );
+    assert_eq!(d.shapes.len(), 2);
+    let b0 = bbox_of(&d.shapes[0]);
+    assert!(close(b0.origin(), Point::new(10.0, -30.0)), "{b0:?}");
+    assert!(close(Point::new(b0.x1, b0.y1), Point::new(30.0, -10.0)), "{b0:?}");
+    let b1 = bbox_of(&d.shapes[1]);
+    assert!(close(b1.origin(), Point::new(50.0, -65.0)), "{b1:?}");
+    assert!(d.shapes[1].svg_id.is_some());
+}
+
+#[test]
+fn use_id_names_anonymous_children() {
+    let d = load(
+        r##"<defs><g id="g"><rect width="5" height="5"/></g></defs>
+            <use id="u" xlink:href="#g"/>"##,
+    );
+    assert_eq!(d.shapes[0].svg_id.as_deref(), Some("u"));
+    assert_eq!(d.shapes[0].name(), "u");
+}
+
+fn bbox_of(shape: &Shape) -> kurbo::Rect {
+    let mut pts = shape
+        .subpaths
+        .iter()
+        .flat_map(|s| s.segments.iter().flat_map(Segment::control_points));
+    let first = pts.next().expect("shape has points");
+    pts.fold(kurbo::Rect::from_points(first, first), |r, p| r.union_pt(p))
+}
+
+#[test]
+fn css_styles_apply() {
+    let d = load(
+        r##"<style>.a { fill: #00ff00; fill-rule: evenodd } #b { fill: none; stroke: red }</style>
+           <rect class="a" width="5" height="5"/>
+           <rect id="b" width="5" height="5"/>"##,
+    );
+    assert_eq!(d.shapes[0].fill_colour, Some([0, 255, 0]));
+    assert_eq!(d.shapes[0].fill_rule, FillRule::EvenOdd);
+    assert!(!d.shapes[1].filled && d.shapes[1].stroked);
+}
+
+#[test]
+fn quadratic_is_elevated_exactly() {
+    let d = load(r#"<path d="M 0 0 Q 30 60 60 0 T 120 0" fill="none" stroke="black"/>"#);
+    let sub = &d.shapes[0].subpaths[0];
+    assert_eq!(count(sub), (0, 2));
+    let Segment::Cubic(c) = sub.segments[0] else {
+        panic!("expected a cubic")
+    };
+    let q = kurbo::QuadBez::new((0.0, 0.0), (30.0, -60.0), (60.0, 0.0));
+    for i in 0..=16 {
+        let t = f64::from(i) / 16.0;
+        assert!((c.eval(t) - q.eval(t)).hypot() < 1e-12);
+    }
+    assert_eq!(c.p1, Point::new(20.0, -40.0));
+}
+
+#[test]
+fn fill_rule_colour_and_id() {
+    let d = load(
+        r##"<path id="star" fill="#102030" fill-rule="evenodd" d="M 0 0 L 10 0 L 5 10 Z"/>
+           <path d="M 0 0 L 10 0 L 5 10 Z" fill="url(#nope)" stroke="blue"/>
+           <path d="M 0 0 L 10 0 L 5 10 Z" fill="none"/>"##,
+    );
+    let s = &d.shapes[0];
+    assert_eq!(s.svg_id.as_deref(), Some("star"));
+    assert_eq!((s.filled, s.stroked), (true, false));
+    assert_eq!(s.fill_rule, FillRule::EvenOdd);
+    assert_eq!(s.fill_colour, Some([0x10, 0x20, 0x30]));
+    assert_eq!(d.shapes[1].fill_rule, FillRule::NonZero);
+    assert_eq!(d.shapes[1].name(), "shape-1");
+    // Neither fill nor stroke: still geometry (TriWild meshes every outline).
+    assert_eq!((d.shapes[2].filled, d.shapes[2].stroked), (false, false));
+    assert_eq!(d.shapes.len(), 3);
+}
+
+#[test]
+fn filled_open_subpath_gets_implicit_close() {
+    let d = load(
+        r#"<path d="M 0 0 L 10 0 L 10 10" fill="red"/>
+           <path d="M 0 0 L 10 0 L 10 10" fill="none" stroke="red"/>
+           <path d="M 0 0 L 10 0 L 10 10 L 0 0" fill="red"/>"#,
+    );
+    let implicit: Vec<&Feature> = d
+        .features
+        .iter()
+        .filter(|f| f.source.segment == FeatureSource::IMPLICIT_CLOSE)
+        .collect();
+    assert_eq!(implicit.len(), 1);
+    assert_eq!(implicit[0].source.shape, ShapeId(0));
+    assert_eq!(
+        implicit[0].geom,
+        FeatureGeom::Line(kurbo::Line::new((10.0, -10.0), (0.0, 0.0)))
+    );
+    assert_eq!(d.features.len(), 3 + 2 + 3);
+}
+
+#[test]
+fn zero_length_subpaths_are_points() {
+    let d = load(
+        r#"<path d="M 5 5 L 5 5" stroke="black" stroke-linecap="round"/>
+           <path d="M 0 0 L 10 0 L 10 0 L 20 0" fill="none" stroke="black"/>"#,
+    );
+    let s0 = &d.shapes[0];
+    assert!(s0.subpaths[0].segments.is_empty());
+    assert_eq!(d.features[0].geom, FeatureGeom::Point(Point::new(5.0, -5.0)));
+    // The zero-length middle segment is dropped.
+    assert_eq!(count(&d.shapes[1].subpaths[0]), (2, 0));
+    assert_eq!(d.features.len(), 3);
+    // A single point is a valid drawing.
+    let p = load(r#"<path d="M 5 5 L 5 5" stroke="black"/>"#);
+    assert_eq!(p.features.len(), 1);
+    assert_eq!(p.diagonal(), 1.0);
+}
+
+#[test]
+fn trailing_moveto_is_a_point() {
+    let d = load(r#"<path d="M 0 0 L 10 0 M 20 20" stroke="black"/>"#);
+    let geoms: Vec<FeatureGeom> = d.features.iter().map(|f| f.geom).collect();
+    assert!(geoms.contains(&FeatureGeom::Point(Point::new(20.0, -20.0))), "{geoms:?}");
+}
+
+#[test]
+fn text_without_outline_warns() {
+    let d = load(
+        r#"<rect width="5" height="5"/>
+           <text id="t0" x="10" y="10" font-size="0">Hello</text>"#,
+    );
+    assert_eq!(d.shapes.len(), 1);
+    assert!(d.warnings.iter().any(|w| w.contains("'t0'")), "{:?}", d.warnings);
+}
+
+#[test]
+fn text_becomes_outlines_when_a_font_exists() {
+    let d = load_bytes(
+        svg(r#"<text id="hello" x="10" y="50" font-size="20" font-family="sans-serif">Hi</text>"#)
+            .as_bytes(),
+    );
+    if super::load::font_database().is_empty() {
+        // No font on this machine: the text is skipped with a warning.
+        assert!(matches!(d, Err(Error::NoGeometry)));
+    } else {
+        let d = d.expect("text drawing loads");
+        assert!(!d.shapes.is_empty());
+        assert!(d.shapes.iter().all(|s| s.svg_id.as_deref() == Some("hello")));
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    }
+}
+
+#[test]
+fn images_are_ignored_with_a_warning() {
+    let d = load(
+        r#"<image width="10" height="10" xlink:href="data:image/png;base64,iVBORw0KGgo="/>
+           <image width="10" height="10" xlink:href="/etc/passwd"/>
+           <rect width="5" height="5"/>"#,
+    );
+    assert_eq!(d.shapes.len(), 1);
+}
+
+#[test]
+fn clip_paths_and_masks_are_not_geometry() {
+    let d = load(
+        r##"<clipPath id="c"><circle cx="5" cy="5" r="5"/></clipPath>
+            <mask id="m"><rect width="100" height="100" fill="white"/></mask>
+            <rect width="10" height="10" clip-path="url(#c)" mask="url(#m)"/>"##,
+    );
+    assert_eq!(d.shapes.len(), 1);
+    assert_eq!(count(&d.shapes[0].subpaths[0]), (4, 0));
+}
+
+#[test]
+fn invisible_elements_stay_dropped() {
+    let err = load_err(&svg(r#"<rect width="5" height="5" display="none"/>"#));
+    assert!(matches!(err, Error::NoGeometry), "{err}");
+}
+
+// ---- bad input ----
+
+#[test]
+fn missing_file_is_a_read_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let err = load_file(&dir.path().join("nope.svg")).expect_err("missing file");
+    assert!(matches!(err, Error::Read(_)));
+    assert_eq!(err.kind(), ErrorKind::Io);
+    assert!(err.to_string().contains("No such file"), "{err}");
+}
+
+#[test]
+fn directory_is_rejected() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    assert!(matches!(load_file(dir.path()), Err(Error::IsDirectory)));
+}
+
+#[test]
+fn empty_file_is_rejected() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("empty.svg");
+    std::fs::write(&path, b"").expect("write");
+    assert!(matches!(load_file(&path), Err(Error::EmptyFile)));
+    assert!(matches!(load_bytes(b" \n\t "), Err(Error::EmptyFile)));
+}
+
+#[test]
+fn a_file_loads() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("ok.svg");
+    std::fs::write(&path, svg(r#"<rect width="5" height="5"/>"#)).expect("write");
+    assert_eq!(load_file(&path).expect("loads").features.len(), 4);
+}
+
+fn not_svg(doc: &[u8]) -> String {
+    match load_bytes(doc) {
+        Err(Error::NotSvg(cause)) => cause,
+        other => panic!("expected NotSvg, got {other:?}"),
+    }
+}
+
+#[test]
+fn non_svg_inputs_are_not_svg() {
+    assert!(not_svg(b"hello world").contains("XML"));
+    assert!(not_svg(b"<svg xmlns='http://www.w3.org/2000/svg'><rect></svg>").contains("broken XML"));
+    let html = b"<!DOCTYPE html>\n<html><head><meta charset='utf-8'></head><body>x</body></html>";
+    assert!(not_svg(html).contains("HTML"));
+    let xhtml = b"<html xmlns='http://www.w3.org/1999/xhtml'><body/></html>";
+    assert!(not_svg(xhtml).contains("<html>"));
+    assert!(not_svg(b"<?xml version='1.0'?><foo/>").contains("<foo>"));
+    let png = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x01";
+    assert!(not_svg(png).contains("PNG"));
+    assert!(not_svg(&[0x1f, 0x8b, 8, 0, 0, 0]).contains("gzip"));
+    assert!(not_svg(&[0x3c, 0xff, 0xfe, 0x00]).contains("UTF-8"));
+    for e in [load_bytes(b"hello"), load_bytes(png)] {
+        assert_eq!(e.expect_err("bad").kind(), ErrorKind::BadInput);
+    }
+}
+
+#[test]
+fn utf16_with_bom_is_decoded() {
+    let text = svg(r#"<rect width="5" height="5"/>"#);
+    let mut bytes = vec![0xff, 0xfe];
+    bytes.extend(text.encode_utf16().flat_map(u16::to_le_bytes));
+    assert_eq!(load_bytes(&bytes).expect("utf-16 loads").features.len(), 4);
+    let bom8 = format!("\u{feff}{text}");
+    assert_eq!(load_bytes(bom8.as_bytes()).expect("bom loads").features.len(), 4);
+}
+
+#[test]
+fn empty_svg_has_no_geometry() {
+    assert!(matches!(load_err(&svg("")), Error::NoGeometry));
+    assert!(matches!(load_err(&svg(r#"<path d=""/>"#)), Error::NoGeometry));
+}
+
+#[test]
+fn huge_coordinates_are_bad() {
+    let err = load_err(&svg(r#"<path id="far" d="M 0 0 L 1e20 0" stroke="black"/>"#));
+    let Error::BadCoordinate(msg) = &err else {
+        panic!("expected BadCoordinate, got {err:?}")
+    };
+    assert!(msg.contains("'far'"), "{msg}");
+    let err = load_err(&svg(
+        r#"<g transform="scale(1e20)"><rect width="1e10" height="1"/></g>"#,
+    ));
+    assert!(matches!(err, Error::BadCoordinate(_)), "{err:?}");
+}
+
+#[test]
+fn nan_and_overflow_never_give_garbage() {
+    let cases = [
+        r#"<path d="M 0 0 L NaN 0 L 5 5" stroke="black"/>"#,
+        r#"<path d="M 0 0 L 1e400 0 L 5 5" stroke="black"/>"#,
+        r#"<path d="M 0 0 L 1e39 0 L 5 5" stroke="black"/>"#,
+        r#"<path d="M 0 0 L inf 0" stroke="black"/>"#,
+        r#"<rect width="1e39" height="5"/>"#,
+        r#"<rect width="NaN" height="5"/>"#,
+        r#"<circle r="1e400"/>"#,
+        r#"<rect width="5" height="5" transform="scale(1e400)"/>"#,
+        r#"<rect width="5" height="5" transform="scale(1e39)"/>"#,
+        r#"<rect width="5" height="5" transform="translate(NaN)"/>"#,
+        r#"<rect width="1e38" height="1e38" transform="scale(1e38)"/>"#,
+        r#"<polygon points="0 0 1e39 0 0 1e39"/>"#,
+    ];
+    for case in cases {
+        match load_bytes(svg(case).as_bytes()) {
+            Ok(d) => {
+                for f in &d.features {
+                    let pts: Vec<Point> = match f.geom {
+                        FeatureGeom::Point(p) => vec![p],
+                        FeatureGeom::Line(l) => vec![l.p0, l.p1],
+                        FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+                    };
+                    for p in pts {
+                        assert!(p.is_finite() && p.x.abs() <= 1e15 && p.y.abs() <= 1e15, "{case}");
+                    }
+                }
+            }
+            Err(Error::BadCoordinate(_) | Error::NoGeometry) => {}
+            Err(e) => panic!("{case}: unexpected {e:?}"),
+        }
+    }
+}
+
+#[test]
+fn tiny_extent_far_from_origin_is_bad() {
+    let err = load_err(&svg(
+        r#"<path d="M 1e14 0 L 1e14 0.00001" stroke="black"/>"#,
+    ));
+    assert!(matches!(err, Error::BadCoordinate(ref m) if m.contains("too small")), "{err:?}");
+    // The same extent near the origin is fine.
+    load(r#"<path d="M 1 0 L 1 0.00001" stroke="black"/>"#);
+}
+
+#[test]
+fn entity_bomb_is_rejected_quickly() {
+    let mut doc = String::from("<?xml version=\"1.0\"?>\n<!DOCTYPE svg [\n<!ENTITY a \"<rect width='1' height='1'/>\">\n");
+    let mut prev = "a".to_owned();
+    for i in 0..12 {
+        let name = format!("e{i}");
+        doc.push_str(&format!("<!ENTITY {name} \"{}\">\n", format!("&{prev};").repeat(10)));
+        prev = name;
+    }
+    doc.push_str(&format!("]>\n<svg xmlns='http://www.w3.org/2000/svg'>&{prev};</svg>"));
+    let t = std::time::Instant::now();
+    let err = load_err(&doc);
+    assert!(matches!(err, Error::NotSvg(_)), "{err:?}");
+    assert!(t.elapsed().as_secs_f64() < 5.0);
+}
+
+#[test]
+fn use_bomb_is_rejected_quickly() {
+    // Each level uses the previous one twice: 2^40 rectangles if expanded.
+    let mut body = String::from(r#"<defs><rect id="l0" width="1" height="1"/>"#);
+    for i in 1..=40 {
+        body.push_str(&format!(
+            r##"<g id="l{i}"><use xlink:href="#l{p}"/><use xlink:href="#l{p}" x="1"/></g>"##,
+            p = i - 1
+        ));
+    }
+    body.push_str(r##"</defs><use xlink:href="#l40"/>"##);
+    let t = std::time::Instant::now();
+    let err = load_err(&svg(&body));
+    assert!(matches!(err, Error::NotSvg(ref m) if m.contains("limit")), "{err:?}");
+    assert!(t.elapsed().as_secs_f64() < 20.0, "{:?}", t.elapsed());
+}
+
+#[test]
+fn deep_nesting_does_not_overflow_the_stack() {
+    for depth in [1000, 5000] {
+        let body = format!(
+            "{}<rect width='1' height='1'/>{}",
+            "<g>".repeat(depth),
+            "</g>".repeat(depth)
+        );
+        match load_bytes(svg(&body).as_bytes()) {
+            Ok(d) => assert_eq!(d.shapes.len(), 1),
+            Err(e) => assert!(matches!(e, Error::NotSvg(_)), "{e:?}"),
+        }
+    }
+}
+
+#[test]
+fn recursive_use_is_skipped() {
+    let d = load(
+        r##"<g id="g1"><rect width="1" height="1"/><use xlink:href="#g1"/></g>
+            <use id="self" xlink:href="#self"/>"##,
+    );
+    assert_eq!(d.shapes.len(), 1);
+}
+
+// ---- corpus and fuzzing ----
+
+/// Every coordinate of a loaded drawing is finite and in range, and the bbox holds them.
+fn assert_sane(d: &Drawing, what: &str) {
+    assert!(!d.features.is_empty(), "{what}: no features");
+    let bbox = d.bbox.inflate(1e-9 * d.diagonal(), 1e-9 * d.diagonal());
+    for f in &d.features {
+        let pts: Vec<Point> = match f.geom {
+            FeatureGeom::Point(p) => vec![p],
+            FeatureGeom::Line(l) => vec![l.p0, l.p1],
+            FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+        };
+        for p in pts {
+            assert!(
+                p.is_finite() && p.x.abs() <= Drawing::MAX_COORD && p.y.abs() <= Drawing::MAX_COORD,
+                "{what}: bad point {p:?}"
+            );
+            assert!(bbox.contains(p), "{what}: {p:?} outside bbox {:?}", d.bbox);
+        }
+    }
+}
+
+/// Load every file of the dev corpus: no panic, Ok with sane geometry or a bad-input error.
+/// Run with `cargo test --lib svg::tests::dev_corpus -- --ignored --nocapture`.
+#[test]
+#[ignore = "reads /work/shared/data/svg-dev (300 files, a few seconds)"]
+#[allow(clippy::print_stderr, reason = "the corpus summary is the test's report")]
+fn dev_corpus() {
+    let root = std::path::Path::new("/work/shared/data/svg-dev");
+    let mut files = Vec::new();
+    let mut dirs = vec![root.to_path_buf()];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).expect("corpus directory readable") {
+            let path = entry.expect("dir entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "svg") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    assert!(files.len() >= 300, "corpus has {} files", files.len());
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    let start = std::time::Instant::now();
+    let mut slowest = (0.0, String::new());
+    for path in &files {
+        let name = path.strip_prefix(root).unwrap_or(path).display().to_string();
+        let t = std::time::Instant::now();
+        let result = load_file(path);
+        let secs = t.elapsed().as_secs_f64();
+        if secs > slowest.0 {
+            slowest = (secs, name.clone());
+        }
+        let key = match &result {
+            Ok(d) => {
+                assert_sane(d, &name);
+                if !d.warnings.is_empty() {
+                    eprintln!("WARN {name}: {:?}", d.warnings);
+                }
+                "ok".to_owned()
+            }
+            Err(e) => {
+                assert_eq!(e.kind(), ErrorKind::BadInput, "{name}: {e}");
+                eprintln!("FAIL {name}: {e}");
+                format!("{e:?}").split('(').next().unwrap_or("?").to_owned()
+            }
+        };
+        *counts.entry(key).or_default() += 1;
+    }
+    eprintln!(
+        "dev corpus: {} files in {:.2} s (slowest {:.3} s: {}); {counts:?}",
+        files.len(),
+        start.elapsed().as_secs_f64(),
+        slowest.0,
+        slowest.1
+    );
+}
+
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    const SEED_SVG: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" viewBox="0 0 100 100"><defs><path id="p" d="M 10 10 Q 20 40 30 10 T 50 10 A 5 5 0 0 1 60 20"/></defs><g transform="rotate(30 50 50) scale(1.5)"><rect x="5" y="5" width="40" height="20" rx="4"/><circle cx="50" cy="50" r="10" fill="none" stroke="red"/><use xlink:href="#p" x="3"/><polygon points="1,2 30,40 50,2" fill-rule="evenodd"/><svg x="60" y="60" width="20" height="20" viewBox="0 0 10 10"><ellipse cx="5" cy="5" rx="5" ry="2"/></svg></g><text x="5" y="90" font-size="8">Hi</text></svg>"##;
+
+    fn config() -> ProptestConfig {
+        ProptestConfig {
+            cases: 128,
+            failure_persistence: None,
+            rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+            ..ProptestConfig::default()
+        }
+    }
+
+    fn check(data: &[u8]) {
+        match load_bytes(data) {
+            Ok(d) => assert_sane(&d, "fuzz input"),
+            Err(e) => assert_eq!(e.kind(), ErrorKind::BadInput, "{e}"),
+        }
+    }
+
+    #[test]
+    fn seed_document_loads() {
+        let d = load_bytes(SEED_SVG.as_bytes()).expect("seed loads");
+        assert!(d.shapes.len() >= 5);
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn random_bytes_never_panic(data in proptest::collection::vec(any::<u8>(), 0..256)) {
+            check(&data);
+        }
+
+        #[test]
+        fn mutated_svg_never_panics(
+            edits in proptest::collection::vec((0..SEED_SVG.len(), 0u8..4, any::<u8>()), 1..8)
+        ) {
+            let mut data = SEED_SVG.as_bytes().to_vec();
+            for (pos, op, byte) in edits {
+                let pos = pos.min(data.len());
+                match op {
+                    0 => data.insert(pos, byte),
+                    1 if pos < data.len() => { data.remove(pos); }
+                    2 if pos < data.len() => data[pos] = byte,
+                    // Splice in a digit run: huge, tiny or malformed numbers.
+                    _ => data.splice(pos..pos, b"9e3".iter().copied().cycle().take(1 + usize::from(byte % 12))).for_each(drop),
+                }
+            }
+            check(&data);
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! Bad input gets one clear line, its exit code, and no output file.
+//!
+//! Table-driven over every case of the foundation issue: each row runs the real
+//! binary and checks stderr (`error: <file>: <cause>`), the exit code, and that no
+//! output appeared (and that an existing output file was left untouched).
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_triwild"))
+}
+
+/// A fresh scratch directory under target/test-tmp for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-errors").join(name);
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00";
+
+struct Case {
+    name: &'static str,
+    /// Input file content; `None` for "does not exist", `Some(None)` for a directory.
+    input: Input,
+    /// Output path relative to the scratch dir.
+    output: &'static str,
+    code: i32,
+    /// A word the cause must contain (case-insensitive).
+    cause: &'static str,
+    /// Which file the message must name.
+    names_output: bool,
+}
+
+enum Input {
+    Missing,
+    Directory,
+    Bytes(&'static [u8]),
+}
+
+const SQUARE: &[u8] = br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><rect x="1" y="1" width="8" height="8"/></svg>"#;
+
+fn cases() -> Vec<Case> {
+    use Input::*;
+    vec![
+        Case { name: "missing", input: Missing, output: "out.msh", code: 2, cause: "no such file", names_output: false },
+        Case { name: "directory", input: Directory, output: "out.msh", code: 2, cause: "directory", names_output: false },
+        Case { name: "empty", input: Bytes(b""), output: "out.msh", code: 2, cause: "empty", names_output: false },
+        Case { name: "not-xml", input: Bytes(b"hello, this is plain text\n"), output: "out.msh", code: 2, cause: "svg", names_output: false },
+        Case { name: "broken-xml", input: Bytes(b"<svg xmlns=\"http://www.w3.org/2000/svg\"><path d=\"M0 0 L1 1\"</svg>"), output: "out.msh", code: 2, cause: "svg", names_output: false },
+        Case { name: "html", input: Bytes(b"<!DOCTYPE html><html><head><title>x</title></head><body><p>hi</p></body></html>"), output: "out.msh", code: 2, cause: "svg", names_output: false },
+        Case { name: "png", input: Bytes(PNG_MAGIC), output: "out.msh", code: 2, cause: "svg", names_output: false },
+        Case { name: "no-geometry", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10"><title>nothing</title></svg>"#), output: "out.msh", code: 2, cause: "geometry", names_output: false },
+        Case { name: "nan", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M 0 0 L NaN 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "", names_output: false },
+        Case { name: "huge", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M 0 0 L 1e300 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "coordinate", names_output: false },
+        Case { name: "infinite-transform", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path transform="scale(1e200)" d="M 0 0 L 1e200 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "", names_output: false },
+        Case { name: "missing-out-dir", input: Bytes(SQUARE), output: "no/such/dir/out.msh", code: 4, cause: "", names_output: true },
+        Case { name: "out-under-file", input: Bytes(SQUARE), output: "a-file/out.msh", code: 4, cause: "", names_output: true },
+        Case { name: "out-is-dir", input: Bytes(SQUARE), output: "a-dir", code: 4, cause: "directory", names_output: true },
+    ]
+}
+
+#[test]
+fn bad_input_gets_one_line_an_exit_code_and_no_output() {
+    for case in cases() {
+        let dir = scratch(case.name);
+        fs::write(dir.join("a-file"), b"not a directory").unwrap();
+        fs::create_dir_all(dir.join("a-dir")).unwrap();
+        let input = dir.join("in.svg");
+        match case.input {
+            Input::Missing => {}
+            Input::Directory => fs::create_dir_all(&input).unwrap(),
+            Input::Bytes(b) => fs::write(&input, b).unwrap(),
+        }
+        let output = dir.join(case.output);
+        let before: Vec<_> = list(&dir);
+        let out = bin().arg(&input).arg("-o").arg(&output).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(out.status.code(), Some(case.code), "{}: exit code; stderr: {stderr}", case.name);
+        assert_eq!(lines.len(), 1, "{}: exactly one line on stderr, got: {stderr}", case.name);
+        let named = if case.names_output { &output } else { &input };
+        let prefix = format!("error: {}: ", named.display());
+        assert!(lines[0].starts_with(&prefix), "{}: `{}` should start with `{prefix}`", case.name, lines[0]);
+        assert!(
+            lines[0].to_lowercase().contains(case.cause),
+            "{}: `{}` should mention `{}`",
+            case.name,
+            lines[0],
+            case.cause
+        );
+        assert_eq!(list(&dir), before, "{}: no file may be created", case.name);
+        assert!(out.stdout.is_empty(), "{}: nothing on stdout", case.name);
+    }
+}
+
+#[test]
+fn an_existing_output_is_left_untouched_on_failure() {
+    let dir = scratch("untouched");
+    let input = dir.join("in.svg");
+    fs::write(&input, b"<svg xmlns=\"http://www.w3.org/2000/svg\"></svg>").unwrap();
+    let output = dir.join("out.msh");
+    fs::write(&output, b"precious").unwrap();
+    let out = bin().arg(&input).arg("-o").arg(&output).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(fs::read(&output).unwrap(), b"precious");
+    assert_eq!(list(&dir).len(), 2, "no temporary file left behind");
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let out = bin().output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = bin().args(["x.svg", "--edge-length", "-1"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = bin().args(["x.svg", "--no-such-flag"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn help_documents_exit_codes_and_defaults() {
+    let out = bin().arg("--help").output().unwrap();
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for needle in ["Exit codes", "[default: 0.05]", "[default: 4.1]", "--stats", "--preview"] {
+        assert!(help.contains(needle), "--help should mention {needle}");
+    }
+}
+
+/// Every path below `dir`, sorted, relative to it.
+fn list(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p.clone());
+            }
+            out.push(p.strip_prefix(dir).unwrap().to_path_buf());
+        }
+    }
+    out.sort();
+    out
+}
