@@ -2,12 +2,17 @@
 //! CDT baseline → regions, checked against areas computed from the loaded
 //! curves themselves.
 
-use kurbo::{BezPath, ParamCurveArea, Point, Shape as _};
+use kurbo::{BezPath, ParamCurveArea, Point};
 use triwild::fem::FemMesh;
 use triwild::pipeline::{Meshed, mesh_drawing_with};
 use triwild::regions::{RegionMode, RegionOptions, RegionStat};
 use triwild::svg::{self, Drawing, Segment};
 use triwild::{Params, output};
+
+mod support;
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
 
 fn mesh(svg: &str, opts: &RegionOptions) -> (Drawing, Meshed) {
     let drawing = svg::load_bytes(svg.as_bytes()).expect("test SVG loads");
@@ -15,7 +20,7 @@ fn mesh(svg: &str, opts: &RegionOptions) -> (Drawing, Meshed) {
     (drawing, meshed)
 }
 
-fn area_of<'a>(stats: &'a [RegionStat], name: &str) -> f64 {
+fn area_of(stats: &[RegionStat], name: &str) -> f64 {
     stats
         .iter()
         .find(|s| s.name == name)
@@ -56,7 +61,7 @@ fn curve_length(d: &Drawing, shape: usize) -> f64 {
         .sum()
 }
 
-/// A fine counter-clockwise polygon of a convex shape's outline (flattened to 1e-9).
+/// A fine counter-clockwise polygon of a convex shape's outline (flattened to 1e-6).
 fn fine_polygon(d: &Drawing, shape: usize) -> Vec<Point> {
     let mut path = BezPath::new();
     for sp in &d.shapes[shape].subpaths {
@@ -70,7 +75,7 @@ fn fine_polygon(d: &Drawing, shape: usize) -> Vec<Point> {
         path.close_path();
     }
     let mut pts = Vec::new();
-    kurbo::flatten(path.iter(), 1e-9, |el| match el {
+    kurbo::flatten(path.iter(), 1e-6, |el| match el {
         kurbo::PathEl::MoveTo(p) | kurbo::PathEl::LineTo(p) => pts.push(p),
         _ => {}
     });
@@ -112,10 +117,41 @@ fn clip(subject: &[Point], clip: &[Point]) -> Vec<Point> {
     out
 }
 
+/// Write `mesh` (4.1 and 2.2) under `target/test-out/regions/`, keeping each
+/// file only if the independent reader and checker find it valid and every
+/// surface of the mesh appears as a named physical group of dimension 2.
 fn write_if_valid(mesh: &FemMesh, name: &str) {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("../test-out/regions");
-    if std::fs::create_dir_all(&dir).is_ok() {
-        output::write_msh(mesh, &dir.join(name), output::MshOptions::DEFAULT).expect("msh written");
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    let dir = DIR.get_or_init(|| support::out_dir("regions"));
+    for (version, tag) in [
+        (output::MshVersion::V41, "v41"),
+        (output::MshVersion::V22, "v22"),
+    ] {
+        let opts = output::MshOptions {
+            version,
+            binary: false,
+        };
+        let tmp = dir.join(format!("{name}-{tag}.msh.tmp"));
+        output::write_msh(mesh, &tmp, opts).expect("msh written");
+        let report = support::check_msh(&tmp);
+        let msh = support::read_msh(&tmp).expect("msh readable");
+        let named: Vec<&String> = msh
+            .physical_names
+            .iter()
+            .filter(|((dim, _), _)| *dim == 2)
+            .map(|(_, n)| n)
+            .collect();
+        let ok = report.is_valid() && mesh.surfaces.iter().all(|s| named.contains(&s));
+        if !ok {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        report.assert_valid(name);
+        assert!(
+            ok,
+            "{name}: surfaces {:?} vs physical names {named:?}",
+            mesh.surfaces
+        );
+        std::fs::rename(&tmp, dir.join(format!("{name}-{tag}.msh"))).expect("rename");
     }
 }
 
@@ -146,6 +182,10 @@ const CIRCLES: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 14
 </svg>"#;
 
 #[test]
+#[allow(
+    clippy::print_stderr,
+    reason = "the measured errors are worth seeing with --nocapture"
+)]
 fn overlapping_circles_give_background_a_b_with_exact_areas() {
     let (d, m) = mesh(CIRCLES, &RegionOptions::DEFAULT);
     let stats = &m.report.regions.surfaces;
@@ -179,7 +219,7 @@ fn overlapping_circles_give_background_a_b_with_exact_areas() {
         m.report.regions.relabelled,
         m.report.regions.relabelled_area
     );
-    write_if_valid(&m.mesh, "circles.msh");
+    write_if_valid(&m.mesh, "circles");
 
     // Cut outside: the background disappears, a and b keep their areas.
     let (_, cut) = mesh(CIRCLES, &RegionOptions::DEFAULT.with_cut_outside(true));
@@ -187,6 +227,7 @@ fn overlapping_circles_give_background_a_b_with_exact_areas() {
     check_groups(&cut.mesh);
     assert_eq!(area_of(&cut.report.regions.surfaces, "a"), ga);
     assert!(cut.mesh.nodes.len() < m.mesh.nodes.len());
+    write_if_valid(&cut.mesh, "circles-cut");
     // A hole at b's centre (output coordinates: y = -y_svg) removes b.
     let hole = RegionOptions::DEFAULT.with_holes(vec![Point::new(100.0, -50.0)]);
     let (_, holed) = mesh(CIRCLES, &hole);
@@ -237,7 +278,7 @@ fn evenodd_and_nonzero_stars_have_their_areas() {
         let total: f64 = m.report.regions.surfaces.iter().map(|s| s.area).sum();
         assert!((total - box_area(&d)).abs() <= 1e-9 * box_area(&d));
         check_groups(&m.mesh);
-        write_if_valid(&m.mesh, &format!("star-{rule}.msh"));
+        write_if_valid(&m.mesh, &format!("star-{rule}"));
     }
 }
 
@@ -254,5 +295,5 @@ fn a_shape_with_a_small_gap_is_still_filled() {
     assert!((got - 6400.0).abs() < 1e-9 * 6400.0, "{got}");
     assert!(d.shapes[0].subpaths[0].implicit_closing_segment().is_some());
     check_groups(&m.mesh);
-    write_if_valid(&m.mesh, "gap.msh");
+    write_if_valid(&m.mesh, "gap");
 }

@@ -157,7 +157,7 @@ impl Outline {
         let mut k = n.clamp(1, 1024);
         loop {
             let h = bb.height() / k as f64;
-            if !(h > 0.0) || !h.is_finite() {
+            if h.is_nan() || h <= 0.0 || h.is_infinite() {
                 k = 1;
             }
             let h = if k == 1 { f64::INFINITY } else { h };
@@ -523,7 +523,7 @@ mod tests {
             closed: true,
         };
         assert_eq!(
-            winding(&[zero.clone()], Point::ZERO, EPS),
+            winding(std::slice::from_ref(&zero), Point::ZERO, EPS),
             Winding::Clear(0)
         );
         assert!(!winding(&[zero], pt, EPS).is_clear());
