@@ -21,8 +21,13 @@
 //! ```
 
 pub mod baseline;
+pub mod bsp;
+pub mod batch;
 pub mod error;
+pub mod exact;
+pub mod features;
 pub mod fem;
+pub mod mesh;
 pub mod output;
 pub mod params;
 pub mod pipeline;

@@ -14,13 +14,16 @@ fn bin() -> Command {
 
 /// A fresh scratch directory under target/test-tmp for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-errors").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli-errors")
+        .join(name);
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).unwrap();
     dir
 }
 
-const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00";
+const PNG_MAGIC: &[u8] =
+    b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00";
 
 struct Case {
     name: &'static str,
@@ -54,7 +57,8 @@ fn cases() -> Vec<Case> {
         Case { name: "html", input: Bytes(b"<!DOCTYPE html><html><head><title>x</title></head><body><p>hi</p></body></html>"), output: "out.msh", code: 2, cause: "svg", names_output: false },
         Case { name: "png", input: Bytes(PNG_MAGIC), output: "out.msh", code: 2, cause: "svg", names_output: false },
         Case { name: "no-geometry", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10"><title>nothing</title></svg>"#), output: "out.msh", code: 2, cause: "geometry", names_output: false },
-        Case { name: "nan", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M 0 0 L NaN 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "", names_output: false },
+        Case { name: "nan", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M 0 0 L NaN 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "non-finite", names_output: false },
+        Case { name: "infinity", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><polygon points="0,0 Infinity,5 5,5"/></svg>"#), output: "out.msh", code: 2, cause: "non-finite", names_output: false },
         Case { name: "huge", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path d="M 0 0 L 1e300 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "coordinate", names_output: false },
         Case { name: "infinite-transform", input: Bytes(br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><path transform="scale(1e200)" d="M 0 0 L 1e200 5 L 5 5 Z"/></svg>"#), output: "out.msh", code: 2, cause: "", names_output: false },
         Case { name: "missing-out-dir", input: Bytes(SQUARE), output: "no/such/dir/out.msh", code: 4, cause: "", names_output: true },
@@ -80,11 +84,26 @@ fn bad_input_gets_one_line_an_exit_code_and_no_output() {
         let out = bin().arg(&input).arg("-o").arg(&output).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-        assert_eq!(out.status.code(), Some(case.code), "{}: exit code; stderr: {stderr}", case.name);
-        assert_eq!(lines.len(), 1, "{}: exactly one line on stderr, got: {stderr}", case.name);
+        assert_eq!(
+            out.status.code(),
+            Some(case.code),
+            "{}: exit code; stderr: {stderr}",
+            case.name
+        );
+        assert_eq!(
+            lines.len(),
+            1,
+            "{}: exactly one line on stderr, got: {stderr}",
+            case.name
+        );
         let named = if case.names_output { &output } else { &input };
         let prefix = format!("error: {}: ", named.display());
-        assert!(lines[0].starts_with(&prefix), "{}: `{}` should start with `{prefix}`", case.name, lines[0]);
+        assert!(
+            lines[0].starts_with(&prefix),
+            "{}: `{}` should start with `{prefix}`",
+            case.name,
+            lines[0]
+        );
         assert!(
             lines[0].to_lowercase().contains(case.cause),
             "{}: `{}` should mention `{}`",
@@ -114,7 +133,10 @@ fn an_existing_output_is_left_untouched_on_failure() {
 fn usage_errors_exit_2() {
     let out = bin().output().unwrap();
     assert_eq!(out.status.code(), Some(2));
-    let out = bin().args(["x.svg", "--edge-length", "-1"]).output().unwrap();
+    let out = bin()
+        .args(["x.svg", "--edge-length", "-1"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let out = bin().args(["x.svg", "--no-such-flag"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
@@ -125,7 +147,13 @@ fn help_documents_exit_codes_and_defaults() {
     let out = bin().arg("--help").output().unwrap();
     assert!(out.status.success());
     let help = String::from_utf8_lossy(&out.stdout);
-    for needle in ["Exit codes", "[default: 0.05]", "[default: 4.1]", "--stats", "--preview"] {
+    for needle in [
+        "Exit codes",
+        "[default: 0.05]",
+        "[default: 4.1]",
+        "--stats",
+        "--preview",
+    ] {
         assert!(help.contains(needle), "--help should mention {needle}");
     }
 }

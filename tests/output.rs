@@ -45,7 +45,16 @@ fn linear_square() -> FemMesh {
         triangles,
         triangle_group,
         surfaces: vec!["left".into(), "unused surface".into(), "right".into()],
-        lines: vec![v(0, 0), v(1, 0), v(1, 0), v(2, 0), v(1, 0), v(1, 1), v(1, 1), v(1, 2)],
+        lines: vec![
+            v(0, 0),
+            v(1, 0),
+            v(1, 0),
+            v(2, 0),
+            v(1, 0),
+            v(1, 1),
+            v(1, 1),
+            v(1, 2),
+        ],
         line_group: vec![0, 0, 2, 2],
         line_kind: vec![
             LineKind::Primary,
@@ -191,7 +200,14 @@ fn roundtrip(test: &str, mesh: &FemMesh, area: f64) {
         output::write_msh(mesh, &path, opts(version, binary)).expect("write");
         let msh = read_msh(&path).unwrap_or_else(|e| panic!("{tag}: unreadable: {e}"));
         assert_eq!(msh.binary, binary, "{tag}");
-        assert_eq!(msh.version, if version == MshVersion::V41 { "4.1" } else { "2.2" });
+        assert_eq!(
+            msh.version,
+            if version == MshVersion::V41 {
+                "4.1"
+            } else {
+                "2.2"
+            }
+        );
         // Nodes: tags 1..=N, coordinates bit-exact (ASCII uses shortest round-trip decimals).
         assert_eq!(msh.nodes.len(), mesh.nodes.len(), "{tag}");
         for (i, (t, xyz)) in msh.nodes.iter().enumerate() {
@@ -211,7 +227,10 @@ fn roundtrip(test: &str, mesh: &FemMesh, area: f64) {
         // Only used groups are written.
         let mut names: Vec<&str> = msh.physical_names.values().map(String::as_str).collect();
         names.sort_unstable();
-        assert!(!names.iter().any(|n| n.contains("unused")), "{tag}: {names:?}");
+        assert!(
+            !names.iter().any(|n| n.contains("unused")),
+            "{tag}: {names:?}"
+        );
         let report = check_msh(&path);
         report.assert_valid(tag);
         assert_eq!(report.order, mesh.order() as usize);
@@ -284,7 +303,11 @@ fn checker_rejects_an_inverted_cubic_with_ccw_corners() {
 fn checker_certifies_a_curved_element_that_needs_subdivision() {
     // det J = 1 − 3.2·x(1−x) ≥ 0.2, but its Bernstein coefficients at
     // (1,1,0) and (0,1,1) are 1 − 1.6 < 0: only subdivision certifies it.
-    let corners = [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+    let corners = [
+        Point::new(0.0, 0.0),
+        Point::new(1.0, 0.0),
+        Point::new(0.0, 1.0),
+    ];
     let map = |p: Point| Point::new(p.x, p.y * (1.0 - 3.2 * p.x * (1.0 - p.x)));
     let (nodes, triangles) = lift(Order::Cubic, &corners, &[[0, 1, 2]], map);
     let mesh = FemMesh {
@@ -392,14 +415,21 @@ fn reader_and_checker_accept_files_written_by_gmsh() {
         let report = check_msh(&path);
         report.assert_valid(tag);
         let ellipse = std::f64::consts::PI * 0.6;
-        assert!((report.area - ellipse).abs() < 1e-3 * ellipse, "{tag}: {}", report.area);
+        assert!(
+            (report.area - ellipse).abs() < 1e-3 * ellipse,
+            "{tag}: {}",
+            report.area
+        );
         if let Some(f) = &first {
             // Same mesh in every format (gmsh's ASCII keeps 16 digits).
             assert_eq!(f.nodes.len(), msh.nodes.len());
             for ((t0, p0), (t1, p1)) in f.nodes.iter().zip(&msh.nodes) {
                 assert_eq!(t0, t1);
                 for k in 0..3 {
-                    assert!((p0[k] - p1[k]).abs() <= 1e-15 * (1.0 + p0[k].abs()), "{tag}");
+                    assert!(
+                        (p0[k] - p1[k]).abs() <= 1e-15 * (1.0 + p0[k].abs()),
+                        "{tag}"
+                    );
                 }
             }
             let conn = |m: &Msh| {
@@ -410,6 +440,56 @@ fn reader_and_checker_accept_files_written_by_gmsh() {
             assert_eq!(conn(f), conn(&msh), "{tag}");
         } else {
             first = Some(msh);
+        }
+    }
+}
+
+/// A structured grid of `2·k²` triangles lifted to `order`.
+fn grid(k: u32, order: Order) -> FemMesh {
+    let mut corners = Vec::new();
+    for j in 0..=k {
+        for i in 0..=k {
+            corners.push(Point::new(f64::from(i) / 7.0, f64::from(j) / 7.0));
+        }
+    }
+    let v = |i: u32, j: u32| j * (k + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            tris.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            tris.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let (nodes, triangles) = lift(order, &corners, &tris, |p| p);
+    FemMesh {
+        order: Some(order),
+        nodes,
+        triangle_group: vec![0; tris.len()],
+        triangles,
+        surfaces: vec!["grid".into()],
+        ..FemMesh::default()
+    }
+}
+
+#[test]
+#[ignore = "timing run: cargo test --release --test output -- --ignored --nocapture"]
+fn write_a_million_triangles() {
+    let dir = scratch("output-million");
+    for order in [Order::Linear, Order::Cubic] {
+        let mesh = grid(708, order);
+        assert!(mesh.triangle_count() > 1_000_000);
+        for (version, binary, tag) in FORMATS {
+            let path = dir.join(format!("{tag}.msh"));
+            let t = std::time::Instant::now();
+            output::write_msh(&mesh, &path, opts(version, binary)).expect("write");
+            let secs = t.elapsed().as_secs_f64();
+            let bytes = std::fs::metadata(&path).expect("meta").len();
+            #[allow(clippy::print_stderr, reason = "a timing report is this test's output")]
+            {
+                eprintln!("{order:?} {tag}: {secs:.2} s, {} MB", bytes >> 20);
+            }
+            let msh = read_msh(&path).expect("read");
+            assert_eq!(msh.elements.len(), mesh.triangle_count());
         }
     }
 }

@@ -27,9 +27,10 @@ fn temp_in(dir: &Path, path: &Path) -> io::Result<tempfile::NamedTempFile> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let prefix = format!(".{stem}.");
+    // ".out.msh.tmpXXXXXX": hidden, and matched by the repository's `*.msh.tmp*` ignore rule.
+    let prefix = format!(".{stem}.tmp");
     let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
+    builder.prefix(&prefix);
     #[cfg(unix)]
     {
         // NamedTempFile defaults to 0o600; a finished output file should get the
@@ -117,7 +118,7 @@ mod tests {
 
     fn scratch(name: &str) -> PathBuf {
         let d = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("target/test-out/unit-atomic")
+            .join("target/tmp/unit-atomic")
             .join(name);
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).expect("create scratch dir");

@@ -25,7 +25,10 @@ fn element_types(order: Order) -> (i32, i32) {
 }
 
 fn invalid(msg: String) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidInput, format!("malformed mesh: {msg}"))
+    io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("malformed mesh: {msg}"),
+    )
 }
 
 /// Check everything the writers rely on, so they never index out of bounds.
@@ -178,7 +181,9 @@ impl Layout {
         for (g, elems) in bucket(&mesh.triangle_group, mesh.surfaces.len()) {
             let bbox = BBox::of(
                 mesh,
-                elems.iter().flat_map(|&t| mesh.triangle(t as usize).iter().copied()),
+                elems
+                    .iter()
+                    .flat_map(|&t| mesh.triangle(t as usize).iter().copied()),
             );
             let tag = g as i32 + 1;
             entities.push(Entity {
@@ -193,7 +198,9 @@ impl Layout {
         for (g, elems) in bucket(&mesh.line_group, mesh.curves.len()) {
             let bbox = BBox::of(
                 mesh,
-                elems.iter().flat_map(|&l| mesh.line(l as usize).iter().copied()),
+                elems
+                    .iter()
+                    .flat_map(|&l| mesh.line(l as usize).iter().copied()),
             );
             let tag = g as i32 + 1;
             entities.push(Entity {
@@ -331,10 +338,15 @@ fn header<W: Write>(w: &mut W, version: &str, binary: bool) -> io::Result<()> {
     w.write_all(b"$EndMeshFormat\n")
 }
 
-/// A name as gmsh reads it: inside double quotes, on one line.
+/// Longest physical name gmsh documents (longer ones may not read back).
+const MAX_NAME_CHARS: usize = 127;
+
+/// A name as gmsh reads it: inside double quotes, on one line, at most
+/// [`MAX_NAME_CHARS`] characters.
 fn quoted(name: &str) -> String {
     let clean: String = name
         .chars()
+        .take(MAX_NAME_CHARS)
         .map(|c| match c {
             '"' => '\'',
             c if c.is_control() => ' ',
@@ -389,7 +401,14 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
     for dim in [1, 2] {
         for e in layout.entities.iter().filter(|e| e.dim == dim) {
             o.int(e.tag)?;
-            for v in [e.bbox.min[0], e.bbox.min[1], 0.0, e.bbox.max[0], e.bbox.max[1], 0.0] {
+            for v in [
+                e.bbox.min[0],
+                e.bbox.min[1],
+                0.0,
+                e.bbox.max[0],
+                e.bbox.max[1],
+                0.0,
+            ] {
                 o.float(v)?;
             }
             match e.physical {
@@ -621,5 +640,6 @@ mod tests {
     #[test]
     fn names_are_quoted_safely() {
         assert_eq!(quoted("a\"b\nc"), "\"a'b c\"");
+        assert_eq!(quoted(&"é".repeat(200)).chars().count(), MAX_NAME_CHARS + 2);
     }
 }

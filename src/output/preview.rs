@@ -235,7 +235,11 @@ mod tests {
 
     #[test]
     fn quadratic_edge_passes_through_midpoint() {
-        let (a, b, m) = (Point::new(0.0, 0.0), Point::new(2.0, 0.0), Point::new(1.0, 1.0));
+        let (a, b, m) = (
+            Point::new(0.0, 0.0),
+            Point::new(2.0, 0.0),
+            Point::new(1.0, 1.0),
+        );
         let Curve::Quad(_, c, _) = edge_curve(a, b, &[m]) else {
             panic!("expected a quadratic");
         };
@@ -248,7 +252,11 @@ mod tests {
     fn preview_flips_y_and_colours_kinds() {
         let mesh = FemMesh {
             order: Some(Order::Linear),
-            nodes: vec![Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 2.0)],
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.0, 2.0),
+            ],
             triangles: vec![0, 1, 2],
             triangle_group: vec![0],
             surfaces: vec!["s".into()],
@@ -264,7 +272,10 @@ mod tests {
         assert!(s.contains("0.0 -2.0"), "{s}");
         assert!(s.contains("fill=\"white\""));
         // Three triangle edges, each drawn once.
-        let grey = s.lines().find(|l| l.contains("#808080")).expect("mesh path");
+        let grey = s
+            .lines()
+            .find(|l| l.contains("#808080"))
+            .expect("mesh path");
         assert_eq!(grey.matches('M').count(), 3);
     }
 }

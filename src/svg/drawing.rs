@@ -25,7 +25,8 @@ pub enum FillRule {
 /// One drawable SVG element after usvg's normalisation.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Shape {
-    /// The SVG `id` attribute, if the element (or its nearest named ancestor `<use>`) had one.
+    /// The SVG `id` attribute, if the element (or its nearest named ancestor `<use>`,
+    /// or for glyph outlines its `<text>` element) had one.
     pub svg_id: Option<String>,
     /// Index of the element in document order among drawable elements (0-based).
     pub element_index: u32,

@@ -145,8 +145,7 @@ fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, 
         .map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
     let root = doc.root_element();
     let name = root.tag_name();
-    if !name.name().eq_ignore_ascii_case("svg")
-        || !matches!(name.namespace(), None | Some(SVG_NS))
+    if !name.name().eq_ignore_ascii_case("svg") || !matches!(name.namespace(), None | Some(SVG_NS))
     {
         let hint = if name.name().eq_ignore_ascii_case("html") {
             " (an HTML page?)"
@@ -158,6 +157,7 @@ fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, 
             name.name()
         )));
     }
+    check_numbers(&doc)?;
     let facts = xml_facts(&doc);
     let opt = usvg::Options {
         fontdb,
@@ -212,12 +212,115 @@ fn xml_error_message(text: &str, e: &roxmltree::Error) -> String {
     }
     match e {
         roxmltree::Error::NoRootNode => "no XML element: not an XML document".into(),
-        roxmltree::Error::EntityReferenceLoop(pos) => format!(
-            "XML entity expansion too deep or too large at {pos} (entity bomb?)"
-        ),
+        roxmltree::Error::EntityReferenceLoop(pos) => {
+            format!("XML entity expansion too deep or too large at {pos} (entity bomb?)")
+        }
         roxmltree::Error::NodesLimitReached => "too many XML nodes".into(),
         _ => format!("broken XML: {e}"),
     }
+}
+
+/// Reject numbers in geometry attributes that usvg would silently turn into a
+/// dropped element: beyond the f32 range, or overflowing f64 (`1e400`).
+///
+/// usvg keeps geometry in f32; an element with such a number vanishes without a
+/// trace, which would mesh a drawing with a piece missing. Conservative: it
+/// also rejects such a number in an element that is never rendered.
+fn check_numbers(doc: &roxmltree::Document<'_>) -> Result<()> {
+    const GEOMETRY: &[&str] = &[
+        "d",
+        "points",
+        "x",
+        "y",
+        "width",
+        "height",
+        "rx",
+        "ry",
+        "cx",
+        "cy",
+        "r",
+        "x1",
+        "y1",
+        "x2",
+        "y2",
+        "transform",
+        "viewBox",
+    ];
+    let limit = f64::from(f32::MAX);
+    for node in doc.descendants().filter(roxmltree::Node::is_element) {
+        if !matches!(node.tag_name().namespace(), None | Some(SVG_NS)) {
+            continue;
+        }
+        for attr in node.attributes() {
+            if attr.namespace().is_some() || !GEOMETRY.contains(&attr.name()) {
+                continue;
+            }
+            let element = || match node.attribute("id") {
+                Some(id) => format!("<{} id='{id}'>", node.tag_name().name()),
+                None => format!("<{}>", node.tag_name().name()),
+            };
+            // `NaN`, `inf` and `Infinity` are not SVG numbers; usvg would stop the path
+            // there and mesh what came before. No path command or transform name
+            // contains these letter sequences, so their presence is always an error.
+            let lower = attr.value().to_ascii_lowercase();
+            if lower.contains("nan") || lower.contains("inf") {
+                return Err(Error::BadCoordinate(format!(
+                    "{}: attribute '{}' holds a non-finite number (NaN or infinity)",
+                    element(),
+                    attr.name()
+                )));
+            }
+            if let Some(bad) = numbers(attr.value()).find(|(_, v)| v.is_nan() || v.abs() > limit) {
+                let element = element();
+                let shown: String = bad.0.chars().take(32).collect();
+                return Err(Error::BadCoordinate(format!(
+                    "{element}: the number {shown} in attribute '{}' is out of range \
+                     (magnitude above {limit:e})",
+                    attr.name()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The decimal numbers in an attribute value (signs ignored), with their text.
+fn numbers(s: &str) -> impl Iterator<Item = (&str, f64)> {
+    let b = s.as_bytes();
+    let digits = |mut i: usize| {
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        while i < b.len() {
+            let starts = b[i].is_ascii_digit()
+                || (b[i] == b'.' && b.get(i + 1).is_some_and(u8::is_ascii_digit));
+            if !starts {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            i = digits(i);
+            if b.get(i) == Some(&b'.') {
+                i = digits(i + 1);
+            }
+            if matches!(b.get(i), Some(b'e' | b'E')) {
+                let mut j = i + 1;
+                if matches!(b.get(j), Some(b'+' | b'-')) {
+                    j += 1;
+                }
+                if b.get(j).is_some_and(u8::is_ascii_digit) {
+                    i = digits(j);
+                }
+            }
+            let text = &s[start..i];
+            return Some((text, text.parse::<f64>().unwrap_or(f64::INFINITY)));
+        }
+        None
+    })
 }
 
 /// What the usvg tree forgets: which groups are `<use>` elements, and which text elements exist.
@@ -236,9 +339,13 @@ fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
         } else if name == "text" {
             let index = text_index;
             text_index += 1;
-            let hidden = node.ancestors().filter(roxmltree::Node::is_element).any(|a| {
-                NOT_RENDERED.contains(&a.tag_name().name()) || a.attribute("display") == Some("none")
-            });
+            let hidden = node
+                .ancestors()
+                .filter(roxmltree::Node::is_element)
+                .any(|a| {
+                    NOT_RENDERED.contains(&a.tag_name().name())
+                        || a.attribute("display") == Some("none")
+                });
             let content: String = node
                 .descendants()
                 .filter_map(|n| n.text())
@@ -281,7 +388,12 @@ pub(super) fn font_database() -> Arc<fontdb::Database> {
                 .map(|p| (*p).to_owned())
                 .or_else(|| families.first().cloned())
         };
-        if let Some(f) = pick(&["DejaVu Serif", "Liberation Serif", "Noto Serif", "FreeSerif"]) {
+        if let Some(f) = pick(&[
+            "DejaVu Serif",
+            "Liberation Serif",
+            "Noto Serif",
+            "FreeSerif",
+        ]) {
             db.set_serif_family(f);
         }
         if let Some(f) = pick(&["DejaVu Sans", "Liberation Sans", "Noto Sans", "FreeSans"]) {

@@ -8,8 +8,14 @@
 //!   of straight segments and cubic Béziers (quadratics are elevated exactly,
 //!   arcs arrive from usvg as cubics), in user units after all transforms
 //!   (each path's absolute transform applied in f64 to usvg's f32 data), y flipped;
+//!   the root `viewBox` → `width`/`height` mapping is one of those transforms, so
+//!   coordinates are in the root viewport's units (px at 96 dpi), as usvg and the
+//!   reference's nanosvg give them;
 //! - zero-length segments are dropped; a subpath with no segment left is an
-//!   isolated point;
+//!   isolated point (a path that is only `M x y` is dropped by usvg, as by
+//!   browsers and nanosvg; a trailing `M` after drawing commands is kept);
+//! - a number in a geometry attribute beyond the f32 range (which usvg would
+//!   silently drop with its element) is a [`Error::BadCoordinate`];
 //! - [`Drawing::features`] lists every segment, every isolated point and the
 //!   implicit closing segment of each open subpath of a filled shape;
 //! - clip paths, masks, images and filters are not geometry (images and filters

@@ -81,8 +81,9 @@ pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts) -> Result<Outlines> {
                         || "a text element".to_owned(),
                         |id| format!("text element '{id}'"),
                     );
-                    out.warnings
-                        .push(format!("{name} produced no outline (no usable glyphs); skipped"));
+                    out.warnings.push(format!(
+                        "{name} produced no outline (no usable glyphs); skipped"
+                    ));
                 }
             }
             Step::Visit(usvg::Node::Image(_), _) => images += 1,

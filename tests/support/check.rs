@@ -134,11 +134,17 @@ pub(crate) fn check(m: &Msh) -> Report {
     let mut lines: Vec<&Element> = Vec::new();
     for e in &m.elements {
         let Some((_, dim)) = type_info(e.etype) else {
-            r.defect(DefectKind::Structure, format!("element {} of unknown type {}", e.tag, e.etype));
+            r.defect(
+                DefectKind::Structure,
+                format!("element {} of unknown type {}", e.tag, e.etype),
+            );
             continue;
         };
         if e.nodes.iter().any(|&t| !index.contains_key(&t)) {
-            r.defect(DefectKind::Structure, format!("element {} uses a missing node", e.tag));
+            r.defect(
+                DefectKind::Structure,
+                format!("element {} uses a missing node", e.tag),
+            );
             continue;
         }
         match dim {
@@ -157,7 +163,10 @@ pub(crate) fn check(m: &Msh) -> Report {
                 ),
                 Some(&p) if !m.physical_names.contains_key(&(dim, p)) => r.defect(
                     DefectKind::NoPhysicalGroup,
-                    format!("physical group ({dim}, {p}) of element {} has no name", e.tag),
+                    format!(
+                        "physical group ({dim}, {p}) of element {} has no name",
+                        e.tag
+                    ),
                 ),
                 Some(_) => {}
             }
@@ -166,7 +175,10 @@ pub(crate) fn check(m: &Msh) -> Report {
     r.triangles = tris.len();
     r.lines = lines.len();
     if tri_types.len() > 1 {
-        r.defect(DefectKind::Structure, format!("mixed triangle types {tri_types:?}"));
+        r.defect(
+            DefectKind::Structure,
+            format!("mixed triangle types {tri_types:?}"),
+        );
     }
 
     // Orientation, Jacobian and area.
@@ -177,11 +189,24 @@ pub(crate) fn check(m: &Msh) -> Report {
             _ => 3,
         };
         r.order = r.order.max(order);
-        let x: Vec<P> = e.nodes.iter().map(|&t| pos(t).expect("checked above")).collect();
+        let x: Vec<P> = e
+            .nodes
+            .iter()
+            .map(|&t| pos(t).expect("checked above"))
+            .collect();
         let o = robust::orient2d(
-            robust::Coord { x: x[0][0], y: x[0][1] },
-            robust::Coord { x: x[1][0], y: x[1][1] },
-            robust::Coord { x: x[2][0], y: x[2][1] },
+            robust::Coord {
+                x: x[0][0],
+                y: x[0][1],
+            },
+            robust::Coord {
+                x: x[1][0],
+                y: x[1][1],
+            },
+            robust::Coord {
+                x: x[2][0],
+                y: x[2][1],
+            },
         );
         if o < 0.0 {
             r.defect(DefectKind::Clockwise, format!("triangle {}", e.tag));
@@ -205,13 +230,16 @@ pub(crate) fn check(m: &Msh) -> Report {
     }
 
     // Edges: key (min corner, max corner) -> sides (from, to, inner nodes from `from`).
-    let mut edges: HashMap<(u64, u64), Vec<(u64, u64, Vec<u64>)>> = HashMap::new();
+    let mut edges: HashMap<(u64, u64), Vec<Side>> = HashMap::new();
     for e in &tris {
         let inner = edge_inner(e.etype);
-        for k in 0..3 {
+        for (k, local) in inner.iter().enumerate() {
             let (a, b) = (e.nodes[k], e.nodes[(k + 1) % 3]);
-            let nodes: Vec<u64> = inner[k].iter().map(|&j| e.nodes[j]).collect();
-            edges.entry((a.min(b), a.max(b))).or_default().push((a, b, nodes));
+            let nodes: Vec<u64> = local.iter().map(|&j| e.nodes[j]).collect();
+            edges
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push((a, b, nodes));
         }
     }
     let mut keys: Vec<_> = edges.keys().copied().collect();
@@ -267,11 +295,17 @@ pub(crate) fn check(m: &Msh) -> Report {
         // +0.0 and -0.0 are the same position.
         let key = ((p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits());
         if let Some(o) = at.insert(key, t) {
-            r.defect(DefectKind::DuplicateNode, format!("nodes {o} and {t} at {p:?}"));
+            r.defect(
+                DefectKind::DuplicateNode,
+                format!("nodes {o} and {t} at {p:?}"),
+            );
         }
     }
     r
 }
+
+/// One side of an edge: (from, to, inner nodes in order from `from`).
+type Side = (u64, u64, Vec<u64>);
 
 /// Local indices of the inner nodes of triangle edges 0→1, 1→2, 2→0 (gmsh order).
 fn edge_inner(etype: i32) -> [&'static [usize]; 3] {
@@ -327,8 +361,8 @@ fn control_net(p: usize, x: &[P]) -> Vec<P> {
         a[i] = p;
         a
     };
-    for i in 0..3 {
-        set(corner(i), x[i]);
+    for (i, &xi) in x.iter().take(3).enumerate() {
+        set(corner(i), xi);
     }
     match p {
         1 => {}
@@ -359,7 +393,10 @@ fn control_net(p: usize, x: &[P]) -> Vec<P> {
             }
             // Centre: x(1/3,1/3,1/3) = (Σ corners + 3 Σ edge controls + 6 c111) / 27.
             let corners = lin(&[(1.0, x[0]), (1.0, x[1]), (1.0, x[2])]);
-            set([1, 1, 1], lin(&[(27.0 / 6.0, x[9]), (-1.0 / 6.0, corners), (-0.5, edge_sum)]));
+            set(
+                [1, 1, 1],
+                lin(&[(27.0 / 6.0, x[9]), (-1.0 / 6.0, corners), (-0.5, edge_sum)]),
+            );
         }
     }
     net
@@ -444,7 +481,13 @@ enum Certificate {
 /// Certify det J > 0 on the reference triangle.
 fn certify(coef: &[f64], n: usize) -> Certificate {
     let scale = coef.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    let corners = |c: &[f64]| [c[flat(n, [n, 0, 0])], c[flat(n, [0, n, 0])], c[flat(n, [0, 0, n])]];
+    let corners = |c: &[f64]| {
+        [
+            c[flat(n, [n, 0, 0])],
+            c[flat(n, [0, n, 0])],
+            c[flat(n, [0, 0, n])],
+        ]
+    };
     let id = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let mut work = vec![(id, coef.to_vec())];
     let mut max_depth = 0;
@@ -461,7 +504,11 @@ fn certify(coef: &[f64], n: usize) -> Certificate {
             max_depth = depth + 1;
             let mid = |i: usize, j: usize| {
                 let (a, b): ([f64; 3], [f64; 3]) = (tri[i], tri[j]);
-                [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, (a[2] + b[2]) / 2.0]
+                [
+                    (a[0] + b[0]) / 2.0,
+                    (a[1] + b[1]) / 2.0,
+                    (a[2] + b[2]) / 2.0,
+                ]
             };
             let (m01, m12, m20) = (mid(0, 1), mid(1, 2), mid(2, 0));
             for sub in [
@@ -487,6 +534,37 @@ fn certify(coef: &[f64], n: usize) -> Certificate {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// gmsh nodes of the straight order-`p` triangle with corners `c`.
+    fn straight(p: usize, c: [P; 3]) -> Vec<P> {
+        let at = |i: usize, j: usize, t: f64| lin(&[(1.0 - t, c[i]), (t, c[j])]);
+        let mut x = c.to_vec();
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            x.extend((1..p).map(|s| at(i, j, s as f64 / p as f64)));
+        }
+        if p == 3 {
+            x.push(lin(&[
+                (1.0 / 3.0, c[0]),
+                (1.0 / 3.0, c[1]),
+                (1.0 / 3.0, c[2]),
+            ]));
+        }
+        x
+    }
+
+    #[test]
+    fn straight_elements_have_constant_jacobian() {
+        let c = [[0.5, -1.0], [3.0, 0.25], [-0.75, 2.0]];
+        let twice_area =
+            (c[1][0] - c[0][0]) * (c[2][1] - c[0][1]) - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
+        for p in 1..=3 {
+            let det = jacobian_bernstein(p, &straight(p, c));
+            assert_eq!(det.len(), multi_indices(2 * (p - 1)).len());
+            for d in det {
+                assert!((d - twice_area).abs() < 1e-12 * twice_area, "p={p}: {d}");
+            }
+        }
+    }
 
     #[test]
     fn flat_enumerates_in_order() {

@@ -213,7 +213,11 @@ pub(crate) fn parse_msh(data: &[u8]) -> R<Msh> {
                         .strip_prefix('"')
                         .and_then(|q| q.strip_suffix('"'))
                         .ok_or_else(|| format!("unquoted name {q:?}"))?;
-                    if msh.physical_names.insert((dim, tag), name.to_owned()).is_some() {
+                    if msh
+                        .physical_names
+                        .insert((dim, tag), name.to_owned())
+                        .is_some()
+                    {
                         return Err(format!("physical ({dim}, {tag}) named twice"));
                     }
                 }
@@ -280,7 +284,8 @@ pub(crate) fn parse_msh(data: &[u8]) -> R<Msh> {
                 for _ in 0..n {
                     let t = c.int()?;
                     let xyz = [c.float()?, c.float()?, c.float()?];
-                    msh.nodes.push((u64::try_from(t).map_err(|_| "negative tag")?, xyz));
+                    msh.nodes
+                        .push((u64::try_from(t).map_err(|_| "negative tag")?, xyz));
                 }
                 c.binary = false;
                 c.expect_end(name)?;
@@ -314,7 +319,10 @@ pub(crate) fn parse_msh(data: &[u8]) -> R<Msh> {
                     }
                 }
                 if msh.elements.len() as u64 != total {
-                    return Err(format!("{} elements, header says {total}", msh.elements.len()));
+                    return Err(format!(
+                        "{} elements, header says {total}",
+                        msh.elements.len()
+                    ));
                 }
                 c.binary = false;
                 c.expect_end(name)?;
@@ -335,7 +343,12 @@ pub(crate) fn parse_msh(data: &[u8]) -> R<Msh> {
                         tag: u64::try_from(tag).map_err(|_| "negative tag")?,
                         etype,
                         entity: tags.get(1).copied().unwrap_or(0),
-                        physical: tags.first().copied().filter(|&p| p != 0).into_iter().collect(),
+                        physical: tags
+                            .first()
+                            .copied()
+                            .filter(|&p| p != 0)
+                            .into_iter()
+                            .collect(),
                         nodes,
                     });
                     Ok(())

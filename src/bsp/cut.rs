@@ -1,0 +1,311 @@
+//! Cutting each seed triangle by the lines of the segments that meet its interior.
+
+use super::seed::Seed;
+use super::{BspInput, BspOptions, BspSegment, BspStats, fan};
+use crate::exact::{Orientation, PointQ, line_intersection, orient2d, orient2d_q};
+use crate::mesh::{TriMesh, VertexId};
+use crate::{Error, Result};
+use kurbo::{Point, Rect};
+use std::collections::HashMap;
+
+/// A uniform grid over the box holding, per cell, the segments whose
+/// bounding box meets it. Cell indices are monotone in the coordinate, so two
+/// overlapping boxes always share a cell.
+struct Grid {
+    x0: f64,
+    y0: f64,
+    inv_w: f64,
+    inv_h: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl Grid {
+    fn new(bbox: Rect, segments: &[BspSegment]) -> Grid {
+        let side = ((segments.len() as f64).sqrt().ceil() as usize).clamp(1, 1024);
+        let (nx, ny) = (side, side);
+        let mut g = Grid {
+            x0: bbox.x0,
+            y0: bbox.y0,
+            inv_w: nx as f64 / (bbox.x1 - bbox.x0),
+            inv_h: ny as f64 / (bbox.y1 - bbox.y0),
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        };
+        if !(g.inv_w.is_finite() && g.inv_h.is_finite()) {
+            // A box too thin or too large for f64 cell arithmetic: one cell.
+            g.inv_w = 0.0;
+            g.inv_h = 0.0;
+        }
+        for (i, s) in segments.iter().enumerate() {
+            if s.a == s.b {
+                continue;
+            }
+            let i = u32::try_from(i).expect("internal: fewer than 2^32 segments");
+            let (cx0, cx1, cy0, cy1) = g.range(s.a, s.b, s.b);
+            for cy in cy0..=cy1 {
+                for cx in cx0..=cx1 {
+                    g.cells[cy * g.nx + cx].push(i);
+                }
+            }
+        }
+        g
+    }
+
+    fn index(v: f64, origin: f64, inv: f64, n: usize) -> usize {
+        let t = ((v - origin) * inv).floor();
+        if t.is_nan() || t < 0.0 {
+            0
+        } else {
+            (t as usize).min(n - 1)
+        }
+    }
+
+    fn range(&self, a: Point, b: Point, c: Point) -> (usize, usize, usize, usize) {
+        let (xmin, xmax) = (a.x.min(b.x).min(c.x), a.x.max(b.x).max(c.x));
+        let (ymin, ymax) = (a.y.min(b.y).min(c.y), a.y.max(b.y).max(c.y));
+        (
+            Grid::index(xmin, self.x0, self.inv_w, self.nx),
+            Grid::index(xmax, self.x0, self.inv_w, self.nx),
+            Grid::index(ymin, self.y0, self.inv_h, self.ny),
+            Grid::index(ymax, self.y0, self.inv_h, self.ny),
+        )
+    }
+}
+
+/// A supporting line through two `f64` points.
+struct Line {
+    p: PointQ,
+    q: PointQ,
+}
+
+/// A convex cell: its vertices counter-clockwise, each with the index (into
+/// the triangle's line table) of the line carrying the edge that starts there.
+type Cell = Vec<(PointQ, usize)>;
+
+/// Whether the closed segment `a b` meets the open triangle `t` (counter-clockwise):
+/// no edge line of `t` has both ends on its outer closed side, and the
+/// segment's line strictly separates two vertices of `t`.
+fn crosses_interior(t: [Point; 3], a: Point, b: Point) -> bool {
+    for k in 0..3 {
+        let (p, q) = (t[k], t[(k + 1) % 3]);
+        let out = |x: Point| orient2d(p, q, x) != Orientation::CounterClockwise;
+        if out(a) && out(b) {
+            return false;
+        }
+    }
+    let o = t.map(|x| orient2d(a, b, x));
+    o.contains(&Orientation::CounterClockwise) && o.contains(&Orientation::Clockwise)
+}
+
+/// Split `cell` by line `lines[lid]`, if the line strictly separates two of its vertices.
+fn split(cell: &Cell, lines: &[Line], lid: usize) -> Option<(Cell, Cell)> {
+    let l = &lines[lid];
+    let signs: Vec<Orientation> = cell
+        .iter()
+        .map(|(v, _)| orient2d_q(&l.p, &l.q, v))
+        .collect();
+    if !(signs.contains(&Orientation::CounterClockwise) && signs.contains(&Orientation::Clockwise))
+    {
+        return None;
+    }
+    // (point, line of the original edge it starts or lies on, lies on the cut line)
+    let mut pos: Vec<(PointQ, usize, bool)> = Vec::new();
+    let mut neg: Vec<(PointQ, usize, bool)> = Vec::new();
+    let n = cell.len();
+    for i in 0..n {
+        let j = (i + 1) % n;
+        let (v, e) = &cell[i];
+        match signs[i] {
+            Orientation::CounterClockwise => pos.push((v.clone(), *e, false)),
+            Orientation::Clockwise => neg.push((v.clone(), *e, false)),
+            Orientation::Collinear => {
+                pos.push((v.clone(), *e, true));
+                neg.push((v.clone(), *e, true));
+            }
+        }
+        let opposite = matches!(
+            (signs[i], signs[j]),
+            (Orientation::CounterClockwise, Orientation::Clockwise)
+                | (Orientation::Clockwise, Orientation::CounterClockwise)
+        );
+        if opposite {
+            let el = &lines[*e];
+            let x = line_intersection(&el.p, &el.q, &l.p, &l.q)
+                .expect("internal: a strictly crossed edge is not parallel to the cut");
+            pos.push((x.clone(), *e, true));
+            neg.push((x, *e, true));
+        }
+    }
+    let finish = |poly: Vec<(PointQ, usize, bool)>| -> Cell {
+        let m = poly.len();
+        (0..m)
+            .map(|k| {
+                let next_on = poly[(k + 1) % m].2;
+                let line = if poly[k].2 && next_on { lid } else { poly[k].1 };
+                (poly[k].0.clone(), line)
+            })
+            .collect()
+    };
+    Some((finish(pos), finish(neg)))
+}
+
+/// Cut every seed triangle and triangulate every cell into `mesh`.
+pub(super) fn cut_all(
+    input: &BspInput,
+    seed: &Seed,
+    opts: &BspOptions,
+    stats: &mut BspStats,
+) -> Result<TriMesh> {
+    let mut mesh = TriMesh::new();
+    let mut vmap: HashMap<PointQ, VertexId> = HashMap::new();
+    let seed_ids: Vec<VertexId> = seed
+        .points
+        .iter()
+        .map(|&(p, tag)| {
+            let id = mesh.add_vertex(p, tag);
+            vmap.insert(PointQ::from_point(p), id);
+            id
+        })
+        .collect();
+    let bbox = seed.points.iter().fold(
+        Rect::from_points(seed.points[0].0, seed.points[0].0),
+        |r, (p, _)| r.union_pt(*p),
+    );
+    let grid = Grid::new(bbox, &input.segments);
+    let mut stamp = vec![u32::MAX; input.segments.len()];
+    let mut candidates: Vec<u32> = Vec::new();
+    for (ti, tri) in seed.triangles.iter().enumerate() {
+        let tp = tri.map(|i| seed.points[i as usize].0);
+        let tag = u32::try_from(ti).expect("internal: fewer than 2^32 triangles");
+        candidates.clear();
+        let (cx0, cx1, cy0, cy1) = grid.range(tp[0], tp[1], tp[2]);
+        for cy in cy0..=cy1 {
+            for cx in cx0..=cx1 {
+                for &s in &grid.cells[cy * grid.nx + cx] {
+                    if stamp[s as usize] != tag {
+                        stamp[s as usize] = tag;
+                        let seg = &input.segments[s as usize];
+                        if crosses_interior(tp, seg.a, seg.b) {
+                            candidates.push(s);
+                        }
+                    }
+                }
+            }
+        }
+        let ids = tri.map(|i| seed_ids[i as usize]);
+        if candidates.is_empty() {
+            mesh.add_face(ids);
+            stats.cells += 1;
+            continue;
+        }
+        stats.cut_triangles += 1;
+        // Deterministic order, duplicates of the same line cut only once.
+        candidates.sort_unstable();
+        let mut lines: Vec<Line> = (0..3)
+            .map(|k| Line {
+                p: PointQ::from_point(tp[k]),
+                q: PointQ::from_point(tp[(k + 1) % 3]),
+            })
+            .collect();
+        let mut cells: Vec<Cell> = vec![(0..3).map(|k| (PointQ::from_point(tp[k]), k)).collect()];
+        let mut seen_lines: Vec<(Point, Point)> = Vec::new();
+        for &s in &candidates {
+            let seg = &input.segments[s as usize];
+            if seen_lines.contains(&(seg.a, seg.b)) || seen_lines.contains(&(seg.b, seg.a)) {
+                continue;
+            }
+            seen_lines.push((seg.a, seg.b));
+            lines.push(Line {
+                p: PointQ::from_point(seg.a),
+                q: PointQ::from_point(seg.b),
+            });
+            let lid = lines.len() - 1;
+            let mut next = Vec::with_capacity(cells.len() + 4);
+            for cell in cells.drain(..) {
+                match split(&cell, &lines, lid) {
+                    Some((a, b)) => {
+                        next.push(a);
+                        next.push(b);
+                    }
+                    None => next.push(cell),
+                }
+            }
+            cells = next;
+        }
+        for cell in &cells {
+            let pts: Vec<PointQ> = cell.iter().map(|(p, _)| p.clone()).collect();
+            if fan::emit_cell(&mut mesh, &mut vmap, &pts) {
+                stats.barycentre_vertices += 1;
+            }
+            stats.cells += 1;
+        }
+        if mesh.num_vertices() > opts.max_vertices as usize {
+            return Err(Error::meshing(
+                "bsp",
+                format!(
+                    "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
+                    opts.max_vertices
+                ),
+            ));
+        }
+    }
+    mesh.link_all();
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(x: f64, y: f64) -> Point {
+        Point::new(x, y)
+    }
+
+    #[test]
+    fn interior_crossing_test() {
+        let t = [p(0.0, 0.0), p(4.0, 0.0), p(0.0, 4.0)];
+        assert!(crosses_interior(t, p(-1.0, 1.0), p(5.0, 1.0)));
+        // Along an edge, through a vertex only, outside, ending at a vertex going out.
+        assert!(!crosses_interior(t, p(-1.0, 0.0), p(5.0, 0.0)));
+        assert!(!crosses_interior(t, p(-1.0, 5.0), p(1.0, 3.0)));
+        assert!(!crosses_interior(t, p(-1.0, -1.0), p(-2.0, 3.0)));
+        assert!(!crosses_interior(t, p(4.0, 0.0), p(6.0, -1.0)));
+        // From a vertex into the triangle and out through the opposite edge.
+        assert!(crosses_interior(t, p(0.0, 0.0), p(3.0, 3.0)));
+        // Line crosses the triangle but the segment stops short.
+        assert!(!crosses_interior(t, p(5.0, 1.0), p(7.0, 1.0)));
+    }
+
+    #[test]
+    fn split_square() {
+        let corners = [p(0.0, 0.0), p(2.0, 0.0), p(2.0, 2.0), p(0.0, 2.0)];
+        let mut lines: Vec<Line> = (0..4)
+            .map(|k| Line {
+                p: PointQ::from_point(corners[k]),
+                q: PointQ::from_point(corners[(k + 1) % 4]),
+            })
+            .collect();
+        let cell: Cell = (0..4)
+            .map(|k| (PointQ::from_point(corners[k]), k))
+            .collect();
+        // Through a corner and an edge midpoint.
+        lines.push(Line {
+            p: PointQ::from_point(p(0.0, 0.0)),
+            q: PointQ::from_point(p(2.0, 1.0)),
+        });
+        let (a, b) = split(&cell, &lines, 4).expect("separates");
+        assert_eq!(a.len() + b.len(), 7);
+        let on_cut = |c: &Cell| c.iter().filter(|(_, l)| *l == 4).count();
+        assert_eq!(on_cut(&a), 1);
+        assert_eq!(on_cut(&b), 1);
+        // A line along an edge does not split.
+        lines.push(Line {
+            p: PointQ::from_point(p(0.0, 0.0)),
+            q: PointQ::from_point(p(5.0, 0.0)),
+        });
+        assert!(split(&cell, &lines, 5).is_none());
+    }
+}

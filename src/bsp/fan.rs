@@ -1,0 +1,179 @@
+//! Triangulating convex cells, tagging segment edges, rounding vertices.
+
+use super::{BspInput, SegmentTag};
+use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
+use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
+use crate::{Error, Result};
+use std::cmp::Ordering;
+use std::collections::HashMap;
+
+/// Triangulate one convex cell (vertices counter-clockwise, possibly with
+/// collinear runs) into `mesh`: a fan from the first corner whose fan has no
+/// degenerate triangle, else a fan from the exact barycentre. Returns whether
+/// a barycentre vertex was added.
+pub(super) fn emit_cell(
+    mesh: &mut TriMesh,
+    vmap: &mut HashMap<PointQ, VertexId>,
+    pts: &[PointQ],
+) -> bool {
+    let ids: Vec<VertexId> = pts
+        .iter()
+        .map(|p| {
+            *vmap
+                .entry(p.clone())
+                .or_insert_with(|| mesh.add_vertex_q(p.clone(), VertexTag::default()))
+        })
+        .collect();
+    let n = ids.len();
+    if n == 3 {
+        mesh.add_face([ids[0], ids[1], ids[2]]);
+        return false;
+    }
+    let fan_ok = |k: usize| {
+        (1..n - 1).all(|i| {
+            let (b, c) = (ids[(k + i) % n], ids[(k + i + 1) % n]);
+            mesh.orientation_of(ids[k], b, c) == Orientation::CounterClockwise
+        })
+    };
+    if let Some(k) = (0..n).find(|&k| fan_ok(k)) {
+        for i in 1..n - 1 {
+            mesh.add_face([ids[k], ids[(k + i) % n], ids[(k + i + 1) % n]]);
+        }
+        return false;
+    }
+    let c = PointQ::barycentre(pts).expect("internal: a cell has vertices");
+    let cid = mesh.add_vertex_q(c, VertexTag::default());
+    for i in 0..n {
+        mesh.add_face([cid, ids[i], ids[(i + 1) % n]]);
+    }
+    true
+}
+
+/// `-0.0` and `0.0` are the same point.
+fn key(p: kurbo::Point) -> (u64, u64) {
+    ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
+}
+
+/// Walk every segment from `a` to `b` along mesh edges and tag them.
+///
+/// # Errors
+/// [`Error::Meshing`] if a segment is not a chain of mesh edges (a bug).
+pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
+    let by_pos: HashMap<(u64, u64), VertexId> = mesh
+        .vertices()
+        .filter(|&v| !mesh.is_rational(v) && mesh.vertex_tag(v).segment_endpoint)
+        .map(|v| (key(mesh.position(v)), v))
+        .collect();
+    let not_conforming = |what: &str| {
+        Error::meshing(
+            "bsp",
+            format!("internal: segment is not a chain of mesh edges ({what})"),
+        )
+    };
+    for seg in &input.segments {
+        let (Some(&va), Some(&vb)) = (by_pos.get(&key(seg.a)), by_pos.get(&key(seg.b))) else {
+            return Err(not_conforming("missing endpoint vertex"));
+        };
+        if va == vb {
+            continue;
+        }
+        let (qa, qb) = (PointQ::from_point(seg.a), PointQ::from_point(seg.b));
+        let d = seg.b - seg.a;
+        let len2 = d.hypot2();
+        let param = |p: kurbo::Point| {
+            if len2 > 0.0 && len2.is_finite() {
+                ((p - seg.a).dot(d) / len2).clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        };
+        let mut u = va;
+        let mut s_u = 0.0;
+        for _ in 0..=mesh.num_vertices() {
+            if u == vb {
+                break;
+            }
+            let qu = mesh.point_q(u);
+            let mut best: Option<(VertexId, PointQ)> = None;
+            for f in mesh.incident_faces(u) {
+                for w in mesh.face(f) {
+                    if w == u {
+                        continue;
+                    }
+                    let on_line = match mesh.exact(w) {
+                        None => orient2d(seg.a, seg.b, mesh.position(w)),
+                        Some(qw) => orient2d_q(&qa, &qb, qw),
+                    };
+                    if on_line != Orientation::Collinear {
+                        continue;
+                    }
+                    let qw = mesh.point_q(w);
+                    if qw.cmp_along_q(&qu, &qa, &qb) != Ordering::Greater
+                        || qw.cmp_along_q(&qb, &qa, &qb) == Ordering::Greater
+                    {
+                        continue;
+                    }
+                    let closer = best
+                        .as_ref()
+                        .is_none_or(|(_, qbest)| qw.cmp_along_q(qbest, &qa, &qb) == Ordering::Less);
+                    if closer {
+                        best = Some((w, qw));
+                    }
+                }
+            }
+            let Some((w, _)) = best else {
+                return Err(not_conforming("no next edge"));
+            };
+            let s_w = if w == vb {
+                1.0
+            } else {
+                param(mesh.position(w))
+            };
+            let tag = match seg.tag {
+                SegmentTag::Primary { section, t } => FeatureOn::Primary {
+                    section,
+                    t: [t[0] + (t[1] - t[0]) * s_u, t[0] + (t[1] - t[0]) * s_w],
+                },
+                SegmentTag::Secondary { polyline } => FeatureOn::Secondary { polyline },
+            };
+            mesh.add_edge_tag(u, w, tag);
+            u = w;
+            s_u = s_w;
+        }
+        if u != vb {
+            return Err(not_conforming("walk budget exhausted"));
+        }
+    }
+    Ok(())
+}
+
+/// Round every rational vertex to its nearest `f64` point when all its
+/// incident triangles stay exactly counter-clockwise; repeat up to `passes`
+/// times while something changed.
+pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
+    for _ in 0..passes {
+        let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
+        for f in mesh.faces() {
+            for v in mesh.face(f) {
+                if mesh.is_rational(v) {
+                    star[v.0 as usize].push(f);
+                }
+            }
+        }
+        let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
+        let mut changed = false;
+        for v in rational {
+            let p = mesh.position(v);
+            let ok = star[v.0 as usize]
+                .iter()
+                .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise);
+            if ok {
+                mesh.set_position(v, p);
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}

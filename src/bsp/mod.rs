@@ -1,0 +1,188 @@
+//! The exact BSP mesher: a valid triangle mesh of a box that contains every
+//! input segment exactly as a chain of its edges.
+//!
+//! It owns [`build`]: a Delaunay triangulation (spade, `f64`) of every input
+//! point, segment endpoint and box corner (`seed.rs`); each triangle is the
+//! root of a BSP cell cut by the supporting line of every input segment that
+//! meets its interior, in rational arithmetic (`cut.rs`); each convex cell is
+//! triangulated by a fan from one of its corners when that gives no
+//! degenerate triangle, else from its exact barycentre; then edges are tagged
+//! with the segments they lie on, and vertices are rounded to `f64` wherever
+//! no incident triangle would invert or degenerate (`fan.rs`).
+//!
+//! Guarantees to the next stage, for any finite input inside the box: every
+//! triangle is exactly counter-clockwise; the mesh is conforming (no
+//! T-junctions) and covers the box; before rounding, every input segment is
+//! exactly a chain of mesh edges, each tagged with the segment's
+//! [`SegmentTag`]. Rounding ([`BspOptions::round`]) moves vertices by at most
+//! half an ulp per coordinate, so a rounded vertex may be off its segment by
+//! that much; vertices that cannot be rounded keep their rational position.
+//!
+//! Thesis §2.3.1 (BSP construction), §2.3.4 (hybrid kernel), §4.4.1 (linear
+//! meshing); DESIGN "Data flow" (bsp) and "Exactness".
+
+mod cut;
+mod fan;
+mod seed;
+
+use crate::Result;
+use crate::mesh::TriMesh;
+use kurbo::{Point, Rect};
+use std::time::Instant;
+
+/// Which input feature a segment belongs to; the mesher copies it onto the
+/// mesh edges along the segment and never interprets it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SegmentTag {
+    /// A piece of a primary feature section, with the section parameter at
+    /// the segment's `a` and `b` ends.
+    Primary {
+        /// Section index (the caller's numbering).
+        section: u32,
+        /// Parameter at `a`, then at `b`.
+        t: [f64; 2],
+    },
+    /// A piece of a secondary polyline.
+    Secondary {
+        /// Polyline index (the caller's numbering).
+        polyline: u32,
+    },
+}
+
+/// One input segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BspSegment {
+    /// Start point.
+    pub a: Point,
+    /// End point.
+    pub b: Point,
+    /// What the segment belongs to.
+    pub tag: SegmentTag,
+}
+
+/// The mesher's input: independent of the feature stage.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BspInput {
+    /// Isolated feature points (become vertices tagged `feature_point`).
+    pub points: Vec<Point>,
+    /// Endpoints of primary sections (become vertices tagged `section_endpoint`).
+    pub section_endpoints: Vec<Point>,
+    /// Feature segments (crossing, overlapping, duplicated: anything goes).
+    pub segments: Vec<BspSegment>,
+}
+
+/// Options of [`build`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct BspOptions {
+    /// Round rational vertices to `f64` where no incident triangle inverts
+    /// (default `true`). Off, the output is exactly conforming in rationals.
+    pub round: bool,
+    /// Passes of the rounding sweep (default 4): rounding one vertex can make
+    /// a neighbour roundable.
+    pub round_passes: u32,
+    /// Stop with an error when the mesh would exceed this many vertices
+    /// (default 50 million): the BSP can be quadratic in the segment count.
+    pub max_vertices: u32,
+}
+
+impl BspOptions {
+    /// The defaults.
+    pub const DEFAULT: BspOptions = BspOptions {
+        round: true,
+        round_passes: 4,
+        max_vertices: 50_000_000,
+    };
+
+    /// Set [`BspOptions::round`].
+    pub fn with_round(mut self, round: bool) -> Self {
+        self.round = round;
+        self
+    }
+
+    /// Set [`BspOptions::max_vertices`].
+    pub fn with_max_vertices(mut self, n: u32) -> Self {
+        self.max_vertices = n;
+        self
+    }
+}
+
+impl Default for BspOptions {
+    fn default() -> Self {
+        BspOptions::DEFAULT
+    }
+}
+
+/// Counts and timings of one [`build`].
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct BspStats {
+    /// Distinct vertices given to the Delaunay triangulation.
+    pub seed_vertices: usize,
+    /// Triangles of the Delaunay triangulation.
+    pub seed_triangles: usize,
+    /// Seed triangles crossed by at least one segment.
+    pub cut_triangles: usize,
+    /// Convex cells after cutting.
+    pub cells: usize,
+    /// Vertices added at cell barycentres.
+    pub barycentre_vertices: usize,
+    /// Output vertices.
+    pub vertices: usize,
+    /// Output triangles.
+    pub triangles: usize,
+    /// Edges tagged with at least one segment.
+    pub tagged_edges: usize,
+    /// Vertices with a non-`f64` position before rounding.
+    pub rational_before_rounding: usize,
+    /// Vertices still rational in the output.
+    pub rational_vertices: usize,
+    /// Power-of-two exponent applied to coordinates for the Delaunay step.
+    pub delaunay_scale_exp: i32,
+    /// Seconds in the Delaunay step.
+    pub seed_seconds: f64,
+    /// Seconds cutting and triangulating cells.
+    pub cut_seconds: f64,
+    /// Seconds tagging edges and rounding.
+    pub finish_seconds: f64,
+    /// Total seconds.
+    pub seconds: f64,
+}
+
+/// Build the exact BSP mesh of `bbox` conforming to `input`.
+///
+/// # Errors
+/// [`crate::Error::BadCoordinate`] for a non-finite coordinate, a point
+/// outside `bbox`, or coordinates whose dynamic range no power-of-two scaling
+/// brings into the Delaunay step's range (about 2^-142 .. 2^201 after
+/// scaling); [`crate::Error::InvalidParams`] for an empty or non-finite box;
+/// [`crate::Error::Meshing`] when [`BspOptions::max_vertices`] is exceeded.
+pub fn build(input: &BspInput, bbox: Rect, opts: &BspOptions) -> Result<(TriMesh, BspStats)> {
+    let t0 = Instant::now();
+    let mut stats = BspStats::default();
+    let seed = seed::seed(input, bbox)?;
+    stats.seed_vertices = seed.points.len();
+    stats.seed_triangles = seed.triangles.len();
+    stats.delaunay_scale_exp = seed.scale_exp;
+    let t1 = Instant::now();
+    let mut mesh = cut::cut_all(input, &seed, opts, &mut stats)?;
+    let t2 = Instant::now();
+    fan::tag_segments(&mut mesh, input)?;
+    stats.rational_before_rounding = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
+    if opts.round {
+        fan::round_vertices(&mut mesh, opts.round_passes);
+    }
+    stats.rational_vertices = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
+    stats.vertices = mesh.num_vertices();
+    stats.triangles = mesh.num_faces();
+    stats.tagged_edges = mesh.tagged_edges().count();
+    let t3 = Instant::now();
+    stats.seed_seconds = (t1 - t0).as_secs_f64();
+    stats.cut_seconds = (t2 - t1).as_secs_f64();
+    stats.finish_seconds = (t3 - t2).as_secs_f64();
+    stats.seconds = (t3 - t0).as_secs_f64();
+    tracing::debug!(?stats, "bsp done");
+    Ok((mesh, stats))
+}
+
+#[cfg(test)]
+mod tests;

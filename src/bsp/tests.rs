@@ -1,0 +1,368 @@
+//! Property and regression tests of the BSP mesher. The conformity check here
+//! is independent of the mesher: it finds, in rationals, every mesh vertex on
+//! each input segment, sorts them along it, and asks that each consecutive
+//! pair be a mesh edge.
+
+use super::*;
+use crate::exact::{Orientation, PointQ, orient2d_q};
+use crate::mesh::{EdgeKey, FeatureOn, VertexId};
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+use std::cmp::Ordering;
+use std::collections::HashSet;
+
+fn p(x: f64, y: f64) -> Point {
+    Point::new(x, y)
+}
+
+fn sc(q: Point, s: f64) -> Point {
+    Point::new(q.x * s, q.y * s)
+}
+
+fn seg(a: Point, b: Point, i: u32) -> BspSegment {
+    BspSegment {
+        a,
+        b,
+        tag: if i % 2 == 0 {
+            SegmentTag::Secondary { polyline: i }
+        } else {
+            SegmentTag::Primary {
+                section: i,
+                t: [0.0, 1.0],
+            }
+        },
+    }
+}
+
+fn padded_box(input: &BspInput) -> Rect {
+    let mut pts = input
+        .points
+        .iter()
+        .copied()
+        .chain(input.segments.iter().flat_map(|s| [s.a, s.b]));
+    let Some(first) = pts.next() else {
+        return Rect::new(0.0, 0.0, 1.0, 1.0);
+    };
+    let r = pts.fold(Rect::from_points(first, first), |r, q| r.union_pt(q));
+    let pad = (r.width().max(r.height()) * 0.1).max(f64::MIN_POSITIVE * 1e10);
+    r.inflate(pad, pad)
+}
+
+/// Every segment is exactly a chain of mesh edges, each tagged with it.
+fn assert_conforming(mesh: &TriMesh, input: &BspInput) {
+    let mut edges: HashSet<EdgeKey> = HashSet::new();
+    for f in mesh.faces() {
+        let [a, b, c] = mesh.face(f);
+        edges.extend([EdgeKey::new(a, b), EdgeKey::new(b, c), EdgeKey::new(c, a)]);
+    }
+    let verts: Vec<(VertexId, PointQ)> = mesh.vertices().map(|v| (v, mesh.point_q(v))).collect();
+    for (si, s) in input.segments.iter().enumerate() {
+        let (qa, qb) = (PointQ::from_point(s.a), PointQ::from_point(s.b));
+        if s.a == s.b {
+            assert!(
+                verts.iter().any(|(_, q)| *q == qa),
+                "segment {si}: point-like segment is a vertex"
+            );
+            continue;
+        }
+        let mut on: Vec<&(VertexId, PointQ)> = verts
+            .iter()
+            .filter(|(_, q)| {
+                orient2d_q(&qa, &qb, q) == Orientation::Collinear
+                    && q.cmp_along_q(&qa, &qa, &qb) != Ordering::Less
+                    && q.cmp_along_q(&qb, &qa, &qb) != Ordering::Greater
+            })
+            .collect();
+        on.sort_by(|x, y| x.1.cmp_along_q(&y.1, &qa, &qb));
+        assert!(on.len() >= 2, "segment {si}: endpoints are vertices");
+        assert_eq!(on[0].1, qa);
+        assert_eq!(on[on.len() - 1].1, qb);
+        for w in on.windows(2) {
+            let key = EdgeKey::new(w[0].0, w[1].0);
+            assert!(
+                edges.contains(&key),
+                "segment {si} {s:?}: {key:?} is not a mesh edge"
+            );
+            let tags = mesh.edge_tags(w[0].0, w[1].0);
+            let want = match s.tag {
+                SegmentTag::Primary { section, .. } => tags
+                    .iter()
+                    .any(|t| matches!(t, FeatureOn::Primary { section: x, .. } if *x == section)),
+                SegmentTag::Secondary { polyline } => {
+                    tags.contains(&FeatureOn::Secondary { polyline })
+                }
+            };
+            assert!(want, "segment {si}: edge {key:?} lacks its tag: {tags:?}");
+        }
+    }
+}
+
+/// The triangles tile the box: their (approximate) areas sum to its area.
+fn assert_covers(mesh: &TriMesh, bbox: Rect) {
+    let mut area = 0.0;
+    for f in mesh.faces() {
+        // In box-relative units, so tiny and huge scales neither under- nor overflow.
+        let [a, b, c] = mesh.face(f).map(|v| {
+            let q = mesh.position(v);
+            Point::new(
+                (q.x - bbox.x0) / bbox.width(),
+                (q.y - bbox.y0) / bbox.height(),
+            )
+        });
+        area += (b - a).cross(c - a) * 0.5;
+    }
+    let want = 1.0;
+    assert!(
+        ((area - want) / want).abs() < 1e-9,
+        "area {area} vs box {want}"
+    );
+}
+
+fn run(input: &BspInput, round: bool) -> (TriMesh, BspStats) {
+    let bbox = padded_box(input);
+    let (mesh, stats) =
+        build(input, bbox, &BspOptions::DEFAULT.with_round(round)).expect("bsp builds");
+    let defects = mesh.check();
+    assert!(
+        defects.is_empty(),
+        "defects: {:?}",
+        &defects[..defects.len().min(10)]
+    );
+    assert_covers(&mesh, bbox);
+    if !round {
+        assert_conforming(&mesh, input);
+        assert_eq!(stats.rational_vertices, stats.rational_before_rounding);
+    }
+    assert!(stats.rational_vertices <= stats.rational_before_rounding);
+    assert_eq!(stats.vertices, mesh.num_vertices());
+    (mesh, stats)
+}
+
+fn run_both(input: &BspInput) -> BspStats {
+    run(input, false);
+    run(input, true).1
+}
+
+// ---- generators -------------------------------------------------------------
+
+/// Segment soups mixing: coarse-lattice segments (collinear overlaps,
+/// duplicates, T-junctions, shared endpoints), free random segments (many
+/// crossings), nearly parallel pairs (one endpoint moved by one ulp), and
+/// isolated points; all multiplied by `scale`.
+fn soup(max_segments: usize) -> impl Strategy<Value = BspInput> {
+    let lattice = (0u8..9, 0u8..9, 0u8..9, 0u8..9).prop_map(|(a, b, c, d)| {
+        (
+            p(f64::from(a), f64::from(b)),
+            p(f64::from(c), f64::from(d)),
+            0u8,
+        )
+    });
+    let free = (0.0..8.0f64, 0.0..8.0f64, 0.0..8.0f64, 0.0..8.0f64)
+        .prop_map(|(a, b, c, d)| (p(a, b), p(c, d), 0u8));
+    let near_parallel = (0.5..8.0f64, 0.5..8.0f64, 0.5..8.0f64, 0.5..8.0f64, 1u8..3)
+        .prop_map(|(a, b, c, d, kind)| (p(a, b), p(c, d), kind));
+    let piece = prop_oneof![3 => lattice, 3 => free, 1 => near_parallel];
+    (
+        proptest::collection::vec(piece, 1..max_segments),
+        proptest::collection::vec((0u8..9, 0u8..9), 0..4),
+        prop_oneof![Just(1.0), Just(1e-9), Just(1e9), Just(3.0e-7)],
+    )
+        .prop_map(|(pieces, pts, scale)| {
+            let mut segments = Vec::new();
+            for (a, b, kind) in pieces {
+                let i = u32::try_from(segments.len()).expect("small");
+                segments.push(seg(sc(a, scale), sc(b, scale), i));
+                // One ulp up (coordinates here are positive).
+                let up = |v: f64| f64::from_bits(v.to_bits() + 1);
+                let (a2, b2) = (sc(a, scale), sc(b, scale));
+                match kind {
+                    1 => segments.push(seg(a2, p(b2.x, up(b2.y)), i + 1)),
+                    2 => segments.push(seg(p(a2.x, up(a2.y)), p(b2.x, up(b2.y)), i + 1)),
+                    _ => {}
+                }
+            }
+            let points = pts
+                .into_iter()
+                .map(|(x, y)| sc(p(f64::from(x) + 0.5, f64::from(y) + 0.25), scale))
+                .collect();
+            BspInput {
+                points,
+                section_endpoints: Vec::new(),
+                segments,
+            }
+        })
+}
+
+fn runner(cases: u32) -> TestRunner {
+    let config = Config {
+        cases,
+        failure_persistence: None,
+        ..Config::default()
+    };
+    TestRunner::new_with_rng(config, TestRng::deterministic_rng(RngAlgorithm::ChaCha))
+}
+
+#[test]
+fn random_soups_are_valid_and_conforming() {
+    let mut r = runner(48);
+    r.run(&soup(24), |input| {
+        run_both(&input);
+        Ok(())
+    })
+    .expect("property holds");
+}
+
+#[test]
+fn larger_random_soups() {
+    let mut r = runner(6);
+    r.run(&soup(120), |input| {
+        run_both(&input);
+        Ok(())
+    })
+    .expect("property holds");
+}
+
+// ---- named regressions ---------------------------------------------------------
+
+#[test]
+fn empty_input_is_the_box() {
+    let input = BspInput::default();
+    let (mesh, stats) =
+        build(&input, Rect::new(0.0, 0.0, 2.0, 1.0), &BspOptions::DEFAULT).expect("ok");
+    assert_eq!(stats.triangles, 2);
+    assert_eq!(mesh.num_vertices(), 4);
+    assert!(mesh.check().is_empty());
+}
+
+#[test]
+fn crossing_pair_splits_at_exact_point() {
+    let input = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(3.0, 1.0), 0),
+            seg(p(0.0, 1.0), p(1.0, -1.0), 1),
+        ],
+        ..BspInput::default()
+    };
+    let (mesh, _) = run(&input, false);
+    // x = 3/7: the crossing is rational, not an f64.
+    assert!(mesh.vertices().any(|v| mesh.is_rational(v)));
+    run(&input, true);
+}
+
+#[test]
+fn collinear_overlaps_duplicates_and_t_junctions() {
+    let input = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(4.0, 0.0), 0),
+            seg(p(1.0, 0.0), p(6.0, 0.0), 1),
+            seg(p(4.0, 0.0), p(0.0, 0.0), 2),
+            seg(p(2.0, 0.0), p(2.0, 3.0), 3),
+            seg(p(2.0, 3.0), p(2.0, 3.0), 4),
+            seg(p(0.0, 0.0), p(6.0, 3.0), 5),
+            seg(p(0.0, 3.0), p(6.0, 0.0), 6),
+        ],
+        points: vec![p(3.0, 1.5), p(5.0, 2.0)],
+        ..BspInput::default()
+    };
+    run_both(&input);
+}
+
+#[test]
+fn star_through_one_point() {
+    let segments = (0..24)
+        .map(|k| {
+            let a = f64::from(k) * 0.27;
+            seg(p(-a.cos(), -a.sin()), p(a.cos(), a.sin()), k)
+        })
+        .collect();
+    run_both(&BspInput {
+        segments,
+        ..BspInput::default()
+    });
+}
+
+#[test]
+fn dense_grid_of_crossings() {
+    let mut segments = Vec::new();
+    for k in 0..15 {
+        let t = f64::from(k) / 7.0;
+        segments.push(seg(p(t, -0.1), p(t + 0.3, 2.1), 2 * k));
+        segments.push(seg(p(-0.1, t * 0.9), p(2.1, t + 0.1), 2 * k + 1));
+    }
+    let stats = run_both(&BspInput {
+        segments,
+        ..BspInput::default()
+    });
+    assert!(stats.cut_triangles > 0 && stats.rational_before_rounding > 100);
+}
+
+#[test]
+fn segment_on_box_boundary_and_tiny_scale() {
+    let input = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(1.0, 0.0), 0),
+            seg(p(0.0, 0.0), p(1.0, 1.0), 1),
+        ],
+        ..BspInput::default()
+    };
+    let (mesh, _) = build(&input, Rect::new(0.0, 0.0, 1.0, 1.0), &BspOptions::DEFAULT).expect("ok");
+    assert!(mesh.check().is_empty());
+    let s = 1e-300;
+    let tiny = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(3.0 * s, s), 0),
+            seg(p(0.0, s), p(s, -s), 1),
+        ],
+        ..BspInput::default()
+    };
+    let (_, stats) = run(&tiny, false);
+    assert!(stats.delaunay_scale_exp > 0);
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let nan = BspInput {
+        points: vec![p(f64::NAN, 0.0)],
+        ..BspInput::default()
+    };
+    let r = build(&nan, Rect::new(0.0, 0.0, 1.0, 1.0), &BspOptions::DEFAULT);
+    assert!(matches!(r, Err(crate::Error::BadCoordinate(_))));
+    let outside = BspInput {
+        points: vec![p(2.0, 0.0)],
+        ..BspInput::default()
+    };
+    let r = build(
+        &outside,
+        Rect::new(0.0, 0.0, 1.0, 1.0),
+        &BspOptions::DEFAULT,
+    );
+    assert!(matches!(r, Err(crate::Error::BadCoordinate(_))));
+    let r = build(
+        &BspInput::default(),
+        Rect::new(0.0, 0.0, 0.0, 1.0),
+        &BspOptions::DEFAULT,
+    );
+    assert!(matches!(r, Err(crate::Error::InvalidParams(_))));
+    let huge_range = BspInput {
+        points: vec![p(1e-300, 0.0)],
+        ..BspInput::default()
+    };
+    let r = build(
+        &huge_range,
+        Rect::new(0.0, 0.0, 1e300, 1.0),
+        &BspOptions::DEFAULT,
+    );
+    assert!(matches!(r, Err(crate::Error::BadCoordinate(_))));
+    let many = BspInput {
+        segments: (0..10)
+            .map(|k| seg(p(0.0, f64::from(k)), p(10.0, 10.0 - f64::from(k)), k))
+            .collect(),
+        ..BspInput::default()
+    };
+    let r = build(
+        &many,
+        Rect::new(-1.0, -1.0, 11.0, 11.0),
+        &BspOptions::DEFAULT.with_max_vertices(8),
+    );
+    assert!(matches!(r, Err(crate::Error::Meshing { .. })));
+}

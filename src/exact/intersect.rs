@@ -1,0 +1,272 @@
+//! Exact intersections of lines and segments.
+
+use super::predicates::{Orientation, orient2d_q};
+use super::rational::PointQ;
+use rug::Rational;
+
+/// How two closed segments meet.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SegmentIntersection {
+    /// They have no common point.
+    Disjoint,
+    /// They cross at one point interior to both.
+    Crossing(PointQ),
+    /// They share exactly one point, an endpoint of at least one of them
+    /// (also a degenerate, point-like segment lying on the other).
+    Touching(PointQ),
+    /// They are collinear and share a piece of positive length, given by its
+    /// two ends ordered along the first segment.
+    Overlap(PointQ, PointQ),
+}
+
+/// How a closed segment meets a line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SegmentLine {
+    /// No common point (or the line is undefined: its two points coincide).
+    Disjoint,
+    /// Exactly one common point (an endpoint of the segment, or a crossing).
+    Point(PointQ),
+    /// The segment lies on the line.
+    Contained,
+}
+
+/// The intersection point of the line through `a`, `b` and the line through
+/// `c`, `d`; `None` when they are parallel, identical or undefined.
+pub fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> Option<PointQ> {
+    let bax = Rational::from(&b.x - &a.x);
+    let bay = Rational::from(&b.y - &a.y);
+    let dcx = Rational::from(&d.x - &c.x);
+    let dcy = Rational::from(&d.y - &c.y);
+    let denom = Rational::from(&bax * &dcy) - Rational::from(&bay * &dcx);
+    if denom == 0 {
+        return None;
+    }
+    let cax = Rational::from(&c.x - &a.x);
+    let cay = Rational::from(&c.y - &a.y);
+    let num = cax * &dcy - cay * &dcx;
+    let t = num / denom;
+    let x = bax * &t + &a.x;
+    let y = bay * &t + &a.y;
+    Some(PointQ::from_rationals(x, y))
+}
+
+/// `p · (b - a)`, exactly: a monotone parameter along the direction `a → b`.
+fn along(p: &PointQ, a: &PointQ, b: &PointQ) -> Rational {
+    let dx = Rational::from(&b.x - &a.x);
+    let dy = Rational::from(&b.y - &a.y);
+    dx * &p.x + dy * &p.y
+}
+
+/// Whether `p` lies on the closed segment `a b` (which may be a point).
+fn on_segment(p: &PointQ, a: &PointQ, b: &PointQ) -> bool {
+    if a == b {
+        return p == a;
+    }
+    if orient2d_q(a, b, p) != Orientation::Collinear {
+        return false;
+    }
+    let (ka, kb, kp) = (along(a, a, b), along(b, a, b), along(p, a, b));
+    ka <= kp && kp <= kb
+}
+
+/// How the closed segments `a b` and `c d` meet, exactly.
+pub fn segment_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> SegmentIntersection {
+    if a == b || c == d {
+        let (p, (s, t)) = if a == b { (a, (c, d)) } else { (c, (a, b)) };
+        return if on_segment(p, s, t) {
+            SegmentIntersection::Touching(p.clone())
+        } else {
+            SegmentIntersection::Disjoint
+        };
+    }
+    let o1 = orient2d_q(a, b, c);
+    let o2 = orient2d_q(a, b, d);
+    if o1 == Orientation::Collinear && o2 == Orientation::Collinear {
+        // Collinear: intersect the parameter ranges along a → b.
+        let (ka, kb) = (along(a, a, b), along(b, a, b));
+        let (kc, kd) = (along(c, a, b), along(d, a, b));
+        let (lo_cd, hi_cd) = if kc <= kd {
+            ((kc, c), (kd, d))
+        } else {
+            ((kd, d), (kc, c))
+        };
+        let (lo, lo_p) = if lo_cd.0 > ka {
+            (lo_cd.0, lo_cd.1)
+        } else {
+            (ka, a)
+        };
+        let (hi, hi_p) = if hi_cd.0 < kb {
+            (hi_cd.0, hi_cd.1)
+        } else {
+            (kb, b)
+        };
+        return match lo.cmp(&hi) {
+            std::cmp::Ordering::Less => SegmentIntersection::Overlap(lo_p.clone(), hi_p.clone()),
+            std::cmp::Ordering::Equal => SegmentIntersection::Touching(lo_p.clone()),
+            std::cmp::Ordering::Greater => SegmentIntersection::Disjoint,
+        };
+    }
+    if o1 == o2 {
+        return SegmentIntersection::Disjoint;
+    }
+    let o3 = orient2d_q(c, d, a);
+    let o4 = orient2d_q(c, d, b);
+    if o3 == o4 {
+        // Both non-collinear (else the four points would be collinear).
+        return SegmentIntersection::Disjoint;
+    }
+    for (o, p) in [(o1, c), (o2, d), (o3, a), (o4, b)] {
+        if o == Orientation::Collinear {
+            return SegmentIntersection::Touching(p.clone());
+        }
+    }
+    let x = line_intersection(a, b, c, d).expect("internal: crossing segments are not parallel");
+    SegmentIntersection::Crossing(x)
+}
+
+/// How the closed segment `a b` meets the line through `p` and `q`, exactly.
+pub fn segment_line(a: &PointQ, b: &PointQ, p: &PointQ, q: &PointQ) -> SegmentLine {
+    if p == q {
+        return SegmentLine::Disjoint;
+    }
+    let oa = orient2d_q(p, q, a);
+    let ob = orient2d_q(p, q, b);
+    match (oa, ob) {
+        (Orientation::Collinear, Orientation::Collinear) => SegmentLine::Contained,
+        (Orientation::Collinear, _) => SegmentLine::Point(a.clone()),
+        (_, Orientation::Collinear) => SegmentLine::Point(b.clone()),
+        _ if oa == ob => SegmentLine::Disjoint,
+        _ => SegmentLine::Point(
+            line_intersection(a, b, p, q).expect("internal: a crossing line is not parallel"),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kurbo::Point;
+    use proptest::prelude::*;
+
+    fn q(x: f64, y: f64) -> PointQ {
+        PointQ::from_point(Point::new(x, y))
+    }
+    use SegmentIntersection as SI;
+
+    #[test]
+    fn proper_crossing() {
+        let r = segment_intersection(&q(0.0, 0.0), &q(3.0, 3.0), &q(0.0, 1.0), &q(1.0, 0.0));
+        assert_eq!(r, SI::Crossing(q(0.5, 0.5)));
+        // An exact non-f64 crossing: x = 1/3.
+        let r = segment_intersection(&q(0.0, 0.0), &q(1.0, 0.0), &q(0.0, -1.0), &q(1.0, 2.0));
+        let SI::Crossing(x) = r else { panic!("{r:?}") };
+        assert!(!x.is_f64());
+        assert_eq!(x, q(0.0, 0.0).lerp_ratio(&q(1.0, 0.0), 1.0, 3.0));
+    }
+
+    #[test]
+    fn touching_cases() {
+        // T-junction.
+        let r = segment_intersection(&q(0.0, 0.0), &q(2.0, 0.0), &q(1.0, 0.0), &q(1.0, 5.0));
+        assert_eq!(r, SI::Touching(q(1.0, 0.0)));
+        // Shared endpoint.
+        let r = segment_intersection(&q(0.0, 0.0), &q(2.0, 0.0), &q(2.0, 0.0), &q(3.0, 5.0));
+        assert_eq!(r, SI::Touching(q(2.0, 0.0)));
+        // Collinear, end to end.
+        let r = segment_intersection(&q(0.0, 0.0), &q(2.0, 0.0), &q(2.0, 0.0), &q(3.0, 0.0));
+        assert_eq!(r, SI::Touching(q(2.0, 0.0)));
+        // Degenerate segment on the other.
+        let r = segment_intersection(&q(1.0, 0.0), &q(1.0, 0.0), &q(0.0, 0.0), &q(2.0, 0.0));
+        assert_eq!(r, SI::Touching(q(1.0, 0.0)));
+        let r = segment_intersection(&q(1.0, 1.0), &q(1.0, 1.0), &q(0.0, 0.0), &q(2.0, 0.0));
+        assert_eq!(r, SI::Disjoint);
+    }
+
+    #[test]
+    fn overlap_and_disjoint() {
+        let r = segment_intersection(&q(0.0, 0.0), &q(4.0, 4.0), &q(5.0, 5.0), &q(1.0, 1.0));
+        assert_eq!(r, SI::Overlap(q(1.0, 1.0), q(4.0, 4.0)));
+        let r = segment_intersection(&q(4.0, 4.0), &q(0.0, 0.0), &q(1.0, 1.0), &q(2.0, 2.0));
+        assert_eq!(r, SI::Overlap(q(2.0, 2.0), q(1.0, 1.0)));
+        let r = segment_intersection(&q(0.0, 0.0), &q(1.0, 1.0), &q(2.0, 2.0), &q(3.0, 3.0));
+        assert_eq!(r, SI::Disjoint);
+        // Parallel, not collinear.
+        let r = segment_intersection(
+            &q(0.0, 0.0),
+            &q(1.0, 1.0),
+            &q(0.0, 1e-300),
+            &q(1.0, 1.0 + f64::EPSILON),
+        );
+        assert_eq!(r, SI::Disjoint);
+        // Nearly parallel, crossing far from the origin of either segment.
+        let r = segment_intersection(
+            &q(0.0, 0.0),
+            &q(1.0, 1.0),
+            &q(0.0, 1e-17),
+            &q(1.0, 1.0 - 1e-16),
+        );
+        assert!(matches!(r, SI::Crossing(_)), "{r:?}");
+    }
+
+    #[test]
+    fn segment_line_cases() {
+        let (p, qq) = (q(0.0, 0.0), q(1.0, 0.0));
+        assert_eq!(
+            segment_line(&q(5.0, -1.0), &q(5.0, 1.0), &p, &qq),
+            SegmentLine::Point(q(5.0, 0.0))
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 0.0), &q(5.0, 1.0), &p, &qq),
+            SegmentLine::Point(q(5.0, 0.0))
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 0.0), &q(-5.0, 0.0), &p, &qq),
+            SegmentLine::Contained
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &qq),
+            SegmentLine::Disjoint
+        );
+        assert_eq!(
+            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &p),
+            SegmentLine::Disjoint
+        );
+    }
+
+    fn pt() -> impl Strategy<Value = PointQ> {
+        // Small integer grid: lots of collinear / touching / overlapping cases.
+        (-3i32..4, -3i32..4).prop_map(|(x, y)| q(f64::from(x), f64::from(y)))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 1024, failure_persistence: None, ..ProptestConfig::default() })]
+
+        /// Every reported point lies on both segments; the answer is symmetric.
+        #[test]
+        fn intersection_is_consistent(a in pt(), b in pt(), c in pt(), d in pt()) {
+            let r = segment_intersection(&a, &b, &c, &d);
+            let s = segment_intersection(&c, &d, &a, &b);
+            match (&r, &s) {
+                (SI::Disjoint, SI::Disjoint) => {
+                    // Sampled check: no lattice point of 1/4 step on both.
+                    for i in 0..=8 {
+                        let x = a.lerp_ratio(&b, f64::from(i), 8.0);
+                        prop_assert!(!(on_segment(&x, &a, &b) && on_segment(&x, &c, &d)));
+                    }
+                }
+                (SI::Crossing(x), SI::Crossing(y)) | (SI::Touching(x), SI::Touching(y)) => {
+                    prop_assert_eq!(x, y);
+                    prop_assert!(on_segment(x, &a, &b) && on_segment(x, &c, &d));
+                }
+                (SI::Overlap(x0, x1), SI::Overlap(y0, y1)) => {
+                    prop_assert!(x0 != x1);
+                    prop_assert!((x0 == y0 && x1 == y1) || (x0 == y1 && x1 == y0));
+                    for x in [x0, x1] {
+                        prop_assert!(on_segment(x, &a, &b) && on_segment(x, &c, &d));
+                    }
+                }
+                _ => prop_assert!(false, "asymmetric: {:?} vs {:?}", r, s),
+            }
+        }
+    }
+}

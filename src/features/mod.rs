@@ -1,0 +1,477 @@
+//! Feature preprocessing: the loader's feature soup → [`FeatureSet`] (DESIGN `features`,
+//! thesis §4.3.1 "Input preprocessing" and §4.4 "Feature processing for curved meshing").
+//!
+//! This module owns the classification of every input curve into *primary* discrete curve
+//! sections (kept exactly, to be curved later) and *secondary* polylines (approximated
+//! within ε), plus isolated points. The stages, in order:
+//!
+//! 1. [`classify`]: degenerate curves (control points within ε_m of their mean) become
+//!    points, straight curves (control points within ε_m of their least-squares line) become
+//!    segments.
+//! 2. [`split`]: cubics are split at inflections (det(c′, c″) = 0, eq. 4.1) and at
+//!    zero-derivative points (cusps), then recursively where the tangent bisects the total
+//!    turn, until every piece has constant-sign curvature and turns less than 180°.
+//! 3. [`resample`]: pieces are halved until each is shorter than l, within μ of its chord and
+//!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m are not eligible.
+//! 4. [`separation`]: μ-separation (Definition 4.1), decided conservatively on the sections'
+//!    control hulls with a uniform grid, then the secondary simplification (endpoints closer
+//!    than μ collapse to their barycentre).
+//!
+//! Guarantees to the next stage (checked by the property tests with an independent checker):
+//! every primary section has constant-sign curvature, turns less than α, is no longer than
+//! l, lies within μ of its chord, and is at least μ away from every section, secondary
+//! segment and point it does not share an endpoint with; no primary chord crosses any other
+//! chord or secondary segment. Sections that share an endpoint share it bit for bit.
+//! [`FeatureSet::conforming_input`] lists what the linear mesher must conform to.
+
+mod classify;
+mod grid;
+mod json;
+mod preview;
+mod resample;
+mod separation;
+mod split;
+
+pub use json::to_json;
+pub use preview::to_svg;
+
+use crate::params::Resolved;
+use crate::svg::{Drawing, FeatureGeom, FeatureSource};
+use kurbo::{CubicBez, Line, ParamCurve, Point};
+use std::time::Instant;
+
+/// Index of a primary section in [`FeatureSet::primary`].
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SectionId(pub u32);
+
+impl std::fmt::Debug for SectionId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "p{}", self.0)
+    }
+}
+
+/// Index of a secondary polyline in [`FeatureSet::secondary`].
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct PolylineId(pub u32);
+
+impl std::fmt::Debug for PolylineId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "q{}", self.0)
+    }
+}
+
+/// An isolated feature point: an input point, a degenerate curve, or a secondary polyline
+/// that collapsed to a single point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeaturePoint {
+    /// Position (output coordinates).
+    pub pos: Point,
+    /// The input feature it came from.
+    pub source: FeatureSource,
+}
+
+/// The input curve a section was cut from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Parent {
+    /// An input cubic Bézier (parameter t of the cubic).
+    Cubic(CubicBez),
+    /// A straight segment: an input line, or a straight input cubic replaced by the segment
+    /// (or one of the collinear segments, if it folds back) it traces (parameter t of the
+    /// segment, 0 at `p0`).
+    Line(Line),
+}
+
+impl Parent {
+    /// The point at parameter `t`; exactly the end points at `t = 0` and `t = 1`.
+    pub fn eval(&self, t: f64) -> Point {
+        match self {
+            Parent::Cubic(c) if t == 0.0 => c.p0,
+            Parent::Cubic(c) if t == 1.0 => c.p3,
+            Parent::Cubic(c) => c.eval(t),
+            Parent::Line(l) if t == 0.0 => l.p0,
+            Parent::Line(l) if t == 1.0 => l.p1,
+            Parent::Line(l) => l.p0.lerp(l.p1, t),
+        }
+    }
+
+    /// The control polygon of the restriction to `[t0, t1]`; its end points are exactly
+    /// `self.eval(t0)` and `self.eval(t1)`. For a line the controls are collinear, at 1/3 and
+    /// 2/3.
+    pub fn restrict(&self, t0: f64, t1: f64) -> CubicBez {
+        let (a, b) = (self.eval(t0), self.eval(t1));
+        match self {
+            Parent::Cubic(c) => {
+                let s = c.subsegment(t0..t1);
+                CubicBez::new(a, s.p1, s.p2, b)
+            }
+            Parent::Line(_) => CubicBez::new(a, a.lerp(b, 1.0 / 3.0), a.lerp(b, 2.0 / 3.0), b),
+        }
+    }
+
+    /// Whether this is a straight segment.
+    pub fn is_line(&self) -> bool {
+        matches!(self, Parent::Line(_))
+    }
+}
+
+/// A primary discrete curve section: a piece of one input curve that the mesh represents
+/// by a single (later curved) edge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimarySection {
+    /// The curve it was cut from.
+    pub parent: Parent,
+    /// The input feature it came from.
+    pub source: FeatureSource,
+    /// Parameter interval `[t0, t1]` on `parent`, `t0 < t1`.
+    pub t: [f64; 2],
+    /// Control polygon of the section itself: `parent` restricted to `t`. Collinear for a
+    /// straight section. `ctrl.p0`/`ctrl.p3` are the chord the linear mesher conforms to.
+    pub ctrl: CubicBez,
+    /// The primary section that continues this one at `ctrl.p0`: the neighbour along the same
+    /// subpath if it is primary, else the only other primary section ending there, else none.
+    pub prev: Option<SectionId>,
+    /// Same as `prev`, at `ctrl.p3`.
+    pub next: Option<SectionId>,
+}
+
+impl PrimarySection {
+    /// The chord: the straight edge the linear mesher conforms to.
+    pub fn chord(&self) -> Line {
+        Line::new(self.ctrl.p0, self.ctrl.p3)
+    }
+}
+
+/// A secondary feature: a polyline within μ of (a run of consecutive secondary sections of)
+/// one input curve, after the secondary simplification.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SecondaryPolyline {
+    /// The vertices, at least two, consecutive ones distinct.
+    pub points: Vec<Point>,
+    /// The input feature it came from.
+    pub source: FeatureSource,
+}
+
+/// What a segment of [`ConformingInput`] represents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SegmentTag {
+    /// The chord of a primary section.
+    Primary(SectionId),
+    /// Segment `index` (from `points[index]` to `points[index + 1]`) of a secondary polyline.
+    Secondary {
+        /// The polyline.
+        polyline: PolylineId,
+        /// The segment within it.
+        index: u32,
+    },
+}
+
+/// Everything the linear (BSP) mesher must conform to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConformingInput {
+    /// Straight segments with what they represent; primary chords first.
+    pub segments: Vec<(Line, SegmentTag)>,
+    /// Isolated points.
+    pub points: Vec<Point>,
+}
+
+/// Counts of what preprocessing found and produced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FeatureCounts {
+    /// Input point features.
+    pub input_points: usize,
+    /// Input straight segments.
+    pub input_lines: usize,
+    /// Input cubics.
+    pub input_cubics: usize,
+    /// Curves (lines or cubics) that degenerated to a point.
+    pub degenerate: usize,
+    /// Cubics found straight and replaced by segments.
+    pub straight: usize,
+    /// Splits at inflections and zero-derivative points.
+    pub inflection_splits: usize,
+    /// Splits that halve a total curvature of 180° or more.
+    pub curvature_splits: usize,
+    /// Discrete curve sections after resampling.
+    pub sections: usize,
+    /// Sections not eligible because of curvature above 2/l_m (or a refinement budget).
+    pub high_curvature: usize,
+    /// Eligible sections demoted by the μ-separation test.
+    pub not_separated: usize,
+    /// Primary sections demoted after the secondary simplification moved a neighbour.
+    pub demoted_after_simplify: usize,
+    /// Secondary vertices moved by the simplification.
+    pub collapsed_vertices: usize,
+    /// Primary sections.
+    pub primary: usize,
+    /// Secondary polylines.
+    pub secondary_polylines: usize,
+    /// Segments of all secondary polylines.
+    pub secondary_segments: usize,
+    /// Isolated points in the output.
+    pub points: usize,
+}
+
+/// Wall time of each preprocessing stage, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FeatureTiming {
+    /// Degenerate / straight classification.
+    pub classify_ms: f64,
+    /// Inflection and total-curvature splits.
+    pub split_ms: f64,
+    /// Resampling into discrete curve sections.
+    pub resample_ms: f64,
+    /// μ-separation.
+    pub separation_ms: f64,
+    /// Secondary simplification and assembly of the output.
+    pub simplify_ms: f64,
+    /// Everything.
+    pub total_ms: f64,
+}
+
+/// The preprocessed features: what the meshers consume (DESIGN `features`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FeatureSet {
+    /// The absolute parameters it was built with.
+    pub params: Resolved,
+    /// Isolated points.
+    pub points: Vec<FeaturePoint>,
+    /// Primary sections, in input order (and along each input curve).
+    pub primary: Vec<PrimarySection>,
+    /// Secondary polylines.
+    pub secondary: Vec<SecondaryPolyline>,
+    /// Counts.
+    pub counts: FeatureCounts,
+    /// Per-stage timing.
+    pub timing: FeatureTiming,
+}
+
+/// A discrete curve section before classification (shared by the stages).
+#[derive(Clone, Copy, Debug)]
+struct Section {
+    /// Index into `Drawing::features`.
+    feature: u32,
+    parent: Parent,
+    t0: f64,
+    t1: f64,
+    ctrl: CubicBez,
+    /// Satisfies the per-section primary conditions (curvature, turn, length, chord).
+    eligible: bool,
+}
+
+fn ms(since: Instant) -> f64 {
+    since.elapsed().as_secs_f64() * 1e3
+}
+
+impl FeatureSet {
+    /// Preprocess the features of `drawing` with the absolute parameters `params`
+    /// (`Params::resolve(drawing.diagonal())`).
+    ///
+    /// Never fails and always terminates: every refinement loop has a budget; what exceeds
+    /// it is made secondary.
+    pub fn build(drawing: &Drawing, params: &Resolved) -> FeatureSet {
+        let _span = tracing::debug_span!("features").entered();
+        let start = Instant::now();
+        let mut counts = FeatureCounts::default();
+        let mut timing = FeatureTiming::default();
+        let mut points = Vec::new();
+
+        // 1. Classification.
+        let t = Instant::now();
+        let mut curves: Vec<(u32, classify::Class)> = Vec::with_capacity(drawing.features.len());
+        for (i, f) in drawing.features.iter().enumerate() {
+            match f.geom {
+                FeatureGeom::Point(_) => counts.input_points += 1,
+                FeatureGeom::Line(_) => counts.input_lines += 1,
+                FeatureGeom::Cubic(_) => counts.input_cubics += 1,
+            }
+            let class = classify::classify(&f.geom, params.eps_m);
+            match &class {
+                classify::Class::Point(p) => {
+                    if !matches!(f.geom, FeatureGeom::Point(_)) {
+                        counts.degenerate += 1;
+                    }
+                    points.push(FeaturePoint {
+                        pos: *p,
+                        source: f.source,
+                    });
+                    continue;
+                }
+                classify::Class::Lines(_) if matches!(f.geom, FeatureGeom::Cubic(_)) => {
+                    counts.straight += 1;
+                }
+                _ => {}
+            }
+            let i = u32::try_from(i).expect("internal: more than 2^32 features");
+            curves.push((i, class));
+        }
+        timing.classify_ms = ms(t);
+
+        // 2. Splits (cubics only).
+        let t = Instant::now();
+        let mut pieces: Vec<(u32, Parent, Vec<[f64; 2]>)> = Vec::with_capacity(curves.len());
+        for (i, class) in curves {
+            match class {
+                classify::Class::Point(_) => {}
+                classify::Class::Lines(lines) => {
+                    for l in lines {
+                        pieces.push((i, Parent::Line(l), vec![[0.0, 1.0]]));
+                    }
+                }
+                classify::Class::Curve(c) => {
+                    let s = split::split(&c);
+                    counts.inflection_splits += s.inflection_splits;
+                    counts.curvature_splits += s.curvature_splits;
+                    pieces.push((i, Parent::Cubic(c), s.intervals));
+                }
+            }
+        }
+        timing.split_ms = ms(t);
+
+        // 3. Resampling.
+        let t = Instant::now();
+        let mut sections = Vec::new();
+        for (i, parent, intervals) in &pieces {
+            for &[t0, t1] in intervals {
+                for p in resample::resample(parent, t0, t1, params) {
+                    sections.push(Section {
+                        feature: *i,
+                        parent: *parent,
+                        t0: p.t0,
+                        t1: p.t1,
+                        ctrl: p.ctrl,
+                        eligible: p.eligible,
+                    });
+                }
+            }
+        }
+        counts.sections = sections.len();
+        counts.high_curvature = sections.iter().filter(|s| !s.eligible).count();
+        timing.resample_ms = ms(t);
+
+        // 4. μ-separation.
+        let t = Instant::now();
+        points = separation::merge_points(points, params.mu);
+        let mut primary = separation::separate(&sections, &points, params.mu, params.alpha);
+        counts.not_separated = sections
+            .iter()
+            .zip(&primary)
+            .filter(|(s, p)| s.eligible && !**p)
+            .count();
+        timing.separation_ms = ms(t);
+
+        // 5. Secondary simplification and assembly.
+        let t = Instant::now();
+        let simplified = separation::simplify(
+            &sections,
+            &mut primary,
+            drawing,
+            &mut points,
+            params.mu,
+            params.alpha,
+        );
+        counts.collapsed_vertices = simplified.collapsed;
+        counts.demoted_after_simplify = simplified.demoted;
+        let primary_sections = assemble_primary(&sections, &primary, drawing);
+        counts.primary = primary_sections.len();
+        counts.secondary_polylines = simplified.polylines.len();
+        counts.secondary_segments = simplified
+            .polylines
+            .iter()
+            .map(|p| p.points.len() - 1)
+            .sum();
+        counts.points = points.len();
+        timing.simplify_ms = ms(t);
+        timing.total_ms = ms(start);
+        tracing::debug!(?counts, "features");
+
+        FeatureSet {
+            params: *params,
+            points,
+            primary: primary_sections,
+            secondary: simplified.polylines,
+            counts,
+            timing,
+        }
+    }
+
+    /// Every straight segment the linear mesher must conform to (primary chords, then the
+    /// segments of secondary polylines) with what it represents, and every isolated point.
+    pub fn conforming_input(&self) -> ConformingInput {
+        let mut segments = Vec::with_capacity(self.primary.len() + self.counts.secondary_segments);
+        for (i, s) in self.primary.iter().enumerate() {
+            let id = SectionId(u32::try_from(i).expect("internal: section count fits u32"));
+            segments.push((s.chord(), SegmentTag::Primary(id)));
+        }
+        for (i, p) in self.secondary.iter().enumerate() {
+            let polyline = PolylineId(u32::try_from(i).expect("internal: polyline count fits u32"));
+            for (k, w) in p.points.windows(2).enumerate() {
+                let index = u32::try_from(k).expect("internal: polyline length fits u32");
+                segments.push((
+                    Line::new(w[0], w[1]),
+                    SegmentTag::Secondary { polyline, index },
+                ));
+            }
+        }
+        ConformingInput {
+            segments,
+            points: self.points.iter().map(|p| p.pos).collect(),
+        }
+    }
+}
+
+/// Build the primary sections with their adjacency.
+fn assemble_primary(
+    sections: &[Section],
+    primary: &[bool],
+    drawing: &Drawing,
+) -> Vec<PrimarySection> {
+    use std::collections::HashMap;
+    let mut out = Vec::new();
+    for (i, s) in sections.iter().enumerate() {
+        if primary[i] {
+            out.push(PrimarySection {
+                parent: s.parent,
+                source: drawing.features[s.feature as usize].source,
+                t: [s.t0, s.t1],
+                ctrl: s.ctrl,
+                prev: None,
+                next: None,
+            });
+        }
+    }
+    // Endpoint → primary sections incident there.
+    let key = |p: Point| (p.x.to_bits(), p.y.to_bits());
+    let mut at: HashMap<(u64, u64), Vec<u32>> = HashMap::new();
+    for (i, s) in out.iter().enumerate() {
+        let i = u32::try_from(i).expect("internal: section count fits u32");
+        at.entry(key(s.ctrl.p0)).or_default().push(i);
+        if s.ctrl.p3 != s.ctrl.p0 {
+            at.entry(key(s.ctrl.p3)).or_default().push(i);
+        }
+    }
+    let pick = |i: usize, p: Point, out: &[PrimarySection]| -> Option<SectionId> {
+        let others: Vec<u32> = at[&key(p)]
+            .iter()
+            .copied()
+            .filter(|&j| j as usize != i)
+            .collect();
+        let me = out[i].source;
+        let same_subpath = others.iter().copied().find(|&j| {
+            let o = out[j as usize].source;
+            o.shape == me.shape && o.subpath == me.subpath
+        });
+        same_subpath
+            .or_else(|| (others.len() == 1).then(|| others[0]))
+            .map(SectionId)
+    };
+    for i in 0..out.len() {
+        let prev = pick(i, out[i].ctrl.p0, &out);
+        let next = pick(i, out[i].ctrl.p3, &out);
+        out[i].prev = prev;
+        out[i].next = next;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,164 @@
+//! Curve resampling into discrete curve sections (thesis §4.4 "Curve resampling",
+//! §4.3.1 "Bounded curvature", Theorem 4.4).
+//!
+//! A piece (constant-sign curvature, turn below 180°) is halved in parameter until every
+//! section is *eligible* for primary: its control polygon is no longer than l (so its arc
+//! is not either), its inner control points are within μ of the chord (so the curve is,
+//! being in their convex hull), the angle between its end tangents is below α (its turn,
+//! given the previous splits), and its curvature, sampled, is at most 2/l_m. A section
+//! that breaks the curvature or turn condition when it is already no longer than μ (the
+//! part around a cusp or a curvature spike) is kept as a *non-eligible* section: it will be
+//! secondary. A depth and count budget bounds the work on any input.
+
+use super::Parent;
+use super::split::{end_tangent, start_tangent};
+use crate::params::Resolved;
+use kurbo::{CubicBez, Line, ParamCurveCurvature, Point};
+
+/// Maximum halving depth of one piece.
+const MAX_DEPTH: u32 = 48;
+/// Maximum sections cut from one piece or line.
+const MAX_SECTIONS: usize = 1 << 16;
+/// Curvature samples per section (plus both ends).
+const CURVATURE_SAMPLES: usize = 8;
+
+/// One discrete curve section of a parent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Piece {
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    /// `parent` restricted to `[t0, t1]`.
+    pub(super) ctrl: CubicBez,
+    /// Satisfies every per-section condition of a primary section.
+    pub(super) eligible: bool,
+}
+
+/// Length of the control polygon (an upper bound of the arc length).
+pub(super) fn polygon_length(c: &CubicBez) -> f64 {
+    c.p0.distance(c.p1) + c.p1.distance(c.p2) + c.p2.distance(c.p3)
+}
+
+/// Distance from `p` to the segment `l`.
+pub(super) fn point_segment_distance(p: Point, l: Line) -> f64 {
+    let d = l.p1 - l.p0;
+    let len2 = d.hypot2();
+    if len2 == 0.0 {
+        return p.distance(l.p0);
+    }
+    let s = ((p - l.p0).dot(d) / len2).clamp(0.0, 1.0);
+    p.distance(l.p0 + d * s)
+}
+
+/// Upper bound of the distance from the curve to its chord.
+fn chord_deviation(c: &CubicBez) -> f64 {
+    let chord = Line::new(c.p0, c.p3);
+    point_segment_distance(c.p1, chord).max(point_segment_distance(c.p2, chord))
+}
+
+/// Angle (radians, in [0, π]) between the end tangents.
+fn end_tangent_angle(c: &CubicBez) -> f64 {
+    let (u, v) = (start_tangent(c), end_tangent(c));
+    if u.hypot2() == 0.0 || v.hypot2() == 0.0 {
+        return std::f64::consts::PI;
+    }
+    u.cross(v).abs().atan2(u.dot(v))
+}
+
+/// Whether the sampled curvature stays within `kappa_max` (a non-finite value, at a
+/// zero-derivative point, does not).
+fn curvature_bounded(c: &CubicBez, kappa_max: f64) -> bool {
+    (0..=CURVATURE_SAMPLES).all(|i| {
+        let k = c.curvature(i as f64 / CURVATURE_SAMPLES as f64);
+        k.is_finite() && k.abs() <= kappa_max
+    })
+}
+
+/// Cut `parent` on `[t0, t1]` into sections. For a line: equal pieces no longer than l.
+pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<Piece> {
+    let mut out = Vec::new();
+    match parent {
+        Parent::Line(l) => {
+            let len = l.length() * (t1 - t0);
+            let n = (len / r.l).ceil().clamp(1.0, MAX_SECTIONS as f64) as usize;
+            let ts: Vec<f64> = (0..=n)
+                .map(|i| match i {
+                    0 => t0,
+                    i if i == n => t1,
+                    i => t0 + (t1 - t0) * i as f64 / n as f64,
+                })
+                .collect();
+            for w in ts.windows(2) {
+                out.push(Piece {
+                    t0: w[0],
+                    t1: w[1],
+                    ctrl: parent.restrict(w[0], w[1]),
+                    eligible: true,
+                });
+            }
+        }
+        Parent::Cubic(_) => {
+            let mut stack = vec![(t0, t1, 0u32)];
+            // Depth-first, left half first, so sections come out in parameter order.
+            while let Some((a, b, depth)) = stack.pop() {
+                let ctrl = parent.restrict(a, b);
+                let len = polygon_length(&ctrl);
+                let shape_ok = len <= r.l && chord_deviation(&ctrl) <= r.mu;
+                let turn_ok = end_tangent_angle(&ctrl) < r.alpha;
+                let curvature_ok = curvature_bounded(&ctrl, 2.0 / r.l_min);
+                let m = 0.5 * (a + b);
+                let can_split =
+                    depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
+                // Too curved and already short: secondary. A turn of α or more with bounded
+                // curvature always goes away by halving (turn ≤ length · 2/l_m).
+                let eligible = shape_ok && turn_ok && curvature_ok;
+                let done = eligible || (shape_ok && !curvature_ok && len <= r.mu) || !can_split;
+                if done {
+                    out.push(Piece {
+                        t0: a,
+                        t1: b,
+                        ctrl,
+                        eligible,
+                    });
+                } else {
+                    stack.push((m, b, depth + 1));
+                    stack.push((a, m, depth + 1));
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+
+    #[test]
+    fn quarter_circle_is_cut_in_sixteen_equal_parameter_steps() {
+        // Unit circle: d = 2√2 with four quarters, l = d/20 ≈ 0.1414, arc π/2 ≈ 1.571:
+        // halving needs 2⁴ = 16 pieces (0.098 each; 8 would be 0.196 > l).
+        let r = Params::DEFAULT.resolve(2.0 * 2f64.sqrt());
+        let k = 0.552_284_749_8;
+        let c = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
+        let ps = resample(&Parent::Cubic(c), 0.0, 1.0, &r);
+        assert_eq!(ps.len(), 16);
+        for (i, p) in ps.iter().enumerate() {
+            assert_eq!(p.t0, i as f64 / 16.0);
+            assert!(p.eligible);
+        }
+    }
+
+    #[test]
+    fn line_pieces_are_no_longer_than_l_and_share_end_points() {
+        let r = Params::DEFAULT.resolve(20.0);
+        let l = Line::new((0.0, 0.0), (10.0, 0.0));
+        let ps = resample(&Parent::Line(l), 0.0, 1.0, &r);
+        assert_eq!(ps.len(), 10);
+        assert_eq!(ps[0].ctrl.p0, l.p0);
+        assert_eq!(ps[9].ctrl.p3, l.p1);
+        for w in ps.windows(2) {
+            assert_eq!(w[0].ctrl.p3, w[1].ctrl.p0);
+        }
+    }
+}

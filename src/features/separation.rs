@@ -1,0 +1,414 @@
+//! μ-separation and secondary simplification (thesis §4.3.1 Definition 4.1, §4.4 "Primary
+//! and secondary feature tagging", "Secondary feature simplification").
+//!
+//! The test runs on each section's control polygon, whose convex hull contains both the
+//! curve piece and its chord, so it is conservative for the curve and for the linear mesh:
+//! an eligible section stays primary only if
+//! - the hull of every section it shares no end point with, and every isolated point, is at
+//!   least μ away from its hull (this catches crossings, near-parallel curves, close end
+//!   points and tangencies, also between parts of the same curve);
+//! - for every section it shares an end point `q` with, the part of either chord farther
+//!   than 1.01·μ from `q` stays μ away from the other chord (Definition 4.1 at a corner:
+//!   the μ-ball of a point must not reach the other branch unless it contains `q`), the two
+//!   chords meet at `q` at an angle of at least 4α (so the two curve pieces, each within
+//!   2α of its chord, cannot cross), and they do not share both end points.
+//!
+//! Offending sections are demoted to secondary (conservatively: both of a pair). Candidate
+//! pairs come from a uniform grid over the hulls' boxes.
+//!
+//! The simplification then moves secondary polyline vertices closer than μ to their
+//! barycentre (greedy clusters around a seed; vertices that are end points of primary
+//! sections stay put), and re-checks the primary sections against the moved segments,
+//! demoting any that a moved segment came too close to.
+
+use super::grid::Grid;
+use super::resample::point_segment_distance;
+use super::{FeaturePoint, SecondaryPolyline, Section};
+use crate::svg::Drawing;
+use kurbo::{CubicBez, Line, Point, Rect};
+use std::collections::HashSet;
+
+/// Chord parts within this factor of μ of a shared end point are exempt (see module doc).
+const CORNER_RADIUS: f64 = 1.01;
+
+fn key(p: Point) -> (u64, u64) {
+    (p.x.to_bits(), p.y.to_bits())
+}
+
+fn ctrl_points(c: &CubicBez) -> [Point; 4] {
+    [c.p0, c.p1, c.p2, c.p3]
+}
+
+fn ctrl_box(c: &CubicBez) -> Rect {
+    let ps = ctrl_points(c);
+    ps[1..]
+        .iter()
+        .fold(Rect::from_points(ps[0], ps[0]), |r, p| r.union_pt(*p))
+}
+
+fn orient(a: Point, b: Point, c: Point) -> f64 {
+    (b - a).cross(c - a)
+}
+
+/// Distance between two segments (0 if they cross or touch).
+pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
+    let (d1, d2) = (orient(a.p0, a.p1, b.p0), orient(a.p0, a.p1, b.p1));
+    let (d3, d4) = (orient(b.p0, b.p1, a.p0), orient(b.p0, b.p1, a.p1));
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
+        return 0.0;
+    }
+    point_segment_distance(a.p0, b)
+        .min(point_segment_distance(a.p1, b))
+        .min(point_segment_distance(b.p0, a))
+        .min(point_segment_distance(b.p1, a))
+}
+
+fn in_triangle(p: Point, a: Point, b: Point, c: Point) -> bool {
+    let area = orient(a, b, c);
+    if area == 0.0 {
+        return false;
+    }
+    let s = area.signum();
+    s * orient(a, b, p) >= 0.0 && s * orient(b, c, p) >= 0.0 && s * orient(c, a, p) >= 0.0
+}
+
+fn in_hull(p: Point, q: &[Point; 4]) -> bool {
+    in_triangle(p, q[0], q[1], q[2])
+        || in_triangle(p, q[0], q[1], q[3])
+        || in_triangle(p, q[0], q[2], q[3])
+        || in_triangle(p, q[1], q[2], q[3])
+}
+
+const PAIRS: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
+/// Distance between the convex hulls of two control polygons (0 if they overlap).
+pub(super) fn hull_distance(a: &[Point; 4], b: &[Point; 4]) -> f64 {
+    if a.iter().any(|p| in_hull(*p, b)) || b.iter().any(|p| in_hull(*p, a)) {
+        return 0.0;
+    }
+    let mut d = f64::INFINITY;
+    for (i, j) in PAIRS {
+        for (k, l) in PAIRS {
+            d = d.min(segment_distance(
+                Line::new(a[i], a[j]),
+                Line::new(b[k], b[l]),
+            ));
+        }
+    }
+    d
+}
+
+/// Distance from a point to the convex hull of a control polygon.
+fn point_hull_distance(p: Point, b: &[Point; 4]) -> f64 {
+    if in_hull(p, b) {
+        return 0.0;
+    }
+    PAIRS
+        .iter()
+        .map(|&(k, l)| point_segment_distance(p, Line::new(b[k], b[l])))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The end point two control polygons share (bit for bit), if any.
+fn shared_end(a: &CubicBez, b: &CubicBez) -> Option<Point> {
+    [a.p0, a.p3].into_iter().find(|p| *p == b.p0 || *p == b.p3)
+}
+
+/// The chord of `c` oriented from its end `q`.
+fn chord_from(c: &CubicBez, q: Point) -> Line {
+    if c.p0 == q {
+        Line::new(c.p0, c.p3)
+    } else {
+        Line::new(c.p3, c.p0)
+    }
+}
+
+/// The part of `l` (which starts at the shared point) farther than `r` from its start.
+fn trimmed(l: Line, r: f64) -> Option<Line> {
+    let len = l.length();
+    (len > r).then(|| Line::new(l.p0.lerp(l.p1, r / len), l.p1))
+}
+
+/// Whether two sections that may share an end point violate μ-separation (see the
+/// module doc). `alpha` is the turning bound in radians.
+pub(super) fn violates(a: &CubicBez, b: &CubicBez, mu: f64, alpha: f64) -> bool {
+    let Some(q) = shared_end(a, b) else {
+        // Boxes farther apart than μ: hulls are too.
+        let (ra, rb) = (ctrl_box(a), ctrl_box(b));
+        let gap_x = (rb.x0 - ra.x1).max(ra.x0 - rb.x1);
+        let gap_y = (rb.y0 - ra.y1).max(ra.y0 - rb.y1);
+        if gap_x >= mu || gap_y >= mu {
+            return false;
+        }
+        return hull_distance(&ctrl_points(a), &ctrl_points(b)) < mu;
+    };
+    let (ca, cb) = (chord_from(a, q), chord_from(b, q));
+    if ca.p1 == cb.p1 {
+        return true;
+    }
+    let (u, v) = (ca.p1 - q, cb.p1 - q);
+    if u.cross(v).abs().atan2(u.dot(v)) < 4.0 * alpha {
+        return true;
+    }
+    let r = CORNER_RADIUS * mu;
+    trimmed(ca, r).is_some_and(|t| segment_distance(t, cb) < mu)
+        || trimmed(cb, r).is_some_and(|t| segment_distance(t, ca) < mu)
+}
+
+fn grid_for(boxes: impl Iterator<Item = Rect> + Clone, n: usize, mu: f64) -> Grid {
+    let mut bounds: Option<Rect> = None;
+    let mut extent = 0.0;
+    for r in boxes.clone() {
+        bounds = Some(bounds.map_or(r, |b| b.union(r)));
+        extent += r.width().max(r.height());
+    }
+    let bounds = bounds.unwrap_or(Rect::ZERO).inflate(mu, mu);
+    let cell = (extent / n.max(1) as f64).max(mu);
+    let mut g = Grid::new(bounds, cell, n);
+    for (i, r) in boxes.enumerate() {
+        g.insert(u32::try_from(i).expect("internal: item count fits u32"), r);
+    }
+    g
+}
+
+/// Merge isolated points closer than `mu` to their barycentre (greedy clusters).
+pub(super) fn merge_points(points: Vec<FeaturePoint>, mu: f64) -> Vec<FeaturePoint> {
+    let pos: Vec<Point> = points.iter().map(|p| p.pos).collect();
+    let moved = cluster(&pos, &vec![false; pos.len()], mu);
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    for (p, m) in points.iter().zip(moved.positions) {
+        if seen.insert(key(m)) {
+            out.push(FeaturePoint {
+                pos: m,
+                source: p.source,
+            });
+        }
+    }
+    out
+}
+
+/// Decide, for every section, whether it is primary.
+pub(super) fn separate(
+    sections: &[Section],
+    points: &[FeaturePoint],
+    mu: f64,
+    alpha: f64,
+) -> Vec<bool> {
+    let n = sections.len();
+    let boxes = sections
+        .iter()
+        .map(|s| ctrl_box(&s.ctrl))
+        .chain(points.iter().map(|p| Rect::from_points(p.pos, p.pos)));
+    let grid = grid_for(boxes, n + points.len(), mu);
+    let mut primary: Vec<bool> = sections.iter().map(|s| s.eligible).collect();
+    for (i, s) in sections.iter().enumerate() {
+        if !s.eligible {
+            continue;
+        }
+        let hull = ctrl_points(&s.ctrl);
+        let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
+        let bad = near.into_iter().any(|j| {
+            let j = j as usize;
+            if j == i {
+                false
+            } else if j < n {
+                violates(&s.ctrl, &sections[j].ctrl, mu, alpha)
+            } else {
+                point_hull_distance(points[j - n].pos, &hull) < mu
+            }
+        });
+        if bad {
+            primary[i] = false;
+        }
+    }
+    primary
+}
+
+/// Result of greedy clustering.
+struct Clusters {
+    positions: Vec<Point>,
+    moved: usize,
+}
+
+/// Greedy clusters of the non-`fixed` positions closer than `mu` to a seed; each cluster
+/// moves to its barycentre. Equal positions always end in the same cluster.
+fn cluster(pos: &[Point], fixed: &[bool], mu: f64) -> Clusters {
+    let grid = grid_for(pos.iter().map(|p| Rect::from_points(*p, *p)), pos.len(), mu);
+    let mut done = fixed.to_vec();
+    let mut positions = pos.to_vec();
+    let mut moved = 0;
+    for i in 0..pos.len() {
+        if done[i] {
+            continue;
+        }
+        let members: Vec<usize> = grid
+            .query(Rect::from_points(pos[i], pos[i]).inflate(mu, mu))
+            .into_iter()
+            .map(|j| j as usize)
+            .filter(|&j| !done[j] && pos[j].distance(pos[i]) < mu)
+            .collect();
+        let sum = members
+            .iter()
+            .fold(kurbo::Vec2::ZERO, |a, &j| a + pos[j].to_vec2());
+        let c = (sum / members.len() as f64).to_point();
+        let all_same = members.iter().all(|&j| pos[j] == pos[i]);
+        for &j in &members {
+            done[j] = true;
+            if !all_same {
+                positions[j] = c;
+                moved += 1;
+            }
+        }
+    }
+    Clusters { positions, moved }
+}
+
+/// What the simplification produced.
+pub(super) struct Simplified {
+    pub(super) polylines: Vec<SecondaryPolyline>,
+    pub(super) collapsed: usize,
+    pub(super) demoted: usize,
+}
+
+/// Build the secondary polylines (runs of consecutive secondary sections of one input
+/// feature), collapse close vertices, re-check primary sections against the moved
+/// segments (demoting offenders in `primary`), and turn polylines that collapsed to one
+/// point into isolated points.
+pub(super) fn simplify(
+    sections: &[Section],
+    primary: &mut [bool],
+    drawing: &Drawing,
+    points: &mut Vec<FeaturePoint>,
+    mu: f64,
+    alpha: f64,
+) -> Simplified {
+    // Runs of secondary sections.
+    let mut runs: Vec<(u32, Vec<Point>)> = Vec::new();
+    let mut prev: Option<usize> = None;
+    for (i, s) in sections.iter().enumerate() {
+        if primary[i] {
+            prev = None;
+            continue;
+        }
+        let continues = prev
+            .is_some_and(|p| sections[p].feature == s.feature && sections[p].ctrl.p3 == s.ctrl.p0);
+        match runs.last_mut() {
+            Some((_, pts)) if continues => pts.push(s.ctrl.p3),
+            _ => runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3])),
+        }
+        prev = Some(i);
+    }
+    // Collapse free vertices.
+    let fixed_keys: HashSet<(u64, u64)> = sections
+        .iter()
+        .zip(primary.iter())
+        .filter(|(_, p)| **p)
+        .flat_map(|(s, _)| [key(s.ctrl.p0), key(s.ctrl.p3)])
+        .collect();
+    let flat: Vec<Point> = runs
+        .iter()
+        .flat_map(|(_, pts)| pts.iter().copied())
+        .collect();
+    let fixed: Vec<bool> = flat.iter().map(|p| fixed_keys.contains(&key(*p))).collect();
+    let clusters = cluster(&flat, &fixed, mu);
+    let mut k = 0;
+    for (_, pts) in &mut runs {
+        for p in pts.iter_mut() {
+            *p = clusters.positions[k];
+            k += 1;
+        }
+    }
+    // Re-check primary sections against the (possibly moved) secondary segments.
+    let segs: Vec<Line> = runs
+        .iter()
+        .flat_map(|(_, pts)| pts.windows(2).map(|w| Line::new(w[0], w[1])))
+        .collect();
+    let mut demoted = 0;
+    if clusters.moved > 0 {
+        let boxes = segs.iter().map(|l| Rect::from_points(l.p0, l.p1));
+        let grid = grid_for(boxes, segs.len(), mu);
+        for (i, s) in sections.iter().enumerate() {
+            if !primary[i] {
+                continue;
+            }
+            let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
+            let bad = near.into_iter().any(|j| {
+                let l = segs[j as usize];
+                let c = CubicBez::new(
+                    l.p0,
+                    l.p0.lerp(l.p1, 1.0 / 3.0),
+                    l.p0.lerp(l.p1, 2.0 / 3.0),
+                    l.p1,
+                );
+                violates(&s.ctrl, &c, mu, alpha)
+            });
+            if bad {
+                primary[i] = false;
+                demoted += 1;
+                runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3]));
+            }
+        }
+    }
+    // Output: drop repeated vertices; single points become isolated points.
+    let mut polylines = Vec::new();
+    for (feature, mut pts) in runs {
+        pts.dedup();
+        let source = drawing.features[feature as usize].source;
+        if pts.len() < 2 {
+            if !points.iter().any(|p| p.pos == pts[0]) {
+                points.push(FeaturePoint {
+                    pos: pts[0],
+                    source,
+                });
+            }
+        } else {
+            polylines.push(SecondaryPolyline {
+                points: pts,
+                source,
+            });
+        }
+    }
+    Simplified {
+        polylines,
+        collapsed: clusters.moved,
+        demoted,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seg(a: (f64, f64), b: (f64, f64)) -> CubicBez {
+        let (a, b) = (Point::from(a), Point::from(b));
+        CubicBez::new(a, a.lerp(b, 1.0 / 3.0), a.lerp(b, 2.0 / 3.0), b)
+    }
+
+    #[test]
+    fn hull_distance_of_parallel_segments() {
+        let a = ctrl_points(&seg((0.0, 0.0), (10.0, 0.0)));
+        let b = ctrl_points(&seg((2.0, 0.5), (8.0, 0.5)));
+        assert!((hull_distance(&a, &b) - 0.5).abs() < 1e-12);
+        let c = ctrl_points(&seg((5.0, -1.0), (5.0, 1.0)));
+        assert_eq!(hull_distance(&a, &c), 0.0);
+    }
+
+    #[test]
+    fn corners_right_angle_passes_sharp_fails_fold_fails() {
+        let alpha = 10f64.to_radians();
+        let a = seg((0.0, 0.0), (1.0, 0.0));
+        assert!(!violates(&a, &seg((0.0, 0.0), (0.0, 1.0)), 0.01, alpha));
+        assert!(!violates(&a, &seg((1.0, 0.0), (2.0, 0.0)), 0.01, alpha));
+        // 30° corner: points of a beyond 1.01μ are within μ of b.
+        let b = seg(
+            (0.0, 0.0),
+            (30f64.to_radians().cos(), 30f64.to_radians().sin()),
+        );
+        assert!(violates(&a, &b, 0.01, alpha));
+        // Folding back on itself.
+        assert!(violates(&a, &seg((0.0, 0.0), (0.5, 0.0)), 0.01, alpha));
+        // Same chord twice.
+        assert!(violates(&a, &seg((1.0, 0.0), (0.0, 0.0)), 0.01, alpha));
+    }
+}

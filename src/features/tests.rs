@@ -1,0 +1,373 @@
+//! Analytic cases and the property test of the FeatureSet invariants, checked by an
+//! independent checker ([`check`]: its own Bézier evaluation and distances, dense sampling).
+
+use super::*;
+use crate::params::{Length, Params};
+use crate::svg::{Feature, ShapeId};
+use kurbo::{Rect, Vec2};
+use proptest::prelude::*;
+
+#[path = "../../tests/support/features_check.rs"]
+mod features_check;
+use features_check::{bez, bez_d, bez_dd, check};
+
+// ---------- drawings built in code ----------
+
+fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
+    let mut bbox: Option<Rect> = None;
+    let mut features = Vec::new();
+    for (k, g) in geoms.into_iter().enumerate() {
+        let ps: Vec<Point> = match g {
+            FeatureGeom::Point(p) => vec![p],
+            FeatureGeom::Line(l) => vec![l.p0, l.p1],
+            FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+        };
+        for p in ps {
+            bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
+        }
+        let source = FeatureSource {
+            shape: ShapeId(0),
+            subpath: 0,
+            segment: k as u32,
+        };
+        features.push(Feature { geom: g, source });
+    }
+    Drawing {
+        shapes: Vec::new(),
+        features,
+        bbox: bbox.expect("test drawing has a feature"),
+        warnings: Vec::new(),
+    }
+}
+
+fn build(geoms: Vec<FeatureGeom>, params: Params) -> (FeatureSet, Drawing) {
+    let d = drawing(geoms);
+    let fs = FeatureSet::build(&d, &params.resolve(d.diagonal()));
+    let defects = check(&fs);
+    assert!(defects.is_empty(), "invariants broken: {defects:#?}");
+    (fs, d)
+}
+
+const K: f64 = 0.552_284_749_830_793_4; // 4/3·(√2 − 1): the usual quarter-circle cubic
+
+/// A circle as four cubics, starting at angle `phase`.
+fn circle(c: Point, r: f64, phase: f64) -> Vec<FeatureGeom> {
+    let q = std::f64::consts::FRAC_PI_2;
+    let u: Vec<Vec2> = (0..4)
+        .map(|k| Vec2::from_angle(phase + k as f64 * q))
+        .collect();
+    let perp = |u: Vec2| Vec2::new(-u.y, u.x);
+    (0..4)
+        .map(|k| {
+            let (u0, u1) = (u[k], u[(k + 1) % 4]);
+            // End points computed once, so consecutive cubics share them bit for bit.
+            FeatureGeom::Cubic(CubicBez::new(
+                c + u0 * r,
+                c + (u0 + perp(u0) * K) * r,
+                c + (u1 - perp(u1) * K) * r,
+                c + u1 * r,
+            ))
+        })
+        .collect()
+}
+
+fn line(a: (f64, f64), b: (f64, f64)) -> FeatureGeom {
+    FeatureGeom::Line(Line::new(a, b))
+}
+
+fn cubic(p: [(f64, f64); 4]) -> FeatureGeom {
+    FeatureGeom::Cubic(CubicBez::new(p[0], p[1], p[2], p[3]))
+}
+
+fn secondary_points(fs: &FeatureSet) -> Vec<Point> {
+    fs.secondary
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .collect()
+}
+
+// ---------- analytic cases ----------
+
+#[test]
+fn circle_splits_land_at_sixteenths_and_all_is_primary() {
+    // d = 2√2, l = d/20: each quarter (arc π/2) halves to 16 sections of ≈ 0.098 < l
+    // (8 would be 0.196 > l); turn 5.6° < α; no inflection, turn 90° < 180°: no split.
+    let (fs, _) = build(circle(Point::ZERO, 1.0, 0.0), Params::DEFAULT);
+    assert_eq!(fs.primary.len(), 64);
+    assert!(fs.secondary.is_empty() && fs.points.is_empty());
+    assert_eq!(fs.counts.inflection_splits + fs.counts.curvature_splits, 0);
+    for (i, s) in fs.primary.iter().enumerate() {
+        assert_eq!(s.t, [(i % 16) as f64 / 16.0, (i % 16 + 1) as f64 / 16.0]);
+        assert_eq!(s.source.segment, (i / 16) as u32);
+        let n = fs.primary.len() as u32;
+        assert_eq!(s.next, Some(SectionId((i as u32 + 1) % n)), "next of {i}");
+        assert_eq!(
+            s.prev,
+            Some(SectionId((i as u32 + n - 1) % n)),
+            "prev of {i}"
+        );
+    }
+    let ci = fs.conforming_input();
+    assert_eq!(ci.segments.len(), 64);
+    assert!(ci.points.is_empty());
+}
+
+#[test]
+fn s_curve_is_cut_at_its_inflection() {
+    for (c, t_infl) in [
+        ([(0.0, 0.0), (1.0, 1.0), (2.0, -1.0), (3.0, 0.0)], 0.5),
+        ([(0.0, 0.0), (1.0, 1.0), (2.0, -2.0), (3.0, 0.0)], 4.0 / 9.0),
+    ] {
+        let (fs, _) = build(vec![cubic(c)], Params::DEFAULT);
+        assert_eq!(fs.counts.inflection_splits, 1);
+        assert!(fs.secondary.is_empty());
+        let cut = fs
+            .primary
+            .iter()
+            .position(|s| (s.t[0] - t_infl).abs() < 1e-12);
+        let cut = cut.expect("a section starts at the inflection");
+        assert_eq!(fs.primary[cut - 1].t[1], fs.primary[cut].t[0]);
+        // Curvature signs differ on the two sides.
+        let sign = |s: &PrimarySection| {
+            let c = [s.ctrl.p0, s.ctrl.p1, s.ctrl.p2, s.ctrl.p3];
+            bez_d(&c, 0.5).cross(bez_dd(&c, 0.5)).signum()
+        };
+        assert_eq!(sign(&fs.primary[cut - 1]), -sign(&fs.primary[cut]));
+    }
+}
+
+#[test]
+fn loop_cubic_is_secondary_only_near_its_self_crossing() {
+    let c = [(0.0, 0.0), (3.0, 2.0), (-1.0, 2.0), (2.0, 0.0)];
+    let (fs, _) = build(vec![cubic(c)], Params::DEFAULT);
+    assert!(fs.counts.curvature_splits >= 1, "{:?}", fs.counts);
+    assert!(!fs.secondary.is_empty() && !fs.primary.is_empty());
+    // The self-crossing is where x(t) = x(s), y(t) = y(s) for t ≠ s: by symmetry of this
+    // curve about x = 1 it lies on x = 1; find it by bisection on t < 1/2.
+    let cc = [c[0].into(), c[1].into(), c[2].into(), c[3].into()];
+    let (mut lo, mut hi) = (0.0, 0.5);
+    for _ in 0..60 {
+        let m = 0.5 * (lo + hi);
+        if bez(&cc, m).x < 1.0 { lo = m } else { hi = m }
+    }
+    let x = bez(&cc, lo);
+    let r = fs.params.l + fs.params.mu;
+    for p in secondary_points(&fs) {
+        assert!(
+            p.distance(x) <= 2.0 * r,
+            "secondary point {p:?} far from the crossing {x:?}"
+        );
+    }
+}
+
+#[test]
+fn cusp_cubic_is_cut_at_the_cusp_and_secondary_around_it() {
+    let (fs, _) = build(
+        vec![cubic([(0.0, 0.0), (2.0, 2.0), (0.0, 2.0), (2.0, 0.0)])],
+        Params::DEFAULT,
+    );
+    assert!(fs.counts.inflection_splits >= 1);
+    let cusp = Point::new(1.0, 1.5);
+    assert!(
+        secondary_points(&fs)
+            .iter()
+            .any(|p| p.distance(cusp) <= fs.params.mu)
+    );
+    for s in &fs.primary {
+        assert!(!(s.t[0] < 0.5 && s.t[1] > 0.5));
+        assert!(
+            s.ctrl.p0.distance(cusp) >= fs.params.mu && s.ctrl.p3.distance(cusp) >= fs.params.mu
+        );
+    }
+    assert!(fs.primary.iter().any(|s| s.t[0] == 0.0) && fs.primary.iter().any(|s| s.t[1] == 1.0));
+}
+
+#[test]
+fn degenerate_cubic_becomes_a_point() {
+    let (fs, _) = build(
+        vec![
+            cubic([
+                (1.0, 1.0),
+                (1.0, 1.0 + 1e-12),
+                (1.0 + 1e-12, 1.0),
+                (1.0, 1.0),
+            ]),
+            line((0.0, 0.0), (5.0, 0.0)),
+        ],
+        Params::DEFAULT,
+    );
+    assert_eq!(fs.counts.degenerate, 1);
+    assert_eq!(fs.points.len(), 1);
+    assert!(fs.points[0].pos.distance(Point::new(1.0, 1.0)) < 1e-11);
+    assert_eq!(fs.points[0].source.segment, 0);
+}
+
+#[test]
+fn straight_cubic_becomes_a_segment() {
+    let (fs, _) = build(
+        vec![cubic([(0.0, 0.0), (1.0, 2.0), (2.0, 4.0), (3.0, 6.0)])],
+        Params::DEFAULT,
+    );
+    assert_eq!(fs.counts.straight, 1);
+    assert_eq!(fs.primary.len(), 20);
+    for s in &fs.primary {
+        assert_eq!(s.parent, Parent::Line(Line::new((0.0, 0.0), (3.0, 6.0))));
+        let c = s.ctrl;
+        assert!((c.p1 - c.p0).cross(c.p3 - c.p0).abs() < 1e-12);
+        assert!((c.p2 - c.p0).cross(c.p3 - c.p0).abs() < 1e-12);
+    }
+}
+
+fn abs_params(mu: f64, l: f64) -> Params {
+    Params::DEFAULT
+        .with_mu(Length::Abs(mu))
+        .with_l(Length::Abs(l))
+}
+
+#[test]
+fn parallel_lines_closer_than_mu_are_secondary_farther_primary() {
+    let lines = |h| vec![line((0.0, 0.0), (10.0, 0.0)), line((0.0, h), (10.0, h))];
+    let (near, _) = build(lines(0.05), abs_params(0.1, 1.0));
+    assert!(near.primary.is_empty());
+    assert_eq!(near.counts.secondary_segments, 20);
+    let (far, _) = build(lines(0.2), abs_params(0.1, 1.0));
+    assert_eq!(far.primary.len(), 20);
+    assert!(far.secondary.is_empty());
+}
+
+#[test]
+fn crossing_lines_are_secondary_only_near_the_crossing() {
+    // Line 1 is cut at integer x: the crossing (0.5, 0) is inside its section [0, 1]; line 2
+    // is cut at integer y: the crossing is the end of its sections [-1, 0] and [0, 1].
+    let (fs, _) = build(
+        vec![line((-5.0, 0.0), (5.0, 0.0)), line((0.5, -5.0), (0.5, 5.0))],
+        abs_params(0.1, 1.0),
+    );
+    assert_eq!(fs.primary.len(), 17);
+    assert_eq!(fs.counts.secondary_segments, 3);
+    for p in secondary_points(&fs) {
+        assert!(p.distance(Point::new(0.5, 0.0)) <= 1.0 + 1e-12, "{p:?}");
+    }
+}
+
+#[test]
+fn touching_circles_are_secondary_only_near_the_contact() {
+    let mut g = circle(Point::new(-1.0, 0.0), 1.0, 0.3);
+    g.extend(circle(Point::new(1.0, 0.0), 1.0, 0.7));
+    let (fs, _) = build(g, Params::DEFAULT);
+    assert!(!fs.secondary.is_empty());
+    // The gap between the circles at height y is about y², below μ for |y| < √μ ≈ 0.067.
+    for p in secondary_points(&fs) {
+        assert!(
+            p.to_vec2().hypot() < 0.5,
+            "secondary point {p:?} far from the contact"
+        );
+    }
+    assert!(fs.primary.len() >= 100, "{}", fs.primary.len());
+}
+
+#[test]
+fn isolated_point_demotes_the_section_it_sits_next_to() {
+    let (fs, _) = build(
+        vec![
+            line((0.0, 0.0), (10.0, 0.0)),
+            FeatureGeom::Point(Point::new(5.5, 0.05)),
+        ],
+        abs_params(0.1, 1.0),
+    );
+    assert_eq!(fs.primary.len(), 9);
+    assert_eq!(fs.points.len(), 1);
+}
+
+#[test]
+fn json_has_the_documented_fields() {
+    let (fs, _) = build(
+        vec![
+            line((0.0, 0.0), (10.0, 0.0)),
+            line((0.0, 0.05), (3.0, 0.05)),
+        ],
+        abs_params(0.1, 1.0),
+    );
+    let v = to_json(&fs);
+    for k in [
+        "d",
+        "params",
+        "counts",
+        "timing_ms",
+        "points",
+        "point_sources",
+        "primary",
+        "secondary",
+    ] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(v["params"]["mu"], 0.1);
+    assert_eq!(v["primary"][0]["ctrl"].as_array().map(Vec::len), Some(4));
+    assert_eq!(
+        v["primary"].as_array().map(Vec::len),
+        Some(fs.primary.len())
+    );
+    assert!(
+        v["secondary"][0]["points"]
+            .as_array()
+            .is_some_and(|a| a.len() >= 2)
+    );
+}
+
+#[test]
+fn checker_reports_tampered_sets() {
+    let (fs, _) = build(
+        vec![line((0.0, 0.0), (10.0, 0.0)), line((0.0, 0.5), (10.0, 0.5))],
+        abs_params(0.1, 1.0),
+    );
+    let mut t = fs.clone();
+    t.params.l = 0.5;
+    assert!(check(&t).iter().any(|d| d.contains("length")));
+    let mut t = fs.clone();
+    t.params.mu = 0.6;
+    assert!(check(&t).iter().any(|d| d.contains("< μ")));
+    let mut t = fs.clone();
+    t.primary[3].ctrl.p1.y += 0.01;
+    assert!(check(&t).iter().any(|d| d.contains("restricted")));
+    let (circ, _) = build(circle(Point::ZERO, 1.0, 0.0), Params::DEFAULT);
+    let mut t = circ.clone();
+    t.params.alpha = 1f64.to_radians();
+    assert!(check(&t).iter().any(|d| d.contains("turns")));
+    let mut t = circ;
+    t.params.mu = 1e-4;
+    assert!(check(&t).iter().any(|d| d.contains("chord")));
+}
+
+// ---------- property test ----------
+
+fn coord() -> impl Strategy<Value = f64> {
+    // Half the time on a coarse grid, so coincident and collinear controls are common.
+    prop_oneof![(0i32..=8).prop_map(|v| v as f64 * 1.25), 0.0..10.0f64]
+}
+
+fn point() -> impl Strategy<Value = Point> {
+    (coord(), coord()).prop_map(|(x, y)| Point::new(x, y))
+}
+
+fn geom() -> impl Strategy<Value = FeatureGeom> {
+    prop_oneof![
+        6 => (point(), point(), point(), point()).prop_map(|(a, b, c, d)| FeatureGeom::Cubic(CubicBez::new(a, b, c, d))),
+        // A cusp-prone or end-degenerate cubic: repeated control points.
+        2 => (point(), point(), point()).prop_map(|(a, b, c)| FeatureGeom::Cubic(CubicBez::new(a, a, b, c))),
+        1 => (point(), point(), point()).prop_map(|(a, b, c)| FeatureGeom::Cubic(CubicBez::new(a, c, b, a))),
+        2 => (point(), point()).prop_map(|(a, b)| FeatureGeom::Line(Line::new(a, b))),
+        1 => point().prop_map(FeatureGeom::Point),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_soups_keep_every_invariant(geoms in prop::collection::vec(geom(), 1..6)) {
+        let d = drawing(geoms);
+        let fs = FeatureSet::build(&d, &Params::DEFAULT.resolve(d.diagonal()));
+        let defects = check(&fs);
+        prop_assert!(defects.is_empty(), "{:#?}", defects);
+    }
+}

@@ -1,0 +1,22 @@
+//! The hybrid triangle mesh shared by the BSP mesher and the optimizer.
+//!
+//! It owns [`TriMesh`]: vertices with an `f64` position plus an exact
+//! rational one while the vertex is not roundable (thesis §2.3.4 "Hybrid
+//! Kernel"), triangles with per-edge adjacency, tags on edges (which input
+//! feature segments an edge lies on) and on vertices (feature points, section
+//! endpoints, box corners), and free lists so the local operations of the
+//! optimizer can delete and reuse slots.
+//!
+//! Guarantees: [`TriMesh::check`] reports every defect of a mesh (inverted or
+//! degenerate triangles decided exactly, asymmetric adjacency, non-manifold
+//! edges, T-junctions, dangling tags). Topology navigation (`topology.rs`)
+//! never reads a coordinate. DESIGN "Invariants" 1 and "Exactness".
+
+mod check;
+mod ids;
+mod storage;
+mod topology;
+
+pub use check::Defect;
+pub use ids::{FaceId, VertexId};
+pub use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};

@@ -1,0 +1,499 @@
+//! Slots for vertices and faces (with tombstones and free lists), positions and tags.
+
+use super::ids::{FaceId, VertexId};
+use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
+use kurbo::Point;
+use std::borrow::Cow;
+use std::collections::HashMap;
+
+/// What a vertex stands for. All false for an ordinary (Steiner) vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct VertexTag {
+    /// A corner of the padded box.
+    pub box_corner: bool,
+    /// An isolated input feature point.
+    pub feature_point: bool,
+    /// An endpoint of an input feature segment.
+    pub segment_endpoint: bool,
+    /// An endpoint of a primary feature section (never moves, DESIGN invariant 4).
+    pub section_endpoint: bool,
+}
+
+impl VertexTag {
+    /// The union of two tags.
+    pub fn union(self, o: VertexTag) -> VertexTag {
+        VertexTag {
+            box_corner: self.box_corner || o.box_corner,
+            feature_point: self.feature_point || o.feature_point,
+            segment_endpoint: self.segment_endpoint || o.segment_endpoint,
+            section_endpoint: self.section_endpoint || o.section_endpoint,
+        }
+    }
+
+    /// Whether any flag is set.
+    pub fn any(self) -> bool {
+        self != VertexTag::default()
+    }
+}
+
+/// One input feature an edge lies on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FeatureOn {
+    /// A primary section, with the section parameter at the edge's two ends,
+    /// ordered as the [`EdgeKey`] (`t[0]` at the smaller vertex id).
+    Primary {
+        /// The section index chosen by the caller.
+        section: u32,
+        /// Parameter at `EdgeKey::lo`, then at `EdgeKey::hi`.
+        t: [f64; 2],
+    },
+    /// A secondary polyline.
+    Secondary {
+        /// The polyline index chosen by the caller.
+        polyline: u32,
+    },
+}
+
+/// An undirected edge, as its two vertices with `lo < hi`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct EdgeKey {
+    /// The smaller vertex id.
+    pub lo: VertexId,
+    /// The larger vertex id.
+    pub hi: VertexId,
+}
+
+impl EdgeKey {
+    /// The key of the edge between `a` and `b` (in any order).
+    pub fn new(a: VertexId, b: VertexId) -> Self {
+        if a <= b {
+            EdgeKey { lo: a, hi: b }
+        } else {
+            EdgeKey { lo: b, hi: a }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct VertexData {
+    pub(super) pos: Point,
+    /// The exact position while it is not an `f64` point.
+    pub(super) exact: Option<PointQ>,
+    pub(super) tag: VertexTag,
+    /// Some live incident face, if any.
+    pub(super) face: Option<FaceId>,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct FaceData {
+    /// Counter-clockwise.
+    pub(super) v: [VertexId; 3],
+    /// `adj[i]`: the face across edge `i`, the edge opposite `v[i]`.
+    pub(super) adj: [Option<FaceId>; 3],
+}
+
+/// A triangle mesh with hybrid (f64 / rational) vertex positions.
+///
+/// Vertex and face slots are tombstoned when removed and reused from free
+/// lists, so ids of live elements stay stable across local operations.
+#[derive(Clone, Debug, Default)]
+pub struct TriMesh {
+    pub(super) vertices: Vec<Option<VertexData>>,
+    pub(super) faces: Vec<Option<FaceData>>,
+    pub(super) free_vertices: Vec<VertexId>,
+    pub(super) free_faces: Vec<FaceId>,
+    pub(super) edge_tags: HashMap<EdgeKey, Vec<FeatureOn>>,
+    pub(super) live_vertices: usize,
+    pub(super) live_faces: usize,
+}
+
+fn to_u32(n: usize) -> u32 {
+    u32::try_from(n).expect("internal: more than u32::MAX mesh elements")
+}
+
+impl TriMesh {
+    /// An empty mesh.
+    pub fn new() -> Self {
+        TriMesh::default()
+    }
+
+    // ---- vertices ----------------------------------------------------------
+
+    /// Add a vertex at an `f64` position.
+    pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
+        self.insert_vertex(VertexData {
+            pos,
+            exact: None,
+            tag,
+            face: None,
+        })
+    }
+
+    /// Add a vertex at an exact position (kept rational unless it is an `f64` point).
+    pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
+        let (pos, exact) = p.to_f64();
+        self.insert_vertex(VertexData {
+            pos,
+            exact: (!exact).then_some(p),
+            tag,
+            face: None,
+        })
+    }
+
+    fn insert_vertex(&mut self, data: VertexData) -> VertexId {
+        self.live_vertices += 1;
+        if let Some(v) = self.free_vertices.pop() {
+            self.vertices[v.idx()] = Some(data);
+            v
+        } else {
+            self.vertices.push(Some(data));
+            VertexId(to_u32(self.vertices.len() - 1))
+        }
+    }
+
+    pub(super) fn vdata(&self, v: VertexId) -> &VertexData {
+        self.vertices
+            .get(v.idx())
+            .and_then(Option::as_ref)
+            .expect("internal: dead or unknown vertex id")
+    }
+
+    fn vdata_mut(&mut self, v: VertexId) -> &mut VertexData {
+        self.vertices
+            .get_mut(v.idx())
+            .and_then(Option::as_mut)
+            .expect("internal: dead or unknown vertex id")
+    }
+
+    /// Remove a vertex (its slot goes to the free list). Faces using it must
+    /// be removed first; [`TriMesh::check`] reports faces on dead vertices.
+    pub fn remove_vertex(&mut self, v: VertexId) {
+        if self.is_vertex_alive(v) {
+            self.vertices[v.idx()] = None;
+            self.free_vertices.push(v);
+            self.live_vertices -= 1;
+        }
+    }
+
+    /// Whether `v` names a live vertex.
+    pub fn is_vertex_alive(&self, v: VertexId) -> bool {
+        matches!(self.vertices.get(v.idx()), Some(Some(_)))
+    }
+
+    /// The live vertices.
+    pub fn vertices(&self) -> impl Iterator<Item = VertexId> + '_ {
+        self.vertices
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.is_some())
+            .map(|(i, _)| VertexId(to_u32(i)))
+    }
+
+    /// Number of live vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.live_vertices
+    }
+
+    /// Upper bound (exclusive) of vertex indices ever used, for dense side tables.
+    pub fn vertex_capacity(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The `f64` position (the nearest `f64` point while the vertex is rational).
+    ///
+    /// # Panics
+    /// If `v` is not a live vertex.
+    pub fn position(&self, v: VertexId) -> Point {
+        self.vdata(v).pos
+    }
+
+    /// The exact position, if the vertex is not an `f64` point.
+    pub fn exact(&self, v: VertexId) -> Option<&PointQ> {
+        self.vdata(v).exact.as_ref()
+    }
+
+    /// Whether the vertex has a rational (not yet rounded) position.
+    pub fn is_rational(&self, v: VertexId) -> bool {
+        self.vdata(v).exact.is_some()
+    }
+
+    /// The exact position as a rational point.
+    pub fn point_q(&self, v: VertexId) -> PointQ {
+        let d = self.vdata(v);
+        d.exact.clone().unwrap_or_else(|| PointQ::from_point(d.pos))
+    }
+
+    /// The exact position, borrowed when the vertex is rational.
+    pub fn point_q_ref(&self, v: VertexId) -> Cow<'_, PointQ> {
+        let d = self.vdata(v);
+        match &d.exact {
+            Some(q) => Cow::Borrowed(q),
+            None => Cow::Owned(PointQ::from_point(d.pos)),
+        }
+    }
+
+    /// The exact orientation of face `f` if vertex `v` were at the `f64` point `p`.
+    pub fn orientation_if_moved(&self, f: FaceId, v: VertexId, p: Point) -> Orientation {
+        let ids = self.face(f);
+        let rational = ids.iter().any(|&x| x != v && self.vdata(x).exact.is_some());
+        if !rational {
+            let [a, b, c] = ids.map(|x| if x == v { p } else { self.vdata(x).pos });
+            return orient2d(a, b, c);
+        }
+        let pq = PointQ::from_point(p);
+        let q = ids.map(|x| {
+            if x == v {
+                Cow::Borrowed(&pq)
+            } else {
+                self.point_q_ref(x)
+            }
+        });
+        orient2d_q(&q[0], &q[1], &q[2])
+    }
+
+    /// Move a vertex to an `f64` position (drops the rational one).
+    pub fn set_position(&mut self, v: VertexId, pos: Point) {
+        let d = self.vdata_mut(v);
+        d.pos = pos;
+        d.exact = None;
+    }
+
+    /// Move a vertex to an exact position.
+    pub fn set_position_q(&mut self, v: VertexId, p: PointQ) {
+        let (pos, exact) = p.to_f64();
+        let d = self.vdata_mut(v);
+        d.pos = pos;
+        d.exact = (!exact).then_some(p);
+    }
+
+    /// The vertex tag.
+    pub fn vertex_tag(&self, v: VertexId) -> VertexTag {
+        self.vdata(v).tag
+    }
+
+    /// Replace the vertex tag.
+    pub fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
+        self.vdata_mut(v).tag = tag;
+    }
+
+    /// Some live face incident to `v`, if any.
+    pub fn vertex_face(&self, v: VertexId) -> Option<FaceId> {
+        self.vdata(v).face
+    }
+
+    // ---- faces -------------------------------------------------------------
+
+    /// Add a face (vertices counter-clockwise), with no adjacency yet: call
+    /// [`TriMesh::link_all`] after a bulk build, or [`TriMesh::set_neighbour`].
+    pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
+        let data = FaceData { v, adj: [None; 3] };
+        self.live_faces += 1;
+        let f = if let Some(f) = self.free_faces.pop() {
+            self.faces[f.idx()] = Some(data);
+            f
+        } else {
+            self.faces.push(Some(data));
+            FaceId(to_u32(self.faces.len() - 1))
+        };
+        for x in v {
+            self.vdata_mut(x).face = Some(f);
+        }
+        f
+    }
+
+    pub(super) fn fdata(&self, f: FaceId) -> &FaceData {
+        self.faces
+            .get(f.idx())
+            .and_then(Option::as_ref)
+            .expect("internal: dead or unknown face id")
+    }
+
+    pub(super) fn fdata_mut(&mut self, f: FaceId) -> &mut FaceData {
+        self.faces
+            .get_mut(f.idx())
+            .and_then(Option::as_mut)
+            .expect("internal: dead or unknown face id")
+    }
+
+    /// Remove a face: its neighbours forget it, its vertices point to another
+    /// live incident face when one is adjacent, and the slot is freed.
+    pub fn remove_face(&mut self, f: FaceId) {
+        if !self.is_face_alive(f) {
+            return;
+        }
+        let data = self.fdata(f).clone();
+        for g in data.adj.into_iter().flatten() {
+            if let Some(Some(gd)) = self.faces.get_mut(g.idx()) {
+                for a in &mut gd.adj {
+                    if *a == Some(f) {
+                        *a = None;
+                    }
+                }
+            }
+        }
+        self.faces[f.idx()] = None;
+        self.free_faces.push(f);
+        self.live_faces -= 1;
+        for (i, &v) in data.v.iter().enumerate() {
+            if self.is_vertex_alive(v) && self.vdata(v).face == Some(f) {
+                // The faces across the two edges incident to v.
+                let cand = [data.adj[(i + 1) % 3], data.adj[(i + 2) % 3]];
+                let repl = cand.into_iter().flatten().find(|&g| self.is_face_alive(g));
+                self.vdata_mut(v).face = repl;
+            }
+        }
+    }
+
+    /// Whether `f` names a live face.
+    pub fn is_face_alive(&self, f: FaceId) -> bool {
+        matches!(self.faces.get(f.idx()), Some(Some(_)))
+    }
+
+    /// The live faces.
+    pub fn faces(&self) -> impl Iterator<Item = FaceId> + '_ {
+        self.faces
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.is_some())
+            .map(|(i, _)| FaceId(to_u32(i)))
+    }
+
+    /// Number of live faces.
+    pub fn num_faces(&self) -> usize {
+        self.live_faces
+    }
+
+    /// Upper bound (exclusive) of face indices ever used.
+    pub fn face_capacity(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The three vertices of a face, counter-clockwise.
+    pub fn face(&self, f: FaceId) -> [VertexId; 3] {
+        self.fdata(f).v
+    }
+
+    /// The faces across the three edges (`[i]` is across the edge opposite vertex `i`).
+    pub fn neighbours(&self, f: FaceId) -> [Option<FaceId>; 3] {
+        self.fdata(f).adj
+    }
+
+    /// Set the face across edge `i` of `f` (one side only; see [`TriMesh::link`]).
+    pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
+        self.fdata_mut(f).adj[i] = g;
+    }
+
+    /// The exact orientation of a face (filtered; rationals only where needed).
+    pub fn orientation(&self, f: FaceId) -> Orientation {
+        let [a, b, c] = self.face(f);
+        self.orientation_of(a, b, c)
+    }
+
+    /// The exact orientation of three vertices.
+    pub fn orientation_of(&self, a: VertexId, b: VertexId, c: VertexId) -> Orientation {
+        let (da, db, dc) = (self.vdata(a), self.vdata(b), self.vdata(c));
+        if da.exact.is_none() && db.exact.is_none() && dc.exact.is_none() {
+            orient2d(da.pos, db.pos, dc.pos)
+        } else {
+            orient2d_q(
+                &self.point_q_ref(a),
+                &self.point_q_ref(b),
+                &self.point_q_ref(c),
+            )
+        }
+    }
+
+    // ---- edge tags ---------------------------------------------------------
+
+    /// The features the edge `a b` lies on (empty when untagged).
+    pub fn edge_tags(&self, a: VertexId, b: VertexId) -> &[FeatureOn] {
+        self.edge_tags
+            .get(&EdgeKey::new(a, b))
+            .map_or(&[][..], Vec::as_slice)
+    }
+
+    /// Record that the edge `a b` lies on a feature (no duplicate entries).
+    /// For a primary, `t_a` / `t_b` are the parameters at `a` / `b`.
+    pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+        let key = EdgeKey::new(a, b);
+        let tag = match tag {
+            FeatureOn::Primary { section, t } if key.lo != a => FeatureOn::Primary {
+                section,
+                t: [t[1], t[0]],
+            },
+            other => other,
+        };
+        let list = self.edge_tags.entry(key).or_default();
+        if !list.contains(&tag) {
+            list.push(tag);
+        }
+    }
+
+    /// Remove and return every tag of the edge `a b`.
+    pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+        self.edge_tags
+            .remove(&EdgeKey::new(a, b))
+            .unwrap_or_default()
+    }
+
+    /// Every tagged edge with its tags.
+    pub fn tagged_edges(&self) -> impl Iterator<Item = (EdgeKey, &[FeatureOn])> + '_ {
+        self.edge_tags.iter().map(|(k, v)| (*k, v.as_slice()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slots_are_reused() {
+        let mut m = TriMesh::new();
+        let a = m.add_vertex(Point::new(0.0, 0.0), VertexTag::default());
+        let b = m.add_vertex(Point::new(1.0, 0.0), VertexTag::default());
+        let c = m.add_vertex(Point::new(0.0, 1.0), VertexTag::default());
+        let f = m.add_face([a, b, c]);
+        assert_eq!(m.orientation(f), Orientation::CounterClockwise);
+        m.remove_face(f);
+        assert_eq!(m.num_faces(), 0);
+        assert_eq!(m.vertex_face(a), None);
+        let g = m.add_face([a, c, b]);
+        assert_eq!(g, f);
+        assert_eq!(m.orientation(g), Orientation::Clockwise);
+        m.remove_face(g);
+        m.remove_vertex(b);
+        let d = m.add_vertex(Point::new(5.0, 5.0), VertexTag::default());
+        assert_eq!(d, b);
+        assert_eq!(m.num_vertices(), 3);
+    }
+
+    #[test]
+    fn primary_tags_follow_key_order() {
+        let mut m = TriMesh::new();
+        let a = m.add_vertex(Point::new(0.0, 0.0), VertexTag::default());
+        let b = m.add_vertex(Point::new(1.0, 0.0), VertexTag::default());
+        m.add_edge_tag(
+            b,
+            a,
+            FeatureOn::Primary {
+                section: 2,
+                t: [0.75, 0.25],
+            },
+        );
+        m.add_edge_tag(
+            a,
+            b,
+            FeatureOn::Primary {
+                section: 2,
+                t: [0.25, 0.75],
+            },
+        );
+        assert_eq!(
+            m.edge_tags(a, b),
+            &[FeatureOn::Primary {
+                section: 2,
+                t: [0.25, 0.75]
+            }]
+        );
+    }
+}

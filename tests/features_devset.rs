@@ -1,0 +1,86 @@
+//! Feature preprocessing on every file of the dev set (`../shared/data/svg-dev`, or
+//! `TRIWILD_DEVSET`): each loadable drawing's FeatureSet must keep every invariant, checked
+//! by the independent checker in `tests/support/features_check.rs`. Prints counts and time
+//! per file. Ignored (slow, needs the corpus): `cargo test --release --test features_devset
+//! -- --ignored --nocapture`.
+#![allow(clippy::print_stdout, reason = "the dev-set run reports its counts")]
+
+use kurbo::{Point, Rect, Vec2};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use triwild::Params;
+use triwild::features::{FeatureSet, Parent};
+
+#[path = "support/features_check.rs"]
+mod features_check;
+
+fn devset_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("TRIWILD_DEVSET") {
+        return d.into();
+    }
+    let sibling = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev");
+    if sibling.is_dir() {
+        sibling
+    } else {
+        PathBuf::from("/work/shared/data/svg-dev")
+    }
+}
+
+fn svg_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            svg_files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "svg") {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+#[ignore = "slow corpus run; needs the svg loader and ../shared/data/svg-dev"]
+fn devset_feature_sets_keep_every_invariant() {
+    let dir = devset_dir();
+    let mut files = Vec::new();
+    svg_files(&dir, &mut files);
+    assert!(!files.is_empty(), "no .svg under {}", dir.display());
+    let (mut ok, mut unloadable, mut failures) = (0, 0, Vec::new());
+    let (mut primary, mut secondary, mut points) = (0, 0, 0);
+    let start = Instant::now();
+    println!("file\tsections\tprimary\tsecondary_segments\tpoints\tms");
+    for f in &files {
+        let Ok(drawing) = triwild::svg::load_file(f) else {
+            unloadable += 1;
+            continue;
+        };
+        let t = Instant::now();
+        let fs = FeatureSet::build(&drawing, &Params::DEFAULT.resolve(drawing.diagonal()));
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
+        let c = fs.counts;
+        println!(
+            "{name}\t{}\t{}\t{}\t{}\t{ms:.1}",
+            c.sections, c.primary, c.secondary_segments, c.points
+        );
+        let defects = features_check::check(&fs);
+        if !defects.is_empty() {
+            println!("  {} defects, first: {}", defects.len(), defects[0]);
+            failures.push(name);
+        }
+        ok += 1;
+        primary += c.primary;
+        secondary += c.secondary_segments;
+        points += c.points;
+    }
+    println!(
+        "{} files: {ok} preprocessed, {unloadable} not loadable; {primary} primary sections, \
+         {secondary} secondary segments, {points} points; {:.1} s",
+        files.len(),
+        start.elapsed().as_secs_f64()
+    );
+    assert!(failures.is_empty(), "invariants broken in {failures:?}");
+}
