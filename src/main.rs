@@ -657,7 +657,23 @@ fn run_batch(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCode {
     }
 }
 
+/// Keep the default panic message, except for panics raised inside spade: the
+/// baseline mesher catches those (a known spade limitation when splitting
+/// crossing constraints) and recovers, so they are not the user's business.
+fn install_panic_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let in_spade = info
+            .location()
+            .is_some_and(|l| l.file().replace('\\', "/").contains("/spade-"));
+        if !in_spade {
+            default(info);
+        }
+    }));
+}
+
 fn main() -> ExitCode {
+    install_panic_hook();
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     init_logging(&cli.log);

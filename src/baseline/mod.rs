@@ -119,7 +119,7 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
     let (cdt, strict) = match build(true) {
         Ok(cdt) => (cdt?, true),
         Err(_) => {
-            tracing::info!(
+            tracing::warn!(
                 "baseline: spade failed to split crossing constraints; meshing without the crossing pieces"
             );
             match build(false) {
