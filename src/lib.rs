@@ -34,6 +34,7 @@ pub mod output;
 pub mod params;
 pub mod pipeline;
 pub mod quality;
+pub mod regions;
 pub mod svg;
 
 pub use error::{Error, ErrorKind, Result};

@@ -14,6 +14,7 @@ use std::time::Duration;
 use triwild::batch::{self, BatchOptions, MemoryGuard, Shard};
 use triwild::output::{MshOptions, MshVersion};
 use triwild::pipeline::{self, RunOptions};
+use triwild::regions::{RegionMode, RegionOptions};
 use triwild::{Error, ErrorKind, Length, Mesher, Params};
 
 const EXIT_HELP: &str = "\
@@ -160,6 +161,68 @@ struct MeshArgs {
     format: FormatArgs,
     #[command(flatten)]
     params: ParamArgs,
+    #[command(flatten)]
+    regions: RegionArgs,
+}
+
+/// What becomes a physical surface, and what is dropped.
+#[derive(Args, Debug, Clone)]
+struct RegionArgs {
+    /// Physical surfaces: one per filled shape (SVG id, else shape-N), one per fill
+    /// colour (fill-#rrggbb), or a single `domain`; plus `background`.
+    #[arg(long, value_enum, default_value = "shape")]
+    regions: RegionsArg,
+    /// Drop the background (what no filled shape covers).
+    #[arg(long)]
+    cut_outside: bool,
+    /// Keep only the named regions.
+    #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
+    keep: Vec<String>,
+    /// Remove the region containing the point X,Y (output coordinates: SVG user
+    /// units after transforms, y pointing up, i.e. y = -y_svg). Repeatable.
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
+    hole: Vec<(f64, f64)>,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum RegionsArg {
+    /// One surface per filled shape.
+    Shape,
+    /// One surface per fill colour.
+    Colour,
+    /// One surface `domain`.
+    None,
+}
+
+fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("not a finite number: `{v}`"))
+    };
+    Ok((num(x)?, num(y)?))
+}
+
+impl RegionArgs {
+    fn to_options(&self) -> RegionOptions {
+        RegionOptions::DEFAULT
+            .with_mode(match self.regions {
+                RegionsArg::Shape => RegionMode::Shape,
+                RegionsArg::Colour => RegionMode::Colour,
+                RegionsArg::None => RegionMode::None,
+            })
+            .with_cut_outside(self.cut_outside)
+            .with_keep(self.keep.clone())
+            .with_holes(
+                self.hole
+                    .iter()
+                    .map(|&(x, y)| kurbo::Point::new(x, y))
+                    .collect(),
+            )
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -363,7 +426,8 @@ fn mesh_one(args: &MeshArgs, quiet: bool) -> ExitCode {
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     let opts = RunOptions::new(args.params.to_params())
         .with_msh(args.format.to_options())
-        .with_preview(args.preview.clone());
+        .with_preview(args.preview.clone())
+        .with_regions(args.regions.to_options());
     match pipeline::run_file(input, &output, &opts) {
         Ok(report) => {
             if !quiet {
