@@ -21,6 +21,7 @@
 //! ```
 
 pub mod baseline;
+pub mod batch;
 pub mod bsp;
 pub mod curve;
 pub mod error;
@@ -29,10 +30,13 @@ pub mod features;
 pub mod fem;
 pub mod input;
 pub mod mesh;
+pub mod ops;
+pub mod optimize;
 pub mod output;
 pub mod params;
 pub mod pipeline;
 pub mod quality;
+pub mod regions;
 pub mod svg;
 
 pub use error::{Error, ErrorKind, Result};

@@ -5,6 +5,7 @@ use crate::fem::FemMesh;
 use crate::output::{self, MshOptions};
 use crate::params::{Mesher, Params, Resolved};
 use crate::quality::Quality;
+use crate::regions::{RegionOptions, RegionReport};
 use crate::svg::{self, Drawing, FeatureGeom};
 use crate::{Error, Result};
 use std::collections::BTreeMap;
@@ -21,6 +22,8 @@ pub struct RunOptions {
     pub msh: MshOptions,
     /// Where to write an SVG preview, if anywhere.
     pub preview: Option<PathBuf>,
+    /// Physical surfaces and dropped regions (default: one surface per filled shape).
+    pub regions: RegionOptions,
 }
 
 impl RunOptions {
@@ -30,6 +33,7 @@ impl RunOptions {
             params,
             msh: MshOptions::DEFAULT,
             preview: None,
+            regions: RegionOptions::DEFAULT,
         }
     }
     /// Set the output format.
@@ -40,6 +44,11 @@ impl RunOptions {
     /// Write a preview to `path`.
     pub fn with_preview(mut self, path: Option<PathBuf>) -> Self {
         self.preview = path;
+        self
+    }
+    /// Set the region options.
+    pub fn with_regions(mut self, regions: RegionOptions) -> Self {
+        self.regions = regions;
         self
     }
 }
@@ -129,6 +138,8 @@ pub struct Report {
     pub output: OutputCounts,
     /// Quality of the output.
     pub quality: Quality,
+    /// Physical surfaces (triangles and area of each) and classification counts.
+    pub regions: RegionReport,
     /// Warnings about the input.
     pub warnings: Vec<String>,
 }
@@ -156,11 +167,25 @@ pub struct Meshed {
     pub report: Report,
 }
 
-/// Mesh an already loaded drawing.
+/// Mesh an already loaded drawing, with the default regions (one surface per
+/// filled shape, plus `background`).
 ///
 /// # Errors
 /// Invalid parameters or a failed meshing stage.
 pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
+    mesh_drawing_with(drawing, params, &RegionOptions::DEFAULT)
+}
+
+/// Mesh an already loaded drawing and tag (or drop) its regions.
+///
+/// # Errors
+/// Invalid parameters, a failed meshing stage, or region options that select
+/// nothing or name regions that do not exist.
+pub fn mesh_drawing_with(
+    drawing: &Drawing,
+    params: &Params,
+    regions: &RegionOptions,
+) -> Result<Meshed> {
     params.validate()?;
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
@@ -176,6 +201,9 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
             ));
         }
     };
+    let (mesh, region_report) = times.time("regions", || {
+        crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
+    })?;
     let quality = times.time("quality", || Quality::of(&mesh));
     let t_core = times.0.values().sum();
     let report = Report {
@@ -186,6 +214,7 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
         t_core,
         output: OutputCounts::of(&mesh),
         quality,
+        regions: region_report,
         warnings: drawing.warnings.clone(),
     };
     Ok(Meshed { mesh, report })
@@ -209,7 +238,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let t = Instant::now();
     let drawing = svg::load_file(input)?;
     let t_load = t.elapsed().as_secs_f64();
-    let Meshed { mesh, mut report } = mesh_drawing(&drawing, &opts.params)?;
+    let Meshed { mesh, mut report } = mesh_drawing_with(&drawing, &opts.params, &opts.regions)?;
     let t = Instant::now();
     output::write_msh(&mesh, output, opts.msh)?;
     if let Some(p) = &opts.preview {
