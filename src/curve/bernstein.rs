@@ -150,20 +150,27 @@ impl BernsteinTri {
         };
         let (v0, v1, v2) = (parent[0], parent[1], parent[2]);
         let (m01, m12, m20) = (mid(v0, v1), mid(v1, v2), mid(v2, v0));
-        // Local corners (in this piece's own barycentrics) of the four children.
-        const L: [[[f64; 3]; 3]; 4] = [
-            [[1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5]],
-            [[0.5, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.5, 0.5]],
-            [[0.5, 0.0, 0.5], [0.0, 0.5, 0.5], [0.0, 0.0, 1.0]],
-            [[0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [0.5, 0.5, 0.0]],
-        ];
         let global = [
             [v0, m01, m20],
             [m01, v1, m12],
             [m20, m12, v2],
             [m12, m20, m01],
         ];
-        [0, 1, 2, 3].map(|i| (self.restrict(L[i]), global[i]))
+        let n = self.degree;
+        let tables = &SPLIT_TABLES[n];
+        [0, 1, 2, 3].map(|i| {
+            let mut c = [0.0; len(MAX_DEGREE)];
+            for &(o, j, w) in &tables[i] {
+                c[o as usize] += w * self.coeffs[j as usize];
+            }
+            (
+                BernsteinTri {
+                    degree: n,
+                    coeffs: c,
+                },
+                global[i],
+            )
+        })
     }
 
     /// The same polynomial scaled by `s`.
@@ -175,6 +182,43 @@ impl BernsteinTri {
         out
     }
 }
+
+/// Corners of the four midpoint-split children in their parent's barycentrics.
+const CHILDREN: [[[f64; 3]; 3]; 4] = [
+    [[1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5]],
+    [[0.5, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.5, 0.5]],
+    [[0.5, 0.0, 0.5], [0.0, 0.5, 0.5], [0.0, 0.0, 1.0]],
+    [[0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [0.5, 0.5, 0.0]],
+];
+
+/// Sparse subdivision matrices of the midpoint split, per degree and child:
+/// (child coefficient, parent coefficient, weight). Built once by blossoming the
+/// unit polynomials; the weights are dyadic rationals, exact in f64.
+type SplitTable = Vec<(u8, u8, f64)>;
+static SPLIT_TABLES: std::sync::LazyLock<[[SplitTable; 4]; MAX_DEGREE + 1]> =
+    std::sync::LazyLock::new(|| {
+        std::array::from_fn(|n| {
+            std::array::from_fn(|child| {
+                let mut t = Vec::new();
+                for j in 0..len(n) {
+                    let mut unit = [0.0; len(MAX_DEGREE)];
+                    unit[j] = 1.0;
+                    let p = BernsteinTri {
+                        degree: n,
+                        coeffs: unit,
+                    };
+                    let r = p.restrict(CHILDREN[child]);
+                    for (o, &w) in r.coeffs().iter().enumerate() {
+                        if w != 0.0 {
+                            t.push((o as u8, j as u8, w));
+                        }
+                    }
+                }
+                t.sort_by_key(|&(o, j, _)| (o, j));
+                t
+            })
+        })
+    });
 
 /// One de Casteljau step from degree `m` to `m − 1` at barycentric point `p`, in place.
 fn step(c: &mut [f64; len(MAX_DEGREE)], m: usize, p: [f64; 3]) {
@@ -246,6 +290,21 @@ mod tests {
                         l[0] * corners[0][d] + l[1] * corners[1][d] + l[2] * corners[2][d]
                     });
                     assert!((child.eval(l) - p.eval(g)).abs() < 1e-12, "n {n}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn split_tables_match_blossoming() {
+        for n in 0..=MAX_DEGREE {
+            let p = sample(n);
+            let unit = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            for (i, (child, corners)) in p.split4(unit).into_iter().enumerate() {
+                assert_eq!(corners, CHILDREN[i]);
+                let direct = p.restrict(CHILDREN[i]);
+                for (a, b) in child.coeffs().iter().zip(direct.coeffs()) {
+                    assert!((a - b).abs() < 1e-13, "n {n} child {i}: {a} vs {b}");
                 }
             }
         }
