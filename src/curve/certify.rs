@@ -340,4 +340,33 @@ mod tests {
         assert_eq!((r.curved, r.certified), (1, 1));
         assert!(r.min_detj_ratio > 0.0 && r.min_detj_ratio < 1.0);
     }
+
+    #[test]
+    fn mixed_orders_in_one_file() {
+        // a straight triangle (type 2) and a straight-noded cubic one (type 21)
+        // sharing the edge 1-2 of the unit square, plus a quadrangle
+        let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
+            $Nodes\n1 11 1 11\n2 1 0 11\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n11\n\
+            0 0 0\n1 0 0\n0 1 0\n1 1 0\n\
+            1 0.3333333333333333 0\n1 0.6666666666666666 0\n0.6666666666666667 1 0\n\
+            0.33333333333333337 1 0\n0.6666666666666666 0.6666666666666666 0\n\
+            0.3333333333333333 0.6666666666666667 0\n0.6666666666666667 0.3333333333333333 0\n\
+            $EndNodes\n$Elements\n3 3 1 3\n\
+            2 1 2 1\n1 1 2 3\n\
+            2 1 21 1\n2 2 4 3 5 6 7 8 10 11 9\n\
+            2 1 3 1\n3 1 2 4 3\n$EndElements\n";
+        let m = crate::input::read_msh(text.as_bytes()).expect("read");
+        assert_eq!(m.triangle_blocks.len(), 2);
+        let r = check_msh(&m, &CertifyOptions::DEFAULT);
+        assert_eq!(r.mesh.by_order, [1, 0, 1]);
+        assert_eq!(r.mesh.certified, 2);
+        assert!(
+            (r.mesh.total_area - 1.0).abs() < 1e-14,
+            "{}",
+            r.mesh.total_area
+        );
+        // the quadrangle is not supported: the file is not valid
+        assert_eq!(r.unsupported_2d, 1);
+        assert!(!r.valid && r.reasons.iter().any(|s| s.contains("unsupported")));
+    }
 }
