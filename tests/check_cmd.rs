@@ -241,3 +241,33 @@ fn unreadable_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a readable gmsh mesh"));
 }
+
+/// gmsh's own P3 meshes of an elliptic disk (axes 1, 0.6), in all four formats: the numbers
+/// mshcheck (gmsh's reader, numpy Bernstein check) reports for them.
+#[test]
+fn gmsh_fixtures_agree_with_mshcheck() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    for f in [
+        "gmsh-disk-p3-v22-ascii.msh",
+        "gmsh-disk-p3-v22-binary.msh",
+        "gmsh-disk-p3-v41-ascii.msh",
+        "gmsh-disk-p3-v41-binary.msh",
+    ] {
+        let (code, j) = check(&dir.join(f));
+        assert_eq!(code, 0, "{f}: {j}");
+        assert_eq!(
+            (j["triangles"].as_u64(), j["curved"].as_u64()),
+            (Some(90), Some(22)),
+            "{f}"
+        );
+        // mshcheck: min_detj_ratio 0.8026052627769277, total_area 1.884963907679325
+        assert!(
+            (num(&j, "min_detj_ratio") - 0.802_605_262_776_927_7).abs() < 1e-9,
+            "{f}: {j}"
+        );
+        assert!(
+            (num(&j, "total_area") - 1.884_963_907_679_325).abs() < 1e-12,
+            "{f}: {j}"
+        );
+    }
+}
