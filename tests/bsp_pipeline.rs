@@ -230,7 +230,13 @@ fn devset_dir() -> PathBuf {
     if let Some(d) = std::env::var_os("TRIWILD_DEVSET") {
         return d.into();
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev")
+    // ../shared/data/svg-dev, looked up from each ancestor (a git worktree sits deeper).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    root.ancestors()
+        .skip(1)
+        .map(|a| a.join("shared/data/svg-dev"))
+        .find(|d| d.is_dir())
+        .unwrap_or_else(|| root.join("../shared/data/svg-dev"))
 }
 
 fn median(v: &mut [f64]) -> f64 {

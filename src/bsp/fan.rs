@@ -147,9 +147,40 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
     Ok(())
 }
 
-/// Round every rational vertex to its nearest `f64` point when all its
-/// incident triangles stay exactly counter-clockwise; repeat up to `passes`
-/// times while something changed.
+/// How many ulps away from the nearest `f64` coordinate rounding may look when
+/// the nearest point would invert a triangle.
+const ROUND_ULPS: i32 = 2;
+
+/// `x` moved by `k` ulps (`k` may be negative).
+fn step_ulps(x: f64, k: i32) -> f64 {
+    let mut y = x;
+    for _ in 0..k.unsigned_abs() {
+        y = if k > 0 { y.next_up() } else { y.next_down() };
+    }
+    y
+}
+
+/// The `f64` points tried when rounding a vertex at exact position `q` whose
+/// nearest `f64` point is `p`: `p` first, then points up to [`ROUND_ULPS`]
+/// ulps away per coordinate, nearest (in ulps) first. A coordinate that is
+/// exactly an `f64` (e.g. on a box side or an axis-parallel segment) is kept.
+fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::Point> {
+    let range = |e: bool| if e { 0..=0 } else { -ROUND_ULPS..=ROUND_ULPS };
+    let mut offsets: Vec<(i32, i32)> = range(exact[0])
+        .flat_map(|i| range(exact[1]).map(move |j| (i, j)))
+        .collect();
+    offsets.sort_by_key(|&(i, j)| (i.abs().max(j.abs()), i.abs() + j.abs()));
+    offsets
+        .into_iter()
+        .map(|(i, j)| kurbo::Point::new(step_ulps(p.x, i), step_ulps(p.y, j)))
+        .filter(|c| c.x.is_finite() && c.y.is_finite())
+        .collect()
+}
+
+/// Round every rational vertex to an `f64` point when all its incident
+/// triangles stay exactly counter-clockwise: the nearest one, else one a few
+/// ulps away ([`round_candidates`]); repeat up to `passes` times while
+/// something changed.
 pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
     for _ in 0..passes {
         let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
@@ -163,17 +194,46 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
         for v in rational {
+            let star = &star[v.0 as usize];
+            let fits = |p: kurbo::Point| {
+                star.iter()
+                    .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise)
+            };
             let p = mesh.position(v);
-            let ok = star[v.0 as usize]
-                .iter()
-                .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise);
-            if ok {
-                mesh.set_position(v, p);
+            let to = if fits(p) {
+                Some(p)
+            } else {
+                let exact = mesh
+                    .exact(v)
+                    .expect("internal: listed as rational")
+                    .coords_are_f64();
+                round_candidates(p, exact).into_iter().skip(1).find(|&c| fits(c))
+            };
+            if let Some(to) = to {
+                mesh.set_position(v, to);
                 changed = true;
             }
         }
         if !changed {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_start_at_the_nearest_point_and_keep_exact_coordinates() {
+        let p = kurbo::Point::new(1.0, 3.0);
+        let c = round_candidates(p, [false, false]);
+        assert_eq!(c.len(), 25);
+        assert_eq!(c[0], p);
+        assert!(c[1..9].iter().all(|q| (q.x - p.x).abs() <= 2.3e-16 && (q.y - p.y).abs() <= 4.5e-16));
+        let c = round_candidates(p, [true, false]);
+        assert_eq!(c.len(), 5);
+        assert!(c.iter().all(|q| q.x == 1.0));
+        assert_eq!(round_candidates(p, [true, true]), vec![p]);
     }
 }
