@@ -54,6 +54,22 @@ fn key(p: kurbo::Point) -> (u64, u64) {
     ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
 }
 
+/// Compare the x (or y, unless `along_x`) coordinates of two vertices exactly:
+/// by their rounded positions when those differ (rounding to nearest is
+/// monotone), else in rationals.
+fn cmp_coordinate(mesh: &TriMesh, along_x: bool, p: VertexId, q: VertexId) -> Ordering {
+    let (pp, pq) = (mesh.position(p), mesh.position(q));
+    let (cp, cq) = if along_x { (pp.x, pq.x) } else { (pp.y, pq.y) };
+    if cp != cq {
+        cp.total_cmp(&cq)
+    } else if mesh.is_rational(p) || mesh.is_rational(q) {
+        let (dx, dy) = if along_x { (1.0, 0.0) } else { (0.0, 1.0) };
+        mesh.point_q_ref(p).cmp_along(&mesh.point_q_ref(q), dx, dy)
+    } else {
+        Ordering::Equal
+    }
+}
+
 /// Walk every segment from `a` to `b` along mesh edges and tag them.
 ///
 /// # Errors
@@ -77,7 +93,8 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
         if va == vb {
             continue;
         }
-        let (qa, qb) = (PointQ::from_point(seg.a), PointQ::from_point(seg.b));
+        let qa = PointQ::from_point(seg.a);
+        let qb = PointQ::from_point(seg.b);
         let d = seg.b - seg.a;
         let len2 = d.hypot2();
         let param = |p: kurbo::Point| {
@@ -87,14 +104,23 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                 0.5
             }
         };
+        // Points of the segment's line are ordered along it as their dominant
+        // coordinate is (its exact delta is non-zero: a != b). Rounding to
+        // nearest is monotone, so distinct rounded coordinates decide; equal
+        // ones fall back to the exact comparison.
+        let along_x = d.x.abs() >= d.y.abs();
+        let ascending = if along_x { d.x > 0.0 } else { d.y > 0.0 };
+        let cmp = |mesh: &TriMesh, p: VertexId, q: VertexId| {
+            let o = cmp_coordinate(mesh, along_x, p, q);
+            if ascending { o } else { o.reverse() }
+        };
         let mut u = va;
         let mut s_u = 0.0;
         for _ in 0..=mesh.num_vertices() {
             if u == vb {
                 break;
             }
-            let qu = mesh.point_q(u);
-            let mut best: Option<(VertexId, PointQ)> = None;
+            let mut best: Option<VertexId> = None;
             for f in mesh.incident_faces(u) {
                 for w in mesh.face(f) {
                     if w == u {
@@ -107,21 +133,17 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                     if on_line != Orientation::Collinear {
                         continue;
                     }
-                    let qw = mesh.point_q(w);
-                    if qw.cmp_along_q(&qu, &qa, &qb) != Ordering::Greater
-                        || qw.cmp_along_q(&qb, &qa, &qb) == Ordering::Greater
+                    if cmp(mesh, w, u) != Ordering::Greater
+                        || cmp(mesh, w, vb) == Ordering::Greater
                     {
                         continue;
                     }
-                    let closer = best
-                        .as_ref()
-                        .is_none_or(|(_, qbest)| qw.cmp_along_q(qbest, &qa, &qb) == Ordering::Less);
-                    if closer {
-                        best = Some((w, qw));
+                    if best.is_none_or(|b| cmp(mesh, w, b) == Ordering::Less) {
+                        best = Some(w);
                     }
                 }
             }
-            let Some((w, _)) = best else {
+            let Some(w) = best else {
                 return Err(not_conforming("no next edge"));
             };
             let s_w = if w == vb {
