@@ -148,7 +148,9 @@ impl LinearMesh {
         if rational > 0 {
             return Err(Error::meshing(
                 stage,
-                format!("{rational} vertices could not be rounded to f64 without inverting a triangle"),
+                format!(
+                    "{rational} vertices could not be rounded to f64 without inverting a triangle"
+                ),
             ));
         }
         let mut index = vec![u32::MAX; mesh.vertex_capacity()];
@@ -160,7 +162,10 @@ impl LinearMesh {
         }
         let id = |v: VertexId| {
             let i = index[v.0 as usize];
-            debug_assert!(i != u32::MAX, "internal: face refers to a dead vertex {v:?}");
+            debug_assert!(
+                i != u32::MAX,
+                "internal: face refers to a dead vertex {v:?}"
+            );
             i
         };
         let triangles = mesh.faces().map(|f| mesh.face(f).map(id)).collect();

@@ -241,11 +241,9 @@ fn bsp_input(fs: &FeatureSet) -> BspInput {
                     section: id.0,
                     t: fs.primary[id.0 as usize].t,
                 },
-                features::SegmentTag::Secondary { polyline, .. } => {
-                    bsp::SegmentTag::Secondary {
-                        polyline: polyline.0,
-                    }
-                }
+                features::SegmentTag::Secondary { polyline, .. } => bsp::SegmentTag::Secondary {
+                    polyline: polyline.0,
+                },
             },
         })
         .collect();

@@ -38,12 +38,12 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
     let d = drawing.diagonal();
     let fs = FeatureSet::build(drawing, &params.resolve(d));
     let tol = 1e-9 * d;
-    let pos: HashMap<u64, [f64; 2]> = m
+    let pos: HashMap<u64, [f64; 2]> = m.nodes.iter().map(|&(t, x)| (t, [x[0], x[1]])).collect();
+    let by_pos: HashMap<(u64, u64), u64> = m
         .nodes
         .iter()
-        .map(|&(t, x)| (t, [x[0], x[1]]))
+        .map(|&(t, x)| (key([x[0], x[1]]), t))
         .collect();
-    let by_pos: HashMap<(u64, u64), u64> = m.nodes.iter().map(|&(t, x)| (key([x[0], x[1]]), t)).collect();
     // Feature line elements: undirected edge -> names of its physical curves.
     let mut line_names: HashMap<(u64, u64), HashSet<&str>> = HashMap::new();
     let mut adj: HashMap<u64, Vec<u64>> = HashMap::new();
@@ -212,7 +212,10 @@ fn crossing_fixtures_exercise_rational_vertices() {
         let o = mesh_and_check(&f, &dir.join(format!("{name}.msh")))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let bsp = o.report.bsp.expect("bsp stats");
-        assert!(bsp.cut_triangles > 0 && bsp.rational_before_rounding > 0, "{name}: {bsp:?}");
+        assert!(
+            bsp.cut_triangles > 0 && bsp.rational_before_rounding > 0,
+            "{name}: {bsp:?}"
+        );
         assert_eq!(bsp.rational_vertices, 0, "{name}");
     }
 }
@@ -256,9 +259,12 @@ fn devset_meshes_valid_and_conforming() {
     }
     let out = out_dir("bsp-devset");
     let (mut ok, mut unloadable, mut failed) = (0usize, 0usize, Vec::new());
-    let (mut rational_before, mut rational_after) = (0usize, 0usize);
+    let (mut rational_before, mut rational_after, mut collapsed) = (0usize, 0usize, 0usize);
     let mut times = Vec::new();
-    println!("file\tseconds\tbsp_s\tvertices\ttriangles\trational_before\trational_left\tvalid");
+    // seconds: load + features + bsp + write; bsp_s: the BSP stage alone.
+    println!(
+        "file\tseconds\tbsp_s\tvertices\ttriangles\trational_before\tcollapsed\trational_left\tvalid"
+    );
     for (i, f) in files.iter().enumerate() {
         let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
         if triwild::svg::load_file(f).is_err() {
@@ -272,17 +278,19 @@ fn devset_meshes_valid_and_conforming() {
                 let b = o.report.bsp.as_ref().expect("bsp stats");
                 let valid = o.defects.is_empty();
                 println!(
-                    "{name}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}\t{valid}",
+                    "{name}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}\t{}\t{valid}",
                     o.seconds,
                     b.seconds,
                     b.vertices,
                     b.triangles,
                     b.rational_before_rounding,
+                    b.collapsed_vertices,
                     b.rational_vertices
                 );
                 times.push(o.seconds);
                 rational_before += b.rational_before_rounding;
                 rational_after += b.rational_vertices;
+                collapsed += b.collapsed_vertices;
                 if valid {
                     ok += 1;
                 } else {
@@ -303,7 +311,7 @@ fn devset_meshes_valid_and_conforming() {
     let max = times.iter().copied().fold(0.0, f64::max);
     println!(
         "{} files: {ok} ok, {} failed, {unloadable} not loadable; time per file median {:.3} s, \
-         max {max:.3} s; rational vertices before rounding {rational_before}, left {rational_after}",
+         max {max:.3} s; rational vertices before rounding {rational_before}, collapsed {collapsed}, left {rational_after}",
         files.len(),
         failed.len(),
         median(&mut times)

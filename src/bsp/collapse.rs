@@ -22,7 +22,9 @@ fn ring(mesh: &TriMesh, v: VertexId, star: &[FaceId]) -> (HashSet<VertexId>, boo
     let mut n = HashSet::new();
     let mut closed = true;
     for &f in star {
-        let i = mesh.local_index(f, v).expect("internal: star face contains its vertex");
+        let i = mesh
+            .local_index(f, v)
+            .expect("internal: star face contains its vertex");
         let vs = mesh.face(f);
         n.insert(vs[(i + 1) % 3]);
         n.insert(vs[(i + 2) % 3]);
@@ -82,7 +84,10 @@ pub(super) fn try_collapse(mesh: &mut TriMesh, v: VertexId) -> bool {
     targets.retain(|&u| !mesh.is_rational(u));
     let pv = mesh.position(v);
     targets.sort_by(|&a, &b| {
-        let (da, db) = ((mesh.position(a) - pv).hypot2(), (mesh.position(b) - pv).hypot2());
+        let (da, db) = (
+            (mesh.position(a) - pv).hypot2(),
+            (mesh.position(b) - pv).hypot2(),
+        );
         da.total_cmp(&db).then(a.cmp(&b))
     });
     targets
@@ -238,7 +243,7 @@ mod tests {
         assert!(m.check().is_empty(), "{:?}", m.check());
         assert_eq!(m.num_faces(), 2);
         let mut tags = m.edge_tags(u, w).to_vec();
-        tags.sort_by_key(|t| feature_id(t));
+        tags.sort_by_key(feature_id);
         let (lo_t, hi_t) = if u < w { (0.0, 1.0) } else { (1.0, 0.0) };
         assert_eq!(
             tags,

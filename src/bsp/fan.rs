@@ -133,8 +133,7 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                     if on_line != Orientation::Collinear {
                         continue;
                     }
-                    if cmp(mesh, w, u) != Ordering::Greater
-                        || cmp(mesh, w, vb) == Ordering::Greater
+                    if cmp(mesh, w, u) != Ordering::Greater || cmp(mesh, w, vb) == Ordering::Greater
                     {
                         continue;
                     }
@@ -173,11 +172,24 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
 /// the nearest point would invert a triangle.
 const ROUND_ULPS: i32 = 2;
 
+/// The next `f64` above `x` (`f64::next_up` needs a newer Rust than the MSRV).
+fn next_up(x: f64) -> f64 {
+    if x.is_nan() || x == f64::INFINITY {
+        x
+    } else if x == 0.0 {
+        f64::from_bits(1)
+    } else if x > 0.0 {
+        f64::from_bits(x.to_bits() + 1)
+    } else {
+        f64::from_bits(x.to_bits() - 1)
+    }
+}
+
 /// `x` moved by `k` ulps (`k` may be negative).
 fn step_ulps(x: f64, k: i32) -> f64 {
     let mut y = x;
     for _ in 0..k.unsigned_abs() {
-        y = if k > 0 { y.next_up() } else { y.next_down() };
+        y = if k > 0 { next_up(y) } else { -next_up(-y) };
     }
     y
 }
@@ -229,7 +241,10 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
                     .exact(v)
                     .expect("internal: listed as rational")
                     .coords_are_f64();
-                round_candidates(p, exact).into_iter().skip(1).find(|&c| fits(c))
+                round_candidates(p, exact)
+                    .into_iter()
+                    .skip(1)
+                    .find(|&c| fits(c))
             };
             if let Some(to) = to {
                 mesh.set_position(v, to);
@@ -252,7 +267,11 @@ mod tests {
         let c = round_candidates(p, [false, false]);
         assert_eq!(c.len(), 25);
         assert_eq!(c[0], p);
-        assert!(c[1..9].iter().all(|q| (q.x - p.x).abs() <= 2.3e-16 && (q.y - p.y).abs() <= 4.5e-16));
+        assert!(
+            c[1..9]
+                .iter()
+                .all(|q| (q.x - p.x).abs() <= 2.3e-16 && (q.y - p.y).abs() <= 4.5e-16)
+        );
         let c = round_candidates(p, [true, false]);
         assert_eq!(c.len(), 5);
         assert!(c.iter().all(|q| q.x == 1.0));
