@@ -21,16 +21,20 @@
 //! ```
 
 pub mod baseline;
+pub mod batch;
 pub mod bsp;
 pub mod error;
 pub mod exact;
 pub mod features;
 pub mod fem;
 pub mod mesh;
+pub mod ops;
+pub mod optimize;
 pub mod output;
 pub mod params;
 pub mod pipeline;
 pub mod quality;
+pub mod regions;
 pub mod svg;
 
 pub use error::{Error, ErrorKind, Result};

@@ -5,11 +5,16 @@
     reason = "the binary talks to the user"
 )]
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
+use std::ffi::OsString;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Duration;
+use triwild::batch::{self, BatchOptions, MemoryGuard, Shard};
 use triwild::output::{MshOptions, MshVersion};
 use triwild::pipeline::{self, RunOptions};
+use triwild::regions::{RegionMode, RegionOptions};
 use triwild::{Error, ErrorKind, Length, Mesher, Params, Stage};
 
 const EXIT_HELP: &str = "\
@@ -38,6 +43,78 @@ struct Cli {
 enum Command {
     /// Preprocess the features only: write the primary / secondary FeatureSet as JSON.
     Features(FeaturesArgs),
+    /// Mesh every SVG file under directories, each in its own child process.
+    Batch(BatchArgs),
+}
+
+const BATCH_HELP: &str = "\
+Each file runs in a child process of this binary (the single-file command with
+the same flags plus --stats), so its mesh has the same bytes; a panic, crash,
+timeout or memory overrun becomes that file's report row and the batch goes on.
+Meshes mirror the input tree: DIR/a/b.svg -> OUTDIR/a/b.msh. Each finished file
+appends one JSON line to OUTDIR/report.jsonl (OUTDIR/report.shard-K-of-N.jsonl
+with --shard): file, status, cause, message, wall time, peak memory, output,
+and the child's --stats object (times per stage, counts, quality).
+
+--max-memory runs each child under `prlimit --as=BYTES` (util-linux) when
+prlimit is on the PATH (a limit on address space, enforced by the kernel);
+otherwise the batch samples the child's resident memory in /proc every 50 ms
+and kills it past the limit.
+
+Merging shards: triwild batch --merge-reports A.jsonl B.jsonl ... -o OUT.jsonl
+
+Exit codes:
+  0  every file meshed
+  1  some file failed (see the report)
+  2  usage error (bad flag, missing input, no .svg file found)
+  4  I/O error (cannot write OUTDIR or the report)
+
+Test-only hooks (environment variables read by the single-file command; never
+set them in production): TRIWILD_TEST_PANIC_ON=S panics, TRIWILD_TEST_SLEEP_ON=S
+sleeps for an hour, TRIWILD_TEST_ALLOC_ON=S allocates until killed (up to
+16 GiB), each when the input path contains S.";
+
+/// `triwild batch`: mesh a collection.
+#[derive(Args, Debug, Clone)]
+#[command(after_help = BATCH_HELP)]
+struct BatchArgs {
+    /// Directories (searched recursively for .svg files) and files to mesh;
+    /// with --merge-reports, the reports to merge.
+    #[arg(required = true, value_name = "DIR|FILE")]
+    inputs: Vec<PathBuf>,
+    /// Output directory; with --merge-reports, the merged report file.
+    #[arg(short, long, value_name = "OUTDIR")]
+    output: PathBuf,
+    /// Files meshed at once [default: the number of cores].
+    #[arg(short, long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    jobs: Option<u32>,
+    /// Time limit per file, seconds.
+    #[arg(long, default_value_t = 600.0, value_name = "SECONDS", value_parser = parse_timeout)]
+    timeout: f64,
+    /// Memory limit per file, like 8G or 512M [default: none].
+    #[arg(long, value_name = "SIZE", value_parser = batch::parse_size)]
+    max_memory: Option<u64>,
+    /// Skip the files whose report row is ok and whose mesh exists; run the rest.
+    #[arg(long)]
+    resume: bool,
+    /// Mesh only shard K of N of the sorted file list (files i with i mod N = K-1).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
+    /// Merge the reports given as inputs into the file given by -o (one row per
+    /// file, sorted) and print their summary.
+    #[arg(long, conflicts_with_all = ["resume", "shard", "jobs", "max_memory"])]
+    merge_reports: bool,
+    #[command(flatten)]
+    format: FormatArgs,
+    #[command(flatten)]
+    params: ParamArgs,
+}
+
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && Duration::try_from_secs_f64(t).is_ok() => Ok(t),
+        _ => Err(format!("expected a positive number of seconds, got `{s}`")),
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -84,6 +161,68 @@ struct MeshArgs {
     format: FormatArgs,
     #[command(flatten)]
     params: ParamArgs,
+    #[command(flatten)]
+    regions: RegionArgs,
+}
+
+/// What becomes a physical surface, and what is dropped.
+#[derive(Args, Debug, Clone)]
+struct RegionArgs {
+    /// Physical surfaces: one per filled shape (SVG id, else shape-N), one per fill
+    /// colour (fill-#rrggbb), or a single `domain`; plus `background`.
+    #[arg(long, value_enum, default_value = "shape")]
+    regions: RegionsArg,
+    /// Drop the background (what no filled shape covers).
+    #[arg(long)]
+    cut_outside: bool,
+    /// Keep only the named regions.
+    #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
+    keep: Vec<String>,
+    /// Remove the region containing the point X,Y (output coordinates: SVG user
+    /// units after transforms, y pointing up, i.e. y = -y_svg). Repeatable.
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
+    hole: Vec<(f64, f64)>,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum RegionsArg {
+    /// One surface per filled shape.
+    Shape,
+    /// One surface per fill colour.
+    Colour,
+    /// One surface `domain`.
+    None,
+}
+
+fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("not a finite number: `{v}`"))
+    };
+    Ok((num(x)?, num(y)?))
+}
+
+impl RegionArgs {
+    fn to_options(&self) -> RegionOptions {
+        RegionOptions::DEFAULT
+            .with_mode(match self.regions {
+                RegionsArg::Shape => RegionMode::Shape,
+                RegionsArg::Colour => RegionMode::Colour,
+                RegionsArg::None => RegionMode::None,
+            })
+            .with_cut_outside(self.cut_outside)
+            .with_keep(self.keep.clone())
+            .with_holes(
+                self.hole
+                    .iter()
+                    .map(|&(x, y)| kurbo::Point::new(x, y))
+                    .collect(),
+            )
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -265,15 +404,43 @@ fn default_output(input: &Path) -> PathBuf {
     input.with_extension("msh")
 }
 
+/// Test-only hooks, so the batch tests can make a child misbehave: each
+/// variable holds a substring of the input path that triggers it.
+fn test_hooks(input: &Path) {
+    let name = input.to_string_lossy();
+    let hit = |var: &str| {
+        std::env::var(var)
+            .ok()
+            .is_some_and(|s| !s.is_empty() && name.contains(&s))
+    };
+    if hit("TRIWILD_TEST_PANIC_ON") {
+        panic!("test hook TRIWILD_TEST_PANIC_ON matched {name}");
+    }
+    if hit("TRIWILD_TEST_SLEEP_ON") {
+        std::thread::sleep(Duration::from_secs(3600));
+    }
+    if hit("TRIWILD_TEST_ALLOC_ON") {
+        let mut hog: Vec<Vec<u8>> = Vec::new();
+        for _ in 0..1024 {
+            hog.push(vec![1u8; 16 << 20]);
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(Duration::from_secs(3600));
+        drop(hog);
+    }
+}
+
 fn mesh_one(args: &MeshArgs, quiet: bool) -> ExitCode {
     let Some(input) = &args.input else {
         eprintln!("error: no input file given (try `triwild --help`)");
         return ExitCode::from(2);
     };
+    test_hooks(input);
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     let opts = RunOptions::new(args.params.to_params())
         .with_msh(args.format.to_options())
-        .with_preview(args.preview.clone());
+        .with_preview(args.preview.clone())
+        .with_regions(args.regions.to_options());
     match pipeline::run_file(input, &output, &opts) {
         Ok(report) => {
             if !quiet {
@@ -330,12 +497,12 @@ fn features_one(args: &FeaturesArgs, quiet: bool) -> ExitCode {
         .clone()
         .unwrap_or_else(|| input.with_extension("features.json"));
     let json = features::to_json(&fs).to_string();
-    if let Err(e) = std::fs::write(&output, json) {
-        return fail(&output, Error::Write(e));
+    if let Err(e) = triwild::output::write_file(&output, json.as_bytes()) {
+        return fail(&output, e);
     }
     if let Some(p) = &args.preview {
-        if let Err(e) = std::fs::write(p, features::to_svg(&fs, &drawing)) {
-            return fail(p, Error::Write(e));
+        if let Err(e) = triwild::output::write_file(p, features::to_svg(&fs, &drawing).as_bytes()) {
+            return fail(p, e);
         }
     }
     if args.stats {
@@ -346,11 +513,191 @@ fn features_one(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// The flags of `matches` that belong to the single-file command's
+/// parameters and format, as given on the command line: what every batch
+/// child gets. Generic over the flags, so a new parameter is passed on too.
+fn child_args(matches: &ArgMatches) -> Vec<OsString> {
+    let mut cmd = clap::Command::new("child");
+    cmd = ParamArgs::augment_args(cmd);
+    cmd = FormatArgs::augment_args(cmd);
+    let mut out = Vec::new();
+    for arg in cmd.get_arguments() {
+        let id = arg.get_id().as_str();
+        if matches.value_source(id) != Some(clap::parser::ValueSource::CommandLine) {
+            continue;
+        }
+        let long = arg
+            .get_long()
+            .expect("internal: parameter flags have long names");
+        if arg.get_action().takes_values() {
+            for v in matches.get_raw(id).into_iter().flatten() {
+                let mut flag = OsString::from(format!("--{long}="));
+                flag.push(v);
+                out.push(flag);
+            }
+        } else {
+            out.push(OsString::from(format!("--{long}")));
+        }
+    }
+    out
+}
+
+fn batch_merge(args: &BatchArgs) -> ExitCode {
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    match batch::merge_reports(&inputs, &args.output) {
+        Ok(m) => {
+            for d in &m.duplicates {
+                eprintln!("warning: {d}: in more than one report; kept the last");
+            }
+            for l in &m.bad_lines {
+                eprintln!("warning: {l}: not a report row; skipped");
+            }
+            let summary = batch::Summary::of(&m.rows);
+            println!("{summary}");
+            println!("report: {}", args.output.display());
+            ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            exit_code(e.kind())
+        }
+    }
+}
+
+fn run_batch(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCode {
+    if args.merge_reports {
+        return batch_merge(args);
+    }
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: cannot find the triwild executable: {e}");
+            return ExitCode::from(4);
+        }
+    };
+    let mut opts = BatchOptions::new(exe, args.output.clone())
+        .with_child_args(child_args(matches))
+        .with_timeout(Duration::from_secs_f64(args.timeout))
+        .with_memory(MemoryGuard::detect(args.max_memory))
+        .with_resume(args.resume)
+        .with_shard(args.shard);
+    if let Some(j) = args.jobs {
+        opts = opts.with_jobs(j as usize);
+    }
+    let plan = match batch::plan(&args.inputs, &opts) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(match e.kind() {
+                ErrorKind::Io if matches!(e, Error::Write(_)) => 4,
+                _ => 2,
+            });
+        }
+    };
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !quiet {
+        let shard = opts.shard.map_or(String::new(), |s| {
+            format!(" (shard {s} of {} found)", plan.found)
+        });
+        eprintln!(
+            "{} files{shard}: {} to mesh, {} done before; {} at once; report {}",
+            plan.total(),
+            plan.todo.len(),
+            plan.done.len(),
+            opts.jobs.min(plan.todo.len().max(1)),
+            plan.report.display()
+        );
+    }
+    let total = plan.todo.len();
+    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let pb = indicatif::ProgressBar::new(total as u64);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} [{wide_bar}] {pos}/{len} {msg} {per_sec} ETA {eta}",
+            )
+            .expect("internal: valid progress template")
+            .progress_chars("=> "),
+        );
+        pb
+    });
+    let (mut ok, mut failed, mut done) = (0usize, 0usize, 0usize);
+    let mut on_row = |row: &batch::Row| {
+        done += 1;
+        let line = match row.status {
+            batch::Status::Ok => {
+                ok += 1;
+                let tris = row
+                    .triangles()
+                    .map_or(String::new(), |t| format!(", {t} triangles"));
+                format!("ok      {} ({:.2} s{tris})", row.file, row.wall)
+            }
+            batch::Status::Failed => {
+                failed += 1;
+                let cause = row.cause.map_or("?", batch::Cause::name);
+                let msg = row.message.as_deref().unwrap_or("");
+                format!("FAILED  {} [{cause}] {msg}", row.file)
+            }
+        };
+        match &bar {
+            Some(pb) => {
+                if row.status == batch::Status::Failed {
+                    pb.println(&line);
+                }
+                pb.set_message(format!("ok {ok} failed {failed}"));
+                pb.inc(1);
+            }
+            None if !quiet => eprintln!("[{done}/{total}] {line}"),
+            None => {}
+        }
+    };
+    let outcome = batch::run(&plan, &opts, &mut on_row);
+    if let Some(pb) = &bar {
+        pb.finish_and_clear();
+    }
+    match outcome {
+        Ok(outcome) => {
+            let summary = outcome.summary();
+            println!("{summary}");
+            println!("report: {}", plan.report.display());
+            ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            exit_code(e.kind())
+        }
+    }
+}
+
+/// Keep the default panic message, except for panics raised inside spade: the
+/// baseline mesher catches those (a known spade limitation when splitting
+/// crossing constraints) and recovers, so they are not the user's business.
+fn install_panic_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let in_spade = info
+            .location()
+            .is_some_and(|l| l.file().replace('\\', "/").contains("/spade-"));
+        if !in_spade {
+            default(info);
+        }
+    }));
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    install_panic_hook();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     init_logging(&cli.log);
     match &cli.command {
         None => mesh_one(&cli.mesh, cli.log.quiet),
         Some(Command::Features(args)) => features_one(args, cli.log.quiet),
+        Some(Command::Batch(args)) => {
+            let sub = matches
+                .subcommand_matches("batch")
+                .expect("internal: the batch subcommand matched");
+            run_batch(args, sub, cli.log.quiet)
+        }
     }
 }

@@ -14,6 +14,7 @@ use crate::mesh::FeatureOn;
 use crate::output::{self, MshOptions};
 use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
+use crate::regions::{RegionOptions, RegionReport};
 use crate::svg::{self, Drawing, FeatureGeom};
 use crate::{Error, Result};
 use kurbo::Rect;
@@ -31,6 +32,8 @@ pub struct RunOptions {
     pub msh: MshOptions,
     /// Where to write an SVG preview, if anywhere.
     pub preview: Option<PathBuf>,
+    /// Physical surfaces and dropped regions (default: one surface per filled shape).
+    pub regions: RegionOptions,
 }
 
 impl RunOptions {
@@ -40,6 +43,7 @@ impl RunOptions {
             params,
             msh: MshOptions::DEFAULT,
             preview: None,
+            regions: RegionOptions::DEFAULT,
         }
     }
     /// Set the output format.
@@ -50,6 +54,11 @@ impl RunOptions {
     /// Write a preview to `path`.
     pub fn with_preview(mut self, path: Option<PathBuf>) -> Self {
         self.preview = path;
+        self
+    }
+    /// Set the region options.
+    pub fn with_regions(mut self, regions: RegionOptions) -> Self {
+        self.regions = regions;
         self
     }
 }
@@ -139,6 +148,8 @@ pub struct Report {
     pub output: OutputCounts,
     /// Quality of the output.
     pub quality: Quality,
+    /// Physical surfaces (triangles and area of each) and classification counts.
+    pub regions: RegionReport,
     /// Feature preprocessing counts (TriWild meshers only).
     pub features: Option<FeatureCounts>,
     /// Counts and timings of the BSP stage (`--mesher bsp` only); its
@@ -174,11 +185,25 @@ pub struct Meshed {
     pub report: Report,
 }
 
-/// Mesh an already loaded drawing.
+/// Mesh an already loaded drawing, with the default regions (one surface per
+/// filled shape, plus `background`).
 ///
 /// # Errors
 /// Invalid parameters or a failed meshing stage.
 pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
+    mesh_drawing_with(drawing, params, &RegionOptions::DEFAULT)
+}
+
+/// Mesh an already loaded drawing and tag (or drop) its regions.
+///
+/// # Errors
+/// Invalid parameters, a failed meshing stage, or region options that select
+/// nothing or name regions that do not exist.
+pub fn mesh_drawing_with(
+    drawing: &Drawing,
+    params: &Params,
+    regions: &RegionOptions,
+) -> Result<Meshed> {
     params.validate()?;
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
@@ -197,6 +222,9 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
         }
     };
     let mesh = FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name());
+    let (mesh, region_report) = times.time("regions", || {
+        crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
+    })?;
     let quality = times.time("quality", || Quality::of(&mesh));
     let t_core = times.0.values().sum();
     let report = Report {
@@ -207,6 +235,7 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
         t_core,
         output: OutputCounts::of(&mesh),
         quality,
+        regions: region_report,
         features,
         bsp,
         stopped_after: params.stop_after,
@@ -311,7 +340,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let t = Instant::now();
     let drawing = svg::load_file(input)?;
     let t_load = t.elapsed().as_secs_f64();
-    let Meshed { mesh, mut report } = mesh_drawing(&drawing, &opts.params)?;
+    let Meshed { mesh, mut report } = mesh_drawing_with(&drawing, &opts.params, &opts.regions)?;
     let t = Instant::now();
     output::write_msh(&mesh, output, opts.msh)?;
     if let Some(p) = &opts.preview {

@@ -21,7 +21,10 @@ pub(super) struct Pow2Scale {
 impl Pow2Scale {
     /// The scale that brings `max_abs` (> 0, finite) into `[1/2, 2)`.
     pub(super) fn normalizing(max_abs: f64) -> Pow2Scale {
-        debug_assert!(max_abs > 0.0 && max_abs.is_finite(), "internal: bad magnitude {max_abs}");
+        debug_assert!(
+            max_abs > 0.0 && max_abs.is_finite(),
+            "internal: bad magnitude {max_abs}"
+        );
         // log2 may be off by one ulp at exact powers of two: the range is [1/2, 2), not [1/2, 1).
         let e = max_abs.log2().floor();
         let k = if e.is_finite() { -(e as i32) - 1 } else { 0 };
@@ -121,7 +124,8 @@ impl PlanarInput {
                 FeatureGeom::Point(p) => polyline.push(s.point(p)),
                 FeatureGeom::Line(l) => polyline.extend([s.point(l.p0), s.point(l.p1)]),
                 FeatureGeom::Cubic(c) => {
-                    let c = CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
+                    let c =
+                        CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
                     flatten_cubic(c, accuracy, &mut polyline);
                 }
             }
@@ -174,15 +178,19 @@ fn flatten_cubic(c: CubicBez, accuracy: f64, out: &mut Vec<Point>) {
     let floor = 6.0 * second / (8.0 * MAX_PIECES_PER_CUBIC * MAX_PIECES_PER_CUBIC);
     let accuracy = accuracy.max(floor);
     out.push(c.p0);
-    kurbo::flatten([PathEl::MoveTo(c.p0), PathEl::CurveTo(c.p1, c.p2, c.p3)], accuracy, |el| {
-        if let PathEl::LineTo(p) = el {
-            // Points of a cubic lie in the hull of its control points; anything else
-            // (a non-finite value) would be a flattening defect: skip it.
-            if p.is_finite() {
-                out.push(p);
+    kurbo::flatten(
+        [PathEl::MoveTo(c.p0), PathEl::CurveTo(c.p1, c.p2, c.p3)],
+        accuracy,
+        |el| {
+            if let PathEl::LineTo(p) = el {
+                // Points of a cubic lie in the hull of its control points; anything else
+                // (a non-finite value) would be a flattening defect: skip it.
+                if p.is_finite() {
+                    out.push(p);
+                }
             }
-        }
-    });
+        },
+    );
     // kurbo ends on p3 exactly; make sure of it.
     if out.last() != Some(&c.p3) {
         out.push(c.p3);
@@ -212,7 +220,10 @@ impl Merger {
     }
 
     fn key(&self, p: Point) -> (i64, i64) {
-        ((p.x / self.cell).floor() as i64, (p.y / self.cell).floor() as i64)
+        (
+            (p.x / self.cell).floor() as i64,
+            (p.y / self.cell).floor() as i64,
+        )
     }
 
     /// The index of `p`: an earlier point within the merge distance, else a new one.
@@ -222,7 +233,10 @@ impl Merger {
         let mut best: Option<(f64, u32)> = None;
         for dx in -1..=1 {
             for dy in -1..=1 {
-                let Some(cands) = self.grid.get(&(kx.saturating_add(dx), ky.saturating_add(dy))) else {
+                let Some(cands) = self
+                    .grid
+                    .get(&(kx.saturating_add(dx), ky.saturating_add(dy)))
+                else {
                     continue;
                 };
                 for &i in cands {
@@ -305,10 +319,18 @@ mod tests {
         // A tiny accuracy on a big cubic is capped.
         let mut out = Vec::new();
         flatten_cubic(c, 1e-30, &mut out);
-        assert!(out.len() <= MAX_PIECES_PER_CUBIC as usize + 2, "{}", out.len());
+        assert!(
+            out.len() <= MAX_PIECES_PER_CUBIC as usize + 2,
+            "{}",
+            out.len()
+        );
         // A degenerate cubic flattens to its end points.
         let mut out = Vec::new();
-        flatten_cubic(CubicBez::new((1.0, 1.0), (1.0, 1.0), (1.0, 1.0), (1.0, 1.0)), 1e-3, &mut out);
+        flatten_cubic(
+            CubicBez::new((1.0, 1.0), (1.0, 1.0), (1.0, 1.0), (1.0, 1.0)),
+            1e-3,
+            &mut out,
+        );
         assert!(out.iter().all(|&p| p == Point::new(1.0, 1.0)));
     }
 }

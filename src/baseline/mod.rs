@@ -31,7 +31,9 @@ use crate::{Drawing, Error, LinearMesh, Params, Result};
 use input::{FlattenParams, PlanarInput, Pow2Scale};
 use kurbo::Point;
 use spade::handles::FixedVertexHandle;
-use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
 use std::collections::HashSet;
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
@@ -86,15 +88,73 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
     ];
     let n_corners = corners.len() as u32;
     let mut vertices: Vec<Point2<f64>> = Vec::with_capacity(planar.points.len() + 4);
-    for p in corners.iter().map(|&c| scale.point(c)).chain(planar.points.iter().copied()) {
+    for p in corners
+        .iter()
+        .map(|&c| scale.point(c))
+        .chain(planar.points.iter().copied())
+    {
         debug_assert!(
             spade::validate_coordinate(p.x).is_ok() && spade::validate_coordinate(p.y).is_ok(),
             "internal: coordinate {p:?} out of spade's range"
         );
         vertices.push(Point2::new(p.x, p.y));
     }
+    let s = |l: f64| scale.length(l);
+    let refinement = |n: usize| {
+        RefinementParameters::<f64>::new()
+            .with_angle_limit(AngleLimit::from_deg(params.cdt_min_angle_deg))
+            .with_max_allowed_area(equilateral_area(s(r.l)))
+            .with_min_required_area(equilateral_area(s(r.l_min)))
+            .with_max_additional_vertices((params.max_vertices as usize).saturating_sub(n))
+    };
+    // spade's constraint splitting has known failure cases (assertions inside
+    // `add_constraint_and_split`, spade issues #107, #116) on valid input. Such a
+    // panic is caught and the triangulation rebuilt without splitting: crossing
+    // pieces are then left out (logged) rather than failing the whole drawing.
+    let build = |split: bool| {
+        std::panic::catch_unwind(|| {
+            build_cdt(&vertices, &planar.pieces, n_corners, split, &refinement)
+        })
+    };
+    let (cdt, strict) = match build(true) {
+        Ok(cdt) => (cdt?, true),
+        Err(_) => {
+            tracing::warn!(
+                "baseline: spade failed to split crossing constraints; meshing without the crossing pieces"
+            );
+            match build(false) {
+                Ok(cdt) => (cdt?, false),
+                Err(_) => {
+                    return Err(Error::meshing(
+                        "baseline",
+                        "spade failed (panicked) on this input",
+                    ));
+                }
+            }
+        }
+    };
+
+    let mesh = extract(&cdt, scale, &planar, n_corners, s(r.eps_m), strict)?;
+    tracing::debug!(
+        vertices = mesh.vertices.len(),
+        triangles = mesh.triangles.len(),
+        feature_edges = mesh.edges.len(),
+        "baseline: done"
+    );
+    Ok(mesh)
+}
+
+/// Bulk-load `vertices`, add the pieces as constraints (split at crossings when
+/// `split`, else skipping those that cross), and refine.
+fn build_cdt(
+    vertices: &[Point2<f64>],
+    pieces: &[input::Piece],
+    n_corners: u32,
+    split: bool,
+    refinement: &dyn Fn(usize) -> RefinementParameters<f64>,
+) -> Result<Cdt> {
     let n_input = vertices.len();
-    let mut cdt = Cdt::bulk_load_cdt(vertices, Vec::new())
+    let mut cdt = Cdt::bulk_load_cdt(vertices.to_vec(), Vec::new())
         .map_err(|e| Error::meshing("baseline", format!("spade rejected a point: {e}")))?;
     if cdt.num_vertices() != n_input {
         return Err(Error::meshing(
@@ -105,35 +165,31 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
             ),
         ));
     }
-
-    // Constraints: each undirected piece once, crossings split.
+    // Constraints: each undirected piece once.
     let handle = |i: u32| FixedVertexHandle::from_index((i + n_corners) as usize);
     let mut constrained: HashSet<(u32, u32)> = HashSet::new();
-    for p in &planar.pieces {
+    let mut skipped = 0usize;
+    for p in pieces {
         if constrained.insert((p.a.min(p.b), p.a.max(p.b))) {
-            cdt.add_constraint_and_split(handle(p.a), handle(p.b), |q| q);
+            if split {
+                cdt.add_constraint_and_split(handle(p.a), handle(p.b), |q| q);
+            } else if cdt.try_add_constraint(handle(p.a), handle(p.b)).is_empty() {
+                skipped += 1;
+            }
         }
     }
     let n_constrained = cdt.num_vertices();
     tracing::debug!(
         constraints = constrained.len(),
+        skipped,
         crossing_vertices = n_constrained - n_input,
         constraint_edges = cdt.num_constraints(),
         "baseline: constrained triangulation"
     );
-
     // Refinement to the minimum angle and the target edge length, within the budget.
-    let s = |l: f64| scale.length(l);
-    let budget = (params.max_vertices as usize).saturating_sub(cdt.num_vertices());
-    let refinement = RefinementParameters::<f64>::new()
-        .with_angle_limit(AngleLimit::from_deg(params.cdt_min_angle_deg))
-        .with_max_allowed_area(equilateral_area(s(r.l)))
-        .with_min_required_area(equilateral_area(s(r.l_min)))
-        .with_max_additional_vertices(budget);
-    let result = cdt.refine(refinement);
+    let result = cdt.refine(refinement(cdt.num_vertices()));
     if !result.refinement_complete {
         tracing::info!(
-            max_vertices = params.max_vertices,
             vertices = cdt.num_vertices(),
             "baseline: vertex budget reached, the mesh is coarser than asked"
         );
@@ -144,20 +200,21 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
         triangles = cdt.num_inner_faces(),
         "baseline: refined"
     );
-
-    let mesh = extract(&cdt, scale, &planar, n_corners)?;
-    tracing::debug!(
-        vertices = mesh.vertices.len(),
-        triangles = mesh.triangles.len(),
-        feature_edges = mesh.edges.len(),
-        "baseline: done"
-    );
-    Ok(mesh)
+    Ok(cdt)
 }
 
 /// Turn the refined triangulation back into user units and check it.
-fn extract(cdt: &Cdt, scale: Pow2Scale, planar: &PlanarInput, n_corners: u32) -> Result<LinearMesh> {
-    let index = |i: usize| u32::try_from(i).map_err(|_| Error::meshing("baseline", "more than 2^32 vertices"));
+fn extract(
+    cdt: &Cdt,
+    scale: Pow2Scale,
+    planar: &PlanarInput,
+    n_corners: u32,
+    merge_distance: f64,
+    strict: bool,
+) -> Result<LinearMesh> {
+    let index = |i: usize| {
+        u32::try_from(i).map_err(|_| Error::meshing("baseline", "more than 2^32 vertices"))
+    };
     let vertices: Vec<Point> = cdt
         .vertices()
         .map(|v| scale.unpoint(Point::new(v.position().x, v.position().y)))
@@ -167,7 +224,7 @@ fn extract(cdt: &Cdt, scale: Pow2Scale, planar: &PlanarInput, n_corners: u32) ->
         let [a, b, c] = f.vertices().map(|v| v.fix().index());
         let t = [index(a)?, index(b)?, index(c)?];
         let o = orient([vertices[a], vertices[b], vertices[c]]);
-        if !(o > 0.0) {
+        if o.is_nan() || o <= 0.0 {
             return Err(Error::meshing(
                 "baseline",
                 format!(
@@ -180,7 +237,7 @@ fn extract(cdt: &Cdt, scale: Pow2Scale, planar: &PlanarInput, n_corners: u32) ->
         }
         triangles.push(t);
     }
-    let edges = attribute_edges(cdt, planar, n_corners)?;
+    let edges = attribute_edges(cdt, planar, n_corners, merge_distance, strict)?;
     Ok(LinearMesh {
         vertices,
         triangles,
@@ -196,13 +253,35 @@ fn orient(p: [Point; 3]) -> f64 {
 
 /// The feature edges: for every input piece, the chain of constraint edges spade
 /// made of it (split at crossings and by refinement), once per (edge, shape).
-fn attribute_edges(cdt: &Cdt, planar: &PlanarInput, n_corners: u32) -> Result<Vec<FeatureEdge>> {
+fn attribute_edges(
+    cdt: &Cdt,
+    planar: &PlanarInput,
+    n_corners: u32,
+    merge_distance: f64,
+    strict: bool,
+) -> Result<Vec<FeatureEdge>> {
+    let corridor = merge_distance.max(1e-13);
+    let mut lost = 0usize;
     let mut seen: HashSet<(u32, u32, ShapeId)> = HashSet::new();
     let mut edges = Vec::new();
     let mut chain = Vec::new();
     for p in &planar.pieces {
         chain.clear();
-        walk_constraint_chain(cdt, p.a + n_corners, p.b + n_corners, &mut chain).ok_or_else(|| {
+        // The merge distance, else a few ulps of the scaled coordinates (below 2), then
+        // wider in case spade rounded a crossing far off.
+        let found = [corridor, corridor * 1e4, corridor * 1e8]
+            .into_iter()
+            .any(|c| {
+                chain.clear();
+                walk_constraint_chain(cdt, p.a + n_corners, p.b + n_corners, c, &mut chain)
+                    .is_some()
+            });
+        if !found && !strict {
+            // Left out by the non-splitting fallback.
+            lost += 1;
+            continue;
+        }
+        found.then_some(()).ok_or_else(|| {
             Error::meshing(
                 "baseline",
                 format!(
@@ -224,58 +303,73 @@ fn attribute_edges(cdt: &Cdt, planar: &PlanarInput, n_corners: u32) -> Result<Ve
             }
         }
     }
+    if lost > 0 {
+        tracing::info!(
+            lost,
+            "baseline: input pieces not conforming (crossings spade could not split)"
+        );
+    }
     Ok(edges)
 }
 
-/// Walk the constraint edges from vertex `from` to vertex `to`, which were joined by
-/// one constraint before splitting; push the vertices passed (both ends included)
-/// to `chain`. `None` if no chain is found.
+/// Find the constraint edges spade made of the constraint `from`–`to` (split at
+/// crossings, by refinement, and where near-collinear features overlap): a path of
+/// constraint edges from `from` to `to` whose vertices all lie within `corridor`
+/// (scaled units) of the segment. Pushes its vertices (both ends included) to
+/// `chain`; `None` if there is none.
 ///
-/// Every vertex spade put on that constraint lies on the segment up to rounding, so
-/// at each vertex the next one is the constraint neighbour that moves toward `to`
-/// (projection on `to - from` increases) with the smallest deviation angle from
-/// the segment's direction. Projections strictly increase, so the walk never
-/// cycles; it is also bounded by the vertex count.
-fn walk_constraint_chain(cdt: &Cdt, from: u32, to: u32, chain: &mut Vec<u32>) -> Option<()> {
+/// Every vertex spade put on the constraint lies on the segment up to rounding, so
+/// such a path exists; where near-collinear features of the input interleave
+/// within the corridor any path through them is as good. Breadth-first over the
+/// corridor's vertices: bounded by their number.
+fn walk_constraint_chain(
+    cdt: &Cdt,
+    from: u32,
+    to: u32,
+    corridor: f64,
+    chain: &mut Vec<u32>,
+) -> Option<()> {
     let pos = |i: u32| {
-        let p = cdt.vertex(FixedVertexHandle::from_index(i as usize)).position();
-        kurbo::Vec2::new(p.x, p.y)
+        let p = cdt
+            .vertex(FixedVertexHandle::from_index(i as usize))
+            .position();
+        kurbo::Point::new(p.x, p.y)
     };
-    let (p0, p1) = (pos(from), pos(to));
-    let dir = p1 - p0;
-    chain.push(from);
-    let mut w = from;
-    for _ in 0..cdt.num_vertices() {
+    let segment = kurbo::Line::new(pos(from), pos(to));
+    let in_corridor = |p: kurbo::Point| {
+        use kurbo::ParamCurveNearest as _;
+        segment.nearest(p, 0.0).distance_sq <= corridor * corridor
+    };
+    let mut parent: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+    let mut queue = std::collections::VecDeque::from([from]);
+    parent.insert(from, from);
+    while let Some(w) = queue.pop_front() {
         if w == to {
+            let mut rev = vec![to];
+            let mut x = to;
+            while x != from {
+                x = parent[&x];
+                rev.push(x);
+            }
+            chain.extend(rev.into_iter().rev());
             return Some(());
         }
-        let pw = pos(w);
-        let mut best: Option<(f64, u32)> = None;
-        for e in cdt.vertex(FixedVertexHandle::from_index(w as usize)).out_edges() {
+        for e in cdt
+            .vertex(FixedVertexHandle::from_index(w as usize))
+            .out_edges()
+        {
             if !e.is_constraint_edge() {
                 continue;
             }
             let x = u32::try_from(e.to().fix().index()).ok()?;
-            if x == to {
-                best = Some((-1.0, x));
-                break;
-            }
-            let step = pos(x) - pw;
-            let along = step.dot(dir);
-            if !(along > 0.0) {
+            if parent.contains_key(&x) || !in_corridor(pos(x)) {
                 continue;
             }
-            // |sin| of the angle between the step and the segment.
-            let deviation = step.cross(dir).abs() / (step.hypot() * dir.hypot());
-            if best.is_none_or(|(b, _)| deviation < b) {
-                best = Some((deviation, x));
-            }
+            parent.insert(x, w);
+            queue.push_back(x);
         }
-        let (_, next) = best?;
-        chain.push(next);
-        w = next;
     }
-    (w == to).then_some(())
+    None
 }
 
 #[cfg(test)]

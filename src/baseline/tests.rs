@@ -1,9 +1,9 @@
 //! Tests of the CDT baseline through [`triangulate`].
 
 use super::*;
+use crate::FemMesh;
 use crate::quality::Quality;
 use crate::svg::{Feature, FeatureGeom, FeatureSource, FillRule, Shape};
-use crate::{FemMesh, Length};
 use kurbo::{CubicBez, Line, Rect};
 use proptest::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -76,7 +76,10 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
     let mut directed: HashSet<(u32, u32)> = HashSet::new();
     for t in &mesh.triangles {
         for k in 0..3 {
-            assert!(directed.insert((t[k], t[(k + 1) % 3])), "edge used twice in one direction");
+            assert!(
+                directed.insert((t[k], t[(k + 1) % 3])),
+                "edge used twice in one direction"
+            );
         }
     }
     // The triangles tile the padded box.
@@ -136,7 +139,11 @@ fn unit_square_meets_the_angle_and_conforms() {
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
     // The four sides are covered exactly by feature edges.
-    assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12, "{}", feature_length(&mesh, 0));
+    assert!(
+        (feature_length(&mesh, 0) - 4.0).abs() < 1e-12,
+        "{}",
+        feature_length(&mesh, 0)
+    );
     // The target length l = d/20 bounds the triangles' size (area cap).
     let l = Params::DEFAULT.resolve(d.diagonal()).l;
     for t in &mesh.triangles {
@@ -148,7 +155,10 @@ fn unit_square_meets_the_angle_and_conforms() {
 
 #[test]
 fn crossing_lines_are_split_at_the_crossing() {
-    let d = drawing(&[(0, line((0.0, 0.0), (1.0, 1.0))), (1, line((0.0, 1.0), (1.0, 0.0)))]);
+    let d = drawing(&[
+        (0, line((0.0, 0.0), (1.0, 1.0))),
+        (1, line((0.0, 1.0), (1.0, 0.0))),
+    ]);
     let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
@@ -160,7 +170,11 @@ fn crossing_lines_are_split_at_the_crossing() {
     for s in [0, 1] {
         assert!((feature_length(&mesh, s) - 2f64.sqrt()).abs() < 1e-9);
         // Each diagonal passes through the crossing vertex.
-        assert!(mesh.edges.iter().any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0])));
+        assert!(
+            mesh.edges
+                .iter()
+                .any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0]))
+        );
     }
 }
 
@@ -175,10 +189,15 @@ fn an_edge_shared_by_two_shapes_is_listed_for_each() {
     assert!((feature_length(&mesh, 1) - 1.0).abs() < 1e-12);
     let mut per_edge: HashMap<(u32, u32), usize> = HashMap::new();
     for e in &mesh.edges {
-        *per_edge.entry((e.v[0].min(e.v[1]), e.v[0].max(e.v[1]))).or_default() += 1;
+        *per_edge
+            .entry((e.v[0].min(e.v[1]), e.v[0].max(e.v[1])))
+            .or_default() += 1;
     }
     assert!(per_edge.values().all(|&k| k <= 2));
-    assert_eq!(per_edge.values().filter(|&&k| k == 2).count(), mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count());
+    assert_eq!(
+        per_edge.values().filter(|&&k| k == 2).count(),
+        mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count()
+    );
 }
 
 #[test]
@@ -227,4 +246,243 @@ fn a_circle_of_cubics_is_flattened_within_mu() {
         assert!(1.0 - mid.to_vec2().hypot() <= mu, "{mid:?}");
     }
     assert!((feature_length(&mesh, 0) - 2.0 * std::f64::consts::PI).abs() < 1e-2);
+}
+
+#[test]
+fn tiny_and_huge_coordinates() {
+    for scale in [1e-9, 1e9] {
+        // A square far from the origin and crossing lines, at that scale.
+        let mut f = square(scale);
+        f.push((1, line((0.0, 0.0), (scale, scale))));
+        f.push((1, line((0.0, scale), (scale, 0.0))));
+        f.push((2, FeatureGeom::Point(Point::new(0.3 * scale, 0.6 * scale))));
+        let d = drawing(&f);
+        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        let q = check(&d, &Params::DEFAULT, &mesh);
+        assert!(q.min_angle_deg >= 20.0, "{scale}: {q:?}");
+        assert!((feature_length(&mesh, 0) - 4.0 * scale).abs() < 1e-12 * scale);
+        // Offset by 1000 sizes: far from the origin.
+        let off = 1000.0 * scale;
+        let f: Vec<_> = square(scale)
+            .into_iter()
+            .map(|(s, g)| match g {
+                FeatureGeom::Line(l) => (
+                    s,
+                    FeatureGeom::Line(Line::new(
+                        l.p0 + kurbo::Vec2::new(off, off),
+                        l.p1 + kurbo::Vec2::new(off, off),
+                    )),
+                ),
+                g => (s, g),
+            })
+            .collect();
+        let d = drawing(&f);
+        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        check(&d, &Params::DEFAULT, &mesh);
+    }
+}
+
+#[test]
+fn the_vertex_budget_stops_refinement_with_a_valid_mesh() {
+    let d = drawing(&circle(1.0));
+    let params = Params::DEFAULT.with_max_vertices(200);
+    let mesh = triangulate(&d, &params).unwrap();
+    check(&d, &params, &mesh);
+    assert!(mesh.vertices.len() <= 200, "{}", mesh.vertices.len());
+}
+
+/// Coordinates that often coincide (a 7×7 lattice: duplicates, shared ends,
+/// collinear overlaps), sometimes not.
+fn coordinate() -> impl Strategy<Value = f64> {
+    prop_oneof![3 => (0..7i32).prop_map(|i| f64::from(i) / 6.0), 1 => 0.0..1.0f64]
+}
+
+fn point() -> impl Strategy<Value = Point> {
+    (coordinate(), coordinate()).prop_map(|(x, y)| Point::new(x, y))
+}
+
+fn feature() -> impl Strategy<Value = (u32, FeatureGeom)> {
+    let geom = prop_oneof![
+        4 => (point(), point()).prop_map(|(a, b)| FeatureGeom::Line(Line::new(a, b))),
+        2 => (point(), point(), point(), point()).prop_map(|(a, b, c, d)| FeatureGeom::Cubic(CubicBez::new(a, b, c, d))),
+        1 => point().prop_map(FeatureGeom::Point),
+    ];
+    (0..3u32, geom)
+}
+
+/// A soup at scale 10^e, offset by `off` sizes.
+fn soup() -> impl Strategy<Value = Vec<(u32, FeatureGeom)>> {
+    (
+        prop::collection::vec(feature(), 1..24),
+        -9..=9i32,
+        prop_oneof![Just(0.0), Just(-0.5), Just(3.0)],
+    )
+        .prop_map(|(features, e, off)| {
+            let s = 10f64.powi(e);
+            let map = |p: Point| Point::new((p.x + off) * s, (p.y + off) * s);
+            features
+                .into_iter()
+                .map(|(shape, g)| {
+                    let g = match g {
+                        FeatureGeom::Point(p) => FeatureGeom::Point(map(p)),
+                        FeatureGeom::Line(l) => FeatureGeom::Line(Line::new(map(l.p0), map(l.p1))),
+                        FeatureGeom::Cubic(c) => FeatureGeom::Cubic(CubicBez::new(
+                            map(c.p0),
+                            map(c.p1),
+                            map(c.p2),
+                            map(c.p3),
+                        )),
+                    };
+                    (shape, g)
+                })
+                .collect()
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 200,
+        failure_persistence: None,
+        rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+        ..ProptestConfig::default()
+    })]
+
+    /// Random segment and cubic soups never panic and always give a valid CCW
+    /// tiling of the padded box that contains every segment's ends.
+    #[test]
+    fn soups_always_mesh(features in soup()) {
+        let d = drawing(&features);
+        // A smaller budget keeps the test fast; refinement must stop cleanly at it.
+        let params = Params::DEFAULT.with_max_vertices(5_000);
+        let mesh = triangulate(&d, &params).unwrap();
+        check(&d, &params, &mesh);
+    }
+}
+
+/// Numbers for the report: `cargo test --release --lib baseline::tests::report -- --ignored --nocapture`.
+#[test]
+#[ignore = "measurement, run by hand in release"]
+#[allow(clippy::print_stderr, reason = "a measurement printed for a human")]
+fn report_default_parameters() {
+    let cases: Vec<(&str, Vec<(u32, FeatureGeom)>)> = vec![
+        ("unit square", square(1.0)),
+        ("circle (4 cubics)", circle(1.0)),
+        (
+            "crossing lines",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 1.0))),
+                (1, line((0.0, 1.0), (1.0, 0.0))),
+            ],
+        ),
+    ];
+    for (name, f) in cases {
+        let d = drawing(&f);
+        let t = std::time::Instant::now();
+        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        let dt = t.elapsed().as_secs_f64();
+        let q = check(&d, &Params::DEFAULT, &mesh);
+        eprintln!(
+            "{name}: {} vertices, {} triangles, {} feature edges, min angle {:.2}°, max angle {:.2}°, max AMIPS {:.3}, mean AMIPS {:.3}, {:.4}s",
+            mesh.vertices.len(),
+            mesh.triangles.len(),
+            mesh.edges.len(),
+            q.min_angle_deg,
+            q.max_angle_deg,
+            q.max_amips,
+            q.mean_amips,
+            dt
+        );
+    }
+    // 10k random short segments in the unit square (deterministic LCG).
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let f: Vec<(u32, FeatureGeom)> = (0..10_000)
+        .map(|_| {
+            let a = Point::new(rnd(), rnd());
+            let b = a + kurbo::Vec2::new(rnd() - 0.5, rnd() - 0.5) * 0.04;
+            (0, FeatureGeom::Line(Line::new(a, b)))
+        })
+        .collect();
+    let d = drawing(&f);
+    let t = std::time::Instant::now();
+    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let dt = t.elapsed().as_secs_f64();
+    let q = check(&d, &Params::DEFAULT, &mesh);
+    eprintln!(
+        "10k segments (length ≤ 0.028, unit square): {} vertices, {} triangles, {} feature edges, min angle {:.2}°, {:.3}s",
+        mesh.vertices.len(),
+        mesh.triangles.len(),
+        mesh.edges.len(),
+        q.min_angle_deg,
+        dt
+    );
+}
+
+/// Found by `soups_always_mesh`: spade's `add_constraint_and_split` asserts on this
+/// input (`!previous_region.is_empty() || from == final_vertex`); the baseline falls
+/// back to meshing without the crossing pieces and still returns a valid mesh.
+#[test]
+fn regression_spade_split_assertion() {
+    let t = 10_000.0 / 3.0;
+    let f = [
+        (
+            0,
+            FeatureGeom::Cubic(CubicBez::new(
+                (-t, 0.0),
+                (-t, 0.0),
+                (-5000.0, 1666.6666666666663),
+                (0.0, -3333.3333333333335),
+            )),
+        ),
+        (
+            0,
+            line((-4240.002742118334, -3333.3333333333335), (5000.0, -5000.0)),
+        ),
+        (
+            0,
+            line((-5000.0, 1666.6666666666663), (1666.6666666666663, -5000.0)),
+        ),
+    ];
+    let d = drawing(&f);
+    let params = Params::DEFAULT.with_max_vertices(5_000);
+    let mesh = triangulate(&d, &params).unwrap();
+    check(&d, &params, &mesh);
+}
+
+/// Found by `soups_always_mesh`: a cubic whose control points are on a vertical
+/// line flattens to points a rounding error off it, interleaving with a segment on
+/// that line; the constraint chains must still be found.
+#[test]
+fn regression_near_collinear_overlap() {
+    let x = -0.33333333333333337;
+    let f = [
+        (
+            0,
+            line((-0.5, -0.5), (-0.22207300655589118, -0.16666666666666669)),
+        ),
+        (0, line((x, -0.12941845925859025), (x, -0.5))),
+        (
+            0,
+            FeatureGeom::Cubic(CubicBez::new(
+                (x, -0.3678078538943085),
+                (x, -0.5),
+                (x, x),
+                (x, 0.0),
+            )),
+        ),
+        (
+            0,
+            line((-0.16666666666666669, -0.5), (-0.5, -0.16666666666666669)),
+        ),
+        (0, line((-0.5, -0.5), (-0.5, -0.5))),
+    ];
+    let d = drawing(&f);
+    let params = Params::DEFAULT.with_max_vertices(5_000);
+    let mesh = triangulate(&d, &params).unwrap();
+    check(&d, &params, &mesh);
 }

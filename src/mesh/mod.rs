@@ -10,13 +10,16 @@
 //! Guarantees: [`TriMesh::check`] reports every defect of a mesh (inverted or
 //! degenerate triangles decided exactly, asymmetric adjacency, non-manifold
 //! edges, T-junctions, dangling tags). Topology navigation (`topology.rs`)
-//! never reads a coordinate. DESIGN "Invariants" 1 and "Exactness".
+//! never reads a coordinate. [`Transaction`] journals changes and rolls them
+//! back on drop, for the optimizer's local operations. DESIGN "Invariants" 1 and "Exactness".
 
 mod check;
 mod ids;
 mod storage;
 mod topology;
+mod transaction;
 
 pub use check::Defect;
 pub use ids::{FaceId, VertexId};
 pub use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
+pub use transaction::Transaction;

@@ -74,7 +74,7 @@ impl EdgeKey {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(super) struct VertexData {
     pub(super) pos: Point,
     /// The exact position while it is not an `f64` point.
@@ -84,7 +84,7 @@ pub(super) struct VertexData {
     pub(super) face: Option<FaceId>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(super) struct FaceData {
     /// Counter-clockwise.
     pub(super) v: [VertexId; 3],
@@ -96,7 +96,10 @@ pub(super) struct FaceData {
 ///
 /// Vertex and face slots are tombstoned when removed and reused from free
 /// lists, so ids of live elements stay stable across local operations.
-#[derive(Clone, Debug, Default)]
+///
+/// `PartialEq` compares every slot, free list and tag (a rolled-back
+/// [`Transaction`](super::Transaction) leaves a mesh equal to before).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
     pub(super) vertices: Vec<Option<VertexData>>,
     pub(super) faces: Vec<Option<FaceData>>,
@@ -107,7 +110,7 @@ pub struct TriMesh {
     pub(super) live_faces: usize,
 }
 
-fn to_u32(n: usize) -> u32 {
+pub(super) fn to_u32(n: usize) -> u32 {
     u32::try_from(n).expect("internal: more than u32::MAX mesh elements")
 }
 

@@ -89,3 +89,12 @@ pub fn write_preview(mesh: &FemMesh, path: &Path) -> Result<()> {
 pub fn check_writable(path: &Path) -> Result<()> {
     atomic::check_writable(path)
 }
+
+/// Write `bytes` to `path` atomically (temporary file in the same directory, then
+/// rename): for the small text outputs (JSON, previews) of other commands.
+///
+/// # Errors
+/// [`crate::Error::Write`].
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    atomic::write_atomic(path, |w| std::io::Write::write_all(w, bytes))
+}

@@ -98,8 +98,16 @@ impl TriangleQuality {
     /// Measure the triangle `corners` (expected counter-clockwise).
     pub fn of(corners: [Point; 3]) -> TriangleQuality {
         let [a, b, c] = corners;
-        let angles = [corner_angle(c, a, b), corner_angle(a, b, c), corner_angle(b, c, a)];
-        let min_angle_deg = angles.iter().copied().fold(f64::INFINITY, f64::min).to_degrees();
+        let angles = [
+            corner_angle(c, a, b),
+            corner_angle(a, b, c),
+            corner_angle(b, c, a),
+        ];
+        let min_angle_deg = angles
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+            .to_degrees();
         let max_angle_deg = angles.iter().copied().fold(0.0, f64::max).to_degrees();
         TriangleQuality {
             min_angle_deg,
@@ -152,13 +160,24 @@ mod tests {
     #[test]
     fn equilateral_has_unit_energy_and_sixty_degrees() {
         let h = 3f64.sqrt() / 2.0;
-        let t = TriangleQuality::of([Point::new(2.0, 1.0), Point::new(5.0, 1.0), Point::new(3.5, 1.0 + 3.0 * h)]);
+        let t = TriangleQuality::of([
+            Point::new(2.0, 1.0),
+            Point::new(5.0, 1.0),
+            Point::new(3.5, 1.0 + 3.0 * h),
+        ]);
         assert!(close(t.amips, 1.0), "{t:?}");
-        assert!(close(t.min_angle_deg, 60.0) && close(t.max_angle_deg, 60.0), "{t:?}");
+        assert!(
+            close(t.min_angle_deg, 60.0) && close(t.max_angle_deg, 60.0),
+            "{t:?}"
+        );
         assert!(close(t.area, 9.0 * h / 2.0), "{t:?}");
         // Rotated equilateral: still 1.
         let r = kurbo::Affine::rotate(0.7);
-        let t = TriangleQuality::of([r * Point::ZERO, r * Point::new(1.0, 0.0), r * Point::new(0.5, h)]);
+        let t = TriangleQuality::of([
+            r * Point::ZERO,
+            r * Point::new(1.0, 0.0),
+            r * Point::new(0.5, h),
+        ]);
         assert!(close(t.amips, 1.0), "{t:?}");
     }
 
@@ -203,8 +222,14 @@ mod tests {
         let mesh = FemMesh::from_linear(&linear, "domain", |_| String::new());
         assert_eq!(mesh.order(), Order::Linear);
         let q = Quality::of(&mesh);
-        assert!(close(q.min_angle_deg, 45.0) && close(q.max_angle_deg, 90.0), "{q:?}");
-        assert!(close(q.max_amips, 2.0 / 3f64.sqrt()) && close(q.mean_amips, 2.0 / 3f64.sqrt()), "{q:?}");
+        assert!(
+            close(q.min_angle_deg, 45.0) && close(q.max_angle_deg, 90.0),
+            "{q:?}"
+        );
+        assert!(
+            close(q.max_amips, 2.0 / 3f64.sqrt()) && close(q.mean_amips, 2.0 / 3f64.sqrt()),
+            "{q:?}"
+        );
         assert!(close(q.area, 1.0), "{q:?}");
         assert_eq!(Quality::per_triangle(&mesh).len(), 2);
     }

@@ -255,11 +255,23 @@ fn check_numbers(doc: &roxmltree::Document<'_>) -> Result<()> {
             if attr.namespace().is_some() || !GEOMETRY.contains(&attr.name()) {
                 continue;
             }
+            let element = || match node.attribute("id") {
+                Some(id) => format!("<{} id='{id}'>", node.tag_name().name()),
+                None => format!("<{}>", node.tag_name().name()),
+            };
+            // `NaN`, `inf` and `Infinity` are not SVG numbers; usvg would stop the path
+            // there and mesh what came before. No path command or transform name
+            // contains these letter sequences, so their presence is always an error.
+            let lower = attr.value().to_ascii_lowercase();
+            if lower.contains("nan") || lower.contains("inf") {
+                return Err(Error::BadCoordinate(format!(
+                    "{}: attribute '{}' holds a non-finite number (NaN or infinity)",
+                    element(),
+                    attr.name()
+                )));
+            }
             if let Some(bad) = numbers(attr.value()).find(|(_, v)| v.is_nan() || v.abs() > limit) {
-                let element = match node.attribute("id") {
-                    Some(id) => format!("<{} id='{id}'>", node.tag_name().name()),
-                    None => format!("<{}>", node.tag_name().name()),
-                };
+                let element = element();
                 let shown: String = bad.0.chars().take(32).collect();
                 return Err(Error::BadCoordinate(format!(
                     "{element}: the number {shown} in attribute '{}' is out of range \

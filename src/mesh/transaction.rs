@@ -1,0 +1,298 @@
+//! A journal of changes to a [`TriMesh`] that rolls them back unless committed.
+//!
+//! Every mutation made through a [`Transaction`] first records the old value of
+//! each slot it touches (vertex, face, edge tag) and each free-list push or pop;
+//! dropping the guard without [`Transaction::commit`] restores them, so the mesh
+//! compares equal (`PartialEq`) to what it was. STYLE "Local operations and
+//! invariants", step 2 and 4. Reads go through `Deref<Target = TriMesh>`.
+
+use super::ids::{FaceId, VertexId};
+use super::storage::{EdgeKey, FaceData, FeatureOn, TriMesh, VertexData, VertexTag};
+use crate::exact::PointQ;
+use kurbo::Point;
+use std::collections::HashMap;
+
+#[derive(Clone, Copy, Debug)]
+enum FreeOp {
+    PushV,
+    PopV(VertexId),
+    PushF,
+    PopF(FaceId),
+}
+
+/// A guard over a mesh: changes made through it are undone on drop unless
+/// [`Transaction::commit`] is called.
+#[derive(Debug)]
+pub struct Transaction<'a> {
+    mesh: &'a mut TriMesh,
+    old_vertices: Vec<(VertexId, Option<VertexData>)>,
+    old_faces: Vec<(FaceId, Option<FaceData>)>,
+    old_tags: Vec<(EdgeKey, Option<Vec<FeatureOn>>)>,
+    free_log: Vec<FreeOp>,
+    vertex_len: usize,
+    face_len: usize,
+    live: (usize, usize),
+    committed: bool,
+}
+
+impl std::ops::Deref for Transaction<'_> {
+    type Target = TriMesh;
+    fn deref(&self) -> &TriMesh {
+        self.mesh
+    }
+}
+
+impl<'a> Transaction<'a> {
+    /// Open a transaction on `mesh`.
+    pub fn new(mesh: &'a mut TriMesh) -> Self {
+        let (vertex_len, face_len) = (mesh.vertices.len(), mesh.faces.len());
+        let live = (mesh.live_vertices, mesh.live_faces);
+        Transaction {
+            mesh,
+            old_vertices: Vec::new(),
+            old_faces: Vec::new(),
+            old_tags: Vec::new(),
+            free_log: Vec::new(),
+            vertex_len,
+            face_len,
+            live,
+            committed: false,
+        }
+    }
+
+    /// Keep the changes.
+    pub fn commit(mut self) {
+        self.committed = true;
+    }
+
+    fn touch_v(&mut self, v: VertexId) {
+        if !self.old_vertices.iter().any(|(x, _)| *x == v) {
+            let old = self.mesh.vertices.get(v.idx()).cloned().flatten();
+            self.old_vertices.push((v, old));
+        }
+    }
+
+    fn touch_f(&mut self, f: FaceId) {
+        if !self.old_faces.iter().any(|(x, _)| *x == f) {
+            let old = self.mesh.faces.get(f.idx()).cloned().flatten();
+            self.old_faces.push((f, old));
+        }
+    }
+
+    fn touch_tag(&mut self, key: EdgeKey) {
+        if !self.old_tags.iter().any(|(k, _)| *k == key) {
+            let old = self.mesh.edge_tags.get(&key).cloned();
+            self.old_tags.push((key, old));
+        }
+    }
+
+    fn before_vertex_insert(&mut self) {
+        if let Some(&v) = self.mesh.free_vertices.last() {
+            self.free_log.push(FreeOp::PopV(v));
+            self.touch_v(v);
+        } else {
+            self.touch_v(VertexId(super::storage::to_u32(self.mesh.vertices.len())));
+        }
+    }
+
+    /// [`TriMesh::add_vertex`], journaled.
+    pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
+        self.before_vertex_insert();
+        self.mesh.add_vertex(pos, tag)
+    }
+
+    /// [`TriMesh::add_vertex_q`], journaled.
+    pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
+        self.before_vertex_insert();
+        self.mesh.add_vertex_q(p, tag)
+    }
+
+    /// [`TriMesh::remove_vertex`], journaled.
+    pub fn remove_vertex(&mut self, v: VertexId) {
+        if self.mesh.is_vertex_alive(v) {
+            self.touch_v(v);
+            self.free_log.push(FreeOp::PushV);
+            self.mesh.remove_vertex(v);
+        }
+    }
+
+    /// [`TriMesh::set_position`], journaled.
+    pub fn set_position(&mut self, v: VertexId, pos: Point) {
+        self.touch_v(v);
+        self.mesh.set_position(v, pos);
+    }
+
+    /// [`TriMesh::add_face`], journaled.
+    pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
+        if let Some(&f) = self.mesh.free_faces.last() {
+            self.free_log.push(FreeOp::PopF(f));
+            self.touch_f(f);
+        } else {
+            self.touch_f(FaceId(super::storage::to_u32(self.mesh.faces.len())));
+        }
+        for x in v {
+            self.touch_v(x);
+        }
+        self.mesh.add_face(v)
+    }
+
+    /// [`TriMesh::remove_face`], journaled.
+    pub fn remove_face(&mut self, f: FaceId) {
+        if !self.mesh.is_face_alive(f) {
+            return;
+        }
+        self.touch_f(f);
+        for g in self.mesh.neighbours(f).into_iter().flatten() {
+            self.touch_f(g);
+        }
+        for x in self.mesh.face(f) {
+            self.touch_v(x);
+        }
+        self.free_log.push(FreeOp::PushF);
+        self.mesh.remove_face(f);
+    }
+
+    /// [`TriMesh::set_neighbour`], journaled.
+    pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
+        self.touch_f(f);
+        self.mesh.set_neighbour(f, i, g);
+    }
+
+    /// [`TriMesh::add_edge_tag`], journaled.
+    pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+        self.touch_tag(EdgeKey::new(a, b));
+        self.mesh.add_edge_tag(a, b, tag);
+    }
+
+    /// [`TriMesh::take_edge_tags`], journaled.
+    pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+        self.touch_tag(EdgeKey::new(a, b));
+        self.mesh.take_edge_tags(a, b)
+    }
+
+    /// Replace the faces `old` (live, forming a region) by faces with the
+    /// vertices `new` (counter-clockwise), linking the new faces to each other
+    /// and to the faces that were across the region's outer edges. Returns the
+    /// new face ids, in the order of `new`. Purely topological.
+    pub fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
+        // The faces outside the region, by the edge they share with it.
+        let mut outside: HashMap<EdgeKey, FaceId> = HashMap::new();
+        for &f in old {
+            for (i, g) in self.mesh.neighbours(f).into_iter().enumerate() {
+                if let Some(g) = g.filter(|g| !old.contains(g)) {
+                    let (a, b) = self.mesh.edge(f, i);
+                    outside.insert(EdgeKey::new(a, b), g);
+                }
+            }
+        }
+        for &f in old {
+            self.remove_face(f);
+        }
+        let ids: Vec<FaceId> = new.iter().map(|&v| self.add_face(v)).collect();
+        let mut inner: HashMap<EdgeKey, (FaceId, usize)> = HashMap::new();
+        for &f in &ids {
+            for i in 0..3 {
+                let (a, b) = self.mesh.edge(f, i);
+                let key = EdgeKey::new(a, b);
+                if let Some((g, j)) = inner.remove(&key) {
+                    self.set_neighbour(f, i, Some(g));
+                    self.set_neighbour(g, j, Some(f));
+                } else if let Some(&g) = outside.get(&key) {
+                    if let Some(j) = self.mesh.edge_index(g, a, b) {
+                        self.set_neighbour(f, i, Some(g));
+                        self.set_neighbour(g, j, Some(f));
+                    }
+                } else {
+                    inner.insert(key, (f, i));
+                }
+            }
+        }
+        ids
+    }
+
+    fn rollback(&mut self) {
+        let m = &mut *self.mesh;
+        for op in self.free_log.drain(..).rev() {
+            match op {
+                FreeOp::PushV => {
+                    m.free_vertices.pop();
+                }
+                FreeOp::PopV(v) => m.free_vertices.push(v),
+                FreeOp::PushF => {
+                    m.free_faces.pop();
+                }
+                FreeOp::PopF(f) => m.free_faces.push(f),
+            }
+        }
+        m.vertices.truncate(self.vertex_len);
+        m.faces.truncate(self.face_len);
+        for (v, old) in self.old_vertices.drain(..) {
+            if let Some(slot) = m.vertices.get_mut(v.idx()) {
+                *slot = old;
+            }
+        }
+        for (f, old) in self.old_faces.drain(..) {
+            if let Some(slot) = m.faces.get_mut(f.idx()) {
+                *slot = old;
+            }
+        }
+        for (key, old) in self.old_tags.drain(..) {
+            match old {
+                Some(list) => {
+                    m.edge_tags.insert(key, list);
+                }
+                None => {
+                    m.edge_tags.remove(&key);
+                }
+            }
+        }
+        (m.live_vertices, m.live_faces) = self.live;
+    }
+}
+
+impl Drop for Transaction<'_> {
+    fn drop(&mut self) {
+        if !self.committed {
+            self.rollback();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dropped_transaction_restores_the_mesh() {
+        let mut m = TriMesh::new();
+        let t = VertexTag::default();
+        let a = m.add_vertex(Point::new(0.0, 0.0), t);
+        let b = m.add_vertex(Point::new(1.0, 0.0), t);
+        let c = m.add_vertex(Point::new(1.0, 1.0), t);
+        let d = m.add_vertex(Point::new(0.0, 1.0), t);
+        let f = m.add_face([a, b, c]);
+        let g = m.add_face([a, c, d]);
+        m.link_all();
+        m.add_edge_tag(a, c, FeatureOn::Secondary { polyline: 3 });
+        let before = m.clone();
+        {
+            let mut tx = Transaction::new(&mut m);
+            let e = tx.add_vertex(Point::new(0.5, 0.5), t);
+            tx.take_edge_tags(a, c);
+            tx.add_edge_tag(a, e, FeatureOn::Secondary { polyline: 3 });
+            let new = tx.replace_faces(&[f, g], &[[a, b, e], [b, c, e], [c, d, e], [d, a, e]]);
+            assert_eq!(new.len(), 4);
+            assert!(tx.check().is_empty(), "{:?}", tx.check());
+            tx.set_position(e, Point::new(0.4, 0.5));
+        }
+        assert_eq!(m, before);
+        {
+            let mut tx = Transaction::new(&mut m);
+            tx.take_edge_tags(a, c);
+            tx.replace_faces(&[f, g], &[[a, b, d], [b, c, d]]);
+            tx.commit();
+        }
+        assert_ne!(m, before);
+        assert!(m.check().is_empty(), "{:?}", m.check());
+    }
+}

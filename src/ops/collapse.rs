@@ -1,0 +1,208 @@
+//! Edge collapse: the vertex `v` of the edge `u v` is removed and its
+//! triangles are re-attached to `u`, which does not move.
+//!
+//! Feature rules (§4.4.1 "Feature Handling" 2): `v` may not be a fixed vertex
+//! (feature endpoint, box corner, junction); a primary `v` slides along its own
+//! curve only, so `u v` must be an edge of `v`'s section, and the merged edge
+//! gets `u`'s parameter; the features on `v`'s other edges move to `u` and are
+//! then checked (envelope, curvature). A boundary `v` collapses only along a
+//! boundary edge where the boundary is exactly straight. The link condition
+//! keeps the mesh a manifold.
+
+use super::invariants::{self, Check};
+use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role, t_at};
+use crate::exact::Orientation;
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
+
+/// Everything a collapse of `v` into `u` needs, gathered from `&TriMesh`.
+#[derive(Clone, Debug)]
+pub struct CollapsePlan {
+    u: VertexId,
+    v: VertexId,
+    /// Faces around `v` (all removed).
+    star: Vec<FaceId>,
+    /// The new faces: those of `star` without `u`, `v` replaced by `u`.
+    new: Vec<[VertexId; 3]>,
+    /// Tags to add on `(u, w)` for each former edge `(v, w)`.
+    retag: Vec<(VertexId, VertexId, FeatureOn)>,
+    /// Vertices `w` whose edge `(v, w)` has tags to drop.
+    drop_tags: Vec<VertexId>,
+    old_max_energy: f64,
+}
+
+impl CollapsePlan {
+    /// Plan the collapse of `v` into `u`.
+    ///
+    /// # Errors
+    /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
+    /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
+    pub fn new(mesh: &TriMesh, u: VertexId, v: VertexId) -> Result<Self, Reject> {
+        if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
+            return Err(Reject::NotAnEdge);
+        }
+        let rv = ring(mesh, v);
+        if !rv.neighbours.contains(&u) {
+            return Err(Reject::NotAnEdge);
+        }
+        let ru = ring(mesh, u);
+        let edge_faces: Vec<FaceId> = rv
+            .faces
+            .iter()
+            .copied()
+            .filter(|&f| mesh.face(f).contains(&u))
+            .collect();
+        let opposite: Vec<VertexId> = edge_faces
+            .iter()
+            .map(|&f| {
+                *mesh
+                    .face(f)
+                    .iter()
+                    .find(|&&x| x != u && x != v)
+                    .expect("internal: third vertex")
+            })
+            .collect();
+        let boundary_edge = edge_faces.len() == 1;
+        let role_v = role(mesh, v, &rv);
+        match role_v {
+            Role::Fixed => return Err(Reject::FixedVertex),
+            Role::Boundary => {
+                if !boundary_edge {
+                    return Err(Reject::Boundary);
+                }
+                // v's other boundary neighbour must be on the line u v.
+                let others: Vec<VertexId> = rv
+                    .neighbours
+                    .iter()
+                    .copied()
+                    .filter(|&w| w != u && is_boundary_edge(mesh, &rv.faces, v, w))
+                    .collect();
+                let [w] = others[..] else {
+                    return Err(Reject::Boundary);
+                };
+                if mesh.orientation_of(u, v, w) != Orientation::Collinear {
+                    return Err(Reject::Boundary);
+                }
+            }
+            Role::Primary { section, .. } => {
+                let on_section = mesh
+                    .edge_tags(u, v)
+                    .iter()
+                    .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section));
+                if !on_section {
+                    return Err(Reject::FeatureRule);
+                }
+            }
+            Role::Free | Role::Secondary => {}
+        }
+        // Link condition: the common neighbours are exactly the opposite vertices,
+        // and two boundary vertices are joined only by a boundary edge.
+        let common = rv
+            .neighbours
+            .iter()
+            .filter(|w| ru.neighbours.contains(w))
+            .count();
+        if common != opposite.len() || opposite.iter().any(|w| !ru.neighbours.contains(w)) {
+            return Err(Reject::Topology);
+        }
+        if rv.boundary && ru.boundary && !boundary_edge {
+            return Err(Reject::Topology);
+        }
+        let new: Vec<[VertexId; 3]> = rv
+            .faces
+            .iter()
+            .filter(|f| !edge_faces.contains(f))
+            .map(|&f| mesh.face(f).map(|x| if x == v { u } else { x }))
+            .collect();
+        if new.is_empty() {
+            return Err(Reject::Topology);
+        }
+        // Features on v's edges move to u.
+        let key_uv = EdgeKey::new(u, v);
+        let t_u_on = |section: u32| {
+            mesh.edge_tags(u, v).iter().find_map(|t| match *t {
+                FeatureOn::Primary { section: s, t } if s == section => Some(t_at(key_uv, t, u)),
+                _ => None,
+            })
+        };
+        let mut retag = Vec::new();
+        let mut drop_tags = vec![u];
+        for &w in &rv.neighbours {
+            if w == u || mesh.edge_tags(v, w).is_empty() {
+                continue;
+            }
+            drop_tags.push(w);
+            let key = EdgeKey::new(v, w);
+            for tag in mesh.edge_tags(v, w) {
+                match *tag {
+                    FeatureOn::Primary { section, t } => {
+                        let Some(tu) = t_u_on(section) else {
+                            return Err(Reject::FeatureRule);
+                        };
+                        retag.push((
+                            u,
+                            w,
+                            FeatureOn::Primary {
+                                section,
+                                t: [tu, t_at(key, t, w)],
+                            },
+                        ));
+                    }
+                    sec @ FeatureOn::Secondary { .. } => retag.push((u, w, sec)),
+                }
+            }
+        }
+        Ok(CollapsePlan {
+            u,
+            v,
+            old_max_energy: max_energy(mesh, &rv.faces),
+            star: rv.faces,
+            new,
+            retag,
+            drop_tags,
+        })
+    }
+}
+
+fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w: VertexId) -> bool {
+    let with: Vec<&FaceId> = faces
+        .iter()
+        .filter(|&&f| mesh.face(f).contains(&w))
+        .collect();
+    with.len() == 1 && {
+        let f = *with[0];
+        let i = mesh.edge_index(f, v, w).expect("internal: edge of f");
+        mesh.neighbours(f)[i].is_none()
+    }
+}
+
+/// Collapse `v` into `u` (see the module doc).
+pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
+    let plan = match CollapsePlan::new(mesh, u, v) {
+        Ok(p) => p,
+        Err(r) => return Outcome::Rejected(r),
+    };
+    let mut tx = Transaction::new(mesh);
+    for &w in &plan.drop_tags {
+        tx.take_edge_tags(plan.v, w);
+    }
+    let created = tx.replace_faces(&plan.star, &plan.new);
+    tx.remove_vertex(plan.v);
+    for &(a, b, tag) in &plan.retag {
+        tx.add_edge_tag(a, b, tag);
+    }
+    let check = Check {
+        faces: &created,
+        changed: &[plan.u],
+        budgets: &[],
+        old_max_energy: Some(plan.old_max_energy),
+    };
+    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+        return Outcome::Rejected(r);
+    }
+    tx.commit();
+    Outcome::Applied(LocalChange {
+        created,
+        removed_vertex: Some(plan.v),
+        ..LocalChange::default()
+    })
+}

@@ -1,0 +1,46 @@
+//! Invariant 3: the curve piece of a primary edge turns less than α
+//! (DESIGN "Invariants" 3, Theorem 4.4).
+//!
+//! A section has constant-sign curvature (the feature stage splits at
+//! inflections), so the turn of a piece is the angle between the end tangents
+//! of its control polygon, the measure the feature stage bounds.
+
+use super::super::Context;
+use kurbo::CubicBez;
+
+/// Angle (radians, in `[0, π]`) between the end tangents of a cubic; π when a
+/// tangent cannot be found.
+pub fn turn(c: &CubicBez) -> f64 {
+    let tangent = |a: kurbo::Point, b: kurbo::Point, d: kurbo::Point| {
+        let t = b - a;
+        if t.hypot2() > 0.0 { t } else { d - a }
+    };
+    let u = tangent(c.p0, c.p1, c.p2);
+    let v = {
+        let t = c.p3 - c.p2;
+        if t.hypot2() > 0.0 { t } else { c.p3 - c.p1 }
+    };
+    if u.hypot2() == 0.0 || v.hypot2() == 0.0 {
+        return std::f64::consts::PI;
+    }
+    u.cross(v).abs().atan2(u.dot(v))
+}
+
+/// Whether the piece `[t0, t1]` (either order) of `section` turns less than
+/// `ctx.alpha` and lies inside the section's interval. An unknown section fails.
+pub fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
+    let Some(s) = ctx.section(section) else {
+        return false;
+    };
+    let (lo, hi) = (t[0].min(t[1]), t[0].max(t[1]));
+    // Parameters interpolated along a chord may miss the ends by rounding.
+    let slack = 1e-9 * (s.t[1] - s.t[0]).abs();
+    if !(lo.is_finite() && hi.is_finite()) || lo < s.t[0] - slack || hi > s.t[1] + slack || lo == hi
+    {
+        return false;
+    }
+    if s.parent.is_line() {
+        return true;
+    }
+    turn(&s.parent.restrict(lo, hi)) < ctx.alpha
+}

@@ -1,0 +1,81 @@
+//! The invariants every local operation keeps (DESIGN "Invariants" 1-5), each
+//! run on the faces an operation created and the edges at the vertices it
+//! changed, cheapest first.
+//!
+//! - [`inversion`]: invariant 1, exact orientation (rationals where a vertex is rational).
+//! - [`on_curve`]: invariants 4 and 5, primary vertices on (or moving toward) their curve.
+//! - [`curvature`]: invariant 3, a primary edge's curve piece turns less than α.
+//! - [`envelope`]: invariant 2, secondary edges inside the ε-envelope (sampled, conservative).
+
+pub mod curvature;
+pub mod envelope;
+pub mod inversion;
+pub mod on_curve;
+
+pub use envelope::Envelope;
+
+use super::{Context, CurveBudget, EnergyRule, Reject, max_energy};
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+
+/// What one operation asks the invariants to check.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Check<'a> {
+    /// The faces the operation created (or whose vertices moved).
+    pub(crate) faces: &'a [FaceId],
+    /// Vertices added, moved or re-connected: their edges are checked.
+    pub(crate) changed: &'a [VertexId],
+    /// Allowed off-curve distance of primary vertices that moved or were added.
+    pub(crate) budgets: &'a [CurveBudget],
+    /// Largest energy of the faces replaced, when the energy rule applies.
+    pub(crate) old_max_energy: Option<f64>,
+}
+
+/// Run every invariant; the first that fails names the rejection.
+pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Result<(), Reject> {
+    if !inversion::holds(mesh, check.faces) {
+        return Err(Reject::Inversion);
+    }
+    if !on_curve::holds(mesh, ctx, check.budgets) {
+        return Err(Reject::OnCurve);
+    }
+    let mut edges: Vec<(EdgeKey, Vec<FeatureOn>)> = Vec::new();
+    for &f in check.faces {
+        let v = mesh.face(f);
+        for i in 0..3 {
+            let (a, b) = (v[i], v[(i + 1) % 3]);
+            if !(check.changed.contains(&a) || check.changed.contains(&b)) {
+                continue;
+            }
+            let key = EdgeKey::new(a, b);
+            let tags = mesh.edge_tags(a, b);
+            if !tags.is_empty() && !edges.iter().any(|(k, _)| *k == key) {
+                edges.push((key, tags.to_vec()));
+            }
+        }
+    }
+    for (_, tags) in &edges {
+        for t in tags {
+            if let FeatureOn::Primary { section, t } = *t {
+                if !curvature::holds(ctx, section, t) {
+                    return Err(Reject::Curvature);
+                }
+            }
+        }
+    }
+    for (key, tags) in &edges {
+        let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
+        for t in tags {
+            if let FeatureOn::Secondary { polyline } = *t {
+                if !ctx.envelope.contains_segment(a, b, polyline) {
+                    return Err(Reject::Envelope);
+                }
+            }
+        }
+    }
+    if let (EnergyRule::NoWorseMax, Some(old)) = (ctx.energy, check.old_max_energy) {
+        if max_energy(mesh, check.faces) > old {
+            return Err(Reject::Energy);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,295 @@
+//! Local mesh operations under TriWild's invariants: edge split, edge
+//! collapse, edge swap, vertex smoothing and vertex rounding.
+//!
+//! Each operation has the four steps of STYLE "Local operations and
+//! invariants": a plan that reads `&TriMesh` only and runs the topological and
+//! feature checks (link condition, §4.4.1 feature rules); a tentative change
+//! through a [`Transaction`](crate::mesh::Transaction); the invariants of [`invariants`] run on the new
+//! faces only; then commit, or drop the transaction, which rolls the mesh
+//! back bit for bit. Every `try_*` returns an [`Outcome`]; a rejection is a
+//! value naming the refusing rule, never an error.
+//!
+//! Feature rules (§4.4.1): box corners, feature points and section endpoints
+//! never move, nor do vertices where features meet, end or branch; a vertex
+//! on a primary section moves only along its curve, its parameter tracked in
+//! the edge tags; a split primary edge gets its vertex at the curve's
+//! parameter midpoint unless that inverts a triangle, else at the edge's
+//! midpoint (to be projected later); collapses keep the surviving vertex in
+//! place and slide a primary vertex only along its own curve; feature edges
+//! are never swapped. Mesh boundary vertices stay put; a boundary vertex may be
+//! collapsed along the boundary only where the boundary is exactly straight.
+//!
+//! Guarantees: an applied operation leaves `TriMesh::check` clean and every
+//! invariant true on the faces it created (given they held before); a
+//! rejected one leaves the mesh equal (`PartialEq`) to before.
+//! DESIGN "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
+
+pub mod invariants;
+
+mod collapse;
+mod round;
+mod smooth;
+mod split;
+mod swap;
+
+#[cfg(test)]
+mod tests;
+
+pub use collapse::{CollapsePlan, try_collapse};
+pub use round::try_round;
+pub use smooth::{SmoothPlan, try_smooth};
+pub use split::{SplitPlan, try_split};
+pub use swap::{SwapPlan, try_swap};
+
+use crate::features::{FeatureSet, Parent};
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+use invariants::Envelope;
+
+/// Why an operation was refused: the rule or invariant that refused it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
+pub enum Reject {
+    /// The element is dead, or the two vertices are not an edge.
+    NotAnEdge,
+    /// The vertex may not move (feature endpoint, box corner, feature junction, boundary).
+    FixedVertex,
+    /// A feature rule of §4.4.1 (swap of a feature edge, a primary vertex leaving its curve).
+    FeatureRule,
+    /// The mesh boundary would change shape.
+    Boundary,
+    /// The link condition (collapse) or an existing edge (swap) forbids the change.
+    Topology,
+    /// Nothing to do (a vertex already `f64`, no better position found).
+    NoChange,
+    /// Invariant 1: a triangle would be inverted or degenerate.
+    Inversion,
+    /// Invariant 4/5: a primary vertex would leave (or move away from) its curve.
+    OnCurve,
+    /// Invariant 3: a primary edge's curve piece would turn α or more.
+    Curvature,
+    /// Invariant 2: a secondary edge would leave the ε-envelope.
+    Envelope,
+    /// The energy rule: the worst triangle would get worse.
+    Energy,
+}
+
+/// What an applied operation changed.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct LocalChange {
+    /// Faces the operation created (ids may reuse removed ones). For
+    /// smoothing and rounding: the faces around the moved vertex.
+    pub created: Vec<FaceId>,
+    /// A vertex the operation added (split).
+    pub new_vertex: Option<VertexId>,
+    /// A vertex the operation removed (collapse).
+    pub removed_vertex: Option<VertexId>,
+    /// A vertex the operation moved (smoothing, rounding).
+    pub moved_vertex: Option<VertexId>,
+}
+
+/// The result of a `try_*` operation.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// The operation was applied and committed.
+    Applied(LocalChange),
+    /// The operation was refused; the mesh is unchanged.
+    Rejected(Reject),
+}
+
+impl Outcome {
+    /// Whether the operation was applied.
+    pub fn is_applied(&self) -> bool {
+        matches!(self, Outcome::Applied(_))
+    }
+}
+
+/// Which energy condition (beyond validity) an operation must meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnergyRule {
+    /// Any valid change is accepted.
+    Ignore,
+    /// The largest AMIPS energy of the new triangles is no larger than that of
+    /// the triangles they replace (collapse, swap, smoothing; never split).
+    NoWorseMax,
+}
+
+/// The curve a primary section's edges lie on: `parent` on `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurveSection {
+    /// The parametric curve.
+    pub parent: Parent,
+    /// The parameter interval of the section on `parent`.
+    pub t: [f64; 2],
+}
+
+/// Everything the operations need besides the mesh: the curves that primary
+/// tags index (`FeatureOn::Primary::section`), the secondary envelope
+/// (`FeatureOn::Secondary::polyline` indexes its polylines) and tolerances.
+#[derive(Clone, Debug)]
+pub struct Context {
+    /// Curves of the primary sections, indexed by the tags' `section`.
+    pub sections: Vec<CurveSection>,
+    /// The ε-envelope of the input secondary polylines.
+    pub envelope: Envelope,
+    /// Bound on the turn of a primary edge's curve piece, radians (α).
+    pub alpha: f64,
+    /// Distance (user units) within which a primary vertex counts as on its curve.
+    pub on_curve_abs: f64,
+    /// The energy condition for collapse, swap and smoothing.
+    pub energy: EnergyRule,
+}
+
+impl Context {
+    /// The context for a mesh whose primary tags index `features.primary` (with
+    /// the parameter of the section's parent curve) and whose secondary tags
+    /// index `features.secondary`. `eps_abs` is the envelope ε,
+    /// `sample_abs` the envelope sampling spacing (thesis: ε), both user units.
+    pub fn from_features(features: &FeatureSet, eps_abs: f64, sample_abs: f64) -> Context {
+        let sections = features
+            .primary
+            .iter()
+            .map(|s| CurveSection {
+                parent: s.parent,
+                t: s.t,
+            })
+            .collect();
+        let polylines: Vec<Vec<kurbo::Point>> = features
+            .secondary
+            .iter()
+            .map(|p| p.points.clone())
+            .collect();
+        Context {
+            sections,
+            envelope: Envelope::new(&polylines, eps_abs, sample_abs),
+            alpha: features.params.alpha,
+            on_curve_abs: 1e-9 * features.params.d,
+            energy: EnergyRule::NoWorseMax,
+        }
+    }
+
+    /// The curve of a section tag, if the index is known.
+    pub fn section(&self, section: u32) -> Option<&CurveSection> {
+        self.sections.get(section as usize)
+    }
+}
+
+/// The parameter of a primary tag at vertex `v` of the edge `key`.
+pub(crate) fn t_at(key: EdgeKey, t: [f64; 2], v: VertexId) -> f64 {
+    if key.lo == v { t[0] } else { t[1] }
+}
+
+/// The vertices, faces and features around one vertex.
+#[derive(Clone, Debug)]
+pub(crate) struct Ring {
+    pub(crate) faces: Vec<FaceId>,
+    /// Distinct neighbour vertices.
+    pub(crate) neighbours: Vec<VertexId>,
+    /// Whether the vertex is on the mesh boundary.
+    pub(crate) boundary: bool,
+}
+
+pub(crate) fn ring(mesh: &TriMesh, v: VertexId) -> Ring {
+    let faces = mesh.incident_faces(v);
+    let mut neighbours = Vec::new();
+    let mut boundary = false;
+    for &f in &faces {
+        let i = mesh
+            .local_index(f, v)
+            .expect("internal: incident face has v");
+        for k in [1, 2] {
+            let w = mesh.face(f)[(i + k) % 3];
+            if !neighbours.contains(&w) {
+                neighbours.push(w);
+            }
+        }
+        // The two edges of f at v are opposite v[i+1] and v[i+2].
+        if mesh.neighbours(f)[(i + 1) % 3].is_none() || mesh.neighbours(f)[(i + 2) % 3].is_none() {
+            boundary = true;
+        }
+    }
+    Ring {
+        faces,
+        neighbours,
+        boundary,
+    }
+}
+
+/// What a vertex may do, from its tag and its incident feature edges.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Role {
+    /// Never moves and is never removed.
+    Fixed,
+    /// On the mesh boundary (no feature): stays put; may collapse along a straight boundary.
+    Boundary,
+    /// No feature: moves freely.
+    Free,
+    /// Inside a secondary chain (exactly two secondary edges, no primary).
+    Secondary,
+    /// Inside a primary section: slides along it between its two neighbours.
+    Primary {
+        section: u32,
+        t: f64,
+        /// The two neighbours along the section with their parameters.
+        along: [(VertexId, f64); 2],
+    },
+}
+
+pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
+    let tag = mesh.vertex_tag(v);
+    if tag.box_corner || tag.feature_point || tag.section_endpoint {
+        return Role::Fixed;
+    }
+    let mut primary: Vec<(VertexId, u32, f64, f64)> = Vec::new();
+    let mut secondary = 0;
+    for &w in &ring.neighbours {
+        let key = EdgeKey::new(v, w);
+        let tags = mesh.edge_tags(v, w);
+        if tags
+            .iter()
+            .any(|t| matches!(t, FeatureOn::Secondary { .. }))
+        {
+            secondary += 1;
+        }
+        for t in tags {
+            if let FeatureOn::Primary { section, t } = *t {
+                primary.push((w, section, t_at(key, t, v), t_at(key, t, w)));
+            }
+        }
+    }
+    let featured = secondary > 0 || !primary.is_empty();
+    if ring.boundary {
+        return if featured {
+            Role::Fixed
+        } else {
+            Role::Boundary
+        };
+    }
+    match (primary.len(), secondary) {
+        (0, 0) => Role::Free,
+        (0, 2) => Role::Secondary,
+        (2, 0) if primary[0].1 == primary[1].1 && primary[0].2 == primary[1].2 => Role::Primary {
+            section: primary[0].1,
+            t: primary[0].2,
+            along: [(primary[0].0, primary[0].3), (primary[1].0, primary[1].3)],
+        },
+        _ => Role::Fixed,
+    }
+}
+
+/// The largest AMIPS energy of the faces (f64 positions).
+pub(crate) fn max_energy(mesh: &TriMesh, faces: &[FaceId]) -> f64 {
+    faces
+        .iter()
+        .map(|&f| {
+            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
+            crate::optimize::energy::amips(a, b, c)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Off-curve distance a primary vertex may have after an operation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CurveBudget {
+    pub(crate) vertex: VertexId,
+    pub(crate) max_off: f64,
+}

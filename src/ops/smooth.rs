@@ -1,0 +1,244 @@
+//! Vertex smoothing: Newton's method on the AMIPS energy of the one-ring,
+//! with a backtracking line search that keeps every triangle of the ring
+//! counter-clockwise (in `f64`; the invariants then decide exactly).
+//!
+//! A free or secondary vertex moves in the plane; a primary vertex moves along
+//! its curve between its two neighbours on the section (univariate Newton on
+//! `E(c(t))`, thesis §4.4.3), which also snaps a vertex the BSP left on the
+//! chord onto the curve. Fixed and boundary vertices do not move. The move is
+//! kept only if it lowers the ring's energy.
+
+use super::invariants::{self, Check, on_curve};
+use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role};
+use crate::features::Parent;
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
+use crate::optimize::energy::{Amips2, CurveJet, along_curve, amips_free};
+use kurbo::{Point, Vec2};
+use nalgebra::Vector2;
+use std::cmp::Ordering;
+
+/// Newton iterations per smoothing.
+const NEWTON_ITERATIONS: usize = 10;
+/// Halvings of the line search.
+const LINE_SEARCH_STEPS: usize = 30;
+
+/// The planned move of one vertex.
+#[derive(Clone, Debug)]
+pub struct SmoothPlan {
+    v: VertexId,
+    faces: Vec<FaceId>,
+    pos: Point,
+    /// New parameter, for a primary vertex.
+    t: Option<(u32, f64)>,
+    old_max_energy: f64,
+}
+
+fn ring_energy(mesh: &TriMesh, v: VertexId, faces: &[FaceId], p: Point) -> Option<Amips2> {
+    let mut sum = Amips2::ZERO;
+    for &f in faces {
+        let fv = mesh.face(f);
+        let i = mesh.local_index(f, v).expect("internal: ring face has v");
+        let (b, c) = (
+            mesh.position(fv[(i + 1) % 3]),
+            mesh.position(fv[(i + 2) % 3]),
+        );
+        sum = sum + amips_free(p, b, c)?;
+    }
+    Some(sum)
+}
+
+fn jet(parent: &Parent, t: f64) -> CurveJet {
+    match parent {
+        Parent::Cubic(c) => CurveJet {
+            pos: parent.eval(t),
+            ..CurveJet::cubic(c, t)
+        },
+        Parent::Line(l) => CurveJet {
+            pos: parent.eval(t),
+            d1: l.p1 - l.p0,
+            d2: Vec2::ZERO,
+        },
+    }
+}
+
+impl SmoothPlan {
+    /// Find a better position for `v`.
+    ///
+    /// # Errors
+    /// [`Reject::NotAnEdge`] for a dead vertex, [`Reject::FixedVertex`] for a
+    /// fixed or boundary one, [`Reject::NoChange`] when no position with a
+    /// lower ring energy was found.
+    pub fn new(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Result<Self, Reject> {
+        if !mesh.is_vertex_alive(v) {
+            return Err(Reject::NotAnEdge);
+        }
+        let r = ring(mesh, v);
+        let faces = r.faces.clone();
+        let energy = |p: Point| ring_energy(mesh, v, &faces, p);
+        let (pos, t) = match role(mesh, v, &r) {
+            Role::Fixed | Role::Boundary => return Err(Reject::FixedVertex),
+            Role::Free | Role::Secondary => {
+                let p0 = mesh.position(v);
+                let e0 = energy(p0).ok_or(Reject::NoChange)?;
+                let mut p = p0;
+                let mut e = e0;
+                for _ in 0..NEWTON_ITERATIONS {
+                    let dir = e
+                        .hess
+                        .cholesky()
+                        .map(|ch| ch.solve(&(-e.grad)))
+                        .unwrap_or_else(|| -e.grad / e.hess.trace().max(1e-300));
+                    let Some((q, eq)) = line_search(p, dir, e.value, &energy) else {
+                        break;
+                    };
+                    let moved = q.distance(p);
+                    p = q;
+                    e = eq;
+                    if moved <= 1e-14 * (p.x.abs() + p.y.abs() + 1e-300) {
+                        break;
+                    }
+                }
+                if e.value.partial_cmp(&e0.value) != Some(Ordering::Less) {
+                    return Err(Reject::NoChange);
+                }
+                (p, None)
+            }
+            Role::Primary { section, t, along } => {
+                let s = ctx.section(section).ok_or(Reject::FeatureRule)?;
+                let (lo, hi) = (along[0].1.min(along[1].1), along[0].1.max(along[1].1));
+                let margin = 1e-3 * (hi - lo);
+                let (lo, hi) = (lo + margin, hi - margin);
+                if lo.partial_cmp(&hi) != Some(Ordering::Less) {
+                    return Err(Reject::NoChange);
+                }
+                let e_at = |t: f64| {
+                    let j = jet(&s.parent, t);
+                    energy(j.pos).map(|e| along_curve(&e, &j))
+                };
+                let t0 = t.clamp(lo, hi);
+                // Off the curve: any valid position on it is progress (projection).
+                let off = on_curve::off_curve(mesh, ctx, v).unwrap_or(0.0) > ctx.on_curve_abs;
+                let base = if off {
+                    f64::INFINITY
+                } else {
+                    energy(mesh.position(v)).map_or(f64::INFINITY, |e| e.value)
+                };
+                let mut tc = t0;
+                let mut e = e_at(t0);
+                if e.is_none() {
+                    return Err(Reject::NoChange);
+                }
+                for _ in 0..NEWTON_ITERATIONS {
+                    let cur = e.expect("internal: valid energy");
+                    let dt = if cur.d2 > 0.0 {
+                        -cur.d1 / cur.d2
+                    } else {
+                        -cur.d1.signum() * 0.25 * (hi - lo)
+                    };
+                    let mut step = 1.0;
+                    let mut found = None;
+                    for _ in 0..LINE_SEARCH_STEPS {
+                        let tn = (tc + step * dt).clamp(lo, hi);
+                        if let Some(en) = e_at(tn).filter(|en| en.value < cur.value) {
+                            found = Some((tn, en));
+                            break;
+                        }
+                        step *= 0.5;
+                    }
+                    let Some((tn, en)) = found else { break };
+                    let done = (tn - tc).abs() <= 1e-14 * (hi - lo);
+                    tc = tn;
+                    e = Some(en);
+                    if done {
+                        break;
+                    }
+                }
+                let value = e.expect("internal: valid energy").value;
+                if value.partial_cmp(&base) != Some(Ordering::Less) {
+                    return Err(Reject::NoChange);
+                }
+                (s.parent.eval(tc), Some((section, tc)))
+            }
+        };
+        if pos == mesh.position(v) && !mesh.is_rational(v) {
+            return Err(Reject::NoChange);
+        }
+        Ok(SmoothPlan {
+            v,
+            old_max_energy: max_energy(mesh, &faces),
+            faces,
+            pos,
+            t,
+        })
+    }
+}
+
+fn line_search(
+    p: Point,
+    dir: Vector2<f64>,
+    e0: f64,
+    energy: &impl Fn(Point) -> Option<Amips2>,
+) -> Option<(Point, Amips2)> {
+    if !(dir[0].is_finite() && dir[1].is_finite()) {
+        return None;
+    }
+    let mut step = 1.0;
+    for _ in 0..LINE_SEARCH_STEPS {
+        let q = p + Vec2::new(dir[0], dir[1]) * step;
+        if let Some(e) = energy(q).filter(|e| e.value < e0) {
+            return Some((q, e));
+        }
+        step *= 0.5;
+    }
+    None
+}
+
+/// Smooth the vertex `v` (see the module doc).
+pub fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+    let plan = match SmoothPlan::new(mesh, ctx, v) {
+        Ok(p) => p,
+        Err(r) => return Outcome::Rejected(r),
+    };
+    let v = plan.v;
+    let budget: Vec<_> = on_curve::budget_now(mesh, ctx, v).into_iter().collect();
+    let mut tx = Transaction::new(mesh);
+    tx.set_position(v, plan.pos);
+    if let Some((section, tn)) = plan.t {
+        let r = ring(&tx, v);
+        for &w in &r.neighbours {
+            let tags = tx.edge_tags(v, w);
+            if !tags
+                .iter()
+                .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section))
+            {
+                continue;
+            }
+            let key = EdgeKey::new(v, w);
+            for tag in tx.take_edge_tags(v, w) {
+                let tag = match tag {
+                    FeatureOn::Primary { section: s, t } if s == section => FeatureOn::Primary {
+                        section,
+                        t: if key.lo == v { [tn, t[1]] } else { [t[0], tn] },
+                    },
+                    other => other,
+                };
+                tx.add_edge_tag(key.lo, key.hi, tag);
+            }
+        }
+    }
+    let check = Check {
+        faces: &plan.faces,
+        changed: &[v],
+        budgets: &budget,
+        old_max_energy: Some(plan.old_max_energy),
+    };
+    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+        return Outcome::Rejected(r);
+    }
+    tx.commit();
+    Outcome::Applied(LocalChange {
+        created: plan.faces,
+        moved_vertex: Some(v),
+        ..LocalChange::default()
+    })
+}

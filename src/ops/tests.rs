@@ -1,0 +1,549 @@
+//! Property tests of the local operations: random sequences of operations on
+//! random meshes (a constrained Delaunay mesh with a curved primary chain and
+//! a secondary polyline; BSP meshes of random segment soups) keep `check()`
+//! clean and every invariant true, and a rejected operation leaves the mesh
+//! equal to before. Fixed seeds.
+
+use super::invariants::{curvature, on_curve};
+use super::*;
+use crate::bsp::{self, BspInput, BspOptions, BspSegment, SegmentTag};
+use crate::mesh::VertexTag;
+use kurbo::{CubicBez, Line, Point, Rect};
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+use std::collections::HashMap;
+
+/// A small deterministic generator (splitmix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+fn curve() -> CubicBez {
+    CubicBez::new((0.1, 0.3), (0.35, 0.36), (0.65, 0.36), (0.9, 0.3))
+}
+
+/// A CDT of the unit box with a curved primary chain (two sections of one
+/// cubic, split at t = 0.5), a secondary polyline and random points.
+fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
+    let mut rng = Rng(seed);
+    let c = curve();
+    let parent = Parent::Cubic(c);
+    let sections = vec![
+        CurveSection {
+            parent,
+            t: [0.0, 0.5],
+        },
+        CurveSection {
+            parent,
+            t: [0.5, 1.0],
+        },
+    ];
+    let polyline: Vec<Point> = [(0.1, 0.7), (0.3, 0.75), (0.5, 0.65), (0.7, 0.8), (0.9, 0.7)]
+        .map(Point::from)
+        .to_vec();
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::new();
+    let mut tags: Vec<VertexTag> = Vec::new();
+    let mut ins =
+        |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, p: Point, tag: VertexTag| {
+            let h = cdt.insert(Point2::new(p.x, p.y)).expect("finite point");
+            if h.index() >= tags.len() {
+                tags.resize(h.index() + 1, VertexTag::default());
+            }
+            tags[h.index()] = tags[h.index()].union(tag);
+            h
+        };
+    let corner = VertexTag {
+        box_corner: true,
+        ..VertexTag::default()
+    };
+    for p in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+        ins(&mut cdt, p.into(), corner);
+    }
+    let n_curve = 8;
+    let mut chain = Vec::new();
+    for i in 0..=n_curve {
+        let t = f64::from(i) / f64::from(n_curve);
+        let tag = VertexTag {
+            section_endpoint: i == 0 || i == n_curve || 2 * i == n_curve,
+            ..VertexTag::default()
+        };
+        chain.push((ins(&mut cdt, parent.eval(t), tag), t));
+    }
+    let mut sec = Vec::new();
+    for (k, w) in polyline.windows(2).enumerate() {
+        let parts = 1 + rng.below(3);
+        for j in 0..parts {
+            let tag = VertexTag {
+                segment_endpoint: j == 0,
+                ..VertexTag::default()
+            };
+            sec.push(ins(&mut cdt, w[0].lerp(w[1], j as f64 / parts as f64), tag));
+        }
+        if k == polyline.len() - 2 {
+            let tag = VertexTag {
+                segment_endpoint: true,
+                ..VertexTag::default()
+            };
+            sec.push(ins(&mut cdt, w[1], tag));
+        }
+    }
+    for _ in 0..(20 + rng.below(40)) {
+        let p = Point::new(0.02 + 0.96 * rng.unit(), 0.02 + 0.96 * rng.unit());
+        let near_curve = (0..=64).any(|i| p.distance(parent.eval(f64::from(i) / 64.0)) < 0.03);
+        let near_sec = polyline
+            .windows(2)
+            .any(|w| (0..=32).any(|i| p.distance(w[0].lerp(w[1], f64::from(i) / 32.0)) < 0.03));
+        if !near_curve && !near_sec {
+            ins(&mut cdt, p, VertexTag::default());
+        }
+    }
+    for w in chain.windows(2) {
+        cdt.add_constraint(w[0].0, w[1].0);
+    }
+    for w in sec.windows(2) {
+        cdt.add_constraint(w[0], w[1]);
+    }
+    let mut mesh = TriMesh::new();
+    let ids: Vec<VertexId> = cdt
+        .vertices()
+        .map(|v| {
+            let p = v.position();
+            mesh.add_vertex(Point::new(p.x, p.y), tags[v.fix().index()])
+        })
+        .collect();
+    for f in cdt.inner_faces() {
+        mesh.add_face(f.vertices().map(|v| ids[v.fix().index()]));
+    }
+    mesh.link_all();
+    for w in chain.windows(2) {
+        let ((a, ta), (b, tb)) = (w[0], w[1]);
+        let section = u32::from(ta >= 0.5);
+        mesh.add_edge_tag(
+            ids[a.index()],
+            ids[b.index()],
+            FeatureOn::Primary {
+                section,
+                t: [ta, tb],
+            },
+        );
+    }
+    for w in sec.windows(2) {
+        mesh.add_edge_tag(
+            ids[w[0].index()],
+            ids[w[1].index()],
+            FeatureOn::Secondary { polyline: 0 },
+        );
+    }
+    let ctx = Context {
+        sections,
+        envelope: Envelope::new(&[polyline], 0.02, 0.02),
+        alpha: 15f64.to_radians(),
+        on_curve_abs: 1e-12,
+        energy,
+    };
+    (mesh, ctx)
+}
+
+/// The BSP mesh of a random segment soup: odd segments primary (straight
+/// sections), even ones secondary (one polyline each).
+fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
+    let mut rng = Rng(seed);
+    let mut input = BspInput::default();
+    let mut sections = Vec::new();
+    let mut polylines = Vec::new();
+    for i in 0..(3 + rng.below(6)) {
+        let mut pt = || {
+            // Some points on a coarse grid, for collinear and touching segments.
+            if rng.below(3) == 0 {
+                Point::new(rng.below(5) as f64 / 4.0, rng.below(5) as f64 / 4.0)
+            } else {
+                Point::new(rng.unit(), rng.unit())
+            }
+        };
+        let (a, b) = (pt(), pt());
+        if a == b {
+            continue;
+        }
+        let tag = if i % 2 == 1 {
+            sections.push(CurveSection {
+                parent: Parent::Line(Line::new(a, b)),
+                t: [0.0, 1.0],
+            });
+            input.section_endpoints.extend([a, b]);
+            SegmentTag::Primary {
+                section: (sections.len() - 1) as u32,
+                t: [0.0, 1.0],
+            }
+        } else {
+            polylines.push(vec![a, b]);
+            SegmentTag::Secondary {
+                polyline: (polylines.len() - 1) as u32,
+            }
+        };
+        input.segments.push(BspSegment { a, b, tag });
+    }
+    let bbox = Rect::new(-0.25, -0.25, 1.25, 1.25);
+    let (mesh, _) = bsp::build(&input, bbox, &BspOptions::DEFAULT).expect("bsp of a small soup");
+    let ctx = Context {
+        sections,
+        envelope: Envelope::new(&polylines, 0.01, 0.01),
+        alpha: 10f64.to_radians(),
+        on_curve_abs: 1e-12,
+        energy,
+    };
+    (mesh, ctx)
+}
+
+/// Every invariant on the whole mesh; `off` tracks each primary vertex's
+/// distance to its curve, which may never grow past the tolerance.
+fn assert_invariants(mesh: &TriMesh, ctx: &Context, off: &mut HashMap<VertexId, f64>, what: &str) {
+    let defects = mesh.check();
+    assert!(defects.is_empty(), "{what}: {defects:?}");
+    for (key, tags) in mesh.tagged_edges() {
+        for t in tags {
+            match *t {
+                FeatureOn::Primary { section, t } => {
+                    assert!(
+                        curvature::holds(ctx, section, t),
+                        "{what}: curvature {key:?}"
+                    )
+                }
+                FeatureOn::Secondary { polyline } => assert!(
+                    ctx.envelope.contains_segment(
+                        mesh.position(key.lo),
+                        mesh.position(key.hi),
+                        polyline
+                    ),
+                    "{what}: envelope {key:?}"
+                ),
+            }
+        }
+    }
+    for v in mesh.vertices() {
+        if let Some(d) = on_curve::off_curve(mesh, ctx, v) {
+            assert!(d.is_finite(), "{what}: inconsistent t at {v:?}");
+            let before = off.get(&v).copied().unwrap_or(f64::INFINITY);
+            assert!(
+                d <= before.max(ctx.on_curve_abs),
+                "{what}: {v:?} moved away from its curve: {d} > {before}"
+            );
+            off.insert(v, d);
+        }
+    }
+}
+
+#[derive(Default, Debug)]
+struct Tally {
+    applied: [usize; 5],
+    rejected: HashMap<Reject, usize>,
+}
+
+fn run_ops(mut mesh: TriMesh, ctx: &Context, seed: u64, n_ops: usize) -> Tally {
+    let mut rng = Rng(seed ^ 0xABCD);
+    let mut off = HashMap::new();
+    let mut tally = Tally::default();
+    assert_invariants(&mesh, ctx, &mut off, "initial");
+    for step in 0..n_ops {
+        let faces: Vec<FaceId> = mesh.faces().collect();
+        let f = faces[rng.below(faces.len())];
+        let v = mesh.face(f);
+        let i = rng.below(3);
+        let (a, b) = (v[i], v[(i + 1) % 3]);
+        let kind = rng.below(5);
+        let before = mesh.clone();
+        let out = match kind {
+            0 if mesh.num_vertices() < 600 => try_split(&mut mesh, ctx, a, b),
+            0 | 1 => try_collapse(&mut mesh, ctx, a, b),
+            2 => try_swap(&mut mesh, ctx, a, b),
+            3 => try_smooth(&mut mesh, ctx, a),
+            _ => try_round(&mut mesh, ctx, a),
+        };
+        let what = format!("seed {seed} step {step} op {kind} on {a:?} {b:?}: {out:?}");
+        match out {
+            Outcome::Rejected(r) => {
+                assert!(mesh == before, "{what}: rejected but changed");
+                *tally.rejected.entry(r).or_default() += 1;
+            }
+            Outcome::Applied(change) => {
+                if let Some(m) = change.new_vertex {
+                    off.remove(&m);
+                }
+                if let Some(m) = change.removed_vertex {
+                    off.remove(&m);
+                }
+                assert_invariants(&mesh, ctx, &mut off, &what);
+                tally.applied[kind] += 1;
+            }
+        }
+    }
+    tally
+}
+
+#[test]
+fn random_ops_on_delaunay_meshes_keep_every_invariant() {
+    let mut total = Tally::default();
+    for seed in 0..6 {
+        let rule = if seed % 2 == 0 {
+            EnergyRule::Ignore
+        } else {
+            EnergyRule::NoWorseMax
+        };
+        let (mesh, ctx) = delaunay_mesh(seed, rule);
+        let t = run_ops(mesh, &ctx, seed, 400);
+        for k in 0..5 {
+            total.applied[k] += t.applied[k];
+        }
+        for (r, n) in t.rejected {
+            *total.rejected.entry(r).or_default() += n;
+        }
+    }
+    // Every operation kind got applied, and the feature rules did refuse some.
+    assert!(total.applied[..4].iter().all(|&n| n > 10), "{total:?}");
+    assert!(
+        total.rejected.contains_key(&Reject::FixedVertex),
+        "{total:?}"
+    );
+    assert!(total.rejected.contains_key(&Reject::Inversion), "{total:?}");
+}
+
+#[test]
+fn random_ops_on_bsp_meshes_keep_every_invariant() {
+    let mut applied_round = 0;
+    let mut applied = 0;
+    for seed in 0..8 {
+        let rule = if seed % 2 == 0 {
+            EnergyRule::NoWorseMax
+        } else {
+            EnergyRule::Ignore
+        };
+        let (mesh, ctx) = bsp_mesh(seed, rule);
+        let t = run_ops(mesh, &ctx, seed, 300);
+        applied_round += t.applied[4];
+        applied += t.applied.iter().sum::<usize>();
+    }
+    assert!(applied > 300, "{applied}");
+    let _ = applied_round;
+}
+
+fn primary_edges(mesh: &TriMesh) -> Vec<(EdgeKey, u32, [f64; 2])> {
+    let mut out: Vec<_> = mesh
+        .tagged_edges()
+        .flat_map(|(k, tags)| {
+            tags.iter().filter_map(move |t| match *t {
+                FeatureOn::Primary { section, t } => Some((k, section, t)),
+                FeatureOn::Secondary { .. } => None,
+            })
+        })
+        .collect();
+    out.sort_by_key(|e| e.0);
+    out
+}
+
+#[test]
+fn split_of_a_primary_edge_puts_its_vertex_at_the_curve_midpoint() {
+    let (mut mesh, ctx) = delaunay_mesh(1, EnergyRule::Ignore);
+    let (key, section, t) = primary_edges(&mesh)[0];
+    let out = try_split(&mut mesh, &ctx, key.lo, key.hi);
+    let Outcome::Applied(change) = out else {
+        panic!("{out:?}")
+    };
+    let m = change.new_vertex.expect("split adds a vertex");
+    let tm = 0.5 * (t[0] + t[1]);
+    assert_eq!(
+        mesh.position(m),
+        ctx.sections[section as usize].parent.eval(tm)
+    );
+    assert_eq!(
+        mesh.edge_tags(key.lo, m),
+        &[FeatureOn::Primary {
+            section,
+            t: [t[0], tm]
+        }]
+    );
+    assert!(mesh.edge_tags(key.lo, key.hi).is_empty());
+    assert_eq!(on_curve::off_curve(&mesh, &ctx, m), Some(0.0));
+}
+
+#[test]
+fn feature_edges_are_never_swapped_and_endpoints_never_collapse() {
+    let (mut mesh, ctx) = delaunay_mesh(2, EnergyRule::Ignore);
+    let before = mesh.clone();
+    for (key, _, _) in primary_edges(&mesh) {
+        assert_eq!(
+            try_swap(&mut mesh, &ctx, key.lo, key.hi),
+            Outcome::Rejected(Reject::FeatureRule)
+        );
+        for (u, v) in [(key.lo, key.hi), (key.hi, key.lo)] {
+            if mesh.vertex_tag(v).section_endpoint {
+                assert_eq!(
+                    try_collapse(&mut mesh, &ctx, u, v),
+                    Outcome::Rejected(Reject::FixedVertex)
+                );
+            }
+        }
+    }
+    assert_eq!(mesh, before);
+    // A primary vertex may not leave its curve through an off-curve edge.
+    let v = mesh
+        .vertices()
+        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .expect("an interior curve vertex");
+    let r = ring(&mesh, v);
+    let off_edge = r
+        .neighbours
+        .iter()
+        .copied()
+        .find(|&w| mesh.edge_tags(v, w).is_empty())
+        .expect("an untagged edge");
+    assert_eq!(
+        try_collapse(&mut mesh, &ctx, off_edge, v),
+        Outcome::Rejected(Reject::FeatureRule)
+    );
+    assert_eq!(mesh, before);
+}
+
+#[test]
+fn smoothing_moves_a_primary_vertex_along_its_curve() {
+    let (mut mesh, ctx) = delaunay_mesh(3, EnergyRule::Ignore);
+    let mut moved = 0;
+    let verts: Vec<VertexId> = mesh.vertices().collect();
+    for v in verts {
+        let Role::Primary { section, t, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+            continue;
+        };
+        if let Outcome::Applied(_) = try_smooth(&mut mesh, &ctx, v) {
+            let Role::Primary { t: t2, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+                panic!("still primary")
+            };
+            assert_ne!(t, t2);
+            assert_eq!(
+                mesh.position(v),
+                ctx.sections[section as usize].parent.eval(t2)
+            );
+            moved += 1;
+        }
+    }
+    assert!(moved > 0);
+    assert!(mesh.check().is_empty());
+}
+
+#[test]
+fn smoothing_improves_a_bad_free_vertex() {
+    let (mut mesh, ctx) = delaunay_mesh(4, EnergyRule::NoWorseMax);
+    let v = mesh
+        .vertices()
+        .find(|&v| role(&mesh, v, &ring(&mesh, v)) == Role::Free)
+        .expect("a free vertex");
+    let faces = ring(&mesh, v).faces;
+    let e0 = max_energy(&mesh, &faces);
+    let mut applied = 0;
+    for _ in 0..3 {
+        applied += usize::from(try_smooth(&mut mesh, &ctx, v).is_applied());
+    }
+    assert!(max_energy(&mesh, &faces) <= e0);
+    assert!(applied >= 1 || e0 < 1.5, "{e0}");
+}
+
+#[test]
+fn rational_vertices_of_a_bsp_mesh_round_or_stay_valid() {
+    let (mut mesh, ctx) = bsp_mesh(11, EnergyRule::Ignore);
+    let mesh_r = {
+        let mut input = BspInput::default();
+        input.segments.push(BspSegment {
+            a: Point::new(0.1, 0.1),
+            b: Point::new(0.9, 0.7),
+            tag: SegmentTag::Secondary { polyline: 0 },
+        });
+        input.segments.push(BspSegment {
+            a: Point::new(0.1, 0.8),
+            b: Point::new(0.8, 0.05),
+            tag: SegmentTag::Secondary { polyline: 1 },
+        });
+        let opts = BspOptions::DEFAULT.with_round(false);
+        bsp::build(&input, Rect::new(0.0, 0.0, 1.0, 1.0), &opts)
+            .expect("bsp")
+            .0
+    };
+    let ctx_r = Context {
+        envelope: Envelope::new(
+            &[
+                vec![Point::new(0.1, 0.1), Point::new(0.9, 0.7)],
+                vec![Point::new(0.1, 0.8), Point::new(0.8, 0.05)],
+            ],
+            0.01,
+            0.01,
+        ),
+        ..ctx.clone()
+    };
+    let mut mesh_r = mesh_r;
+    let rational: Vec<VertexId> = mesh_r
+        .vertices()
+        .filter(|&v| mesh_r.is_rational(v))
+        .collect();
+    assert!(!rational.is_empty());
+    for v in rational {
+        let out = try_round(&mut mesh_r, &ctx_r, v);
+        assert!(out.is_applied(), "{out:?}");
+        assert!(!mesh_r.is_rational(v));
+    }
+    assert!(mesh_r.check().is_empty());
+    let v = mesh.vertices().next().expect("a vertex");
+    if !mesh.is_rational(v) {
+        assert_eq!(
+            try_round(&mut mesh, &ctx, v),
+            Outcome::Rejected(Reject::NoChange)
+        );
+    }
+}
+
+#[test]
+fn smoothing_snaps_a_chord_vertex_onto_its_curve_and_never_away() {
+    let (mut mesh, ctx) = delaunay_mesh(5, EnergyRule::Ignore);
+    let v = mesh
+        .vertices()
+        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .expect("an interior curve vertex");
+    let Role::Primary { along, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+        unreachable!()
+    };
+    // Put v on the chord of its neighbours, as the BSP leaves such vertices.
+    let chord = mesh
+        .position(along[0].0)
+        .midpoint(mesh.position(along[1].0));
+    let p = mesh.position(v).lerp(chord, 0.5);
+    mesh.set_position(v, p);
+    assert!(mesh.check().is_empty());
+    let off0 = on_curve::off_curve(&mesh, &ctx, v).expect("primary");
+    assert!(off0 > 1e-4, "{off0}");
+    let out = try_smooth(&mut mesh, &ctx, v);
+    assert!(out.is_applied(), "{out:?}");
+    assert!(on_curve::off_curve(&mesh, &ctx, v).expect("primary") <= ctx.on_curve_abs);
+}
+
+#[test]
+fn curvature_refuses_pieces_that_turn_too_much_or_leave_the_section() {
+    let (_, mut ctx) = delaunay_mesh(0, EnergyRule::Ignore);
+    assert!(curvature::holds(&ctx, 0, [0.1, 0.4]));
+    assert!(curvature::holds(&ctx, 1, [1.0, 0.5]));
+    assert!(!curvature::holds(&ctx, 0, [0.2, 0.7]), "leaves section 0");
+    assert!(!curvature::holds(&ctx, 7, [0.1, 0.2]), "unknown section");
+    assert!(!curvature::holds(&ctx, 0, [0.3, 0.3]), "empty piece");
+    ctx.sections[0].t = [0.0, 1.0];
+    // The whole cubic turns about 27°, more than α = 15°.
+    assert!(!curvature::holds(&ctx, 0, [0.0, 1.0]));
+    assert!(curvature::holds(&ctx, 0, [0.0, 0.5]));
+}

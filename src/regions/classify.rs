@@ -1,0 +1,238 @@
+//! Which filled shape each triangle belongs to: the topmost one (in paint order)
+//! whose fill covers it, or none (background).
+
+use super::element::{element_area, element_point};
+use super::winding::{Outline, Winding};
+use crate::fem::FemMesh;
+use crate::svg::{Drawing, FillRule, ShapeId};
+use kurbo::Point;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Options of [`classify`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct ClassifyOptions {
+    /// Distance to an input curve (user units) below which a sample point's
+    /// winding number is not trusted and another interior point is tried. The
+    /// pipeline uses the numerical tolerance ε_m (default 1e-8·d).
+    pub eps_abs: f64,
+    /// Give every triangle of a face (a set of triangles connected across
+    /// non-feature edges) the face's area-majority label. Default true; see the
+    /// module documentation for why.
+    pub vote_per_face: bool,
+}
+
+impl ClassifyOptions {
+    /// Options with tolerance `eps_abs` (user units) and per-face voting.
+    pub fn new(eps_abs: f64) -> Self {
+        ClassifyOptions {
+            eps_abs,
+            vote_per_face: true,
+        }
+    }
+    /// Turn per-face voting on or off.
+    pub fn with_vote_per_face(mut self, vote: bool) -> Self {
+        self.vote_per_face = vote;
+        self
+    }
+}
+
+/// The classification of a mesh's triangles.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RegionAssignment {
+    /// For each triangle, the topmost filled shape covering it; `None` is the background.
+    pub owner: Vec<Option<ShapeId>>,
+    /// Triangles none of whose sample points was clear of the outlines (their
+    /// own label is a best guess; with per-face voting their face decides).
+    pub near_boundary: usize,
+    /// Triangles whose own sample disagreed with their face's majority and took
+    /// the face's label (the sliver between a flattened curve and the true one).
+    pub relabelled: usize,
+    /// Total area of the relabelled triangles.
+    pub relabelled_area: f64,
+}
+
+/// Interior points tried in turn (barycentric), the centroid first.
+const SAMPLES: [[f64; 3]; 7] = [
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+    [0.5, 0.25, 0.25],
+    [0.25, 0.5, 0.25],
+    [0.25, 0.25, 0.5],
+    [0.2, 0.4, 0.4],
+    [0.4, 0.2, 0.4],
+    [0.4, 0.4, 0.2],
+];
+
+/// The filled shapes, topmost first, ready for point queries.
+pub(crate) struct Painting {
+    layers: Vec<(ShapeId, FillRule, Outline)>,
+}
+
+impl Painting {
+    pub(crate) fn new(drawing: &Drawing) -> Painting {
+        let mut layers: Vec<(u32, ShapeId, FillRule, Outline)> = drawing
+            .shapes
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.filled)
+            .map(|(i, s)| {
+                (
+                    s.paint_order,
+                    ShapeId(i as u32),
+                    s.fill_rule,
+                    Outline::of_shape(s),
+                )
+            })
+            .filter(|l| l.3.bbox().is_some())
+            .collect();
+        // Topmost first; equal paint orders fall back to document order.
+        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
+        Painting {
+            layers: layers
+                .into_iter()
+                .map(|(_, id, rule, o)| (id, rule, o))
+                .collect(),
+        }
+    }
+
+    /// The topmost shape covering `p`, and whether that answer is certain: it is
+    /// unless `p` is near the outline of a shape at or above the answer.
+    pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
+        let mut clear = true;
+        for (id, rule, outline) in &self.layers {
+            let w: Winding = outline.winding(p, eps_abs);
+            clear &= w.is_clear();
+            if w.inside(*rule) {
+                return (Some(*id), clear);
+            }
+        }
+        (None, clear)
+    }
+}
+
+/// Classify every triangle of `mesh` by the fills of `drawing`.
+///
+/// Each triangle is sampled at a point well inside it (its centroid, or for a
+/// curved element the image of the reference centroid, node 9 of a cubic
+/// triangle); when that point is within `eps_abs` of an outline, other interior
+/// points are tried. Winding numbers are evaluated on the input curves
+/// ([`super::winding`]). With [`ClassifyOptions::vote_per_face`], each face of
+/// the mesh (triangles connected across edges that are not line elements) then
+/// takes the label that covers most of its area.
+pub fn classify(drawing: &Drawing, mesh: &FemMesh, opts: &ClassifyOptions) -> RegionAssignment {
+    let painting = Painting::new(drawing);
+    let order = mesh.order();
+    let n = mesh.triangle_count();
+    let eps = opts.eps_abs;
+    let samples: Vec<(Option<ShapeId>, bool, f64)> = (0..n)
+        .into_par_iter()
+        .map(|t| {
+            let nodes: Vec<Point> = mesh
+                .triangle(t)
+                .iter()
+                .map(|&v| mesh.nodes[v as usize])
+                .collect();
+            let area = element_area(order, &nodes).abs();
+            let mut first = None;
+            for l in SAMPLES {
+                let (owner, clear) = painting.owner_at(element_point(order, &nodes, l), eps);
+                if clear {
+                    return (owner, true, area);
+                }
+                first.get_or_insert(owner);
+            }
+            (first.flatten(), false, area)
+        })
+        .collect();
+    let near_boundary = samples.iter().filter(|s| !s.1).count();
+    let mut out = RegionAssignment {
+        owner: samples.iter().map(|s| s.0).collect(),
+        near_boundary,
+        relabelled: 0,
+        relabelled_area: 0.0,
+    };
+    if opts.vote_per_face && n > 0 {
+        let face = faces(mesh);
+        // Per face: total weight of each label; uncertain samples count for little.
+        let mut votes: HashMap<u32, Vec<(Option<ShapeId>, f64)>> = HashMap::new();
+        for (t, &(owner, clear, area)) in samples.iter().enumerate() {
+            let w = if clear { area } else { area * 1e-6 } + f64::MIN_POSITIVE;
+            let v = votes.entry(face[t]).or_default();
+            match v.iter_mut().find(|e| e.0 == owner) {
+                Some(e) => e.1 += w,
+                None => v.push((owner, w)),
+            }
+        }
+        let winner: HashMap<u32, Option<ShapeId>> = votes
+            .into_iter()
+            .map(|(f, v)| {
+                let best = v
+                    .iter()
+                    .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+                    .expect("internal: a face has at least one triangle");
+                (f, best.0)
+            })
+            .collect();
+        for t in 0..n {
+            let w = winner[&face[t]];
+            if out.owner[t] != w {
+                out.owner[t] = w;
+                out.relabelled += 1;
+                out.relabelled_area += samples[t].2;
+            }
+        }
+    }
+    tracing::debug!(
+        triangles = n,
+        near_boundary = out.near_boundary,
+        relabelled = out.relabelled,
+        "regions classified"
+    );
+    out
+}
+
+/// Edge key: the two corner indices, sorted.
+pub(crate) fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// The face of each triangle: union-find over edges shared by two triangles
+/// that are not line elements (features separate faces).
+fn faces(mesh: &FemMesh) -> Vec<u32> {
+    let n = mesh.triangle_count();
+    let features: std::collections::HashSet<(u32, u32)> = (0..mesh.line_count())
+        .map(|i| edge_key(mesh.line(i)[0], mesh.line(i)[1]))
+        .collect();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let p = parent[parent[x as usize] as usize];
+            parent[x as usize] = p;
+            x = p;
+        }
+        x
+    }
+    let mut first: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * n);
+    for t in 0..n {
+        let c = mesh.triangle(t);
+        for e in 0..3 {
+            let k = edge_key(c[e], c[(e + 1) % 3]);
+            if features.contains(&k) {
+                continue;
+            }
+            match first.get(&k) {
+                Some(&u) => {
+                    let (a, b) = (find(&mut parent, u), find(&mut parent, t as u32));
+                    if a != b {
+                        parent[a.max(b) as usize] = a.min(b);
+                    }
+                }
+                None => {
+                    first.insert(k, t as u32);
+                }
+            }
+        }
+    }
+    (0..n as u32).map(|t| find(&mut parent, t)).collect()
+}

@@ -1,0 +1,106 @@
+//! Regions: what the drawing fills becomes tagged FEM domains (DESIGN `regions`, issue 7).
+//!
+//! Owns the decision of which filled SVG shape each triangle belongs to, the
+//! physical surfaces made from it, and the dropping of regions (`--cut-outside`,
+//! `--keep`, `--hole`). Works on a [`FemMesh`] of any order, so it serves every
+//! mesher (cdt, linear, curved).
+//!
+//! # What a region is
+//! - Inside / outside per shape comes from the shape's own fill rule (nonzero,
+//!   evenodd) and winding numbers evaluated on the input curves ([`winding`]);
+//!   an open subpath is closed by a straight segment, as SVG fills it (the loader
+//!   adds that segment as a feature, so region boundaries conform to the mesh).
+//! - A triangle belongs to the topmost filled shape (paint order) covering it,
+//!   else to the background: what you see is what is meshed.
+//!
+//! # Guarantees
+//! - Every triangle and every line element of the result is in a physical group;
+//!   empty groups are removed; nodes no element uses are removed and the
+//!   numbering stays contiguous, in the old order.
+//! - Each face of the mesh (triangles connected across edges that are not line
+//!   elements) gets one label, so a region boundary is always a chain of line
+//!   elements.
+//!
+//! # The region of a flattened triangle
+//! A linear mesh (the CDT baseline) conforms to the *flattened* features: each
+//! curve is replaced by a polyline within μ of it. A triangle in the thin sliver
+//! between a curve and its polyline may then have its centroid on the other side
+//! of the true curve than its face. We define the region of a triangle as the
+//! region of its face, and the region of a face as the label that covers the
+//! largest part of its area when each triangle is classified against the true
+//! curves at a point well inside it. Away from the curves (farther than μ) the
+//! two sides agree, so a face that is not itself a μ-thin sliver is labelled
+//! as the true drawing labels it, and region boundaries are exactly the
+//! mesh's feature edges. The area of a region then differs from the exact
+//! area by at most the area between the curves and their flattening:
+//! |Δ area| ≤ μ · (length of the region's curved boundary) (for chords of a
+//! smooth arc the sliver is about ⅔·μ per unit length). Triangles whose own
+//! sample disagrees with their face are counted in [`RegionReport`]
+//! (`relabelled`, `relabelled_area`): a large relabelled area points at a
+//! missing feature edge. The curved mesher makes the boundaries exact; then
+//! the same rule gives exact areas.
+
+mod classify;
+mod element;
+mod select;
+pub mod winding;
+
+pub use classify::{ClassifyOptions, RegionAssignment, classify};
+pub use select::{BACKGROUND, DOMAIN, RegionMode, RegionOptions, RegionStat, apply, stats_of};
+
+use crate::Result;
+use crate::fem::FemMesh;
+use crate::svg::Drawing;
+
+/// What the region stage did, for `--stats`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RegionReport {
+    /// Each physical surface of the output: name, triangle count, area.
+    pub surfaces: Vec<RegionStat>,
+    /// Triangles whose sample points were all within ε_m of an outline.
+    pub near_boundary: usize,
+    /// Triangles relabelled to their face's majority (see the module docs).
+    pub relabelled: usize,
+    /// Their total area.
+    pub relabelled_area: f64,
+}
+
+/// Classify `mesh` by the fills of `drawing` and make the surfaces `opts` asks
+/// for. `eps_abs` is the tolerance of [`ClassifyOptions::eps_abs`] (the pipeline
+/// passes ε_m). With [`RegionMode::None`] and nothing to drop, no
+/// classification is done: every triangle goes to one surface `domain`.
+///
+/// # Errors
+/// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
+/// mesh, or nothing left.
+pub fn tag(
+    drawing: &Drawing,
+    mesh: &FemMesh,
+    opts: &RegionOptions,
+    eps_abs: f64,
+) -> Result<(FemMesh, RegionReport)> {
+    if !opts.needs_classification() {
+        let mut out = mesh.clone();
+        out.surfaces = vec![DOMAIN.to_owned()];
+        out.triangle_group = vec![0; mesh.triangle_count()];
+        let report = RegionReport {
+            surfaces: stats_of(&out),
+            ..RegionReport::default()
+        };
+        return Ok((out, report));
+    }
+    let asg = classify(drawing, mesh, &ClassifyOptions::new(eps_abs));
+    let (out, surfaces) = apply(drawing, mesh, &asg, opts)?;
+    Ok((
+        out,
+        RegionReport {
+            surfaces,
+            near_boundary: asg.near_boundary,
+            relabelled: asg.relabelled,
+            relabelled_area: asg.relabelled_area,
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,349 @@
+//! From a classification to physical surfaces: naming (per shape, per colour,
+//! or one domain), dropping regions (`--cut-outside`, `--keep`, `--hole`) and
+//! compacting the mesh.
+
+use super::classify::{RegionAssignment, edge_key};
+use super::element::element_area;
+use crate::fem::FemMesh;
+use crate::svg::Drawing;
+use crate::{Error, Result};
+use kurbo::Point;
+use std::collections::{HashMap, HashSet};
+
+/// How triangles are grouped into physical surfaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RegionMode {
+    /// One surface per filled shape (its SVG id, else `shape-N`), plus `background`.
+    Shape,
+    /// One surface per distinct fill colour (`fill-#rrggbb`; a gradient or pattern
+    /// fill is `fill-<shape name>`), plus `background`.
+    Colour,
+    /// One surface `domain` (painted and background alike, unless dropped).
+    None,
+}
+
+/// What regions become surfaces and which are kept.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct RegionOptions {
+    /// Grouping. Default [`RegionMode::Shape`].
+    pub mode: RegionMode,
+    /// Drop the background (triangles no filled shape covers). Default false.
+    pub cut_outside: bool,
+    /// Keep only the regions with these names (empty: keep all). With
+    /// [`RegionMode::None`] the names are `domain` (painted) and `background`.
+    pub keep: Vec<String>,
+    /// Drop the region containing each of these points (output coordinates).
+    pub holes: Vec<Point>,
+}
+
+impl RegionOptions {
+    /// Per-shape surfaces, nothing dropped.
+    pub const DEFAULT: RegionOptions = RegionOptions {
+        mode: RegionMode::Shape,
+        cut_outside: false,
+        keep: Vec::new(),
+        holes: Vec::new(),
+    };
+    /// Set the grouping.
+    pub fn with_mode(mut self, mode: RegionMode) -> Self {
+        self.mode = mode;
+        self
+    }
+    /// Drop (or keep) the background.
+    pub fn with_cut_outside(mut self, cut: bool) -> Self {
+        self.cut_outside = cut;
+        self
+    }
+    /// Keep only the named regions.
+    pub fn with_keep(mut self, names: Vec<String>) -> Self {
+        self.keep = names;
+        self
+    }
+    /// Drop the regions containing these points.
+    pub fn with_holes(mut self, holes: Vec<Point>) -> Self {
+        self.holes = holes;
+        self
+    }
+    /// Whether the triangles must be classified (anything but one plain domain).
+    pub fn needs_classification(&self) -> bool {
+        self.mode != RegionMode::None
+            || self.cut_outside
+            || !self.keep.is_empty()
+            || !self.holes.is_empty()
+    }
+}
+
+impl Default for RegionOptions {
+    fn default() -> Self {
+        RegionOptions::DEFAULT
+    }
+}
+
+/// One physical surface of the output.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RegionStat {
+    /// Surface name.
+    pub name: String,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Area (exact for the elements as written, straight or curved).
+    pub area: f64,
+}
+
+/// Name of the surface of triangles no filled shape covers.
+pub const BACKGROUND: &str = "background";
+/// Name of the single surface of [`RegionMode::None`].
+pub const DOMAIN: &str = "domain";
+
+/// Per-triangle region labels and the label names (background is label 0).
+fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u32>, Vec<String>) {
+    let mut names = vec![BACKGROUND.to_owned()];
+    let mut index: HashMap<String, u32> = HashMap::from([(BACKGROUND.to_owned(), 0)]);
+    // Labels in paint order of the shapes, so the surface order is deterministic.
+    let mut order: Vec<usize> = (0..drawing.shapes.len())
+        .filter(|&i| drawing.shapes[i].filled)
+        .collect();
+    order.sort_by_key(|&i| (drawing.shapes[i].paint_order, i));
+    let mut of_shape = vec![0u32; drawing.shapes.len()];
+    for i in order {
+        let s = &drawing.shapes[i];
+        let name = match mode {
+            RegionMode::Shape => {
+                let n = s.name();
+                if n == BACKGROUND {
+                    format!("shape-{}", s.element_index)
+                } else {
+                    n
+                }
+            }
+            RegionMode::Colour => match s.fill_colour {
+                Some([r, g, b]) => format!("fill-#{r:02x}{g:02x}{b:02x}"),
+                None => format!("fill-{}", s.name()),
+            },
+            RegionMode::None => DOMAIN.to_owned(),
+        };
+        of_shape[i] = *index.entry(name.clone()).or_insert_with(|| {
+            names.push(name);
+            (names.len() - 1) as u32
+        });
+    }
+    let tri = asg
+        .owner
+        .iter()
+        .map(|o| o.map_or(0, |s| of_shape[s.0 as usize]))
+        .collect();
+    (tri, names)
+}
+
+/// The first triangle whose corner triangle contains `p` (exact test).
+fn locate(mesh: &FemMesh, p: Point) -> Option<usize> {
+    let o = |a: Point, b: Point| {
+        robust::orient2d(
+            robust::Coord { x: a.x, y: a.y },
+            robust::Coord { x: b.x, y: b.y },
+            robust::Coord { x: p.x, y: p.y },
+        )
+    };
+    (0..mesh.triangle_count()).find(|&t| {
+        let [a, b, c] = mesh.corners(t);
+        o(a, b) >= 0.0 && o(b, c) >= 0.0 && o(c, a) >= 0.0
+    })
+}
+
+/// Turn a classification into physical surfaces, drop the regions `opts` asks
+/// to drop, and compact the mesh (unused nodes removed, numbering contiguous
+/// in the old order; line elements kept when a kept triangle has them as an
+/// edge; empty physical groups removed). Every element of the result is in a
+/// physical group.
+///
+/// # Errors
+/// [`Error::InvalidParams`] when `--keep` names a region that does not exist,
+/// a `--hole` point lies outside the mesh, or nothing is left.
+pub fn apply(
+    drawing: &Drawing,
+    mesh: &FemMesh,
+    asg: &RegionAssignment,
+    opts: &RegionOptions,
+) -> Result<(FemMesh, Vec<RegionStat>)> {
+    let n = mesh.triangle_count();
+    debug_assert_eq!(asg.owner.len(), n, "internal: assignment of another mesh");
+    let (tri_label, names) = labels(drawing, asg, opts.mode);
+    let mut count = vec![0usize; names.len()];
+    for &l in &tri_label {
+        count[l as usize] += 1;
+    }
+    let present: Vec<&str> = (0..names.len())
+        .filter(|&l| count[l] > 0)
+        .map(|l| names[l].as_str())
+        .collect();
+    let mut keep = vec![true; names.len()];
+    if opts.cut_outside {
+        keep[0] = false;
+    }
+    if !opts.keep.is_empty() {
+        for name in &opts.keep {
+            if !present.contains(&name.as_str()) {
+                return Err(Error::InvalidParams(format!(
+                    "--keep: no region named `{name}`; the regions are: {}",
+                    present.join(", ")
+                )));
+            }
+        }
+        for (l, k) in keep.iter_mut().enumerate() {
+            *k &= opts.keep.contains(&names[l]);
+        }
+    }
+    for &p in &opts.holes {
+        let t = locate(mesh, p).ok_or_else(|| {
+            Error::InvalidParams(format!(
+                "--hole {},{}: the point is outside the meshed box",
+                p.x, p.y
+            ))
+        })?;
+        keep[tri_label[t] as usize] = false;
+    }
+    let kept: Vec<usize> = (0..n).filter(|&t| keep[tri_label[t] as usize]).collect();
+    if kept.is_empty() {
+        return Err(Error::InvalidParams(format!(
+            "regions: --cut-outside/--keep/--hole removed every triangle; the regions are: {}",
+            present.join(", ")
+        )));
+    }
+
+    // Surfaces: the kept labels with triangles, in label order; `none` merges them.
+    let mut surfaces: Vec<String> = Vec::new();
+    let mut surface_of = vec![u32::MAX; names.len()];
+    for l in 0..names.len() {
+        if keep[l] && count[l] > 0 {
+            let name = if opts.mode == RegionMode::None {
+                DOMAIN
+            } else {
+                &names[l]
+            };
+            surface_of[l] = match surfaces.iter().position(|s| s == name) {
+                Some(i) => i as u32,
+                None => {
+                    surfaces.push(name.to_owned());
+                    (surfaces.len() - 1) as u32
+                }
+            };
+        }
+    }
+
+    // Lines: kept when a kept triangle has them as an edge (all of them when
+    // nothing was dropped).
+    let all_kept = kept.len() == n;
+    let mut kept_edges = HashSet::new();
+    if !all_kept {
+        for &t in &kept {
+            let c = mesh.triangle(t);
+            for e in 0..3 {
+                kept_edges.insert(edge_key(c[e], c[(e + 1) % 3]));
+            }
+        }
+    }
+    let kept_lines: Vec<usize> = (0..mesh.line_count())
+        .filter(|&i| all_kept || kept_edges.contains(&edge_key(mesh.line(i)[0], mesh.line(i)[1])))
+        .collect();
+
+    // Nodes, renumbered in their old order.
+    let mut used = vec![false; mesh.nodes.len()];
+    for &t in &kept {
+        for &v in mesh.triangle(t) {
+            used[v as usize] = true;
+        }
+    }
+    for &i in &kept_lines {
+        for &v in mesh.line(i) {
+            used[v as usize] = true;
+        }
+    }
+    let mut new_index = vec![u32::MAX; mesh.nodes.len()];
+    let mut nodes = Vec::new();
+    for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        new_index[v] = nodes.len() as u32;
+        nodes.push(mesh.nodes[v]);
+    }
+
+    // Physical curves that still have lines, in their old order.
+    let mut has_line = vec![false; mesh.curves.len()];
+    for &i in &kept_lines {
+        has_line[mesh.line_group[i] as usize] = true;
+    }
+    let mut curve_of = vec![u32::MAX; mesh.curves.len()];
+    let mut curves = Vec::new();
+    for (g, _) in has_line.iter().enumerate().filter(|(_, h)| **h) {
+        curve_of[g] = curves.len() as u32;
+        curves.push(mesh.curves[g].clone());
+    }
+
+    let order = mesh.order();
+    let mut out = FemMesh {
+        order: mesh.order,
+        nodes,
+        triangles: Vec::with_capacity(kept.len() * order.triangle_nodes()),
+        triangle_group: Vec::with_capacity(kept.len()),
+        surfaces,
+        lines: Vec::with_capacity(kept_lines.len() * order.line_nodes()),
+        line_group: Vec::with_capacity(kept_lines.len()),
+        line_kind: Vec::with_capacity(kept_lines.len()),
+        curves,
+    };
+    let mut stats: Vec<RegionStat> = out
+        .surfaces
+        .iter()
+        .map(|name| RegionStat {
+            name: name.clone(),
+            triangles: 0,
+            area: 0.0,
+        })
+        .collect();
+    for &t in &kept {
+        let g = surface_of[tri_label[t] as usize];
+        out.triangles
+            .extend(mesh.triangle(t).iter().map(|&v| new_index[v as usize]));
+        out.triangle_group.push(g);
+        let pts: Vec<Point> = mesh
+            .triangle(t)
+            .iter()
+            .map(|&v| mesh.nodes[v as usize])
+            .collect();
+        stats[g as usize].triangles += 1;
+        stats[g as usize].area += element_area(order, &pts);
+    }
+    for &i in &kept_lines {
+        out.lines
+            .extend(mesh.line(i).iter().map(|&v| new_index[v as usize]));
+        out.line_group.push(curve_of[mesh.line_group[i] as usize]);
+        out.line_kind.push(mesh.line_kind[i]);
+    }
+    Ok((out, stats))
+}
+
+/// The surfaces of `mesh` as they are, with their triangle counts and areas.
+pub fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
+    let mut stats: Vec<RegionStat> = mesh
+        .surfaces
+        .iter()
+        .map(|name| RegionStat {
+            name: name.clone(),
+            triangles: 0,
+            area: 0.0,
+        })
+        .collect();
+    let order = mesh.order();
+    for t in 0..mesh.triangle_count() {
+        let pts: Vec<Point> = mesh
+            .triangle(t)
+            .iter()
+            .map(|&v| mesh.nodes[v as usize])
+            .collect();
+        if let Some(s) = stats.get_mut(mesh.triangle_group[t] as usize) {
+            s.triangles += 1;
+            s.area += element_area(order, &pts);
+        }
+    }
+    stats
+}

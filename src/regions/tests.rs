@@ -1,0 +1,363 @@
+//! Tests of classification and region selection on hand-built meshes.
+//! (End-to-end tests on CDT meshes are in `tests/regions.rs`.)
+
+use super::*;
+use crate::fem::{LineKind, Order};
+use crate::svg::{Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath};
+use kurbo::{Line, Point, Rect};
+
+pub(crate) fn shape(
+    id: Option<&str>,
+    index: u32,
+    rule: FillRule,
+    colour: [u8; 3],
+    subpaths: Vec<Subpath>,
+) -> Shape {
+    Shape {
+        svg_id: id.map(str::to_owned),
+        element_index: index,
+        paint_order: index,
+        filled: true,
+        stroked: false,
+        fill_rule: rule,
+        fill_colour: Some(colour),
+        subpaths,
+    }
+}
+
+pub(crate) fn polygon(points: &[(f64, f64)]) -> Subpath {
+    let p: Vec<Point> = points.iter().map(|&(x, y)| Point::new(x, y)).collect();
+    let mut segments: Vec<Segment> = p
+        .windows(2)
+        .map(|w| Segment::Line(Line::new(w[0], w[1])))
+        .collect();
+    segments.push(Segment::Line(Line::new(p[p.len() - 1], p[0])));
+    Subpath {
+        segments,
+        start: p[0],
+        closed: true,
+    }
+}
+
+/// A drawing of `shapes` with its feature soup and bbox derived as the loader does.
+pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
+    let mut features = Vec::new();
+    for (si, s) in shapes.iter().enumerate() {
+        for (pi, sp) in s.subpaths.iter().enumerate() {
+            let src = |segment| FeatureSource {
+                shape: ShapeId(si as u32),
+                subpath: pi as u32,
+                segment,
+            };
+            for (k, seg) in sp.segments.iter().enumerate() {
+                let geom = match *seg {
+                    Segment::Line(l) => FeatureGeom::Line(l),
+                    Segment::Cubic(c) => FeatureGeom::Cubic(c),
+                };
+                features.push(Feature {
+                    geom,
+                    source: src(k as u32),
+                });
+            }
+            if s.filled {
+                if let Some(l) = sp.implicit_closing_segment() {
+                    features.push(Feature {
+                        geom: FeatureGeom::Line(l),
+                        source: src(FeatureSource::IMPLICIT_CLOSE),
+                    });
+                }
+            }
+        }
+    }
+    let mut bbox: Option<Rect> = None;
+    for s in &shapes {
+        for sp in &s.subpaths {
+            for seg in &sp.segments {
+                for p in seg.control_points() {
+                    bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
+                }
+            }
+        }
+    }
+    Drawing {
+        shapes,
+        features,
+        bbox: bbox.expect("test drawing has geometry"),
+        warnings: vec![],
+    }
+}
+
+/// A structured grid mesh of [0, n]² (unit cells, two CCW triangles each), with
+/// line elements on the given closed unit-grid polygons (group per polygon).
+fn grid(n: u32, outlines: &[(&str, &[(u32, u32)])]) -> FemMesh {
+    let id = |i: u32, j: u32| j * (n + 1) + i;
+    let mut m = FemMesh {
+        order: Some(Order::Linear),
+        surfaces: vec!["domain".into()],
+        ..FemMesh::default()
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            m.nodes.push(Point::new(i as f64, j as f64));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            m.triangles
+                .extend([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            m.triangles
+                .extend([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            m.triangle_group.extend([0, 0]);
+        }
+    }
+    for (g, (name, poly)) in outlines.iter().enumerate() {
+        m.curves.push((*name).to_owned());
+        for k in 0..poly.len() {
+            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+            // Unit steps along the (axis-aligned) side a→b.
+            let (dx, dy) = (
+                (b.0 as i64 - a.0 as i64).signum(),
+                (b.1 as i64 - a.1 as i64).signum(),
+            );
+            let steps = a.0.abs_diff(b.0).max(a.1.abs_diff(b.1)) as i64;
+            for s in 0..steps {
+                let at = |s: i64| ((a.0 as i64 + s * dx) as u32, (a.1 as i64 + s * dy) as u32);
+                let (p, q) = (at(s), at(s + 1));
+                m.lines.extend([id(p.0, p.1), id(q.0, q.1)]);
+                m.line_group.push(g as u32);
+                m.line_kind.push(LineKind::Constraint);
+            }
+        }
+    }
+    m
+}
+
+fn stat<'a>(stats: &'a [RegionStat], name: &str) -> &'a RegionStat {
+    stats
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no region {name} in {stats:?}"))
+}
+
+fn check_mesh(m: &FemMesh) {
+    let nn = m.nodes.len() as u32;
+    assert!(m.triangles.iter().chain(&m.lines).all(|&v| v < nn));
+    let mut used = vec![false; m.nodes.len()];
+    for &v in m.triangles.iter().chain(&m.lines) {
+        used[v as usize] = true;
+    }
+    assert!(used.iter().all(|&u| u), "unused node");
+    assert_eq!(m.triangle_group.len(), m.triangle_count());
+    assert!(
+        m.triangle_group
+            .iter()
+            .all(|&g| (g as usize) < m.surfaces.len())
+    );
+    assert_eq!(m.line_group.len(), m.line_count());
+    assert_eq!(m.line_kind.len(), m.line_count());
+    assert!(m.line_group.iter().all(|&g| (g as usize) < m.curves.len()));
+    for g in 0..m.surfaces.len() as u32 {
+        assert!(
+            m.triangle_group.contains(&g),
+            "empty surface {}",
+            m.surfaces[g as usize]
+        );
+    }
+    for g in 0..m.curves.len() as u32 {
+        assert!(
+            m.line_group.contains(&g),
+            "empty curve {}",
+            m.curves[g as usize]
+        );
+    }
+}
+
+/// Two overlapping squares: `a` = [1,5]×[1,5] under `b` = [3,7]×[3,7], box [0,8]².
+fn two_squares() -> (Drawing, FemMesh) {
+    let a = shape(
+        Some("a"),
+        0,
+        FillRule::NonZero,
+        [255, 0, 0],
+        vec![polygon(&[(1.0, 1.0), (5.0, 1.0), (5.0, 5.0), (1.0, 5.0)])],
+    );
+    let b = shape(
+        Some("b"),
+        1,
+        FillRule::NonZero,
+        [0, 0, 255],
+        vec![polygon(&[(3.0, 3.0), (7.0, 3.0), (7.0, 7.0), (3.0, 7.0)])],
+    );
+    let mesh = grid(
+        8,
+        &[
+            ("a", &[(1, 1), (5, 1), (5, 5), (1, 5)]),
+            ("b", &[(3, 3), (7, 3), (7, 7), (3, 7)]),
+        ],
+    );
+    (drawing(vec![a, b]), mesh)
+}
+
+#[test]
+fn topmost_shape_wins_and_areas_add_up() {
+    let (d, mesh) = two_squares();
+    for vote in [false, true] {
+        let asg = classify(
+            &d,
+            &mesh,
+            &ClassifyOptions::new(1e-9).with_vote_per_face(vote),
+        );
+        assert_eq!(asg.near_boundary, 0);
+        assert_eq!(asg.relabelled, 0);
+        let (out, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+        check_mesh(&out);
+        assert_eq!(out.surfaces, ["background", "a", "b"]);
+        assert_eq!(stat(&stats, "a").area, 12.0);
+        assert_eq!(stat(&stats, "b").area, 16.0);
+        assert_eq!(stat(&stats, "background").area, 64.0 - 28.0);
+        assert_eq!(stat(&stats, "b").triangles, 32);
+        assert_eq!(out.nodes.len(), mesh.nodes.len());
+        assert_eq!(out.lines, mesh.lines);
+    }
+}
+
+#[test]
+fn paint_order_not_document_order_decides() {
+    let (mut d, mesh) = two_squares();
+    d.shapes[0].paint_order = 5;
+    let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
+    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+    assert_eq!(stat(&stats, "a").area, 16.0);
+    assert_eq!(stat(&stats, "b").area, 12.0);
+}
+
+#[test]
+fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
+    let (mut d, mesh) = two_squares();
+    let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
+    let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
+    let (_, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    assert_eq!(stat(&stats, "fill-#ff0000").area, 12.0);
+    assert_eq!(stat(&stats, "fill-#0000ff").area, 16.0);
+    d.shapes[1].fill_colour = Some([255, 0, 0]);
+    let (out, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    assert_eq!(out.surfaces, ["background", "fill-#ff0000"]);
+    assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
+
+    let none = RegionOptions::DEFAULT.with_mode(RegionMode::None);
+    let (out, report) = tag(&d, &mesh, &none, 1e-9).unwrap();
+    assert_eq!(out.surfaces, ["domain"]);
+    assert_eq!(report.surfaces[0].area, 64.0);
+    let (out, report) = tag(&d, &mesh, &none.with_cut_outside(true), 1e-9).unwrap();
+    assert_eq!(out.surfaces, ["domain"]);
+    assert_eq!(report.surfaces[0].area, 28.0);
+}
+
+#[test]
+fn cut_outside_drops_background_nodes_and_keeps_boundary_lines() {
+    let (d, mesh) = two_squares();
+    let opts = RegionOptions::DEFAULT.with_cut_outside(true);
+    let (out, report) = tag(&d, &mesh, &opts, 1e-9).unwrap();
+    check_mesh(&out);
+    assert_eq!(out.surfaces, ["a", "b"]);
+    let area: f64 = report.surfaces.iter().map(|s| s.area).sum();
+    assert_eq!(area, 28.0);
+    // Nodes of the two squares' union: 5×5 + 5×5 − 3×3.
+    assert_eq!(out.nodes.len(), 41);
+    // Every boundary line of both squares borders a kept triangle.
+    assert_eq!(out.line_count(), mesh.line_count());
+    assert_eq!(out.curves, ["a", "b"]);
+}
+
+#[test]
+fn keep_and_hole_select_regions() {
+    let (d, mesh) = two_squares();
+    let (out, report) = tag(
+        &d,
+        &mesh,
+        &RegionOptions::DEFAULT.with_keep(vec!["a".into()]),
+        1e-9,
+    )
+    .unwrap();
+    check_mesh(&out);
+    assert_eq!(out.surfaces, ["a"]);
+    assert_eq!(report.surfaces[0].area, 12.0);
+    // Region a is the L-shape [1,5]² \ [3,5]²: a's outline without its 4 lines
+    // inside b (12), and b's outline along the L's inner corner (2 + 2).
+    assert_eq!(out.line_count(), 16);
+    assert_eq!(out.curves, ["a", "b"]);
+    // Removing b by a point inside it, and the background by a point in the padding.
+    let holes = vec![Point::new(6.5, 6.5), Point::new(0.5, 7.5)];
+    let (out, report) = tag(&d, &mesh, &RegionOptions::DEFAULT.with_holes(holes), 1e-9).unwrap();
+    assert_eq!(out.surfaces, ["a"]);
+    assert_eq!(report.surfaces[0].area, 12.0);
+    // Errors a user can act on.
+    let bad = tag(
+        &d,
+        &mesh,
+        &RegionOptions::DEFAULT.with_keep(vec!["c".into()]),
+        1e-9,
+    )
+    .unwrap_err();
+    assert!(bad.to_string().contains("background, a, b"), "{bad}");
+    let outside = RegionOptions::DEFAULT.with_holes(vec![Point::new(9.0, 1.0)]);
+    assert!(tag(&d, &mesh, &outside, 1e-9).is_err());
+    let all = RegionOptions::DEFAULT
+        .with_cut_outside(true)
+        .with_keep(vec!["background".into()]);
+    assert!(tag(&d, &mesh, &all, 1e-9).is_err());
+}
+
+#[test]
+fn evenodd_and_nonzero_differ_in_the_overlap() {
+    // Two nested squares, same orientation, in one shape: nonzero fills the
+    // inner one (winding 2), evenodd leaves it empty.
+    let sub = vec![
+        polygon(&[(1.0, 1.0), (7.0, 1.0), (7.0, 7.0), (1.0, 7.0)]),
+        polygon(&[(3.0, 3.0), (5.0, 3.0), (5.0, 5.0), (3.0, 5.0)]),
+    ];
+    let mesh = grid(
+        8,
+        &[
+            ("s", &[(1, 1), (7, 1), (7, 7), (1, 7)]),
+            ("s", &[(3, 3), (5, 3), (5, 5), (3, 5)]),
+        ],
+    );
+    for (rule, area) in [(FillRule::NonZero, 36.0), (FillRule::EvenOdd, 32.0)] {
+        let d = drawing(vec![shape(Some("s"), 0, rule, [0; 3], sub.clone())]);
+        let (_, report) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9).unwrap();
+        assert_eq!(stat(&report.surfaces, "s").area, area, "{rule:?}");
+        assert_eq!(stat(&report.surfaces, "background").area, 64.0 - area);
+    }
+}
+
+#[test]
+fn a_face_is_labelled_by_its_majority() {
+    // The shape is the square [1,5]² but the mesh's feature lines run along
+    // [1,5]×[1,4] (as if a flattening were off by one row): the row y ∈ [4,5] is
+    // in the background's face; per-face voting gives it to the background and
+    // reports it as relabelled.
+    let (d, _) = two_squares();
+    let d = drawing(vec![d.shapes[0].clone()]);
+    let mesh = grid(8, &[("a", &[(1, 1), (5, 1), (5, 4), (1, 4)])]);
+    let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
+    assert_eq!(asg.relabelled, 8);
+    assert_eq!(asg.relabelled_area, 4.0);
+    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+    assert_eq!(stat(&stats, "a").area, 12.0);
+    let own = classify(
+        &d,
+        &mesh,
+        &ClassifyOptions::new(1e-9).with_vote_per_face(false),
+    );
+    let (_, stats) = apply(&d, &mesh, &own, &RegionOptions::DEFAULT).unwrap();
+    assert_eq!(stat(&stats, "a").area, 16.0);
+}
+
+#[test]
+fn a_shape_named_background_does_not_merge_with_it() {
+    let (mut d, mesh) = two_squares();
+    d.shapes[1].svg_id = Some("background".into());
+    let (out, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9).unwrap();
+    assert_eq!(out.surfaces, ["background", "a", "shape-1"]);
+}

@@ -1,0 +1,646 @@
+//! Winding numbers of points with respect to a filled shape's outline, evaluated
+//! on the input curves themselves (never on a flattening).
+//!
+//! The outline of a shape is the union of its subpaths, each closed as SVG fills
+//! it: a straight segment joins the end of an open subpath back to its start
+//! (the same segment the loader adds as a feature, `FeatureSource::IMPLICIT_CLOSE`).
+//!
+//! # Method
+//! Ray casting towards +x with the half-open rule (an upward piece counts when
+//! `y0 ∈ [y_start, y_end)`, a downward one when `y0 ∈ [y_end, y_start)`), so a ray
+//! through a vertex or along a horizontal piece is counted once, exactly.
+//! - A straight piece decides its crossing with the exact `orient2d` predicate.
+//! - A cubic is replaced by its chord whenever the point lies outside the
+//!   bounding box of its control points (inflated by a margin): the curve and
+//!   its chord then bound a closed loop inside a convex set that excludes the
+//!   point, so both contribute the same to the winding number. Otherwise the
+//!   cubic is split in two (de Casteljau at t = ½, the shared midpoint computed
+//!   once so the chain stays closed) and each half is treated the same way.
+//!
+//! The result is exact whenever the point is clear of the outline; a point that
+//! lies on a straight piece, or within about `eps_abs` of a curve (where
+//! subdivision stops), is reported as [`Winding::Near`] with a best-effort
+//! number, and the caller picks another point.
+
+use crate::svg::{FillRule, Segment, Shape, Subpath};
+use kurbo::{CubicBez, Point, Rect};
+
+/// Subdivision depth at which a cubic piece is given up on (2⁻⁶⁰ of the curve).
+const MAX_DEPTH: u32 = 60;
+/// Total number of cubic pieces examined per cubic before giving up (keeps
+/// pathological, self-overlapping curves bounded).
+const MAX_PIECES: u32 = 4096;
+
+/// The winding number of a point, and whether it is certain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Winding {
+    /// The point is clear of the outline (at least `eps_abs / 4` from every
+    /// curve, and on no straight piece): the number is exact.
+    Clear(i32),
+    /// The point lies on a straight piece or within about `2·eps_abs` of a
+    /// curve: the number is a best guess.
+    Near(i32),
+}
+
+impl Winding {
+    /// The winding number (exact for [`Winding::Clear`]).
+    pub fn number(self) -> i32 {
+        match self {
+            Winding::Clear(w) | Winding::Near(w) => w,
+        }
+    }
+    /// Whether the number is certain.
+    pub fn is_clear(self) -> bool {
+        matches!(self, Winding::Clear(_))
+    }
+    /// Whether a winding number means "inside" under `rule`.
+    pub fn inside(self, rule: FillRule) -> bool {
+        let w = self.number();
+        match rule {
+            FillRule::NonZero => w != 0,
+            FillRule::EvenOdd => w % 2 != 0,
+        }
+    }
+}
+
+/// One piece of a closed outline.
+#[derive(Clone, Copy, Debug)]
+enum Piece {
+    Line(Point, Point),
+    Cubic(CubicBez),
+}
+
+impl Piece {
+    fn bbox(&self) -> Rect {
+        match *self {
+            Piece::Line(a, b) => Rect::from_points(a, b),
+            Piece::Cubic(c) => control_bbox(&c),
+        }
+    }
+}
+
+fn control_bbox(c: &CubicBez) -> Rect {
+    Rect::from_points(c.p0, c.p1).union_pt(c.p2).union_pt(c.p3)
+}
+
+/// A shape's closed outline, prepared for many winding queries: its pieces
+/// bucketed into horizontal bands, so a query only looks at the pieces whose
+/// vertical extent holds the query point.
+#[derive(Clone, Debug)]
+pub struct Outline {
+    pieces: Vec<Piece>,
+    bbox: Option<Rect>,
+    band_y0: f64,
+    band_h: f64,
+    bands: Vec<Vec<u32>>,
+}
+
+impl Outline {
+    /// The outline of `subpaths`, each closed by a straight segment if open.
+    /// Consecutive segments that do not meet exactly are joined by a straight
+    /// segment (the loader never produces such gaps; this keeps the chain closed).
+    pub fn new(subpaths: &[Subpath]) -> Outline {
+        let mut pieces = Vec::new();
+        for sp in subpaths {
+            if sp.segments.is_empty() {
+                continue;
+            }
+            let mut cursor = sp.start;
+            for seg in &sp.segments {
+                if seg.start() != cursor {
+                    pieces.push(Piece::Line(cursor, seg.start()));
+                }
+                pieces.push(match *seg {
+                    Segment::Line(l) => Piece::Line(l.p0, l.p1),
+                    Segment::Cubic(c) => Piece::Cubic(c),
+                });
+                cursor = seg.end();
+            }
+            if cursor != sp.start {
+                pieces.push(Piece::Line(cursor, sp.start));
+            }
+        }
+        let bbox = pieces.iter().map(Piece::bbox).reduce(|a, b| a.union(b));
+        let mut outline = Outline {
+            pieces,
+            bbox,
+            band_y0: 0.0,
+            band_h: 1.0,
+            bands: Vec::new(),
+        };
+        outline.build_bands();
+        outline
+    }
+
+    /// The outline of a shape's subpaths.
+    pub fn of_shape(shape: &Shape) -> Outline {
+        Outline::new(&shape.subpaths)
+    }
+
+    /// Bounding box of the control points, `None` for an empty outline.
+    pub fn bbox(&self) -> Option<Rect> {
+        self.bbox
+    }
+
+    fn build_bands(&mut self) {
+        let Some(bb) = self.bbox else { return };
+        let n = self.pieces.len();
+        let ranges: Vec<(f64, f64)> = self
+            .pieces
+            .iter()
+            .map(|p| {
+                let b = p.bbox();
+                (b.y0, b.y1)
+            })
+            .collect();
+        // Fewer bands while long pieces would make the index much larger than the outline.
+        let mut k = n.clamp(1, 1024);
+        loop {
+            let h = bb.height() / k as f64;
+            if h.is_nan() || h <= 0.0 || h.is_infinite() {
+                k = 1;
+            }
+            let h = if k == 1 { f64::INFINITY } else { h };
+            let band = |y: f64| -> usize {
+                if k == 1 {
+                    0
+                } else {
+                    (((y - bb.y0) / h).floor().max(0.0) as usize).min(k - 1)
+                }
+            };
+            let total: usize = ranges.iter().map(|&(a, b)| band(b) - band(a) + 1).sum();
+            if k > 1 && total > 16 * n + 1024 {
+                k /= 2;
+                continue;
+            }
+            let mut bands = vec![Vec::new(); k];
+            for (i, &(a, b)) in ranges.iter().enumerate() {
+                for list in &mut bands[band(a)..=band(b)] {
+                    list.push(i as u32);
+                }
+            }
+            self.band_y0 = bb.y0;
+            self.band_h = h;
+            self.bands = bands;
+            return;
+        }
+    }
+
+    fn band_of(&self, y: f64) -> Option<&[u32]> {
+        let k = self.bands.len();
+        if k == 0 {
+            return None;
+        }
+        let i = if k == 1 {
+            0
+        } else {
+            (((y - self.band_y0) / self.band_h).floor().max(0.0) as usize).min(k - 1)
+        };
+        Some(&self.bands[i])
+    }
+
+    /// The winding number of `p` around the outline. `eps_abs` (user units, > 0)
+    /// is the distance to a curve below which the answer is only a best guess.
+    pub fn winding(&self, p: Point, eps_abs: f64) -> Winding {
+        let margin = eps_abs * 0.25;
+        let Some(bb) = self.bbox else {
+            return Winding::Clear(0);
+        };
+        if p.x < bb.x0 - margin
+            || p.x > bb.x1 + margin
+            || p.y < bb.y0 - margin
+            || p.y > bb.y1 + margin
+        {
+            return Winding::Clear(0);
+        }
+        let mut acc = Acc::default();
+        // A piece whose vertical extent misses p.y (by more than the margin) adds
+        // nothing: its chord misses the ray and p is outside its box.
+        for &i in self.band_of(p.y).unwrap_or(&[]) {
+            match self.pieces[i as usize] {
+                Piece::Line(a, b) => acc.line(a, b, p),
+                Piece::Cubic(c) => acc.cubic(c, p, eps_abs, margin),
+            }
+        }
+        if acc.near {
+            Winding::Near(acc.w)
+        } else {
+            Winding::Clear(acc.w)
+        }
+    }
+}
+
+/// The winding number of `p` around `subpaths` (each closed as SVG fills it).
+/// Builds an [`Outline`] each call; prepare one for repeated queries.
+pub fn winding(subpaths: &[Subpath], p: Point, eps_abs: f64) -> Winding {
+    Outline::new(subpaths).winding(p, eps_abs)
+}
+
+#[derive(Default)]
+struct Acc {
+    w: i32,
+    near: bool,
+}
+
+fn orient(a: Point, b: Point, c: Point) -> f64 {
+    robust::orient2d(
+        robust::Coord { x: a.x, y: a.y },
+        robust::Coord { x: b.x, y: b.y },
+        robust::Coord { x: c.x, y: c.y },
+    )
+}
+
+impl Acc {
+    /// Exact crossing of the +x ray from `p` with the segment a→b (half-open rule).
+    fn line(&mut self, a: Point, b: Point, p: Point) {
+        if p == a || p == b {
+            self.near = true;
+            return;
+        }
+        if a.y <= p.y && p.y < b.y {
+            let o = orient(a, b, p);
+            if o > 0.0 {
+                self.w += 1;
+            } else if o == 0.0 {
+                self.near = true;
+            }
+        } else if b.y <= p.y && p.y < a.y {
+            let o = orient(a, b, p);
+            if o < 0.0 {
+                self.w -= 1;
+            } else if o == 0.0 {
+                self.near = true;
+            }
+        } else if a.y == p.y && b.y == p.y && (a.x.min(b.x) <= p.x && p.x <= a.x.max(b.x)) {
+            self.near = true;
+        }
+    }
+
+    /// Crossings of the +x ray from `p` with a cubic, by subdivision until each
+    /// piece's control box excludes `p` (then the chord stands for the piece).
+    fn cubic(&mut self, c: CubicBez, p: Point, eps_abs: f64, margin: f64) {
+        let mut stack = vec![(c, 0u32)];
+        let mut budget = MAX_PIECES;
+        while let Some((c, depth)) = stack.pop() {
+            let b = control_bbox(&c);
+            let outside = p.x < b.x0 - margin
+                || p.x > b.x1 + margin
+                || p.y < b.y0 - margin
+                || p.y > b.y1 + margin;
+            if outside {
+                if p.y >= b.y0 && p.y <= b.y1 {
+                    self.line(c.p0, c.p3, p);
+                }
+                continue;
+            }
+            let small = b.width().max(b.height()) <= eps_abs;
+            if small || depth >= MAX_DEPTH || budget < 2 {
+                // p is within about eps_abs of the curve: best effort with the chord.
+                self.line(c.p0, c.p3, p);
+                self.near = true;
+                continue;
+            }
+            budget -= 2;
+            let (l, r) = split_half(&c);
+            stack.push((r, depth + 1));
+            stack.push((l, depth + 1));
+        }
+    }
+}
+
+/// de Casteljau split at t = ½; the midpoint is shared bit for bit.
+fn split_half(c: &CubicBez) -> (CubicBez, CubicBez) {
+    let m = |a: Point, b: Point| Point::new(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
+    let p01 = m(c.p0, c.p1);
+    let p12 = m(c.p1, c.p2);
+    let p23 = m(c.p2, c.p3);
+    let p012 = m(p01, p12);
+    let p123 = m(p12, p23);
+    let mid = m(p012, p123);
+    (
+        CubicBez::new(c.p0, p01, p012, mid),
+        CubicBez::new(mid, p123, p23, c.p3),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kurbo::{Line, ParamCurve};
+    use proptest::prelude::*;
+    use std::f64::consts::PI;
+
+    fn open(points: &[Point]) -> Subpath {
+        Subpath {
+            segments: points
+                .windows(2)
+                .map(|w| Segment::Line(Line::new(w[0], w[1])))
+                .collect(),
+            start: points[0],
+            closed: false,
+        }
+    }
+
+    fn closed(points: &[Point]) -> Subpath {
+        let mut pts = points.to_vec();
+        pts.push(points[0]);
+        Subpath {
+            closed: true,
+            ..open(&pts)
+        }
+    }
+
+    /// A circle as 4 cubics (the standard k = 0.5523 construction), counter-clockwise.
+    pub(crate) fn circle(c: Point, r: f64) -> Subpath {
+        let k = 4.0 / 3.0 * (2f64.sqrt() - 1.0) * r;
+        let p = |x: f64, y: f64| Point::new(c.x + x, c.y + y);
+        let segs = vec![
+            CubicBez::new(p(r, 0.0), p(r, k), p(k, r), p(0.0, r)),
+            CubicBez::new(p(0.0, r), p(-k, r), p(-r, k), p(-r, 0.0)),
+            CubicBez::new(p(-r, 0.0), p(-r, -k), p(-k, -r), p(0.0, -r)),
+            CubicBez::new(p(0.0, -r), p(k, -r), p(r, -k), p(r, 0.0)),
+        ];
+        Subpath {
+            segments: segs.into_iter().map(Segment::Cubic).collect(),
+            start: p(r, 0.0),
+            closed: true,
+        }
+    }
+
+    /// A five-pointed star {5/2} (self-intersecting pentagram).
+    pub(crate) fn star(c: Point, r: f64) -> Subpath {
+        let pts: Vec<Point> = (0..5)
+            .map(|i| {
+                let a = PI / 2.0 + i as f64 * 4.0 * PI / 5.0;
+                Point::new(c.x + r * a.cos(), c.y + r * a.sin())
+            })
+            .collect();
+        closed(&pts)
+    }
+
+    const EPS: f64 = 1e-9;
+
+    #[test]
+    fn circle_inside_outside_and_near() {
+        let s = [circle(Point::ZERO, 1.0)];
+        assert_eq!(winding(&s, Point::ZERO, EPS), Winding::Clear(1));
+        assert_eq!(winding(&s, Point::new(0.7, 0.7), EPS), Winding::Clear(1));
+        assert_eq!(winding(&s, Point::new(0.72, 0.72), EPS), Winding::Clear(0));
+        assert_eq!(winding(&s, Point::new(2.0, 0.0), EPS), Winding::Clear(0));
+        // On the ray through the joints (y = 0) and through a cubic's extremum (y = 1 - 1e-12).
+        assert_eq!(winding(&s, Point::new(-0.5, 0.0), EPS), Winding::Clear(1));
+        assert_eq!(
+            winding(&s, Point::new(0.0, 1.0 - 1e-6), EPS),
+            Winding::Clear(1)
+        );
+        assert_eq!(
+            winding(&s, Point::new(0.0, 1.0 + 1e-6), EPS),
+            Winding::Clear(0)
+        );
+        assert_eq!(winding(&s, Point::new(-3.0, 1.0), EPS), Winding::Clear(0));
+        // Exactly on a joint, and closer than eps to the curve.
+        assert!(!winding(&s, Point::new(1.0, 0.0), EPS).is_clear());
+        assert!(!winding(&s, Point::new(0.0, 1.0 - 1e-11), EPS).is_clear());
+        // The Bézier circle bulges slightly beyond the unit circle between its
+        // joints and midpoints (radius 1.000 27 near t = 0.2); just inside and
+        // just outside the curve along that ray (the curve is star-shaped).
+        let q = circle(Point::ZERO, 1.0).segments[0]
+            .to_cubic()
+            .eval(0.2)
+            .to_vec2();
+        assert!(q.length() > 1.0002, "{}", q.length());
+        let dir = q.normalize();
+        assert_eq!(
+            winding(&s, (dir * (q.length() - 1e-7)).to_point(), EPS),
+            Winding::Clear(1)
+        );
+        assert_eq!(
+            winding(&s, (dir * (q.length() + 1e-7)).to_point(), EPS),
+            Winding::Clear(0)
+        );
+    }
+
+    #[test]
+    fn clockwise_circle_winds_negatively() {
+        let mut c = circle(Point::ZERO, 1.0);
+        c.segments.reverse();
+        for s in &mut c.segments {
+            let k = s.to_cubic();
+            *s = Segment::Cubic(CubicBez::new(k.p3, k.p2, k.p1, k.p0));
+        }
+        let w = winding(&[c], Point::new(0.1, 0.2), EPS);
+        assert_eq!(w, Winding::Clear(-1));
+        assert!(w.inside(FillRule::NonZero) && w.inside(FillRule::EvenOdd));
+    }
+
+    #[test]
+    fn star_centre_winds_twice_points_once() {
+        let s = [star(Point::ZERO, 1.0)];
+        let centre = winding(&s, Point::new(0.01, 0.02), EPS);
+        assert_eq!(centre.number().abs(), 2);
+        assert!(centre.inside(FillRule::NonZero));
+        assert!(!centre.inside(FillRule::EvenOdd));
+        let tip = winding(&s, Point::new(0.0, 0.9), EPS);
+        assert_eq!(tip.number().abs(), 1);
+        assert!(tip.inside(FillRule::EvenOdd));
+        assert_eq!(winding(&s, Point::new(0.0, -0.9), EPS), Winding::Clear(0));
+    }
+
+    #[test]
+    fn open_subpath_is_closed_by_a_straight_segment() {
+        // A square with its left side missing: SVG fill closes it.
+        let sq = [open(&[
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(1.0, 1.0),
+            Point::new(0.0, 1.0),
+        ])];
+        assert_eq!(winding(&sq, Point::new(0.5, 0.5), EPS).number().abs(), 1);
+        assert_eq!(winding(&sq, Point::new(0.05, 0.95), EPS).number().abs(), 1);
+        assert_eq!(winding(&sq, Point::new(-0.05, 0.5), EPS), Winding::Clear(0));
+        // On the implicit closing segment itself.
+        assert!(!winding(&sq, Point::new(0.0, 0.5), EPS).is_clear());
+        // A circle with a small gap (the last cubic ends short of the start).
+        let mut c = circle(Point::ZERO, 1.0);
+        c.closed = false;
+        if let Some(Segment::Cubic(k)) = c.segments.last_mut() {
+            k.p3 = Point::new(1.0, -0.01);
+        }
+        let c = [c];
+        assert_eq!(winding(&c, Point::ZERO, EPS), Winding::Clear(1));
+        assert_eq!(
+            winding(&c, Point::new(0.999, -0.005), EPS),
+            Winding::Clear(1)
+        );
+        assert_eq!(
+            winding(&c, Point::new(1.001, -0.005), EPS),
+            Winding::Clear(0)
+        );
+    }
+
+    #[test]
+    fn rays_through_vertices_and_horizontal_edges_count_once() {
+        // A polygon with a horizontal edge and vertices at the query's height.
+        let poly = [closed(&[
+            Point::new(0.0, 0.0),
+            Point::new(4.0, 0.0),
+            Point::new(4.0, 2.0),
+            Point::new(3.0, 1.0),
+            Point::new(2.0, 1.0),
+            Point::new(1.0, 2.0),
+            Point::new(0.0, 1.0),
+        ])];
+        assert_eq!(winding(&poly, Point::new(0.5, 1.0), EPS), Winding::Clear(1));
+        assert_eq!(
+            winding(&poly, Point::new(-1.0, 1.0), EPS),
+            Winding::Clear(0)
+        );
+        assert_eq!(winding(&poly, Point::new(2.5, 1.5), EPS), Winding::Clear(0));
+        assert_eq!(winding(&poly, Point::new(3.5, 2.0), EPS), Winding::Clear(0));
+        assert_eq!(
+            winding(&poly, Point::new(-1.0, 2.0), EPS),
+            Winding::Clear(0)
+        );
+        assert!(!winding(&poly, Point::new(2.5, 1.0), EPS).is_clear());
+    }
+
+    #[test]
+    fn degenerate_outlines_wind_zero() {
+        assert_eq!(winding(&[], Point::ZERO, EPS), Winding::Clear(0));
+        let dot = Subpath {
+            segments: vec![],
+            start: Point::ZERO,
+            closed: false,
+        };
+        assert_eq!(
+            winding(&[dot], Point::new(1.0, 0.0), EPS),
+            Winding::Clear(0)
+        );
+        let pt = Point::new(1.0, 1.0);
+        let zero = Subpath {
+            segments: vec![Segment::Cubic(CubicBez::new(pt, pt, pt, pt))],
+            start: pt,
+            closed: true,
+        };
+        assert_eq!(
+            winding(std::slice::from_ref(&zero), Point::ZERO, EPS),
+            Winding::Clear(0)
+        );
+        assert!(!winding(&[zero], pt, EPS).is_clear());
+    }
+
+    #[test]
+    fn cubic_loop_self_intersection() {
+        // A cubic whose control polygon makes it loop: winding differs inside the loop.
+        let c = CubicBez::new((0.0, 0.0), (3.0, 3.0), (-1.0, 3.0), (2.0, 0.0));
+        let sp = Subpath {
+            segments: vec![Segment::Cubic(c)],
+            start: c.p0,
+            closed: false,
+        };
+        // Compare with a fine polygon of the same curve, far from the curve.
+        let mut pts: Vec<Point> = (0..=20_000).map(|i| c.eval(i as f64 / 20_000.0)).collect();
+        pts.pop();
+        let poly = Outline::new(&[open(&pts)]);
+        let curve = Outline::new(&[sp]);
+        let mut checked = 0;
+        for i in 0..40 {
+            for j in 0..40 {
+                let p = Point::new(-0.5 + i as f64 * 0.07, -0.3 + j as f64 * 0.07);
+                let (a, b) = (curve.winding(p, 1e-3), poly.winding(p, 1e-3));
+                if a.is_clear() {
+                    assert_eq!(a.number(), b.number(), "at {p:?}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 1000);
+    }
+
+    /// Reference: the winding number of a polygon by summing signed angles,
+    /// rounded (only used on points well away from the edges).
+    fn angle_winding(pts: &[Point], p: Point) -> i32 {
+        let mut total = 0.0;
+        for i in 0..pts.len() {
+            let a = pts[i] - p;
+            let b = pts[(i + 1) % pts.len()] - p;
+            total += a.cross(b).atan2(a.dot(b));
+        }
+        (total / (2.0 * PI)).round() as i32
+    }
+
+    fn seg_dist(p: Point, a: Point, b: Point) -> f64 {
+        use kurbo::ParamCurveNearest;
+        Line::new(a, b).nearest(p, 0.0).distance_sq.sqrt()
+    }
+
+    /// Exactly on the closed segment a–b.
+    fn on_segment(p: Point, a: Point, b: Point) -> bool {
+        orient(a, b, p) == 0.0
+            && a.x.min(b.x) <= p.x
+            && p.x <= a.x.max(b.x)
+            && a.y.min(b.y) <= p.y
+            && p.y <= a.y.max(b.y)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 256,
+            failure_persistence: None,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(7),
+            ..ProptestConfig::default()
+        })]
+
+        /// On straight inputs, the winding number equals the polygon's exact
+        /// winding number (angle sum, or orientation tests where the angle sum is
+        /// not reliable), including integer grid points on vertices and edges.
+        #[test]
+        fn matches_polygon_winding(
+            verts in proptest::collection::vec((-8i32..8, -8i32..8), 3..12),
+            queries in proptest::collection::vec((-18i32..18, -18i32..18), 20),
+            scale_exp in -30i32..30,
+        ) {
+            let s = 2f64.powi(scale_exp);
+            let pts: Vec<Point> = verts.iter().map(|&(x, y)| Point::new(x as f64 * s, y as f64 * s)).collect();
+            let outline = Outline::new(&[open(&pts)]);
+            for &(qx, qy) in &queries {
+                // Half-integer grid: often on rays through vertices and horizontal edges.
+                let p = Point::new(qx as f64 * 0.5 * s, qy as f64 * 0.5 * s);
+                let w = outline.winding(p, 1e-9 * s);
+                let on_edge = (0..pts.len()).any(|i| on_segment(p, pts[i], pts[(i + 1) % pts.len()]));
+                prop_assert_eq!(w.is_clear(), !on_edge, "p {:?}", p);
+                if !on_edge {
+                    prop_assert_eq!(w.number(), angle_winding(&pts, p), "p {:?}", p);
+                }
+            }
+        }
+
+        /// The same polygon given with its straight edges as (degree-elevated)
+        /// cubics gives the same winding numbers away from the edges.
+        #[test]
+        fn cubic_lines_match_lines(
+            verts in proptest::collection::vec((-1000.0f64..1000.0, -1000.0f64..1000.0), 3..10),
+            queries in proptest::collection::vec((-1100.0f64..1100.0, -1100.0f64..1100.0), 20),
+        ) {
+            let mut pts: Vec<Point> = verts.iter().map(|&(x, y)| Point::new(x, y)).collect();
+            pts.push(pts[0]);
+            let lines = open(&pts);
+            let cubics = Subpath {
+                segments: lines.segments.iter().map(|s| Segment::Cubic(s.to_cubic())).collect(),
+                ..lines.clone()
+            };
+            let (a, b) = (Outline::new(&[lines]), Outline::new(&[cubics]));
+            for &(x, y) in &queries {
+                let p = Point::new(x, y);
+                let wb = b.winding(p, 1e-6);
+                if wb.is_clear() {
+                    prop_assert_eq!(a.winding(p, 1e-6), wb);
+                }
+                let d = (0..pts.len() - 1).map(|i| seg_dist(p, pts[i], pts[i + 1])).fold(f64::INFINITY, f64::min);
+                if d > 1e-5 {
+                    prop_assert!(wb.is_clear());
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! The single-file command end to end on the bundled drawings: every format
+//! (4.1 / 2.2, ASCII / binary) is read back by the independent reader with the
+//! counts `--stats` reports, the meshes are valid, and the formats agree.
+//! Meshes are written under target/test-out/cli_mesh/ (CI runs gmsh on them).
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_triwild"))
+}
+
+fn drawings() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+        .collect();
+    v.sort();
+    assert!(v.len() >= 4, "data/svg holds the bundled drawings");
+    v
+}
+
+const FORMATS: [(&str, &[&str]); 4] = [
+    ("v41-ascii", &[]),
+    ("v41-binary", &["--binary"]),
+    ("v22-ascii", &["--msh-version", "2.2"]),
+    ("v22-binary", &["--msh-version", "2.2", "--binary"]),
+];
+
+#[test]
+fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
+    let out = support::out_dir("cli_mesh");
+    for svg in drawings() {
+        let stem = svg.file_stem().unwrap().to_string_lossy().to_string();
+        let mut first: Option<support::Msh> = None;
+        for (name, flags) in FORMATS {
+            let msh = out.join(format!("{stem}-{name}.msh"));
+            let run = bin()
+                .arg(&svg)
+                .arg("-o")
+                .arg(&msh)
+                .args(flags)
+                .arg("--stats")
+                .output()
+                .unwrap();
+            assert!(
+                run.status.success(),
+                "{stem} {name}: {}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            let stats: serde_json::Value =
+                serde_json::from_slice(&run.stdout).expect("--stats is one JSON object");
+            let report = support::check_msh(&msh);
+            report.assert_valid(&format!("{stem} {name}"));
+            assert_eq!(
+                report.triangles as u64,
+                stats["output"]["triangles"].as_u64().unwrap(),
+                "{stem} {name}"
+            );
+            assert_eq!(
+                report.nodes as u64,
+                stats["output"]["nodes"].as_u64().unwrap(),
+                "{stem} {name}"
+            );
+            assert_eq!(
+                report.lines as u64,
+                stats["output"]["feature_edges"].as_u64().unwrap(),
+                "{stem} {name}"
+            );
+            assert!(report.triangles > 0 && report.lines > 0);
+            // The mesh covers the padded box: its area is the box's.
+            let d = stats["input"]["d"].as_f64().unwrap();
+            assert!(report.area > 0.0 && report.area.is_finite());
+            let min_angle = stats["quality"]["min_angle_deg"].as_f64().unwrap();
+            assert!(min_angle > 0.0, "{stem}: min angle {min_angle}");
+            let _ = d;
+            let m = support::read_msh(&msh).unwrap();
+            assert!(
+                m.physical_names.values().any(|n| n == "domain"),
+                "{stem} {name}: physical surface"
+            );
+            match &first {
+                None => first = Some(m),
+                Some(f) => {
+                    assert_eq!(f.nodes, m.nodes, "{stem} {name}: same nodes, bit for bit");
+                    let conn = |x: &support::Msh| {
+                        x.elements
+                            .iter()
+                            .map(|e| (e.etype, e.nodes.clone(), e.physical.clone()))
+                            .collect::<Vec<_>>()
+                    };
+                    assert_eq!(conn(f), conn(&m), "{stem} {name}: same elements and groups");
+                    assert_eq!(
+                        f.physical_names, m.physical_names,
+                        "{stem} {name}: same group names"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_readme_command_writes_mesh_preview_and_stats() {
+    let out = support::out_dir("cli_readme");
+    let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/ello.svg");
+    let (msh, preview) = (out.join("ello.msh"), out.join("ello.svg"));
+    let run = bin()
+        .arg(&svg)
+        .arg("-o")
+        .arg(&msh)
+        .arg("--preview")
+        .arg(&preview)
+        .arg("--stats")
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    support::check_msh(&msh).assert_valid("ello");
+    let svg_text = std::fs::read_to_string(&preview).unwrap();
+    assert!(svg_text.starts_with("<?xml") || svg_text.starts_with("<svg"));
+    assert!(
+        svg_text.contains("<path") || svg_text.contains("<polygon") || svg_text.contains("<line")
+    );
+    let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    for key in ["input", "params", "times", "output", "quality"] {
+        assert!(stats.get(key).is_some(), "--stats has {key}");
+    }
+    assert!(
+        stats["quality"]["min_angle_deg"].as_f64().unwrap() >= 20.0,
+        "CDT refined to 25° in the interior"
+    );
+}
+
+#[test]
+fn the_default_output_sits_beside_the_input() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-default-out");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("drawing.svg");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg"),
+        &svg,
+    )
+    .unwrap();
+    let run = bin().arg(&svg).arg("-q").output().unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        run.stderr.is_empty() && run.stdout.is_empty(),
+        "-q and no --stats: silent"
+    );
+    support::check_msh(&dir.join("drawing.msh")).assert_valid("default output");
+}
+
+#[test]
+fn named_shapes_give_named_physical_curves() {
+    // star-evenodd.svg has ids `path1` and `frame`.
+    let out = support::out_dir("cli_names");
+    let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg");
+    let msh = out.join("star.msh");
+    let run = bin().arg(&svg).arg("-o").arg(&msh).output().unwrap();
+    assert!(run.status.success());
+    let m = support::read_msh(&msh).unwrap();
+    let curves: Vec<&String> = m
+        .physical_names
+        .iter()
+        .filter(|((dim, _), _)| *dim == 1)
+        .map(|(_, n)| n)
+        .collect();
+    assert!(curves.iter().any(|n| *n == "path1"), "{curves:?}");
+    assert!(curves.iter().any(|n| *n == "frame"), "{curves:?}");
+}
