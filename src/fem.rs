@@ -8,6 +8,8 @@
 //! the centre). Lines list their two ends, then interior nodes in order along the line
 //! (gmsh type 8: end, end, middle; type 26: end, end, 1/3, 2/3).
 
+use crate::mesh::{FeatureOn, TriMesh, VertexId};
+use crate::{Error, Result};
 use kurbo::Point;
 
 /// Geometric order of the elements (1 linear, 2 quadratic, 3 cubic).
@@ -126,6 +128,70 @@ pub struct LinearMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Feature edges; each is an edge of the triangulation.
     pub edges: Vec<FeatureEdge>,
+}
+
+impl LinearMesh {
+    /// The delivered form of a [`TriMesh`]: live vertices numbered compactly in
+    /// id order, its (counter-clockwise) triangles, and one [`FeatureEdge`] per
+    /// tagged edge and distinct `(shape, kind)` that `feature` assigns to its
+    /// tags, in edge order.
+    ///
+    /// # Errors
+    /// [`Error::Meshing`] in `stage` if some vertex still has a rational position
+    /// (DESIGN "Exactness": such a mesh is never written).
+    pub fn from_trimesh(
+        mesh: &TriMesh,
+        stage: &'static str,
+        feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
+    ) -> Result<LinearMesh> {
+        let rational = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
+        if rational > 0 {
+            return Err(Error::meshing(
+                stage,
+                format!(
+                    "{rational} vertices could not be rounded to f64 without inverting a triangle"
+                ),
+            ));
+        }
+        let mut index = vec![u32::MAX; mesh.vertex_capacity()];
+        let mut vertices = Vec::with_capacity(mesh.num_vertices());
+        for v in mesh.vertices() {
+            index[v.0 as usize] =
+                u32::try_from(vertices.len()).expect("internal: vertex count fits u32");
+            vertices.push(mesh.position(v));
+        }
+        let id = |v: VertexId| {
+            let i = index[v.0 as usize];
+            debug_assert!(
+                i != u32::MAX,
+                "internal: face refers to a dead vertex {v:?}"
+            );
+            i
+        };
+        let triangles = mesh.faces().map(|f| mesh.face(f).map(id)).collect();
+        let mut tagged: Vec<_> = mesh.tagged_edges().collect();
+        tagged.sort_unstable_by_key(|(k, _)| *k);
+        let mut edges = Vec::with_capacity(tagged.len());
+        for (k, tags) in tagged {
+            let first = edges.len();
+            for t in tags {
+                let (shape, kind) = feature(t);
+                let e = FeatureEdge {
+                    v: [id(k.lo), id(k.hi)],
+                    shape,
+                    kind,
+                };
+                if !edges[first..].contains(&e) {
+                    edges.push(e);
+                }
+            }
+        }
+        Ok(LinearMesh {
+            vertices,
+            triangles,
+            edges,
+        })
+    }
 }
 
 impl FemMesh {

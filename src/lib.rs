@@ -41,5 +41,5 @@ pub mod svg;
 
 pub use error::{Error, ErrorKind, Result};
 pub use fem::{FemMesh, LinearMesh};
-pub use params::{Length, Mesher, Params};
+pub use params::{Length, Mesher, Params, Stage};
 pub use svg::Drawing;

@@ -15,7 +15,7 @@ use triwild::batch::{self, BatchOptions, MemoryGuard, Shard};
 use triwild::output::{MshOptions, MshVersion};
 use triwild::pipeline::{self, RunOptions};
 use triwild::regions::{RegionMode, RegionOptions};
-use triwild::{Error, ErrorKind, Length, Mesher, Params};
+use triwild::{Error, ErrorKind, Length, Mesher, Params, Stage};
 
 const EXIT_HELP: &str = "\
 Exit codes:
@@ -264,7 +264,14 @@ enum MshVersionArg {
 enum MesherArg {
     /// spade constrained Delaunay triangulation with refinement (linear baseline).
     Cdt,
-    /// TriWild's exact BSP mesher.
+    /// TriWild's exact BSP mesher (features, exact BSP, rounding). The optimizer
+    /// does not exist yet, so this writes the raw BSP mesh, as with `--stop-after bsp`.
+    Bsp,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum StageArg {
+    /// The exact BSP mesh, rounded to f64, feature edges as physical curves (needs --mesher bsp).
     Bsp,
 }
 
@@ -274,6 +281,9 @@ struct ParamArgs {
     /// Linear mesher.
     #[arg(long, value_enum, default_value = "cdt")]
     mesher: MesherArg,
+    /// Stop after this stage and write its mesh.
+    #[arg(long, value_enum, value_name = "STAGE")]
+    stop_after: Option<StageArg>,
     /// Target edge length l, relative to d.
     #[arg(short = 'l', long, default_value_t = 0.05, value_name = "REL")]
     edge_length: f64,
@@ -347,6 +357,9 @@ impl ParamArgs {
                 MesherArg::Cdt => Mesher::Cdt,
                 MesherArg::Bsp => Mesher::Bsp,
             })
+            .with_stop_after(self.stop_after.map(|s| match s {
+                StageArg::Bsp => Stage::Bsp,
+            }))
             .with_l(len(self.edge_length, self.edge_length_abs))
             .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
             .with_mu(len(self.mu, self.mu_abs))

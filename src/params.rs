@@ -42,6 +42,16 @@ pub enum Mesher {
     Bsp,
 }
 
+/// A pipeline stage after which meshing may stop (`--stop-after`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum Stage {
+    /// The exact BSP mesh (needs [`Mesher::Bsp`]): every vertex rounded to `f64`
+    /// or an error, no optimization.
+    Bsp,
+}
+
 /// All meshing parameters. Start from [`Params::DEFAULT`] and use the `with_*` builders.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[non_exhaustive]
@@ -76,6 +86,9 @@ pub struct Params {
     pub max_vertices: u32,
     /// The linear mesher. Default [`Mesher::Cdt`] until the TriWild stages land.
     pub mesher: Mesher,
+    /// Stop after this stage and deliver its mesh. Default `None` (run every
+    /// stage that exists). [`Stage::Bsp`] needs [`Mesher::Bsp`].
+    pub stop_after: Option<Stage>,
     /// Run the full mesh validator after every stage (slow). Default false.
     pub paranoid: bool,
 }
@@ -97,6 +110,7 @@ impl Params {
         cdt_min_angle_deg: 25.0,
         max_vertices: 200_000,
         mesher: Mesher::Cdt,
+        stop_after: None,
         paranoid: false,
     };
 
@@ -162,6 +176,11 @@ impl Params {
         self.max_passes_curved = max_passes;
         self
     }
+    /// Stop after `stage` (or run every stage, with `None`).
+    pub fn with_stop_after(mut self, stage: Option<Stage>) -> Self {
+        self.stop_after = stage;
+        self
+    }
     /// Turn the paranoid validator on or off.
     pub fn with_paranoid(mut self, paranoid: bool) -> Self {
         self.paranoid = paranoid;
@@ -216,6 +235,11 @@ impl Params {
                     "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
                 )));
             }
+        }
+        if self.stop_after == Some(Stage::Bsp) && self.mesher != Mesher::Bsp {
+            return Err(Error::InvalidParams(
+                "--stop-after bsp needs --mesher bsp".into(),
+            ));
         }
         Ok(())
     }
@@ -296,5 +320,16 @@ mod tests {
                 .is_err()
         );
         assert!(Params::DEFAULT.with_alpha_deg(-1.0).validate().is_err());
+        assert!(
+            Params::DEFAULT
+                .with_stop_after(Some(Stage::Bsp))
+                .validate()
+                .is_err()
+        );
+        Params::DEFAULT
+            .with_mesher(Mesher::Bsp)
+            .with_stop_after(Some(Stage::Bsp))
+            .validate()
+            .unwrap();
     }
 }

@@ -1,13 +1,23 @@
 //! The pipeline: load → mesh → (regions, curving) → output, with per-stage timings
 //! gathered into a [`Report`].
+//!
+//! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild's
+//! linear path, features → exact BSP (`bsp`) → rounded [`LinearMesh`]
+//! (`linear`); a BSP vertex that stays rational is an error, never written
+//! (DESIGN "Exactness"). The optimizer (issue 5) does not exist yet, so the BSP
+//! mesh is delivered as is, with or without `--stop-after bsp`.
 
-use crate::fem::FemMesh;
+use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
+use crate::features::{self, FeatureCounts, FeatureSet};
+use crate::fem::{FemMesh, LineKind, LinearMesh};
+use crate::mesh::FeatureOn;
 use crate::output::{self, MshOptions};
-use crate::params::{Mesher, Params, Resolved};
+use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
 use crate::regions::{RegionOptions, RegionReport};
 use crate::svg::{self, Drawing, FeatureGeom};
 use crate::{Error, Result};
+use kurbo::Rect;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -140,6 +150,14 @@ pub struct Report {
     pub quality: Quality,
     /// Physical surfaces (triangles and area of each) and classification counts.
     pub regions: RegionReport,
+    /// Feature preprocessing counts (TriWild meshers only).
+    pub features: Option<FeatureCounts>,
+    /// Counts and timings of the BSP stage (`--mesher bsp` only); its
+    /// `rational_before_rounding` and `rational_vertices` say how many vertices
+    /// were still rational before and after rounding.
+    pub bsp: Option<BspStats>,
+    /// The stage the run stopped after, if it stopped early.
+    pub stopped_after: Option<Stage>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
 }
@@ -189,18 +207,21 @@ pub fn mesh_drawing_with(
     params.validate()?;
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
-    let mesh = match params.mesher {
-        Mesher::Cdt => {
-            let linear =
-                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
-            FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name())
-        }
+    let mut features = None;
+    let mut bsp = None;
+    let linear = match params.mesher {
+        Mesher::Cdt => times.time("baseline", || crate::baseline::triangulate(drawing, params))?,
         Mesher::Bsp => {
-            return Err(Error::InvalidParams(
-                "--mesher bsp is not available yet; use --mesher cdt".into(),
-            ));
+            let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
+            features = Some(fs.counts);
+            let (linear, stats) = bsp_linear(drawing, &fs, params, &resolved, &mut times)?;
+            bsp = Some(stats);
+            // No optimizer yet (issue 5): the BSP mesh is the linear mesh,
+            // whether or not the run stops after `bsp`.
+            linear
         }
     };
+    let mesh = FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name());
     let (mesh, region_report) = times.time("regions", || {
         crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
     })?;
@@ -215,9 +236,90 @@ pub fn mesh_drawing_with(
         output: OutputCounts::of(&mesh),
         quality,
         regions: region_report,
+        features,
+        bsp,
+        stopped_after: params.stop_after,
         warnings: drawing.warnings.clone(),
     };
     Ok(Meshed { mesh, report })
+}
+
+/// The box the TriWild meshers cover: the drawing's bounding box padded by
+/// `padding` (at least a few ulps of the coordinates, so it stays strictly larger).
+fn padded_box(drawing: &Drawing, padding: f64) -> Rect {
+    let b = drawing.bbox;
+    let magnitude = [b.x0, b.y0, b.x1, b.y1]
+        .into_iter()
+        .fold(0.0f64, |m, c| m.max(c.abs()));
+    let pad = padding.max(magnitude * 1e-12).max(f64::MIN_POSITIVE);
+    Rect::new(b.x0 - pad, b.y0 - pad, b.x1 + pad, b.y1 + pad)
+}
+
+/// The BSP input of a feature set: every conforming segment with its tag,
+/// isolated points and section endpoints.
+fn bsp_input(fs: &FeatureSet) -> BspInput {
+    let ci = fs.conforming_input();
+    let segments = ci
+        .segments
+        .iter()
+        .map(|(line, tag)| BspSegment {
+            a: line.p0,
+            b: line.p1,
+            tag: match *tag {
+                features::SegmentTag::Primary(id) => bsp::SegmentTag::Primary {
+                    section: id.0,
+                    t: fs.primary[id.0 as usize].t,
+                },
+                features::SegmentTag::Secondary { polyline, .. } => bsp::SegmentTag::Secondary {
+                    polyline: polyline.0,
+                },
+            },
+        })
+        .collect();
+    let section_endpoints = fs
+        .primary
+        .iter()
+        .flat_map(|s| [s.ctrl.p0, s.ctrl.p3])
+        .collect();
+    BspInput {
+        points: ci.points,
+        section_endpoints,
+        segments,
+    }
+}
+
+/// Features → exact BSP → rounded linear mesh (stages `bsp` and `linear`).
+fn bsp_linear(
+    drawing: &Drawing,
+    fs: &FeatureSet,
+    params: &Params,
+    resolved: &Resolved,
+    times: &mut Times,
+) -> Result<(LinearMesh, BspStats)> {
+    let input = bsp_input(fs);
+    let bbox = padded_box(drawing, resolved.padding);
+    let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
+    if params.paranoid {
+        let defects = times.time("check", || mesh.check());
+        if let Some(d) = defects.first() {
+            return Err(Error::meshing(
+                "bsp",
+                format!("internal: {} mesh defects, first: {d:?}", defects.len()),
+            ));
+        }
+    }
+    let linear = times.time("linear", || {
+        LinearMesh::from_trimesh(&mesh, "bsp", |t| match *t {
+            FeatureOn::Primary { section, .. } => {
+                (fs.primary[section as usize].source.shape, LineKind::Primary)
+            }
+            FeatureOn::Secondary { polyline } => (
+                fs.secondary[polyline as usize].source.shape,
+                LineKind::Secondary,
+            ),
+        })
+    })?;
+    Ok((linear, stats))
 }
 
 /// Load `input`, mesh it, write `output` (and the preview, if asked for).

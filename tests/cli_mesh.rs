@@ -73,15 +73,27 @@ fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
             );
             assert!(report.triangles > 0 && report.lines > 0);
             // The mesh covers the padded box: its area is the box's.
-            let d = stats["input"]["d"].as_f64().unwrap();
             assert!(report.area > 0.0 && report.area.is_finite());
             let min_angle = stats["quality"]["min_angle_deg"].as_f64().unwrap();
             assert!(min_angle > 0.0, "{stem}: min angle {min_angle}");
-            let _ = d;
+            // Regions (default `--regions shape`): the background plus the filled
+            // shapes, whose areas add up to the whole mesh.
             let m = support::read_msh(&msh).unwrap();
             assert!(
-                m.physical_names.values().any(|n| n == "domain"),
-                "{stem} {name}: physical surface"
+                m.physical_names
+                    .iter()
+                    .any(|((dim, _), n)| *dim == 2 && n == "background"),
+                "{stem} {name}: physical surface `background`"
+            );
+            let regions = stats["regions"]["surfaces"]
+                .as_array()
+                .or_else(|| stats["regions"]["regions"].as_array())
+                .expect("--stats lists the regions");
+            let sum: f64 = regions.iter().map(|r| r["area"].as_f64().unwrap()).sum();
+            assert!(
+                (sum - report.area).abs() <= 1e-9 * report.area,
+                "{stem} {name}: region areas {sum} vs mesh area {}",
+                report.area
             );
             match &first {
                 None => first = Some(m),

@@ -41,6 +41,27 @@ fn svg_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
+/// CI's sample: every 15th file of the dev set under 40 KB (about 15 drawings from
+/// every collection), so the invariants are checked on real drawings in every run.
+#[test]
+fn devset_sample_feature_sets_keep_every_invariant() {
+    let dir = devset_dir();
+    let mut files = Vec::new();
+    svg_files(&dir, &mut files);
+    if files.is_empty() {
+        println!("no dev set at {}: skipped", dir.display());
+        return;
+    }
+    let sample: Vec<PathBuf> = files
+        .iter()
+        .step_by(15)
+        .filter(|f| std::fs::metadata(f).is_ok_and(|m| m.len() < 40_000))
+        .cloned()
+        .collect();
+    assert!(sample.len() >= 8, "sample of {} files", sample.len());
+    check_files(&dir, &sample);
+}
+
 #[test]
 #[ignore = "slow corpus run; needs the svg loader and ../shared/data/svg-dev"]
 fn devset_feature_sets_keep_every_invariant() {
@@ -48,11 +69,15 @@ fn devset_feature_sets_keep_every_invariant() {
     let mut files = Vec::new();
     svg_files(&dir, &mut files);
     assert!(!files.is_empty(), "no .svg under {}", dir.display());
+    check_files(&dir, &files);
+}
+
+fn check_files(dir: &Path, files: &[PathBuf]) {
     let (mut ok, mut unloadable, mut failures) = (0, 0, Vec::new());
     let (mut primary, mut secondary, mut points) = (0, 0, 0);
     let start = Instant::now();
     println!("file\tsections\tprimary\tsecondary_segments\tpoints\tms");
-    for f in &files {
+    for f in files {
         let Ok(drawing) = triwild::svg::load_file(f) else {
             unloadable += 1;
             continue;
@@ -60,7 +85,7 @@ fn devset_feature_sets_keep_every_invariant() {
         let t = Instant::now();
         let fs = FeatureSet::build(&drawing, &Params::DEFAULT.resolve(drawing.diagonal()));
         let ms = t.elapsed().as_secs_f64() * 1e3;
-        let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
+        let name = f.strip_prefix(dir).unwrap_or(f).display().to_string();
         let c = fs.counts;
         println!(
             "{name}\t{}\t{}\t{}\t{}\t{ms:.1}",

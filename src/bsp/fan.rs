@@ -54,6 +54,22 @@ fn key(p: kurbo::Point) -> (u64, u64) {
     ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
 }
 
+/// Compare the x (or y, unless `along_x`) coordinates of two vertices exactly:
+/// by their rounded positions when those differ (rounding to nearest is
+/// monotone), else in rationals.
+fn cmp_coordinate(mesh: &TriMesh, along_x: bool, p: VertexId, q: VertexId) -> Ordering {
+    let (pp, pq) = (mesh.position(p), mesh.position(q));
+    let (cp, cq) = if along_x { (pp.x, pq.x) } else { (pp.y, pq.y) };
+    if cp != cq {
+        cp.total_cmp(&cq)
+    } else if mesh.is_rational(p) || mesh.is_rational(q) {
+        let (dx, dy) = if along_x { (1.0, 0.0) } else { (0.0, 1.0) };
+        mesh.point_q_ref(p).cmp_along(&mesh.point_q_ref(q), dx, dy)
+    } else {
+        Ordering::Equal
+    }
+}
+
 /// Walk every segment from `a` to `b` along mesh edges and tag them.
 ///
 /// # Errors
@@ -77,7 +93,8 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
         if va == vb {
             continue;
         }
-        let (qa, qb) = (PointQ::from_point(seg.a), PointQ::from_point(seg.b));
+        let qa = PointQ::from_point(seg.a);
+        let qb = PointQ::from_point(seg.b);
         let d = seg.b - seg.a;
         let len2 = d.hypot2();
         let param = |p: kurbo::Point| {
@@ -87,14 +104,23 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                 0.5
             }
         };
+        // Points of the segment's line are ordered along it as their dominant
+        // coordinate is (its exact delta is non-zero: a != b). Rounding to
+        // nearest is monotone, so distinct rounded coordinates decide; equal
+        // ones fall back to the exact comparison.
+        let along_x = d.x.abs() >= d.y.abs();
+        let ascending = if along_x { d.x > 0.0 } else { d.y > 0.0 };
+        let cmp = |mesh: &TriMesh, p: VertexId, q: VertexId| {
+            let o = cmp_coordinate(mesh, along_x, p, q);
+            if ascending { o } else { o.reverse() }
+        };
         let mut u = va;
         let mut s_u = 0.0;
         for _ in 0..=mesh.num_vertices() {
             if u == vb {
                 break;
             }
-            let qu = mesh.point_q(u);
-            let mut best: Option<(VertexId, PointQ)> = None;
+            let mut best: Option<VertexId> = None;
             for f in mesh.incident_faces(u) {
                 for w in mesh.face(f) {
                     if w == u {
@@ -107,21 +133,16 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                     if on_line != Orientation::Collinear {
                         continue;
                     }
-                    let qw = mesh.point_q(w);
-                    if qw.cmp_along_q(&qu, &qa, &qb) != Ordering::Greater
-                        || qw.cmp_along_q(&qb, &qa, &qb) == Ordering::Greater
+                    if cmp(mesh, w, u) != Ordering::Greater || cmp(mesh, w, vb) == Ordering::Greater
                     {
                         continue;
                     }
-                    let closer = best
-                        .as_ref()
-                        .is_none_or(|(_, qbest)| qw.cmp_along_q(qbest, &qa, &qb) == Ordering::Less);
-                    if closer {
-                        best = Some((w, qw));
+                    if best.is_none_or(|b| cmp(mesh, w, b) == Ordering::Less) {
+                        best = Some(w);
                     }
                 }
             }
-            let Some((w, _)) = best else {
+            let Some(w) = best else {
                 return Err(not_conforming("no next edge"));
             };
             let s_w = if w == vb {
@@ -147,9 +168,53 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
     Ok(())
 }
 
-/// Round every rational vertex to its nearest `f64` point when all its
-/// incident triangles stay exactly counter-clockwise; repeat up to `passes`
-/// times while something changed.
+/// How many ulps away from the nearest `f64` coordinate rounding may look when
+/// the nearest point would invert a triangle.
+const ROUND_ULPS: i32 = 2;
+
+/// The next `f64` above `x` (`f64::next_up` needs a newer Rust than the MSRV).
+fn next_up(x: f64) -> f64 {
+    if x.is_nan() || x == f64::INFINITY {
+        x
+    } else if x == 0.0 {
+        f64::from_bits(1)
+    } else if x > 0.0 {
+        f64::from_bits(x.to_bits() + 1)
+    } else {
+        f64::from_bits(x.to_bits() - 1)
+    }
+}
+
+/// `x` moved by `k` ulps (`k` may be negative).
+fn step_ulps(x: f64, k: i32) -> f64 {
+    let mut y = x;
+    for _ in 0..k.unsigned_abs() {
+        y = if k > 0 { next_up(y) } else { -next_up(-y) };
+    }
+    y
+}
+
+/// The `f64` points tried when rounding a vertex at exact position `q` whose
+/// nearest `f64` point is `p`: `p` first, then points up to [`ROUND_ULPS`]
+/// ulps away per coordinate, nearest (in ulps) first. A coordinate that is
+/// exactly an `f64` (e.g. on a box side or an axis-parallel segment) is kept.
+fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::Point> {
+    let range = |e: bool| if e { 0..=0 } else { -ROUND_ULPS..=ROUND_ULPS };
+    let mut offsets: Vec<(i32, i32)> = range(exact[0])
+        .flat_map(|i| range(exact[1]).map(move |j| (i, j)))
+        .collect();
+    offsets.sort_by_key(|&(i, j)| (i.abs().max(j.abs()), i.abs() + j.abs()));
+    offsets
+        .into_iter()
+        .map(|(i, j)| kurbo::Point::new(step_ulps(p.x, i), step_ulps(p.y, j)))
+        .filter(|c| c.x.is_finite() && c.y.is_finite())
+        .collect()
+}
+
+/// Round every rational vertex to an `f64` point when all its incident
+/// triangles stay exactly counter-clockwise: the nearest one, else one a few
+/// ulps away ([`round_candidates`]); repeat up to `passes` times while
+/// something changed.
 pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
     for _ in 0..passes {
         let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
@@ -163,17 +228,53 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
         for v in rational {
+            let star = &star[v.0 as usize];
+            let fits = |p: kurbo::Point| {
+                star.iter()
+                    .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise)
+            };
             let p = mesh.position(v);
-            let ok = star[v.0 as usize]
-                .iter()
-                .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise);
-            if ok {
-                mesh.set_position(v, p);
+            let to = if fits(p) {
+                Some(p)
+            } else {
+                let exact = mesh
+                    .exact(v)
+                    .expect("internal: listed as rational")
+                    .coords_are_f64();
+                round_candidates(p, exact)
+                    .into_iter()
+                    .skip(1)
+                    .find(|&c| fits(c))
+            };
+            if let Some(to) = to {
+                mesh.set_position(v, to);
                 changed = true;
             }
         }
         if !changed {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_start_at_the_nearest_point_and_keep_exact_coordinates() {
+        let p = kurbo::Point::new(1.0, 3.0);
+        let c = round_candidates(p, [false, false]);
+        assert_eq!(c.len(), 25);
+        assert_eq!(c[0], p);
+        assert!(
+            c[1..9]
+                .iter()
+                .all(|q| (q.x - p.x).abs() <= 2.3e-16 && (q.y - p.y).abs() <= 4.5e-16)
+        );
+        let c = round_candidates(p, [true, false]);
+        assert_eq!(c.len(), 5);
+        assert!(c.iter().all(|q| q.x == 1.0));
+        assert_eq!(round_candidates(p, [true, true]), vec![p]);
     }
 }

@@ -8,19 +8,25 @@
 //! triangulated by a fan from one of its corners when that gives no
 //! degenerate triangle, else from its exact barycentre; then edges are tagged
 //! with the segments they lie on, and vertices are rounded to `f64` wherever
-//! no incident triangle would invert or degenerate (`fan.rs`).
+//! no incident triangle would invert or degenerate, trying the nearest `f64`
+//! point and then a few ulps around it (`fan.rs`); a vertex that none of
+//! those can hold is collapsed into an `f64` neighbour when that keeps the
+//! mesh valid and the feature chains intact (`collapse.rs`).
 //!
 //! Guarantees to the next stage, for any finite input inside the box: every
 //! triangle is exactly counter-clockwise; the mesh is conforming (no
 //! T-junctions) and covers the box; before rounding, every input segment is
 //! exactly a chain of mesh edges, each tagged with the segment's
 //! [`SegmentTag`]. Rounding ([`BspOptions::round`]) moves vertices by at most
-//! half an ulp per coordinate, so a rounded vertex may be off its segment by
-//! that much; vertices that cannot be rounded keep their rational position.
+//! a few ulps per coordinate (half an ulp when the nearest point fits), so a
+//! rounded vertex may be off its segment by that much; a collapsed vertex
+//! leaves its chain's neighbours joined by one edge, its tags merged; vertices
+//! that can be neither rounded nor collapsed keep their rational position.
 //!
 //! Thesis §2.3.1 (BSP construction), §2.3.4 (hybrid kernel), §4.4.1 (linear
 //! meshing); DESIGN "Data flow" (bsp) and "Exactness".
 
+mod collapse;
 mod cut;
 mod fan;
 mod seed;
@@ -134,6 +140,9 @@ pub struct BspStats {
     pub tagged_edges: usize,
     /// Vertices with a non-`f64` position before rounding.
     pub rational_before_rounding: usize,
+    /// Rational vertices that no nearby `f64` point could hold, collapsed
+    /// into a neighbour.
+    pub collapsed_vertices: usize,
     /// Vertices still rational in the output.
     pub rational_vertices: usize,
     /// Power-of-two exponent applied to coordinates for the Delaunay step.
@@ -170,6 +179,21 @@ pub fn build(input: &BspInput, bbox: Rect, opts: &BspOptions) -> Result<(TriMesh
     stats.rational_before_rounding = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
     if opts.round {
         fan::round_vertices(&mut mesh, opts.round_passes);
+        // What no f64 point can hold is collapsed into a neighbour, which may
+        // free others to round; a few rounds at most.
+        for _ in 0..opts.round_passes {
+            let stuck: Vec<_> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
+            let before = stats.collapsed_vertices;
+            for v in stuck {
+                if mesh.is_vertex_alive(v) && collapse::try_collapse(&mut mesh, v) {
+                    stats.collapsed_vertices += 1;
+                }
+            }
+            if stats.collapsed_vertices == before {
+                break;
+            }
+            fan::round_vertices(&mut mesh, opts.round_passes);
+        }
     }
     stats.rational_vertices = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
     stats.vertices = mesh.num_vertices();

@@ -184,6 +184,11 @@ impl PointQ {
         self.ix.lo == self.ix.hi && self.iy.lo == self.iy.hi
     }
 
+    /// Whether each coordinate (x, then y) is exactly representable as `f64`.
+    pub fn coords_are_f64(&self) -> [bool; 2] {
+        [self.ix.lo == self.ix.hi, self.iy.lo == self.iy.hi]
+    }
+
     /// The exact `f64` value of this point, if it has one.
     pub fn as_f64(&self) -> Option<Point> {
         self.is_f64().then(|| Point::new(self.ix.lo, self.iy.lo))

@@ -5,15 +5,15 @@
 //! sections (kept exactly, to be curved later) and *secondary* polylines (approximated
 //! within ε), plus isolated points. The stages, in order:
 //!
-//! 1. [`classify`]: degenerate curves (control points within ε_m of their mean) become
+//! 1. `classify`: degenerate curves (control points within ε_m of their mean) become
 //!    points, straight curves (control points within ε_m of their least-squares line) become
 //!    segments.
-//! 2. [`split`]: cubics are split at inflections (det(c′, c″) = 0, eq. 4.1) and at
+//! 2. `split`: cubics are split at inflections (det(c′, c″) = 0, eq. 4.1) and at
 //!    zero-derivative points (cusps), then recursively where the tangent bisects the total
 //!    turn, until every piece has constant-sign curvature and turns less than 180°.
-//! 3. [`resample`]: pieces are halved until each is shorter than l, within μ of its chord and
+//! 3. `resample`: pieces are halved until each is shorter than l, within μ of its chord and
 //!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m are not eligible.
-//! 4. [`separation`]: μ-separation (Definition 4.1), decided conservatively on the sections'
+//! 4. `separation`: μ-separation (Definition 4.1), decided conservatively on the sections'
 //!    control hulls with a uniform grid, then the secondary simplification (endpoints closer
 //!    than μ collapse to their barycentre).
 //!

@@ -1,0 +1,320 @@
+//! TriWild's linear path end to end (`--mesher bsp --stop-after bsp`): features → exact BSP
+//! → rounded linear mesh → .msh. Every drawing of `data/svg` and `tests/fixtures/bsp` is
+//! meshed through the library API, written under `target/test-out/bsp/` (CI runs gmsh's
+//! `mshcheck --strict` on them), read back with the independent reader of `tests/support`
+//! and checked: valid (counter-clockwise, conforming, manifold), covering the padded box,
+//! and every primary chord and secondary segment of the FeatureSet present as a chain of
+//! feature line elements whose vertices lie within 1e-9·d of it, in a physical curve named
+//! after the segment's source shape.
+//!
+//! The dev-set run is ignored (slow, needs the corpus):
+//! `cargo test --release --test bsp_pipeline -- --ignored --nocapture`.
+#![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
+
+mod support;
+
+use kurbo::{Line, Point};
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use support::{Msh, check, out_dir, read_msh};
+use triwild::features::{FeatureSet, SegmentTag};
+use triwild::pipeline::{self, Report, RunOptions};
+use triwild::{Drawing, Mesher, Params, Stage};
+
+fn bsp_params() -> Params {
+    Params::DEFAULT
+        .with_mesher(Mesher::Bsp)
+        .with_stop_after(Some(Stage::Bsp))
+}
+
+/// Node tag by exact position.
+fn key(p: [f64; 2]) -> (u64, u64) {
+    ((p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits())
+}
+
+/// What the conformance check found wrong, in words (empty: all good).
+fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<String> {
+    let d = drawing.diagonal();
+    let fs = FeatureSet::build(drawing, &params.resolve(d));
+    let tol = 1e-9 * d;
+    let pos: HashMap<u64, [f64; 2]> = m.nodes.iter().map(|&(t, x)| (t, [x[0], x[1]])).collect();
+    let by_pos: HashMap<(u64, u64), u64> = m
+        .nodes
+        .iter()
+        .map(|&(t, x)| (key([x[0], x[1]]), t))
+        .collect();
+    // Feature line elements: undirected edge -> names of its physical curves.
+    let mut line_names: HashMap<(u64, u64), HashSet<&str>> = HashMap::new();
+    let mut adj: HashMap<u64, Vec<u64>> = HashMap::new();
+    for e in m.of_type(1) {
+        let (a, b) = (e.nodes[0], e.nodes[1]);
+        let names = line_names.entry((a.min(b), a.max(b))).or_default();
+        for p in &e.physical {
+            if let Some(n) = m.physical_names.get(&(1, *p)) {
+                names.insert(n.as_str());
+            }
+        }
+        adj.entry(a).or_default().push(b);
+        adj.entry(b).or_default().push(a);
+    }
+    let mut defects = Vec::new();
+    for (line, tag) in fs.conforming_input().segments {
+        let source = match tag {
+            SegmentTag::Primary(id) => fs.primary[id.0 as usize].source,
+            SegmentTag::Secondary { polyline, .. } => fs.secondary[polyline.0 as usize].source,
+        };
+        let name = drawing.shapes[source.shape.0 as usize].name();
+        if let Err(e) = find_chain(line, &name, tol, &pos, &by_pos, &adj, &line_names) {
+            defects.push(format!("{tag:?} {line:?} of {name}: {e}"));
+        }
+    }
+    defects
+}
+
+/// Search a chain of feature lines (in the curve `name`) from `line.p0` to `line.p1` whose
+/// vertices are within `tol` of the segment and advance strictly along it.
+fn find_chain(
+    line: Line,
+    name: &str,
+    tol: f64,
+    pos: &HashMap<u64, [f64; 2]>,
+    by_pos: &HashMap<(u64, u64), u64>,
+    adj: &HashMap<u64, Vec<u64>>,
+    line_names: &HashMap<(u64, u64), HashSet<&str>>,
+) -> Result<(), String> {
+    let (a, b) = (line.p0, line.p1);
+    let (Some(&ta), Some(&tb)) = (by_pos.get(&key([a.x, a.y])), by_pos.get(&key([b.x, b.y])))
+    else {
+        return Err("an endpoint is not a node".into());
+    };
+    if ta == tb {
+        return Ok(());
+    }
+    let dir = b - a;
+    let len2 = dir.hypot2();
+    let along = |t: u64| {
+        let p = pos[&t];
+        let v = Point::new(p[0], p[1]) - a;
+        (v.dot(dir) / len2, v.cross(dir).abs() / len2.sqrt())
+    };
+    let mut stack = vec![ta];
+    let mut seen = HashSet::from([ta]);
+    while let Some(u) = stack.pop() {
+        if u == tb {
+            return Ok(());
+        }
+        let (su, _) = along(u);
+        for &w in adj.get(&u).map(Vec::as_slice).unwrap_or(&[]) {
+            let (sw, dist) = along(w);
+            let named = line_names[&(u.min(w), u.max(w))].contains(name);
+            if named && dist <= tol && sw > su && seen.insert(w) {
+                stack.push(w);
+            }
+        }
+    }
+    Err("no chain of feature lines along it".into())
+}
+
+/// One meshed and checked file.
+struct Outcome {
+    report: Report,
+    seconds: f64,
+    /// Defects of the written file and of its conformance, in words.
+    defects: Vec<String>,
+}
+
+/// Mesh `svg` to `out` with the BSP path, read it back and check it.
+fn mesh_and_check(svg: &Path, out: &Path) -> Result<Outcome, String> {
+    let params = bsp_params();
+    let drawing = triwild::svg::load_file(svg).map_err(|e| format!("load: {e}"))?;
+    let t = Instant::now();
+    let report = pipeline::run_file(svg, out, &RunOptions::new(params.clone()))
+        .map_err(|e| format!("mesh: {e}"))?;
+    let seconds = t.elapsed().as_secs_f64();
+    let m = read_msh(out).map_err(|e| format!("read back: {e}"))?;
+    let r = check(&m);
+    let mut defects: Vec<String> = r
+        .defects
+        .iter()
+        .map(|d| format!("{:?}: {}", d.kind, d.detail))
+        .collect();
+    // The triangles tile the padded box.
+    let pad = params.padding.resolve(drawing.diagonal());
+    let b = drawing.bbox.inflate(pad, pad);
+    if (r.area - b.area()).abs() > 1e-9 * b.area() {
+        defects.push(format!("area {} is not the box's {}", r.area, b.area()));
+    }
+    let bsp = report.bsp.as_ref().ok_or("no bsp stats")?;
+    if bsp.rational_vertices != 0 || r.nodes != bsp.vertices || r.triangles != bsp.triangles {
+        defects.push(format!(
+            "counts disagree: file {} nodes {} triangles, stats {bsp:?}",
+            r.nodes, r.triangles
+        ));
+    }
+    defects.extend(conformance_defects(&drawing, &params, &m));
+    Ok(Outcome {
+        report,
+        seconds,
+        defects,
+    })
+}
+
+fn svgs_in(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            svgs_in(&p, out);
+        } else if p.extension().is_some_and(|e| e == "svg") {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+fn sample_drawings_and_fixtures_mesh_valid_and_conforming() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    svgs_in(&root.join("data/svg"), &mut files);
+    let samples = files.len();
+    svgs_in(&root.join("tests/fixtures/bsp"), &mut files);
+    assert!(samples >= 5 && files.len() >= samples + 4, "{files:?}");
+    let dir = out_dir("bsp");
+    for f in &files {
+        let stem = f.file_stem().expect("a file name").to_string_lossy();
+        let out = dir.join(format!("{stem}.msh"));
+        let o = mesh_and_check(f, &out).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert!(
+            o.defects.is_empty(),
+            "{}: {} defects, first: {:#?}",
+            f.display(),
+            o.defects.len(),
+            &o.defects[..o.defects.len().min(5)]
+        );
+        let bsp = o.report.bsp.as_ref().expect("bsp stats");
+        assert!(bsp.tagged_edges > 0 && o.report.output.feature_edges > 0);
+        assert!(o.report.times.contains_key("features") && o.report.times.contains_key("bsp"));
+    }
+}
+
+#[test]
+fn crossing_fixtures_exercise_rational_vertices() {
+    // The fixtures are only useful if the BSP really cuts: crossings make rational
+    // vertices, which rounding must all remove.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp");
+    let dir = out_dir("bsp-crossings");
+    for name in ["crossing-lines", "overlapping-circles", "t-junction"] {
+        let f = root.join(format!("{name}.svg"));
+        let o = mesh_and_check(&f, &dir.join(format!("{name}.msh")))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let bsp = o.report.bsp.expect("bsp stats");
+        assert!(
+            bsp.cut_triangles > 0 && bsp.rational_before_rounding > 0,
+            "{name}: {bsp:?}"
+        );
+        assert_eq!(bsp.rational_vertices, 0, "{name}");
+    }
+}
+
+#[test]
+fn stop_after_bsp_needs_the_bsp_mesher() {
+    let err = Params::DEFAULT
+        .with_stop_after(Some(Stage::Bsp))
+        .validate()
+        .expect_err("cdt cannot stop after bsp");
+    assert_eq!(err.kind(), triwild::ErrorKind::BadInput);
+}
+
+fn devset_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("TRIWILD_DEVSET") {
+        return d.into();
+    }
+    // ../shared/data/svg-dev, looked up from each ancestor (a git worktree sits deeper).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    root.ancestors()
+        .skip(1)
+        .map(|a| a.join("shared/data/svg-dev"))
+        .find(|d| d.is_dir())
+        .unwrap_or_else(|| root.join("../shared/data/svg-dev"))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
+}
+
+#[test]
+#[ignore = "slow corpus run over ../shared/data/svg-dev (or TRIWILD_DEVSET)"]
+fn devset_meshes_valid_and_conforming() {
+    let dir = devset_dir();
+    let mut files = Vec::new();
+    svgs_in(&dir, &mut files);
+    if files.is_empty() {
+        println!("no .svg under {}: skipped", dir.display());
+        return;
+    }
+    let out = out_dir("bsp-devset");
+    let (mut ok, mut unloadable, mut failed) = (0usize, 0usize, Vec::new());
+    let (mut rational_before, mut rational_after, mut collapsed) = (0usize, 0usize, 0usize);
+    let mut times = Vec::new();
+    // seconds: load + features + bsp + write; bsp_s: the BSP stage alone.
+    println!(
+        "file\tseconds\tbsp_s\tvertices\ttriangles\trational_before\tcollapsed\trational_left\tvalid"
+    );
+    for (i, f) in files.iter().enumerate() {
+        let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
+        if triwild::svg::load_file(f).is_err() {
+            unloadable += 1;
+            continue;
+        }
+        let msh = out.join(format!("{i:03}.msh"));
+        let result = std::panic::catch_unwind(|| mesh_and_check(f, &msh));
+        match result {
+            Ok(Ok(o)) => {
+                let b = o.report.bsp.as_ref().expect("bsp stats");
+                let valid = o.defects.is_empty();
+                println!(
+                    "{name}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}\t{}\t{valid}",
+                    o.seconds,
+                    b.seconds,
+                    b.vertices,
+                    b.triangles,
+                    b.rational_before_rounding,
+                    b.collapsed_vertices,
+                    b.rational_vertices
+                );
+                times.push(o.seconds);
+                rational_before += b.rational_before_rounding;
+                rational_after += b.rational_vertices;
+                collapsed += b.collapsed_vertices;
+                if valid {
+                    ok += 1;
+                } else {
+                    println!("  {} defects, first: {}", o.defects.len(), o.defects[0]);
+                    failed.push(name);
+                }
+            }
+            Ok(Err(e)) => {
+                println!("{name}\tFAILED: {e}");
+                failed.push(name);
+            }
+            Err(_) => {
+                println!("{name}\tPANICKED");
+                failed.push(name);
+            }
+        }
+    }
+    let max = times.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{} files: {ok} ok, {} failed, {unloadable} not loadable; time per file median {:.3} s, \
+         max {max:.3} s; rational vertices before rounding {rational_before}, collapsed {collapsed}, left {rational_after}",
+        files.len(),
+        failed.len(),
+        median(&mut times)
+    );
+    assert!(failed.is_empty(), "failed: {failed:?}");
+}
