@@ -469,8 +469,7 @@ impl<'a> Reader<'a> {
                     return self.err(format!("unexpected {}", truncate(l)));
                 }
                 _ => {
-                    let owned: &'static str = "an unknown section";
-                    self.section = owned;
+                    self.section = "an unknown section";
                     self.skip_section(name)?;
                 }
             }
