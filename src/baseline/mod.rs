@@ -8,7 +8,9 @@
 //! length l within the vertex budget [`Params::max_vertices`].
 //!
 //! Guarantees to the next stage (a [`LinearMesh`]):
-//! - the triangles tile the padded box exactly (their areas sum to its area);
+//! - the triangles tile the padded box (their areas sum to its area, up to an ulp
+//!   of the coordinates along the box's sides, where spade's refinement may round
+//!   a vertex it puts on a side);
 //! - every triangle is strictly counter-clockwise, decided with the exact
 //!   predicate `robust::orient2d` on the returned f64 vertices; otherwise the
 //!   result is an [`crate::Error::Meshing`], never a bad mesh;
@@ -179,6 +181,12 @@ fn mesh_planar(
         ));
     };
     let (cdt, skipped) = built?;
+    if skipped > 0 {
+        tracing::warn!(
+            skipped,
+            "baseline: spade could not insert some snapped pieces; they are left out"
+        );
+    }
     extract(&cdt, scale, planar, n_corners, s(r.eps_m), skipped == 0)
 }
 
@@ -207,10 +215,10 @@ pub(super) fn gmsh_defects(mesh: &LinearMesh) -> (usize, usize) {
         return (0, 0);
     };
     let cell = VALIDITY_REL * bb.width().hypot(bb.height()) + 1e-300;
-    let cells: HashSet<(i64, i64)> = pts
-        .iter()
-        .map(|p| ((p.x / cell).round() as i64, (p.y / cell).round() as i64))
-        .collect();
+    // Rounded in f64 like the checker (an integer cast would saturate far from the
+    // origin); `+ 0.0` identifies -0 with 0.
+    let key = |c: f64| ((c / cell).round() + 0.0).to_bits();
+    let cells: HashSet<(u64, u64)> = pts.iter().map(|p| (key(p.x), key(p.y))).collect();
     let duplicates = pts.len() - cells.len();
     let degenerate = mesh
         .triangles
@@ -220,7 +228,7 @@ pub(super) fn gmsh_defects(mesh: &LinearMesh) -> (usize, usize) {
             let det = (b - a).cross(c - a);
             let dx = a.x.max(b.x).max(c.x) - a.x.min(b.x).min(c.x);
             let dy = a.y.max(b.y).max(c.y) - a.y.min(b.y).min(c.y);
-            !(det.abs() > VALIDITY_REL * (dx * dx + dy * dy))
+            det.abs() <= VALIDITY_REL * (dx * dx + dy * dy) || det.is_nan()
         })
         .count();
     (duplicates, degenerate)

@@ -42,16 +42,20 @@ pub(super) struct Snapped {
     pub(super) dropped: usize,
 }
 
-/// δ: the power of two nearest below `rel · d` (scaled units), never below 2^-50
-/// (the resolution of scaled coordinates, which are below 2 in magnitude).
+/// Finest grid: scaled coordinates are below 2 in magnitude, so grid coordinates
+/// stay below 2^61 and every orientation below 2^125 fits an `i128`.
+const MIN_PITCH_EXP: i32 = -60;
+
+/// δ: the power of two nearest below `rel · d` (scaled units), within
+/// `[2^MIN_PITCH_EXP, 1]`.
 pub(super) fn grid_pitch(d: f64, rel: f64) -> f64 {
     let target = rel * d;
     let e = if target.is_finite() && target > 0.0 {
         target.log2().floor()
     } else {
-        -50.0
+        f64::from(MIN_PITCH_EXP)
     };
-    2f64.powi((e as i32).clamp(-50, 0))
+    2f64.powi((e as i32).clamp(MIN_PITCH_EXP, 0))
 }
 
 fn orient(a: Ip, b: Ip, c: Ip) -> i128 {
@@ -76,6 +80,9 @@ struct State {
 
 impl State {
     fn vertex(&mut self, p: Ip) -> u32 {
+        // Grid coordinates above 2^53 are those an f64 holds (so the output points,
+        // `p · δ` in f64, are distinct exactly when the keys are).
+        let p = ((p.0 as f64) as i64, (p.1 as f64) as i64);
         if let Some(&i) = self.index.get(&p) {
             return i;
         }
@@ -354,5 +361,169 @@ pub(super) fn snap(planar: &PlanarInput, delta: f64) -> Snapped {
         rounds,
         splits,
         dropped,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Planar input from points and (a, b, shape) pieces.
+    fn planar(points: &[(f64, f64)], pieces: &[(u32, u32, u32)]) -> PlanarInput {
+        PlanarInput {
+            points: points.iter().map(|&(x, y)| Point::new(x, y)).collect(),
+            pieces: pieces
+                .iter()
+                .map(|&(a, b, s)| Piece {
+                    a,
+                    b,
+                    shape: ShapeId(s),
+                })
+                .collect(),
+            merged: 0,
+            dropped_pieces: 0,
+        }
+    }
+
+    /// Check every guarantee of [`snap`] by brute force, in f64 geometry.
+    fn assert_snapped(s: &Snapped, delta: f64) {
+        let p = &s.planar.points;
+        for q in p {
+            assert_eq!((q.x / delta).fract(), 0.0, "{q:?} off the grid");
+            assert_eq!((q.y / delta).fract(), 0.0, "{q:?} off the grid");
+        }
+        let distinct: HashSet<(u64, u64)> =
+            p.iter().map(|q| (q.x.to_bits(), q.y.to_bits())).collect();
+        assert_eq!(distinct.len(), p.len(), "duplicate points");
+        let mut keys = HashSet::new();
+        for piece in &s.planar.pieces {
+            assert_ne!(piece.a, piece.b);
+            assert!(keys.insert((piece.a.min(piece.b), piece.a.max(piece.b), piece.shape)));
+        }
+        let geo: Vec<(u32, u32)> = s
+            .planar
+            .pieces
+            .iter()
+            .map(|x| (x.a, x.b))
+            .collect::<HashSet<_>>()
+            .into_iter()
+            .collect();
+        for &(a, b) in &geo {
+            let seg = kurbo::Line::new(p[a as usize], p[b as usize]);
+            // No point near the interior.
+            for (v, &q) in p.iter().enumerate() {
+                if v as u32 == a || v as u32 == b {
+                    continue;
+                }
+                let d = seg.p1 - seg.p0;
+                let t = (q - seg.p0).dot(d) / d.hypot2();
+                if t > 0.0 && t < 1.0 {
+                    let dist = (q - seg.p0).cross(d).abs() / d.hypot();
+                    assert!(
+                        dist > 1.5 * delta,
+                        "point {q:?} is {dist} from piece {seg:?}"
+                    );
+                }
+            }
+            // No proper crossing with another piece.
+            for &(c, e) in &geo {
+                if [a, b].contains(&c) || [a, b].contains(&e) {
+                    continue;
+                }
+                let o = |u: Point, v: Point, w: Point| (v - u).cross(w - u);
+                let (pc, pe) = (p[c as usize], p[e as usize]);
+                let crosses = o(seg.p0, seg.p1, pc) * o(seg.p0, seg.p1, pe) < 0.0
+                    && o(pc, pe, seg.p0) * o(pc, pe, seg.p1) < 0.0;
+                assert!(!crosses, "{seg:?} crosses {pc:?}–{pe:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn crossing_t_junction_overlap_and_near_vertex() {
+        let delta = 2f64.powi(-30);
+        let cases = [
+            // Two crossing segments.
+            planar(
+                &[(0.0, 0.0), (1.0, 0.7), (0.0, 0.7), (1.0, 0.0)],
+                &[(0, 1, 0), (2, 3, 1)],
+            ),
+            // T-junction off by 1e-13.
+            planar(
+                &[(0.0, 0.0), (1.0, 0.0), (0.5, 1e-13), (0.5, 1.0)],
+                &[(0, 1, 0), (2, 3, 1)],
+            ),
+            // Near-parallel overlap at angle 1e-14.
+            planar(
+                &[(0.0, 0.0), (1.0, 0.0), (0.1, 0.0), (0.9, 0.8e-14)],
+                &[(0, 1, 0), (2, 3, 1)],
+            ),
+            // A lone vertex 1e-13 from a segment.
+            planar(&[(0.0, 0.0), (1.0, 1.0), (0.3, 0.3 + 1e-13)], &[(0, 1, 0)]),
+        ];
+        let expect_pieces = [4, 3, 3, 2];
+        for (c, n) in cases.iter().zip(expect_pieces) {
+            let s = snap(c, delta);
+            assert_snapped(&s, delta);
+            assert_eq!(s.dropped, 0);
+            let geo: HashSet<(u32, u32)> = s
+                .planar
+                .pieces
+                .iter()
+                .map(|x| (x.a.min(x.b), x.a.max(x.b)))
+                .collect();
+            assert_eq!(geo.len(), n, "{:?}", s.planar);
+        }
+        // The overlap keeps both owners on the shared middle piece.
+        let s = snap(&cases[2], delta);
+        assert_eq!(s.planar.pieces.len(), 4, "{:?}", s.planar.pieces);
+    }
+
+    #[test]
+    fn grid_pitch_is_a_clamped_power_of_two() {
+        assert_eq!(grid_pitch(1.0, 1e-9), 2f64.powi(-30));
+        assert_eq!(grid_pitch(0.0, 1e-9), 2f64.powi(MIN_PITCH_EXP));
+        assert_eq!(grid_pitch(1e300, 1.0), 1.0);
+    }
+
+    /// Near-degenerate soups: points on a coarse lattice nudged by 1e-13.. 1e-15.
+    fn soup() -> impl Strategy<Value = PlanarInput> {
+        let coord = prop_oneof![
+            3 => (0..5i32, -2..=2i32).prop_map(|(i, e)| f64::from(i) / 4.0 + f64::from(e) * 1e-13),
+            1 => 0.0..1.0f64,
+        ];
+        let pts = prop::collection::vec((coord.clone(), coord), 2..30);
+        (
+            pts,
+            prop::collection::vec((0..30u32, 0..30u32, 0..3u32), 1..40),
+        )
+            .prop_map(|(pts, pieces)| {
+                let n = pts.len() as u32;
+                let pieces: Vec<_> = pieces
+                    .into_iter()
+                    .map(|(a, b, s)| (a % n, b % n, s))
+                    .filter(|(a, b, _)| a != b)
+                    .collect();
+                planar(&pts, &pieces)
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 200,
+            failure_persistence: None,
+            rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+            ..ProptestConfig::default()
+        })]
+
+        #[test]
+        fn snapping_meets_its_guarantees(p in soup()) {
+            let delta = 2f64.powi(-30);
+            let s = snap(&p, delta);
+            if s.dropped == 0 {
+                assert_snapped(&s, delta);
+            }
+        }
     }
 }
