@@ -8,7 +8,9 @@
 //! length l within the vertex budget [`Params::max_vertices`].
 //!
 //! Guarantees to the next stage (a [`LinearMesh`]):
-//! - the triangles tile the padded box exactly (their areas sum to its area);
+//! - the triangles tile the padded box (their areas sum to its area, up to an ulp
+//!   of the coordinates along the box's sides, where spade's refinement may round
+//!   a vertex it puts on a side);
 //! - every triangle is strictly counter-clockwise, decided with the exact
 //!   predicate `robust::orient2d` on the returned f64 vertices; otherwise the
 //!   result is an [`crate::Error::Meshing`], never a bad mesh;
@@ -24,6 +26,7 @@
 //! is in `[1/2, 2)`; smaller magnitudes than 2^-142 are flushed to zero.
 
 mod input;
+mod snap;
 
 use crate::fem::{FeatureEdge, LineKind};
 use crate::svg::ShapeId;
@@ -62,7 +65,7 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
         ));
     }
     let scale = Pow2Scale::normalizing(magnitude);
-    let planar = PlanarInput::new(
+    let flat = PlanarInput::new(
         drawing,
         FlattenParams {
             scale,
@@ -71,14 +74,73 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
         },
     );
     tracing::debug!(
-        points = planar.points.len(),
-        pieces = planar.pieces.len(),
-        merged_points = planar.merged,
-        dropped_pieces = planar.dropped_pieces,
+        points = flat.points.len(),
+        pieces = flat.pieces.len(),
+        merged_points = flat.merged,
+        dropped_pieces = flat.dropped_pieces,
         scale_exp = scale.k,
         "baseline: flattened input"
     );
+    let s = |l: f64| scale.length(l);
+    let mut last = (0, 0);
+    // Snap to a grid of pitch δ ≈ 1e-9 d; should the result still fail the gmsh-side
+    // validity criteria, retry with a coarser grid (δ · 16, three times at most).
+    for attempt in 0..4 {
+        let delta = snap::grid_pitch(s(r.d), SNAP_REL * 16f64.powi(attempt));
+        let snapped = snap::snap(&flat, delta);
+        tracing::debug!(
+            delta,
+            rounds = snapped.rounds,
+            splits = snapped.splits,
+            dropped = snapped.dropped,
+            points = snapped.planar.points.len(),
+            pieces = snapped.planar.pieces.len(),
+            "baseline: snap rounded"
+        );
+        let mesh = mesh_planar(&snapped.planar, bx, scale, params, &r)?;
+        let defects = gmsh_defects(&mesh);
+        if defects == (0, 0) {
+            tracing::debug!(
+                vertices = mesh.vertices.len(),
+                triangles = mesh.triangles.len(),
+                feature_edges = mesh.edges.len(),
+                "baseline: done"
+            );
+            return Ok(mesh);
+        }
+        tracing::info!(
+            attempt,
+            duplicates = defects.0,
+            degenerate = defects.1,
+            "baseline: mesh fails the validity criteria; retrying with a coarser snap grid"
+        );
+        last = defects;
+    }
+    Err(Error::meshing(
+        "baseline",
+        format!(
+            "the mesh keeps {} near-duplicate nodes and {} degenerate triangles after snap rounding",
+            last.0, last.1
+        ),
+    ))
+}
 
+/// Snap grid pitch relative to the drawing's diagonal (first attempt).
+const SNAP_REL: f64 = 1e-9;
+
+/// Relative tolerance of the acceptance criteria (near-duplicate nodes, degenerate
+/// triangles), as gmsh-side validity checks use it.
+const VALIDITY_REL: f64 = 1e-12;
+
+/// Triangulate snapped input: constraints added without splitting, refinement,
+/// extraction with the exact CCW check and feature-edge recovery.
+fn mesh_planar(
+    planar: &PlanarInput,
+    bx: kurbo::Rect,
+    scale: Pow2Scale,
+    params: &Params,
+    r: &crate::params::Resolved,
+) -> Result<LinearMesh> {
     // Box corners first (indices 0..4), then the input points.
     let corners = [
         Point::new(bx.x0, bx.y0),
@@ -107,41 +169,69 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
             .with_min_required_area(equilateral_area(s(r.l_min)))
             .with_max_additional_vertices((params.max_vertices as usize).saturating_sub(n))
     };
-    // spade's constraint splitting has known failure cases (assertions inside
-    // `add_constraint_and_split`, spade issues #107, #116) on valid input. Such a
-    // panic is caught and the triangulation rebuilt without splitting: crossing
-    // pieces are then left out (logged) rather than failing the whole drawing.
-    let build = |split: bool| {
-        std::panic::catch_unwind(|| {
-            build_cdt(&vertices, &planar.pieces, n_corners, split, &refinement)
-        })
+    // Snap rounding leaves no crossing, so constraints go in without splitting; a
+    // panic inside spade is still caught rather than taking the process down.
+    let built = std::panic::catch_unwind(|| {
+        build_cdt(&vertices, &planar.pieces, n_corners, false, &refinement)
+    });
+    let Ok(built) = built else {
+        return Err(Error::meshing(
+            "baseline",
+            "spade failed (panicked) on this input",
+        ));
     };
-    let (cdt, strict) = match build(true) {
-        Ok(cdt) => (cdt?, true),
-        Err(_) => {
-            tracing::warn!(
-                "baseline: spade failed to split crossing constraints; meshing without the crossing pieces"
-            );
-            match build(false) {
-                Ok(cdt) => (cdt?, false),
-                Err(_) => {
-                    return Err(Error::meshing(
-                        "baseline",
-                        "spade failed (panicked) on this input",
-                    ));
-                }
-            }
-        }
-    };
+    let (cdt, skipped) = built?;
+    if skipped > 0 {
+        tracing::warn!(
+            skipped,
+            "baseline: spade could not insert some snapped pieces; they are left out"
+        );
+    }
+    extract(&cdt, scale, planar, n_corners, s(r.eps_m), skipped == 0)
+}
 
-    let mesh = extract(&cdt, scale, &planar, n_corners, s(r.eps_m), strict)?;
-    tracing::debug!(
-        vertices = mesh.vertices.len(),
-        triangles = mesh.triangles.len(),
-        feature_edges = mesh.edges.len(),
-        "baseline: done"
-    );
-    Ok(mesh)
+/// The acceptance checker's two criteria on a linear mesh: used nodes sharing a
+/// cell of the grid of pitch 1e-12 · (bounding-box diagonal of the used nodes), and
+/// triangles with |2A| ≤ 1e-12 · h², h² = (x-range)² + (y-range)² of their corners.
+pub(super) fn gmsh_defects(mesh: &LinearMesh) -> (usize, usize) {
+    let mut used = vec![false; mesh.vertices.len()];
+    for t in &mesh.triangles {
+        for &i in t {
+            used[i as usize] = true;
+        }
+    }
+    let pts: Vec<Point> = mesh
+        .vertices
+        .iter()
+        .zip(&used)
+        .filter(|(_, u)| **u)
+        .map(|(p, _)| *p)
+        .collect();
+    let Some(bb) = pts
+        .iter()
+        .map(|&p| kurbo::Rect::from_points(p, p))
+        .reduce(|a, b| a.union(b))
+    else {
+        return (0, 0);
+    };
+    let cell = VALIDITY_REL * bb.width().hypot(bb.height()) + 1e-300;
+    // Rounded in f64 like the checker (an integer cast would saturate far from the
+    // origin); `+ 0.0` identifies -0 with 0.
+    let key = |c: f64| ((c / cell).round() + 0.0).to_bits();
+    let cells: HashSet<(u64, u64)> = pts.iter().map(|p| (key(p.x), key(p.y))).collect();
+    let duplicates = pts.len() - cells.len();
+    let degenerate = mesh
+        .triangles
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            let det = (b - a).cross(c - a);
+            let dx = a.x.max(b.x).max(c.x) - a.x.min(b.x).min(c.x);
+            let dy = a.y.max(b.y).max(c.y) - a.y.min(b.y).min(c.y);
+            det.abs() <= VALIDITY_REL * (dx * dx + dy * dy) || det.is_nan()
+        })
+        .count();
+    (duplicates, degenerate)
 }
 
 /// Bulk-load `vertices`, add the pieces as constraints (split at crossings when
@@ -152,7 +242,7 @@ fn build_cdt(
     n_corners: u32,
     split: bool,
     refinement: &dyn Fn(usize) -> RefinementParameters<f64>,
-) -> Result<Cdt> {
+) -> Result<(Cdt, usize)> {
     let n_input = vertices.len();
     let mut cdt = Cdt::bulk_load_cdt(vertices.to_vec(), Vec::new())
         .map_err(|e| Error::meshing("baseline", format!("spade rejected a point: {e}")))?;
@@ -200,7 +290,7 @@ fn build_cdt(
         triangles = cdt.num_inner_faces(),
         "baseline: refined"
     );
-    Ok(cdt)
+    Ok((cdt, skipped))
 }
 
 /// Turn the refined triangulation back into user units and check it.

@@ -93,8 +93,15 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
             0.5 * (b - a).cross(c - a)
         })
         .sum();
+    // Up to rounding: spade places refinement vertices on the box's sides by
+    // interpolation, which can round them an ulp inside (far from the origin an ulp
+    // of the coordinates is not small against the box).
+    let magnitude = [bx.x0, bx.y0, bx.x1, bx.y1]
+        .into_iter()
+        .fold(0.0f64, |m, c| m.max(c.abs()));
+    let ulp = magnitude * f64::EPSILON;
     assert!(
-        (area - bx.area()).abs() <= 1e-9 * bx.area(),
+        (area - bx.area()).abs() <= 1e-9 * bx.area() + 4.0 * ulp * (bx.width() + bx.height()),
         "area {area} vs box {}",
         bx.area()
     );
@@ -119,8 +126,54 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
             assert!(near_vertex(p), "input point {p:?} is not a mesh vertex");
         }
     }
+    // The acceptance checker's criteria hold.
+    assert_eq!(checker_defects(mesh), (0, 0), "gmsh-side validity");
     let fem = FemMesh::from_linear(mesh, "domain", |s| format!("{s:?}"));
     Quality::of(&fem)
+}
+
+/// The acceptance checker's (mshcheck.py --strict) criteria, written independently of
+/// [`gmsh_defects`]: (used nodes sharing a cell of the 1e-12·diag grid, triangles with
+/// |det J| ≤ 1e-12·h², h² = x-range² + y-range² of the corners).
+fn checker_defects(mesh: &LinearMesh) -> (usize, usize) {
+    let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    let xy: Vec<Point> = used.iter().map(|&i| mesh.vertices[i as usize]).collect();
+    let (mut lo, mut hi) = (
+        Point::new(f64::MAX, f64::MAX),
+        Point::new(f64::MIN, f64::MIN),
+    );
+    for p in &xy {
+        lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
+        hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
+    }
+    let diag = (hi - lo).hypot();
+    let g = 1e-12 * diag + 1e-300;
+    let mut q: Vec<(f64, f64)> = xy
+        .iter()
+        .map(|p| ((p.x / g).round(), (p.y / g).round()))
+        .collect();
+    q.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let before = q.len();
+    q.dedup();
+    let dup = before - q.len();
+    let degenerate = mesh
+        .triangles
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            let det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+            let xs = [a.x, b.x, c.x];
+            let ys = [a.y, b.y, c.y];
+            let ptp = |v: [f64; 3]| {
+                v.iter().copied().fold(f64::MIN, f64::max)
+                    - v.iter().copied().fold(f64::MAX, f64::min)
+            };
+            det.abs() <= 1e-12 * (ptp(xs).powi(2) + ptp(ys).powi(2))
+        })
+        .count();
+    (dup, degenerate)
 }
 
 /// Total length of the feature edges of `shape`.
@@ -260,7 +313,8 @@ fn tiny_and_huge_coordinates() {
         let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
         let q = check(&d, &Params::DEFAULT, &mesh);
         assert!(q.min_angle_deg >= 20.0, "{scale}: {q:?}");
-        assert!((feature_length(&mesh, 0) - 4.0 * scale).abs() < 1e-12 * scale);
+        // Snap rounding moves points by up to δ ≤ 1e-9 d.
+        assert!((feature_length(&mesh, 0) - 4.0 * scale).abs() < 1e-8 * scale);
         // Offset by 1000 sizes: far from the origin.
         let off = 1000.0 * scale;
         let f: Vec<_> = square(scale)
@@ -483,6 +537,86 @@ fn regression_near_collinear_overlap() {
     ];
     let d = drawing(&f);
     let params = Params::DEFAULT.with_max_vertices(5_000);
+    let mesh = triangulate(&d, &params).unwrap();
+    check(&d, &params, &mesh);
+}
+
+/// Snap rounding cases that made spade create near-duplicate vertices and slivers:
+/// each meshes, passes [`check`] (including the checker's criteria) and keeps the
+/// features' lengths per shape.
+#[test]
+fn snap_rounding_cases_pass_the_checker() {
+    type Case = (&'static str, Vec<(u32, FeatureGeom)>, [f64; 2]);
+    let cases: Vec<Case> = vec![
+        (
+            "two crossing segments",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 0.7))),
+                (1, line((0.0, 0.7), (1.0, 0.0))),
+            ],
+            [1.0f64.hypot(0.7), 1.0f64.hypot(0.7)],
+        ),
+        (
+            "T-junction off by 1e-13",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 0.0))),
+                (1, line((0.5, 1e-13), (0.5, 1.0))),
+            ],
+            [1.0, 1.0 - 1e-13],
+        ),
+        (
+            "near-parallel overlap at angle 1e-14",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 0.0))),
+                (1, line((0.1, 0.0), (0.9, 0.8e-14))),
+            ],
+            [1.0, 0.8],
+        ),
+        (
+            "a vertex 1e-13 from a segment",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 1.0))),
+                (1, FeatureGeom::Point(Point::new(0.3, 0.3 + 1e-13))),
+                (1, line((0.0, 1.0), (0.0, 0.0))),
+            ],
+            [2f64.sqrt(), 1.0],
+        ),
+        (
+            "collinear partial overlap of two shapes",
+            vec![
+                (0, line((0.0, 0.0), (1.0, 0.0))),
+                (1, line((1.5, 0.0), (0.5, 0.0))),
+            ],
+            [1.0, 1.0],
+        ),
+    ];
+    for (name, f, lengths) in cases {
+        let d = drawing(&f);
+        let mesh = triangulate(&d, &Params::DEFAULT).unwrap_or_else(|e| panic!("{name}: {e}"));
+        check(&d, &Params::DEFAULT, &mesh);
+        for (s, &len) in lengths.iter().enumerate() {
+            let got = feature_length(&mesh, s as u32);
+            assert!(
+                (got - len).abs() < 1e-8,
+                "{name}: shape {s}: {got} vs {len}"
+            );
+        }
+    }
+}
+
+/// Many nearly coincident, nearly parallel segments (the pattern of the failing
+/// real drawings): valid for the checker.
+#[test]
+fn a_fan_of_nearly_coincident_segments_passes_the_checker() {
+    let mut f = Vec::new();
+    for i in 0..40 {
+        let e = f64::from(i) * 1e-13;
+        f.push((i % 3, line((0.0, e), (1.0, 0.5 - e))));
+        f.push((i % 3, line((e, 0.5), (1.0 - e, 0.0))));
+        f.push((i % 3, line((0.2 + e, 0.0), (0.8, 0.3 + e * 3.0))));
+    }
+    let d = drawing(&f);
+    let params = Params::DEFAULT.with_max_vertices(20_000);
     let mesh = triangulate(&d, &params).unwrap();
     check(&d, &params, &mesh);
 }
