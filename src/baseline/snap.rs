@@ -178,6 +178,9 @@ impl State {
                 }
             }
         }
+        // The grid is a HashMap, so the crossings arrive in a random order; sort them
+        // so new vertices are numbered the same on every run (same input, same mesh).
+        crossings.sort_unstable();
         for (i, j, x) in crossings {
             let v = self.vertex(x);
             splits[i as usize].push(v);
