@@ -1,0 +1,49 @@
+//! Meshing three drawings of the dev set (small, medium, large) with the exact BSP
+//! mesher (`--mesher bsp --stop-after bsp`: features + BSP) and with the CDT
+//! baseline, from a loaded `Drawing` (no file I/O). Skips drawings that are absent
+//! (the dev set lives in ../shared/data/svg-dev, beside the repository).
+#![allow(missing_docs, reason = "criterion macros generate undocumented items")]
+#![allow(clippy::print_stdout, reason = "the bench reports per-stage times")]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+use triwild::params::Stage;
+use triwild::{Mesher, Params, pipeline, svg};
+
+const DRAWINGS: [(&str, &str); 3] = [
+    ("small", "gilbarbara-logos/ello.svg"),
+    ("medium", "gilbarbara-logos/argo.svg"),
+    ("large", "noto-emoji/emoji_u1f98e.svg"),
+];
+
+fn bench(c: &mut Criterion) {
+    let dev = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev");
+    let mut group = c.benchmark_group("pipeline");
+    group.sample_size(10).measurement_time(Duration::from_secs(20));
+    for (size, file) in DRAWINGS {
+        let Ok(drawing) = svg::load_file(&dev.join(file)) else {
+            println!("{file}: not available, skipped");
+            continue;
+        };
+        let bsp = Params::DEFAULT
+            .with_mesher(Mesher::Bsp)
+            .with_stop_after(Some(Stage::Bsp));
+        let cdt = Params::DEFAULT;
+        for (name, params) in [("bsp", &bsp), ("cdt", &cdt)] {
+            let once = pipeline::mesh_drawing(&drawing, params).expect("meshes");
+            println!(
+                "{size} {file} {name}: {} triangles, stage seconds {:?}",
+                once.report.output.triangles, once.report.times
+            );
+            group.bench_function(format!("{name}/{size}"), |b| {
+                b.iter(|| pipeline::mesh_drawing(black_box(&drawing), params).expect("meshes"))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
