@@ -21,7 +21,9 @@ const DRAWINGS: [(&str, &str); 3] = [
 fn bench(c: &mut Criterion) {
     let dev = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev");
     let mut group = c.benchmark_group("pipeline");
-    group.sample_size(10).measurement_time(Duration::from_secs(20));
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(20));
     for (size, file) in DRAWINGS {
         let Ok(drawing) = svg::load_file(&dev.join(file)) else {
             println!("{file}: not available, skipped");
