@@ -458,6 +458,14 @@ fn mesh_one(args: &MeshArgs, quiet: bool) -> ExitCode {
         .with_msh(args.format.to_options())
         .with_preview(args.preview.clone())
         .with_regions(args.regions.to_options());
+    // The library's write errors do not say which file; an unwritable preview
+    // is reported here, naming the preview, before anything is meshed.
+    if let Some(preview) = &args.preview {
+        if let Err(err) = triwild::output::check_writable(preview) {
+            eprintln!("error: {}: {err}", preview.display());
+            return exit_code(err.kind());
+        }
+    }
     match pipeline::run_file(input, &output, &opts) {
         Ok(report) => {
             if !quiet {

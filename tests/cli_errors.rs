@@ -130,6 +130,33 @@ fn an_existing_output_is_left_untouched_on_failure() {
 }
 
 #[test]
+fn an_unwritable_preview_is_named_and_nothing_is_written() {
+    let dir = scratch("preview");
+    let input = dir.join("in.svg");
+    fs::write(&input, SQUARE).unwrap();
+    let output = dir.join("out.msh");
+    let preview = dir.join("missing/preview.svg");
+    let out = bin()
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .arg("--preview")
+        .arg(&preview)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(4));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with(&format!("error: {}: ", preview.display())),
+        "{stderr}"
+    );
+    assert!(
+        !output.exists(),
+        "no mesh written when the preview cannot be"
+    );
+}
+
+#[test]
 fn usage_errors_exit_2() {
     let out = bin().output().unwrap();
     assert_eq!(out.status.code(), Some(2));
