@@ -130,22 +130,9 @@ fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
 /// equilateral reference triangle `(0,0), (1,0), (1/2, √3/2)` onto `corners`;
 /// `+∞` when `det J ≤ 0` (degenerate or clockwise) or not finite.
 pub fn amips(corners: [Point; 3]) -> f64 {
+    // One definition of the energy for measuring and for optimizing.
     let [a, b, c] = corners;
-    // Element edge matrix E = [b - a | c - a] and reference R = [(1, 0) | (1/2, √3/2)].
-    let (e1, e2) = (b - a, c - a);
-    let h = 3f64.sqrt() / 2.0;
-    // R⁻¹ = [[1, -1/(2h)], [0, 1/h]] (det R = h), so J = E R⁻¹ has columns
-    // j1 = e1 and j2 = (e2 - e1/2) / h.
-    let j1 = e1;
-    let j2 = (e2 - e1 * 0.5) / h;
-    let det = j1.cross(j2);
-    let frob2 = j1.hypot2() + j2.hypot2();
-    let energy = frob2 / (2.0 * det);
-    if det > 0.0 && energy.is_finite() {
-        energy
-    } else {
-        f64::INFINITY
-    }
+    crate::optimize::energy::amips(a, b, c)
 }
 
 #[cfg(test)]
