@@ -13,9 +13,11 @@
 
 mod support;
 
+use support::devset::{devset_dir, svg_files};
+
 use kurbo::{Line, Point};
 use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 use support::{Msh, check, out_dir, read_msh};
 use triwild::features::{FeatureSet, SegmentTag};
@@ -160,28 +162,13 @@ fn mesh_and_check(svg: &Path, out: &Path) -> Result<Outcome, String> {
     })
 }
 
-fn svgs_in(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(rd) = std::fs::read_dir(dir) else {
-        return;
-    };
-    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            svgs_in(&p, out);
-        } else if p.extension().is_some_and(|e| e == "svg") {
-            out.push(p);
-        }
-    }
-}
-
 #[test]
 fn sample_drawings_and_fixtures_mesh_valid_and_conforming() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    svgs_in(&root.join("data/svg"), &mut files);
+    svg_files(&root.join("data/svg"), &mut files);
     let samples = files.len();
-    svgs_in(&root.join("tests/fixtures/bsp"), &mut files);
+    svg_files(&root.join("tests/fixtures/bsp"), &mut files);
     assert!(samples >= 5 && files.len() >= samples + 4, "{files:?}");
     let dir = out_dir("bsp");
     for f in &files {
@@ -229,19 +216,6 @@ fn stop_after_bsp_needs_the_bsp_mesher() {
     assert_eq!(err.kind(), triwild::ErrorKind::BadInput);
 }
 
-fn devset_dir() -> PathBuf {
-    if let Some(d) = std::env::var_os("TRIWILD_DEVSET") {
-        return d.into();
-    }
-    // ../shared/data/svg-dev, looked up from each ancestor (a git worktree sits deeper).
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    root.ancestors()
-        .skip(1)
-        .map(|a| a.join("shared/data/svg-dev"))
-        .find(|d| d.is_dir())
-        .unwrap_or_else(|| root.join("../shared/data/svg-dev"))
-}
-
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     if v.is_empty() { 0.0 } else { v[v.len() / 2] }
@@ -252,7 +226,7 @@ fn median(v: &mut [f64]) -> f64 {
 fn devset_meshes_valid_and_conforming() {
     let dir = devset_dir();
     let mut files = Vec::new();
-    svgs_in(&dir, &mut files);
+    svg_files(&dir, &mut files);
     if files.is_empty() {
         println!("no .svg under {}: skipped", dir.display());
         return;

@@ -14,32 +14,10 @@ use triwild::features::{FeatureSet, Parent};
 #[path = "support/features_check.rs"]
 mod features_check;
 
-fn devset_dir() -> PathBuf {
-    if let Some(d) = std::env::var_os("TRIWILD_DEVSET") {
-        return d.into();
-    }
-    let sibling = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/svg-dev");
-    if sibling.is_dir() {
-        sibling
-    } else {
-        PathBuf::from("/work/shared/data/svg-dev")
-    }
-}
+#[path = "support/devset.rs"]
+mod devset;
 
-fn svg_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(rd) = std::fs::read_dir(dir) else {
-        return;
-    };
-    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            svg_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "svg") {
-            out.push(p);
-        }
-    }
-}
+use devset::{devset_dir, svg_files};
 
 /// CI's sample: every 15th file of the dev set under 40 KB (about 15 drawings from
 /// every collection), so the invariants are checked on real drawings in every run.

@@ -9,6 +9,7 @@
 )]
 
 pub(crate) mod check;
+pub(crate) mod devset;
 pub(crate) mod reader;
 
 pub(crate) use check::{DefectKind, Report, check, check_msh};
