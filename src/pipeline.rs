@@ -10,7 +10,8 @@
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::features::{self, FeatureCounts, FeatureSet};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
-use crate::mesh::FeatureOn;
+use crate::mesh::{FeatureOn, TriMesh};
+use crate::ops::Context;
 use crate::output::{self, MshOptions};
 use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
@@ -214,7 +215,8 @@ pub fn mesh_drawing_with(
         Mesher::Bsp => {
             let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
             features = Some(fs.counts);
-            let (linear, stats) = bsp_linear(drawing, &fs, params, &resolved, &mut times)?;
+            let (mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
+            let linear = to_linear(&mesh, &fs, "bsp", &mut times)?;
             bsp = Some(stats);
             // No optimizer yet (issue 5): the BSP mesh is the linear mesh,
             // whether or not the run stops after `bsp`.
@@ -288,14 +290,32 @@ fn bsp_input(fs: &FeatureSet) -> BspInput {
     }
 }
 
-/// Features → exact BSP → rounded linear mesh (stages `bsp` and `linear`).
-fn bsp_linear(
+/// The exact BSP mesh of a drawing's features (TriWild §4.3-4.4 up to the
+/// conforming mesh, before optimization): the rounded [`TriMesh`], the feature
+/// set its tags index, and the operations' [`Context`] (curves of the primary
+/// sections, ε-envelope of the secondary polylines). Vertices the BSP could
+/// not round stay rational (the optimizer rounds them later).
+///
+/// # Errors
+/// [`Error::Meshing`] if the BSP fails, or (with `params.paranoid`) if its mesh
+/// has a defect.
+pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, FeatureSet, Context)> {
+    params.validate()?;
+    let resolved = params.resolve(drawing.diagonal());
+    let mut times = Times::default();
+    let fs = FeatureSet::build(drawing, &resolved);
+    let (mesh, _) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
+    let ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
+    Ok((mesh, fs, ctx))
+}
+
+fn bsp_trimesh(
     drawing: &Drawing,
     fs: &FeatureSet,
     params: &Params,
     resolved: &Resolved,
     times: &mut Times,
-) -> Result<(LinearMesh, BspStats)> {
+) -> Result<(TriMesh, BspStats)> {
     let input = bsp_input(fs);
     let bbox = padded_box(drawing, resolved.padding);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
@@ -308,8 +328,18 @@ fn bsp_linear(
             ));
         }
     }
-    let linear = times.time("linear", || {
-        LinearMesh::from_trimesh(&mesh, "bsp", |t| match *t {
+    Ok((mesh, stats))
+}
+
+/// The delivered linear form of a mesh whose tags index `fs`.
+fn to_linear(
+    mesh: &TriMesh,
+    fs: &FeatureSet,
+    stage: &'static str,
+    times: &mut Times,
+) -> Result<LinearMesh> {
+    times.time("linear", || {
+        LinearMesh::from_trimesh(mesh, stage, |t| match *t {
             FeatureOn::Primary { section, .. } => {
                 (fs.primary[section as usize].source.shape, LineKind::Primary)
             }
@@ -318,8 +348,7 @@ fn bsp_linear(
                 LineKind::Secondary,
             ),
         })
-    })?;
-    Ok((linear, stats))
+    })
 }
 
 /// Load `input`, mesh it, write `output` (and the preview, if asked for).
