@@ -26,7 +26,7 @@ use triwild::{Drawing, Mesher, Params, Stage};
 
 fn bsp_params() -> Params {
     Params::DEFAULT
-        .with_mesher(Mesher::Bsp)
+        .with_mesher(Mesher::TriWild)
         .with_stop_after(Some(Stage::Bsp))
 }
 
