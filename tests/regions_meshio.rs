@@ -145,7 +145,9 @@ fn region_defects(m: &Meshed, drawing_box: Rect) -> Vec<String> {
     }
     let sum: f64 = stats.iter().map(|s| s.area).sum();
     let box_area = bx.area();
-    if !((sum - box_area).abs() <= 1e-9 * box_area) {
+    // Written so that a NaN sum is a defect.
+    let within = (sum - box_area).abs() <= 1e-9 * box_area;
+    if !within {
         defects.push(format!(
             "region areas sum to {sum}, box area {box_area} (rel {:.2e})",
             (sum - box_area).abs() / box_area
