@@ -364,6 +364,7 @@ fn devset_regions_sum_to_the_box() {
     svg_files(&dir, &mut files);
     assert!(!files.is_empty(), "no .svg under {}", dir.display());
     let t = run(&files, None);
+    println!("not loadable: {:?}", t.unloadable);
     println!("failed meshing: {:?}", t.failed_meshing);
     assert!(t.checked > 0, "nothing meshed");
     assert!(
