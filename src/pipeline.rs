@@ -334,6 +334,24 @@ pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, Feature
     Ok((mesh, fs, ctx))
 }
 
+/// The optimized linear mesh of a drawing (TriWild §4.4.1): [`bsp_stage`]
+/// followed by the optimizer, with what it did. The mesh may still hold
+/// rational vertices or off-curve primary vertices when the stats say so
+/// (the pipeline refuses to write the former and warns about the latter).
+///
+/// # Errors
+/// As [`bsp_stage`].
+pub fn optimize_stage(
+    drawing: &Drawing,
+    params: &Params,
+) -> Result<(TriMesh, FeatureSet, Context, OptimizeStats)> {
+    let (mut mesh, fs, mut ctx) = bsp_stage(drawing, params)?;
+    let resolved = params.resolve(drawing.diagonal());
+    let stats =
+        crate::optimize::optimize(&mut mesh, &mut ctx, &optimize_options(params, &resolved));
+    Ok((mesh, fs, ctx, stats))
+}
+
 fn bsp_trimesh(
     drawing: &Drawing,
     fs: &FeatureSet,

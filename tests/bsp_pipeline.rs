@@ -215,8 +215,9 @@ fn crossing_fixtures_exercise_rational_vertices() {
 }
 
 #[test]
-fn stop_after_bsp_needs_the_bsp_mesher() {
+fn stop_after_bsp_needs_the_triwild_mesher() {
     let err = Params::DEFAULT
+        .with_mesher(Mesher::Cdt)
         .with_stop_after(Some(Stage::Bsp))
         .validate()
         .expect_err("cdt cannot stop after bsp");

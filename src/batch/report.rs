@@ -132,7 +132,22 @@ impl Row {
             m.remove("times");
             m.remove("t_core");
         }
+        if let Some(stats) = &mut r.stats {
+            strip_seconds(stats);
+        }
         r
+    }
+}
+
+/// Remove every `seconds` / `*_seconds` field (stage timings) at any depth.
+fn strip_seconds(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| !(k == "seconds" || k.ends_with("_seconds")));
+            m.values_mut().for_each(strip_seconds);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_seconds),
+        _ => {}
     }
 }
 

@@ -38,7 +38,8 @@ impl CollapsePlan {
     /// # Errors
     /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
     /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
-    pub fn new(mesh: &TriMesh, u: VertexId, v: VertexId) -> Result<Self, Reject> {
+    /// `eps` is the envelope radius (how far a secondary junction may move).
+    pub fn new(mesh: &TriMesh, u: VertexId, v: VertexId, eps: f64) -> Result<Self, Reject> {
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
@@ -95,6 +96,13 @@ impl CollapsePlan {
                 }
             }
             Role::Free | Role::Secondary => {}
+            Role::SecondaryJunction => {
+                // The features' ends and crossings move by at most ε, so the
+                // input stays within ε of the mesh there too.
+                if mesh.position(u).distance(mesh.position(v)) > eps {
+                    return Err(Reject::FeatureRule);
+                }
+            }
         }
         // Link condition: the common neighbours are exactly the opposite vertices,
         // and two boundary vertices are joined only by a boundary edge.
@@ -179,7 +187,7 @@ fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w: VertexId) 
 
 /// Collapse `v` into `u` (see the module doc).
 pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
-    let plan = match CollapsePlan::new(mesh, u, v) {
+    let plan = match CollapsePlan::new(mesh, u, v, ctx.envelope.eps()) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };

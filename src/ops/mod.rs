@@ -11,7 +11,9 @@
 //! value naming the refusing rule, never an error.
 //!
 //! Feature rules (§4.4.1): box corners, feature points and section endpoints
-//! never move, nor do vertices where features meet, end or branch; a vertex
+//! never move, nor do vertices where primary features meet, end or branch
+//! (where only secondary features end, meet or cross, a vertex may collapse
+//! into a neighbour within ε, under the envelope test); a vertex
 //! on a primary section moves only along its curve, its parameter tracked in
 //! the edge tags; a split primary edge gets its vertex at the curve's
 //! parameter midpoint unless that inverts a triangle, else at the edge's
@@ -247,6 +249,10 @@ pub(crate) enum Role {
     Free,
     /// Inside a secondary chain (exactly two secondary edges, no primary).
     Secondary,
+    /// On secondary features only, but where they end, meet or cross (not two
+    /// secondary edges): never smoothed; collapsible into a neighbour within
+    /// ε, where the envelope test decides (TetWild's rule for surface vertices).
+    SecondaryJunction,
     /// Inside a primary section: slides along it between its two neighbours.
     Primary {
         section: u32,
@@ -289,6 +295,7 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
     match (primary.len(), secondary) {
         (0, 0) => Role::Free,
         (0, 2) => Role::Secondary,
+        (0, _) => Role::SecondaryJunction,
         (2, 0) if primary[0].1 == primary[1].1 && primary[0].2 == primary[1].2 => Role::Primary {
             section: primary[0].1,
             t: primary[0].2,

@@ -27,7 +27,9 @@ pub fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     let (section, t) = match role(mesh, v, &r) {
         Role::Primary { section, t, .. } => (section, t),
         Role::Fixed | Role::Boundary => return Outcome::Rejected(Reject::FixedVertex),
-        Role::Free | Role::Secondary => return Outcome::Rejected(Reject::NoChange),
+        Role::Free | Role::Secondary | Role::SecondaryJunction => {
+            return Outcome::Rejected(Reject::NoChange);
+        }
     };
     let Some(s) = ctx.section(section) else {
         return Outcome::Rejected(Reject::FeatureRule);

@@ -76,7 +76,9 @@ impl SmoothPlan {
         let faces = r.faces.clone();
         let energy = |p: Point| ring_energy(mesh, v, &faces, p);
         let (pos, t) = match role(mesh, v, &r) {
-            Role::Fixed | Role::Boundary => return Err(Reject::FixedVertex),
+            Role::Fixed | Role::Boundary | Role::SecondaryJunction => {
+                return Err(Reject::FixedVertex);
+            }
             Role::Free | Role::Secondary => {
                 let p0 = mesh.position(v);
                 let e0 = energy(p0).ok_or(Reject::NoChange)?;

@@ -6,29 +6,34 @@
 //! One pass:
 //! 1. split every edge longer than 4/3 of its endpoints' mean target length,
 //!    longest first (the new vertex gets that mean);
-//! 2. update the sizing field: a vertex's target is halved when a bad triangle
-//!    (AMIPS above the stop energy, or an angle below α) lies within its target
-//!    length, multiplied by 1.5 otherwise, and kept within `[l_floor, l]`;
-//! 3. collapse edges shorter than 4/5 of their mean target, shortest first
-//!    (edges made short by a collapse are queued again);
-//! 4. swap interior non-feature edges where the swap lowers the larger energy of
+//! 2. collapse edges shorter than 4/5 of their mean target, shortest first
+//!    (edges made short by a collapse are queued again; refused ones are
+//!    retried once their neighbourhood changed), never creating an edge longer
+//!    than 4/3 of its target (else splits and collapses would undo each other);
+//! 3. swap interior non-feature edges where the swap lowers the larger energy of
 //!    the two triangles, longest first;
-//! 5. smooth every movable vertex (Newton on the one-ring AMIPS; along its curve
+//! 4. smooth every movable vertex (Newton on the one-ring AMIPS; along its curve
 //!    for a primary vertex), in a fixed pseudo-random order;
-//! 6. round the vertices still rational and project off-curve primary vertices
+//! 5. round the vertices still rational and project off-curve primary vertices
 //!    toward their curve (invariant 5).
+//!
+//! When a pass stops paying off (the maximum energy fell by less than 0.25 and
+//! the mean by less than 0.025), the sizing field is refined around the worst
+//! triangles and relaxed (×1.5, up to `l`) elsewhere (see `update_sizing`).
+//! After the last pass the targets go back to `l` and one more collapse pass
+//! coarsens what was refined for nothing, then swaps and smoothing polish it.
 //!
 //! Every operation goes through `crate::ops`, so every invariant holds after
 //! each one and refused operations leave the mesh as it was. Collapse, swap and
 //! smoothing never raise the local maximum energy; splits may.
 //!
-//! Stop rules: the mesh has every vertex in `f64` and on its curve, its size
-//! has settled (nothing longer than the split bound, or the face count changed
-//! by at most 1% in the pass), and the minimum angle exceeds α or the maximum
-//! energy is below the stop energy, both over the triangles not locked by
-//! three feature edges (the input's own shapes); or two passes in a row
-//! improved neither the maximum nor the mean energy by 0.1%; or the pass
-//! limit. Vertices still rational at the end go through the envelope
+//! Stop rules: the mesh has every vertex in `f64` and on its curve, no edge
+//! longer than `2 l` (smoothing may stretch a few edges past the split bound
+//! of 4/3 of the target), and the minimum angle exceeds α or the maximum energy
+//! is below the stop energy, both over the triangles not locked by three
+//! feature edges (the input's own shapes); or, once the sizing field has hit
+//! its floor, ten passes in a row improved neither the maximum nor the mean
+//! energy; or the pass limit. Vertices still rational at the end go through the envelope
 //! stages of §2.3.4 (denser sampling, then a larger ε, each followed by more
 //! rounding and smoothing); a vertex left rational after them makes the mesh
 //! unusable, which the caller reports as an error.
@@ -401,13 +406,28 @@ impl Schedule<'_> {
     }
 
     /// Collapse edges shorter than 4/5 of their mean target, shortest first.
-    fn collapse_pass(&mut self) -> u64 {
+    fn collapse_pass(&mut self, factor: f64) -> u64 {
+        // Refused collapses are retried (in a new round) once a collapse has
+        // changed their neighbourhood, as long as rounds make progress.
+        let mut total = 0;
+        for _ in 0..4 {
+            let n = self.collapse_round(factor);
+            total += n;
+            if n == 0 {
+                break;
+            }
+        }
+        total
+    }
+
+    /// One round of [`Self::collapse_pass`]: every short edge once, shortest first.
+    fn collapse_round(&mut self, factor: f64) -> u64 {
         // Min-heap on length through reversed ordering of the bits of a
         // non-negative f64 (monotone for non-negative values).
         let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
         for k in edges(self.mesh) {
             let len = length(self.mesh, k);
-            if len < 0.8 * self.mean_target(k) {
+            if len < factor * self.mean_target(k) {
                 heap.push(std::cmp::Reverse((len.to_bits(), k)));
             }
         }
@@ -422,7 +442,7 @@ impl Schedule<'_> {
                 continue;
             }
             let len = length(self.mesh, k);
-            if len.to_bits() != bits || len >= 0.8 * self.mean_target(k) {
+            if len.to_bits() != bits || len >= factor * self.mean_target(k) {
                 continue;
             }
             if let Some(&at) = self.failed_collapse.get(&k) {
@@ -465,7 +485,7 @@ impl Schedule<'_> {
                 for w in ops::ring(self.mesh, u).neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = length(self.mesh, e);
-                    if len < 0.8 * self.mean_target(e) {
+                    if len < factor * self.mean_target(e) {
                         heap.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
                 }
@@ -661,7 +681,7 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         ctx,
         opts: *opts,
         stats,
-        rng: Shuffle(0x7472_6977_696c_64),
+        rng: Shuffle(0x0074_7269_7769_6c64),
         clock: 1,
         stamp: Vec::new(),
         failed_collapse: rustc_hash::FxHashMap::default(),
@@ -675,13 +695,13 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
     let mut history: Vec<(f64, f64)> = Vec::new();
     for pass in 0..opts.max_passes {
         let good = last.min_angle > opts.alpha_deg || last.max_energy < opts.stop_energy;
-        if good && rational == 0 && off == 0 && last.longest <= 4.0 / 3.0 * opts.l {
+        if good && rational == 0 && off == 0 && last.longest <= 2.0 * opts.l {
             s.stats.stop = StopReason::Quality;
             break;
         }
         s.stats.passes = pass + 1;
         let (long, splits) = s.split_pass();
-        let collapses = s.collapse_pass();
+        let collapses = s.collapse_pass(0.8);
         let swaps = s.swap_pass();
         let smooths = s.smooth_pass();
         rational = s.round_all();
@@ -730,13 +750,24 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         }
     }
     // Coarsen where the sizing field was refined for nothing: targets back to
-    // `l`, one collapse pass (collapses never make the worst triangle worse).
+    // `l`, one collapse pass of every edge shorter than `l` whose collapse
+    // makes no edge longer than 4/3 `l` (collapses never make the local worst
+    // triangle worse).
     let all: Vec<VertexId> = s.mesh.vertices().collect();
     for v in all {
         s.set_target(v, opts.l);
     }
     s.failed_collapse.clear();
-    s.collapse_pass();
+    if s.collapse_pass(1.0) > 0 {
+        // Polish what the coarsening touched: swaps and smoothing only (no
+        // change of size), each never making a local worst triangle worse.
+        for _ in 0..2 {
+            let changed = s.swap_pass() + s.smooth_pass();
+            if changed == 0 {
+                break;
+            }
+        }
+    }
     // Envelope stages (§2.3.4): rational vertices left get more room.
     let base = s.ctx.envelope.eps();
     let spacing = s.ctx.envelope.spacing();
