@@ -6,7 +6,8 @@
 //! Meshes are written under `target/test-out/curving/` for CI's mshcheck.
 //!
 //! The dev-set run is ignored (slow, needs the corpus):
-//! `cargo test --release --test curving -- --ignored --nocapture`.
+//! `cargo test --release --test curving -- --ignored --nocapture` (every N-th file with
+//! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`).
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
 mod support;
@@ -152,9 +153,14 @@ fn devset_curving() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(usize::MAX);
+    let every: usize = std::env::var("TRIWILD_CURVING_EVERY")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
+        .max(1);
     let dir = out_dir("curving-devset");
     let (mut curved_sum, mut fitted_sum, mut straight_sum) = (0, 0, 0);
-    for path in files.iter().take(limit) {
+    for path in files.iter().step_by(every).take(limit) {
         let Ok(drawing) = triwild::svg::load_file(path) else {
             continue;
         };

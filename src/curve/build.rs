@@ -5,9 +5,10 @@
 //!
 //! Steps of [`curve_mesh`]:
 //! 1. vertices still rational are rounded (an error if one cannot be);
-//! 2. every triangle with more than one primary edge is split (`ops::try_split`:
-//!    a non-primary edge if it has one, else its longest primary edge) until each
-//!    has at most one;
+//! 2. every triangle with more than one curved edge (a primary edge on a cubic;
+//!    primary edges on straight parents stay straight) is split (`ops::try_split`:
+//!    an edge that is not curved if it has one, else its longest curved edge) until
+//!    each has at most one;
 //! 3. each primary edge takes its curve piece: the cubic nodes at the parameter
 //!    thirds (order 3, which reproduces the piece exactly) or the parameter
 //!    midpoint (order 2). When a corner is off its curve (a vertex the BSP left on
@@ -56,13 +57,16 @@ pub struct CurveOptions {
     pub repair_rounds: usize,
     /// Pattern-search iterations of one fit.
     pub fit_iterations: usize,
+    /// Smallest certified Jacobian ratio (`lower / upper` of the certificate) a
+    /// fitted element may have: the fit stops short of near-degenerate elements.
+    pub fit_min_ratio: f64,
     /// How elements are certified while curving.
     pub certify: CertifyOptions,
 }
 
 impl CurveOptions {
-    /// Cubic output, `d` as given, `l_min = 1e-4 · d`, 10 000 splits, 8 repair
-    /// rounds, 80 fit iterations, validity-only certification.
+    /// `d` as given, `l_min = 1e-4 · d`, 10 000 splits, 8 repair rounds, 80 fit
+    /// iterations, fitted ratio ≥ 0.01, validity-only certification.
     pub fn new(order: Order, d: f64) -> Self {
         CurveOptions {
             order,
@@ -71,6 +75,7 @@ impl CurveOptions {
             max_splits: 10_000,
             repair_rounds: 8,
             fit_iterations: 80,
+            fit_min_ratio: 0.01,
             certify: CertifyOptions::VALIDITY,
         }
     }
@@ -158,6 +163,11 @@ fn on_cubic(ctx: &Context, section: u32) -> bool {
     ctx.section(section).is_some_and(|s| !s.parent.is_line())
 }
 
+/// The tag of a primary edge on a cubic parent: the edges that are curved.
+fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<(u32, [f64; 2])> {
+    primary(mesh, key).filter(|&(section, _)| on_cubic(ctx, section))
+}
+
 /// Fractions of an edge where its inner nodes sit.
 fn fractions(order: Order) -> &'static [f64] {
     match order {
@@ -172,10 +182,10 @@ fn straight_inner(a: Point, b: Point, order: Order) -> Vec<Point> {
     fractions(order).iter().map(|&s| a.lerp(b, s)).collect()
 }
 
-/// The curved inner nodes (from `lo` to `hi`) of a primary edge, or `None` if
-/// the edge is not primary or its section is unknown.
+/// The curved inner nodes (from `lo` to `hi`) of a primary edge on a cubic, or
+/// `None` if the edge is not such an edge (straight parents stay straight).
 fn curved_inner(mesh: &TriMesh, ctx: &Context, order: Order, key: EdgeKey) -> Option<Vec<Point>> {
-    let (section, t) = primary(mesh, key)?;
+    let (section, t) = curved_tag(mesh, ctx, key)?;
     let parent = ctx.section(section)?.parent;
     let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
     // Offsets of the corners from the curve (zero when they are on it).
@@ -304,7 +314,7 @@ fn round_all(mesh: &mut TriMesh, ctx: &Context) -> Result<()> {
     Ok(())
 }
 
-/// Split triangles with two or three primary edges until each has at most one
+/// Split triangles with two or three curved edges until each has at most one
 /// (or the budget runs out). Returns the number of splits.
 fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) -> usize {
     let mut done = 0;
@@ -312,7 +322,7 @@ fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) ->
     for _ in 0..16 {
         let bad: Vec<FaceId> = mesh
             .faces()
-            .filter(|&f| primary_edges(mesh, f).len() > 1)
+            .filter(|&f| curved_edges(mesh, ctx, f).len() > 1)
             .collect();
         if bad.is_empty() || *budget == 0 {
             break;
@@ -322,7 +332,7 @@ fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) ->
             if *budget == 0 {
                 break;
             }
-            if !mesh.is_face_alive(f) || primary_edges(mesh, f).len() < 2 {
+            if !mesh.is_face_alive(f) || curved_edges(mesh, ctx, f).len() < 2 {
                 continue;
             }
             let edges = face_edges(mesh, f);
@@ -330,7 +340,10 @@ fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) ->
             // Prefer the non-primary edge (it separates the primary ones), then the longest.
             let mut order: Vec<EdgeKey> = edges.to_vec();
             order.sort_by(|a, b| {
-                let (pa, pb) = (primary(mesh, *a).is_some(), primary(mesh, *b).is_some());
+                let (pa, pb) = (
+                    curved_tag(mesh, ctx, *a).is_some(),
+                    curved_tag(mesh, ctx, *b).is_some(),
+                );
                 pa.cmp(&pb).then(len(b).total_cmp(&len(a)))
             });
             for k in order {
@@ -349,11 +362,11 @@ fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) ->
     done
 }
 
-/// The primary edges of face `f`.
-fn primary_edges(mesh: &TriMesh, f: FaceId) -> Vec<EdgeKey> {
+/// The curved edges (primary, on a cubic) of face `f`.
+fn curved_edges(mesh: &TriMesh, ctx: &Context, f: FaceId) -> Vec<EdgeKey> {
     face_edges(mesh, f)
         .into_iter()
-        .filter(|k| primary(mesh, *k).is_some())
+        .filter(|k| curved_tag(mesh, ctx, *k).is_some())
         .collect()
 }
 
@@ -405,7 +418,7 @@ fn repair(
             if !mesh.is_face_alive(f) {
                 continue;
             }
-            let curved = primary_edges(mesh, f);
+            let curved = curved_edges(mesh, ctx, f);
             let Some(&key) = curved.first() else {
                 continue;
             };
@@ -430,7 +443,7 @@ fn repair(
                 continue;
             }
             let len = (mesh.position(key.hi) - mesh.position(key.lo)).hypot();
-            if len < 2.0 * opts.l_min_abs || primary(mesh, key).is_none() {
+            if len < 2.0 * opts.l_min_abs || curved_tag(mesh, ctx, key).is_none() {
                 continue;
             }
             if let Outcome::Applied(_) = ops::try_split(mesh, ctx, key.lo, key.hi) {
@@ -530,7 +543,7 @@ fn fit_edge(
         let mut margin = f64::INFINITY;
         for &f in faces {
             let c = shape.certificate(mesh, order, f, &opts.certify)?;
-            if !c.is_certified() {
+            if !c.is_certified() || c.ratio() < opts.fit_min_ratio {
                 return None;
             }
             margin = margin.min(c.ratio());
@@ -852,4 +865,189 @@ fn lagrange_edge(a: Point, b: Point, inner: &[Point], s: f64) -> Point {
         out += w * p.to_vec2();
     }
     out.to_point()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::features::Parent;
+    use crate::mesh::VertexTag;
+    use crate::ops::invariants::Envelope;
+    use crate::ops::{CurveSection, EnergyRule};
+    use kurbo::CubicBez;
+
+    const FIXED: VertexTag = VertexTag {
+        box_corner: true,
+        feature_point: false,
+        segment_endpoint: false,
+        section_endpoint: false,
+    };
+
+    fn context(curves: &[CubicBez]) -> Context {
+        Context {
+            sections: curves
+                .iter()
+                .map(|&c| CurveSection {
+                    parent: Parent::Cubic(c),
+                    t: [0.0, 1.0],
+                })
+                .collect(),
+            envelope: Envelope::new(&[], 1e-3, 1e-3),
+            alpha: std::f64::consts::PI,
+            on_curve_abs: 1e-12,
+            energy: EnergyRule::NoWorseMax,
+        }
+    }
+
+    fn feature(_: &FeatureOn) -> (ShapeId, LineKind) {
+        (ShapeId(0), LineKind::Primary)
+    }
+
+    /// Two triangles on the primary edge (0,0)–(1,0) (the cubic `c`), apex at
+    /// `(0.5, apex)` above and `(0.5, -1)` below; all vertices fixed.
+    fn diamond(c: CubicBez, apex: f64) -> (TriMesh, Context) {
+        let mut m = TriMesh::new();
+        let a = m.add_vertex(Point::new(0.0, 0.0), FIXED);
+        let b = m.add_vertex(Point::new(1.0, 0.0), FIXED);
+        let top = m.add_vertex(Point::new(0.5, apex), FIXED);
+        let bottom = m.add_vertex(Point::new(0.5, -1.0), FIXED);
+        m.add_face([a, b, top]);
+        m.add_face([b, a, bottom]);
+        m.link_all();
+        m.add_edge_tag(
+            a,
+            b,
+            FeatureOn::Primary {
+                section: 0,
+                t: [0.0, 1.0],
+            },
+        );
+        (m, context(&[c]))
+    }
+
+    fn all_certified(cm: &CurvedMesh) -> bool {
+        let order = cm.order();
+        cm.triangles.chunks_exact(order.triangle_nodes()).all(|t| {
+            let pts: Vec<Point> = t.iter().map(|&i| cm.nodes[i as usize]).collect();
+            jacobian::certify_element(order, &pts, &CertifyOptions::DEFAULT)
+                .is_some_and(|c| c.is_certified())
+        })
+    }
+
+    #[test]
+    fn gentle_curve_is_exact_and_shared() {
+        let c = CubicBez::new((0.0, 0.0), (0.3, 0.1), (0.7, 0.1), (1.0, 0.0));
+        let (mut m, ctx) = diamond(c, 0.6);
+        let opts = CurveOptions::new(Order::Cubic, 2.0);
+        let (cm, stats) = curve_mesh(&mut m, &ctx, &opts, feature).expect("curving");
+        assert_eq!(stats.curved_triangles, 2, "{stats:?}");
+        assert_eq!(stats.fitted_triangles + stats.straight_triangles, 0);
+        assert!(stats.max_curve_distance_rel < 1e-15, "{stats:?}");
+        assert!(all_certified(&cm));
+        // 4 vertices + 5 edges × 2 + 2 centres; the line shares the edge's nodes
+        assert_eq!(cm.nodes.len(), 4 + 10 + 2);
+        assert_eq!(cm.lines.len(), 4);
+        let t0 = &cm.triangles[..10];
+        let t1 = &cm.triangles[10..20];
+        let line = &cm.lines;
+        for n in &line[2..] {
+            assert!(t0.contains(n) && t1.contains(n));
+        }
+        // the line runs from its first end through 1/3 and 2/3 (gmsh type 26)
+        let p = |i: usize| cm.nodes[line[i] as usize];
+        let s = if p(0).x < p(1).x {
+            1.0 / 3.0
+        } else {
+            2.0 / 3.0
+        };
+        assert!((p(2) - kurbo::ParamCurve::eval(&c, s)).hypot() < 1e-15);
+        // order 2: the midpoint
+        let (mut m, ctx) = diamond(c, 0.6);
+        let (cm, _) = curve_mesh(
+            &mut m,
+            &ctx,
+            &CurveOptions::new(Order::Quadratic, 2.0),
+            feature,
+        )
+        .expect("curving");
+        assert_eq!(cm.lines.len(), 3);
+        assert!((cm.nodes[cm.lines[2] as usize] - Point::new(0.5, 0.075)).hypot() < 1e-15);
+        assert!(all_certified(&cm));
+    }
+
+    #[test]
+    fn bulge_past_the_apex_is_fitted_not_dropped() {
+        // The arc rises to 0.45, above the fixed apex at 0.3: the exact element is
+        // inverted, no split may help (edge below l_min), so the nodes are fitted.
+        let c = CubicBez::new((0.0, 0.0), (0.3, 0.6), (0.7, 0.6), (1.0, 0.0));
+        let (mut m, ctx) = diamond(c, 0.3);
+        for order in [Order::Cubic, Order::Quadratic] {
+            let opts = CurveOptions::new(order, 1.0).with_l_min_abs(10.0);
+            let (cm, stats) = curve_mesh(&mut m.clone(), &ctx, &opts, feature).expect("curving");
+            assert!(all_certified(&cm), "{order:?}");
+            assert_eq!(stats.fitted_triangles, 2, "{order:?} {stats:?}");
+            assert_eq!(stats.straight_triangles, 0, "{order:?} {stats:?}");
+            assert_eq!(stats.curved_triangles, 2);
+            // closer than the chord (0.45 away), still not the curve; the corner
+            // angles bound the edge's end slopes, so it cannot rise much above 0.15
+            assert!(
+                stats.max_curve_distance_rel > 0.25 && stats.max_curve_distance_rel < 0.4,
+                "{order:?} {stats:?}"
+            );
+            assert!(stats.min_jacobian_ratio >= opts.fit_min_ratio, "{stats:?}");
+        }
+        // With splits allowed, the repair splits first; the result is still certified.
+        let opts = CurveOptions::new(Order::Cubic, 1.0).with_l_min_abs(1e-3);
+        let (cm, stats) = curve_mesh(&mut m, &ctx, &opts, feature).expect("curving");
+        assert!(all_certified(&cm));
+        assert!(stats.splits_repair > 0, "{stats:?}");
+    }
+
+    #[test]
+    fn two_curved_edges_are_separated() {
+        let mut m = TriMesh::new();
+        let a = m.add_vertex(Point::new(0.0, 0.0), FIXED);
+        let b = m.add_vertex(Point::new(1.0, 0.0), FIXED);
+        let c = m.add_vertex(Point::new(0.5, 1.0), FIXED);
+        m.add_face([a, b, c]);
+        m.link_all();
+        let ab = CubicBez::new((0.0, 0.0), (0.3, -0.1), (0.7, -0.1), (1.0, 0.0));
+        let bc = CubicBez::new((1.0, 0.0), (0.9, 0.4), (0.8, 0.7), (0.5, 1.0));
+        let ctx = context(&[ab, bc]);
+        m.add_edge_tag(
+            a,
+            b,
+            FeatureOn::Primary {
+                section: 0,
+                t: [0.0, 1.0],
+            },
+        );
+        m.add_edge_tag(
+            b,
+            c,
+            FeatureOn::Primary {
+                section: 1,
+                t: [0.0, 1.0],
+            },
+        );
+        let opts = CurveOptions::new(Order::Cubic, 1.5);
+        let (cm, stats) = curve_mesh(&mut m, &ctx, &opts, feature).expect("curving");
+        assert_eq!(stats.splits_multi_primary, 1, "{stats:?}");
+        assert_eq!(m.num_faces(), 2);
+        for f in m.faces() {
+            assert_eq!(curved_edges(&m, &ctx, f).len(), 1);
+        }
+        assert!(all_certified(&cm));
+        assert_eq!(stats.curved_triangles, 2);
+        assert!(stats.max_curve_distance_rel < 1e-15);
+    }
+
+    #[test]
+    fn lagrange_edge_interpolates() {
+        let (a, b) = (Point::new(0.0, 0.0), Point::new(3.0, 0.0));
+        let inner = [Point::new(1.0, 1.0), Point::new(2.0, 1.0)];
+        assert!((lagrange_edge(a, b, &inner, 1.0 / 3.0) - inner[0]).hypot() < 1e-15);
+        assert!((lagrange_edge(a, b, &inner, 1.0) - b).hypot() < 1e-15);
+        assert!((lagrange_edge(a, b, &[], 0.5) - Point::new(1.5, 0.0)).hypot() < 1e-15);
+    }
 }
