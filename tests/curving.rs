@@ -7,7 +7,8 @@
 //!
 //! The dev-set run is ignored (slow, needs the corpus):
 //! `cargo test --release --test curving -- --ignored --nocapture` (every N-th file with
-//! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`).
+//! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`, order 2
+//! with `TRIWILD_CURVING_ORDER=2`).
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
 mod support;
@@ -170,7 +171,11 @@ fn devset_curving() {
             println!("{name}: bsp failed");
             continue;
         };
-        let opts = CurveOptions::new(Order::Cubic, drawing.diagonal());
+        let order = match std::env::var("TRIWILD_CURVING_ORDER").as_deref() {
+            Ok("2") => Order::Quadratic,
+            _ => Order::Cubic,
+        };
+        let opts = CurveOptions::new(order, drawing.diagonal());
         let r = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
             FeatureOn::Primary { section, .. } => {
                 (fs.primary[section as usize].source.shape, LineKind::Primary)
@@ -185,11 +190,12 @@ fn devset_curving() {
                 let fem =
                     FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
                 let c = certify_fem(&fem, &triwild::curve::CertifyOptions::VALIDITY);
+                let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
                 let _ =
                     output::write_msh(&fem, &dir.join(format!("{name}.msh")), MshOptions::DEFAULT);
                 println!(
                     "{name}: {} tris, curved {} fitted {} straight {} splits {}+{} smooth {} \
-                     maxdist {:.2e} meandist {:.2e} minratio {:.3} valid {} {:.2}s",
+                     maxdist {:.2e} (corners off {:.2e}) meandist {:.2e} minratio {:.3} valid {} {:.2}s",
                     fem.triangle_count(),
                     s.curved_triangles,
                     s.fitted_triangles,
@@ -198,6 +204,7 @@ fn devset_curving() {
                     s.splits_repair,
                     s.smooths_repair,
                     s.max_curve_distance_rel,
+                    s.max_corner_offset_rel,
                     s.mean_curve_distance_rel,
                     s.min_jacobian_ratio,
                     c.is_valid(),

@@ -14,7 +14,9 @@
 //!    midpoint (order 2). When a corner is off its curve (a vertex the BSP left on
 //!    a chord) the piece is moved by the linear blend of the two corner offsets,
 //!    so the element still passes through its corners;
-//! 4. repair of elements that are not certified, on the linear mesh: smooth the
+//! 4. repair of elements that are not certified, on the linear mesh: a straight
+//!    sliver (exactly positive, but `det J` within the zero tolerance) is swapped,
+//!    smoothed or collapsed away; for a curved element, smooth the
 //!    vertex opposite the curved edge, then split the curved edge at its
 //!    parameter midpoint (within [`CurveOptions::max_splits`] and never below
 //!    [`CurveOptions::l_min_abs`]), re-curving and re-certifying what changed;
@@ -113,10 +115,16 @@ pub struct CurveStats {
     pub splits_repair: usize,
     /// Smoothings applied to repair elements.
     pub smooths_repair: usize,
+    /// Local operations applied to straight slivers that could not be certified.
+    pub sliver_repairs: usize,
     /// Largest sampled distance of a primary edge from its curve piece, relative to `d`.
     pub max_curve_distance_rel: f64,
     /// Mean over primary edges of their largest sampled distance, relative to `d`.
     pub mean_curve_distance_rel: f64,
+    /// Largest distance of a primary edge's corner from its curve point `c(t)`,
+    /// relative to `d`: vertices the linear mesh left off their curve (the curved
+    /// edge follows the curve up to this offset).
+    pub max_corner_offset_rel: f64,
     /// Smallest certified Jacobian ratio (lower bound of `min det J / max det J`) of
     /// the curved elements (1 when none is curved).
     pub min_jacobian_ratio: f64,
@@ -268,8 +276,10 @@ fn face_edges(mesh: &TriMesh, f: FaceId) -> [EdgeKey; 3] {
 /// for [`crate::fem::LinearMesh::from_trimesh`]).
 ///
 /// # Errors
-/// [`Error::Meshing`] (stage `curve`) if a vertex stays rational or an element
-/// cannot be certified even straight (the linear mesh was invalid).
+/// [`Error::Meshing`] (stage `curve`) if a vertex stays rational, or an element
+/// cannot be certified even straight: a sliver of the linear mesh, exactly
+/// positive but with `det J` within the zero tolerance, that no local operation
+/// could remove (e.g. between two features 1e-16 apart).
 pub fn curve_mesh(
     mesh: &mut TriMesh,
     ctx: &Context,
@@ -396,6 +406,45 @@ fn uncertified(mesh: &TriMesh, shape: &Bend, order: Order, opts: &CertifyOptions
     bad
 }
 
+/// Straight faces that are not certified at `order`: slivers whose exact
+/// orientation is positive but whose `det J` is within the zero tolerance.
+fn uncertified_straight(
+    mesh: &TriMesh,
+    shape: &Bend,
+    order: Order,
+    opts: &CertifyOptions,
+) -> Vec<FaceId> {
+    mesh.faces()
+        .filter(|&f| {
+            face_edges(mesh, f)
+                .iter()
+                .all(|k| !shape.edges.contains_key(k))
+                && !shape.certified(mesh, order, f, opts)
+        })
+        .collect()
+}
+
+/// Try to remove a sliver: swap its longest edge, smooth its vertices, collapse
+/// its shortest edge (the local operations keep the linear invariants).
+fn repair_sliver(mesh: &mut TriMesh, ctx: &Context, f: FaceId) -> bool {
+    let mut edges = face_edges(mesh, f);
+    let len = |k: &EdgeKey| (mesh.position(k.hi) - mesh.position(k.lo)).hypot();
+    edges.sort_by(|a, b| len(b).total_cmp(&len(a)));
+    for k in &edges {
+        if ops::try_swap(mesh, ctx, k.lo, k.hi).is_applied() {
+            return true;
+        }
+    }
+    for v in mesh.face(f) {
+        if ops::try_smooth(mesh, ctx, v).is_applied() {
+            return true;
+        }
+    }
+    let k = edges[2];
+    ops::try_collapse(mesh, ctx, k.lo, k.hi).is_applied()
+        || ops::try_collapse(mesh, ctx, k.hi, k.lo).is_applied()
+}
+
 /// Repair on the linear mesh: smooth the vertex opposite a failing curved edge,
 /// and if that does not certify the element, split the curved edge.
 fn repair(
@@ -409,11 +458,22 @@ fn repair(
     for _ in 0..opts.repair_rounds {
         let shape = exact_shape(mesh, ctx, order);
         let bad = uncertified(mesh, &shape, order, &opts.certify);
-        tracing::debug!(bad = bad.len(), "curving repair round");
-        if bad.is_empty() {
+        let slivers = uncertified_straight(mesh, &shape, order, &opts.certify);
+        tracing::debug!(
+            bad = bad.len(),
+            slivers = slivers.len(),
+            "curving repair round"
+        );
+        if bad.is_empty() && slivers.is_empty() {
             return;
         }
         let mut progress = false;
+        for f in slivers {
+            if mesh.is_face_alive(f) && repair_sliver(mesh, ctx, f) {
+                stats.sliver_repairs += 1;
+                progress = true;
+            }
+        }
         for f in bad {
             if !mesh.is_face_alive(f) {
                 continue;
@@ -775,10 +835,20 @@ fn finish_stats(
         let cert = jacobian::certify_element(order, &pts, &opts.certify)
             .expect("internal: element has its order's node count");
         if !cert.is_certified() {
+            let mut faces: Vec<FaceId> = mesh.faces().collect();
+            faces.sort_unstable();
+            let f = faces[i];
+            let bent = face_edges(mesh, f)
+                .iter()
+                .filter(|k| shape.edges.contains_key(k))
+                .count();
             return Err(Error::meshing(
                 "curve",
                 format!(
-                    "element {i} is not certified valid ({:?}); the linear mesh was invalid",
+                    "element {i} ({f:?}, {bent} curved edges, centre moved: {}) is not \
+                     certified valid ({:?}): a straight sliver of the linear mesh that no \
+                     local operation could remove",
+                    shape.centre.contains_key(&f),
                     cert.validity
                 ),
             ));
@@ -789,6 +859,7 @@ fn finish_stats(
     let mut dist_sum = 0.0;
     let mut dist_count = 0usize;
     let mut dist_max = 0.0f64;
+    let mut corner_max = 0.0f64;
     let mut keys: Vec<EdgeKey> = mesh.tagged_edges().map(|(k, _)| k).collect();
     keys.sort_unstable();
     for key in keys {
@@ -804,6 +875,10 @@ fn finish_stats(
             .get(&key)
             .cloned()
             .unwrap_or_else(|| straight_inner(a, b, order));
+        let off = (a - sec.parent.eval(t[0]))
+            .hypot()
+            .max((b - sec.parent.eval(t[1])).hypot());
+        corner_max = corner_max.max(off);
         let piece = sec.parent.restrict(t[0], t[1]);
         let dist = edge_distance(a, b, &inner, &piece, 1e-12 * opts.d);
         dist_max = dist_max.max(dist);
@@ -818,6 +893,7 @@ fn finish_stats(
     stats.curved_triangles = curved_faces.len();
     let d = if opts.d > 0.0 { opts.d } else { 1.0 };
     stats.max_curve_distance_rel = dist_max / d;
+    stats.max_corner_offset_rel = corner_max / d;
     stats.mean_curve_distance_rel = if dist_count > 0 {
         dist_sum / dist_count as f64 / d
     } else {
