@@ -30,7 +30,7 @@ fn bench(c: &mut Criterion) {
             continue;
         };
         let bsp = Params::DEFAULT
-            .with_mesher(Mesher::Bsp)
+            .with_mesher(Mesher::TriWild)
             .with_stop_after(Some(Stage::Bsp));
         let cdt = Params::DEFAULT;
         for (name, params) in [("bsp", &bsp), ("cdt", &cdt)] {

@@ -264,26 +264,33 @@ enum MshVersionArg {
 enum MesherArg {
     /// spade constrained Delaunay triangulation with refinement (linear baseline).
     Cdt,
-    /// TriWild's exact BSP mesher (features, exact BSP, rounding). The optimizer
-    /// does not exist yet, so this writes the raw BSP mesh, as with `--stop-after bsp`.
-    Bsp,
+    /// TriWild: feature analysis, exact BSP mesh, AMIPS optimization under the
+    /// feature invariants (and curving).
+    #[value(name = "triwild", alias = "bsp")]
+    TriWild,
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy)]
 enum StageArg {
-    /// The exact BSP mesh, rounded to f64, feature edges as physical curves (needs --mesher bsp).
+    /// The exact BSP mesh, rounded to f64, feature edges as physical curves.
     Bsp,
+    /// The optimized linear mesh (same as --linear).
+    Optimize,
 }
 
 /// Meshing parameters (DESIGN "Coordinates and parameters").
 #[derive(Args, Debug, Clone)]
 struct ParamArgs {
-    /// Linear mesher.
-    #[arg(long, value_enum, default_value = "cdt")]
+    /// Mesher.
+    #[arg(long, value_enum, default_value = "triwild")]
     mesher: MesherArg,
-    /// Stop after this stage and write its mesh.
+    /// Stop after this stage and write its mesh (needs --mesher triwild).
     #[arg(long, value_enum, value_name = "STAGE")]
     stop_after: Option<StageArg>,
+    /// Write the optimized linear mesh (straight triangles, feature edges as
+    /// physical curves), without curving: --stop-after optimize.
+    #[arg(long, conflicts_with = "stop_after")]
+    linear: bool,
     /// Target edge length l, relative to d.
     #[arg(short = 'l', long, default_value_t = 0.05, value_name = "REL")]
     edge_length: f64,
@@ -323,14 +330,15 @@ struct ParamArgs {
     /// Minimal angle α (degrees) for optimization and curve sections.
     #[arg(long, default_value_t = 10.0, value_name = "DEG")]
     alpha: f64,
-    /// AMIPS energy at which linear optimization stops.
-    #[arg(long, default_value_t = 10.0)]
+    /// AMIPS energy (1 = equilateral) at which linear optimization stops; 5 is the
+    /// thesis's 10 in its normalization (2 = equilateral).
+    #[arg(long, default_value_t = 5.0)]
     stop_energy: f64,
     /// Maximum linear optimization passes.
     #[arg(long, default_value_t = 80)]
     max_passes: u32,
-    /// AMIPS energy at which curved optimization stops.
-    #[arg(long, default_value_t = 20.0)]
+    /// AMIPS energy (1 = equilateral) at which curved optimization stops (the thesis's 20).
+    #[arg(long, default_value_t = 10.0)]
     stop_energy_curved: f64,
     /// Maximum curved optimization passes.
     #[arg(long, default_value_t = 10)]
@@ -355,11 +363,13 @@ impl ParamArgs {
         Params::DEFAULT
             .with_mesher(match self.mesher {
                 MesherArg::Cdt => Mesher::Cdt,
-                MesherArg::Bsp => Mesher::Bsp,
+                MesherArg::TriWild => Mesher::TriWild,
             })
-            .with_stop_after(self.stop_after.map(|s| match s {
-                StageArg::Bsp => Stage::Bsp,
-            }))
+            .with_stop_after(match (self.stop_after, self.linear) {
+                (Some(StageArg::Bsp), _) => Some(Stage::Bsp),
+                (Some(StageArg::Optimize), _) | (None, true) => Some(Stage::Optimize),
+                (None, false) => None,
+            })
             .with_l(len(self.edge_length, self.edge_length_abs))
             .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
             .with_mu(len(self.mu, self.mu_abs))

@@ -38,8 +38,9 @@ impl Length {
 pub enum Mesher {
     /// spade's constrained Delaunay triangulation with refinement: the baseline.
     Cdt,
-    /// The exact BSP mesher of TriWild (DESIGN `bsp`).
-    Bsp,
+    /// TriWild: features, the exact BSP mesh, then mesh optimization (and curving).
+    #[serde(rename = "triwild")]
+    TriWild,
 }
 
 /// A pipeline stage after which meshing may stop (`--stop-after`).
@@ -47,9 +48,12 @@ pub enum Mesher {
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Stage {
-    /// The exact BSP mesh (needs [`Mesher::Bsp`]): every vertex rounded to `f64`
+    /// The exact BSP mesh (needs [`Mesher::TriWild`]): every vertex rounded to `f64`
     /// or an error, no optimization.
     Bsp,
+    /// The optimized linear mesh (needs [`Mesher::TriWild`]): all `f64`, primary
+    /// vertices on their curves, no curving (`--linear`).
+    Optimize,
 }
 
 /// All meshing parameters. Start from [`Params::DEFAULT`] and use the `with_*` builders.
@@ -72,9 +76,11 @@ pub struct Params {
     /// Minimal angle α in degrees the optimizer aims for; also the turning bound of
     /// a primary section (Theorem 4.4). Default 10.
     pub alpha_deg: f64,
-    /// AMIPS energy at which linear optimization stops. Default 10.
+    /// AMIPS energy (1 for equilateral) at which linear optimization stops.
+    /// Default 5: the thesis's 10 in its normalization `tr(JᵀJ)/det J` (2 for equilateral).
     pub stop_energy: f64,
-    /// AMIPS energy at which curved optimization stops. Default 20.
+    /// AMIPS energy (1 for equilateral) at which curved optimization stops.
+    /// Default 10: the thesis's 20.
     pub stop_energy_curved: f64,
     /// Maximum linear optimization passes. Default 80.
     pub max_passes: u32,
@@ -84,10 +90,10 @@ pub struct Params {
     pub cdt_min_angle_deg: f64,
     /// Vertex budget of the CDT baseline's refinement, so it always terminates. Default 200 000.
     pub max_vertices: u32,
-    /// The linear mesher. Default [`Mesher::Cdt`] until the TriWild stages land.
+    /// The mesher. Default [`Mesher::TriWild`].
     pub mesher: Mesher,
     /// Stop after this stage and deliver its mesh. Default `None` (run every
-    /// stage that exists). [`Stage::Bsp`] needs [`Mesher::Bsp`].
+    /// stage that exists). [`Stage::Bsp`] needs [`Mesher::TriWild`].
     pub stop_after: Option<Stage>,
     /// Run the full mesh validator after every stage (slow). Default false.
     pub paranoid: bool,
@@ -103,13 +109,13 @@ impl Params {
         l_min: Length::Rel(1e-4),
         padding: Length::Rel(0.05),
         alpha_deg: 10.0,
-        stop_energy: 10.0,
-        stop_energy_curved: 20.0,
+        stop_energy: 5.0,
+        stop_energy_curved: 10.0,
         max_passes: 80,
         max_passes_curved: 10,
         cdt_min_angle_deg: 25.0,
         max_vertices: 200_000,
-        mesher: Mesher::Cdt,
+        mesher: Mesher::TriWild,
         stop_after: None,
         paranoid: false,
     };
@@ -236,9 +242,9 @@ impl Params {
                 )));
             }
         }
-        if self.stop_after == Some(Stage::Bsp) && self.mesher != Mesher::Bsp {
+        if self.stop_after.is_some() && self.mesher != Mesher::TriWild {
             return Err(Error::InvalidParams(
-                "--stop-after bsp needs --mesher bsp".into(),
+                "--stop-after and --linear need --mesher triwild".into(),
             ));
         }
         Ok(())
@@ -322,12 +328,13 @@ mod tests {
         assert!(Params::DEFAULT.with_alpha_deg(-1.0).validate().is_err());
         assert!(
             Params::DEFAULT
+                .with_mesher(Mesher::Cdt)
                 .with_stop_after(Some(Stage::Bsp))
                 .validate()
                 .is_err()
         );
         Params::DEFAULT
-            .with_mesher(Mesher::Bsp)
+            .with_mesher(Mesher::TriWild)
             .with_stop_after(Some(Stage::Bsp))
             .validate()
             .unwrap();

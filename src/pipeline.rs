@@ -3,15 +3,16 @@
 //!
 //! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild's
 //! linear path, features → exact BSP (`bsp`) → rounded [`LinearMesh`]
-//! (`linear`); a BSP vertex that stays rational is an error, never written
-//! (DESIGN "Exactness"). The optimizer (issue 5) does not exist yet, so the BSP
-//! mesh is delivered as is, with or without `--stop-after bsp`.
+//! (`linear`) → AMIPS optimization (`optimize`); a vertex that stays rational
+//! is an error, never written (DESIGN "Exactness"). `--stop-after bsp` delivers
+//! the raw BSP mesh, `--linear` the optimized one.
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::features::{self, FeatureCounts, FeatureSet};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
+use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MshOptions};
 use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
@@ -159,6 +160,8 @@ pub struct Report {
     pub bsp: Option<BspStats>,
     /// The stage the run stopped after, if it stopped early.
     pub stopped_after: Option<Stage>,
+    /// What the optimizer did (`--mesher triwild` unless stopped after `bsp`).
+    pub optimize: Option<OptimizeStats>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
 }
@@ -210,17 +213,38 @@ pub fn mesh_drawing_with(
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
     let mut bsp = None;
+    let mut optimize = None;
+    let mut warnings = drawing.warnings.clone();
     let linear = match params.mesher {
         Mesher::Cdt => times.time("baseline", || crate::baseline::triangulate(drawing, params))?,
-        Mesher::Bsp => {
+        Mesher::TriWild => {
             let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
             features = Some(fs.counts);
-            let (mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
-            let linear = to_linear(&mesh, &fs, "bsp", &mut times)?;
+            let (mut mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
             bsp = Some(stats);
-            // No optimizer yet (issue 5): the BSP mesh is the linear mesh,
-            // whether or not the run stops after `bsp`.
-            linear
+            if params.stop_after == Some(Stage::Bsp) {
+                to_linear(&mesh, &fs, "bsp", &mut times)?
+            } else {
+                let stats = times.time("optimize", || {
+                    let mut ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
+                    crate::optimize::optimize(
+                        &mut mesh,
+                        &mut ctx,
+                        &optimize_options(params, &resolved),
+                    )
+                });
+                if params.paranoid {
+                    check_trimesh(&mesh, "optimize")?;
+                }
+                if stats.off_curve_left > 0 {
+                    warnings.push(format!(
+                        "{} primary vertices could not be moved onto their curves",
+                        stats.off_curve_left
+                    ));
+                }
+                optimize = Some(stats);
+                to_linear(&mesh, &fs, "optimize", &mut times)?
+            }
         }
     };
     let mesh = FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name());
@@ -241,7 +265,8 @@ pub fn mesh_drawing_with(
         features,
         bsp,
         stopped_after: params.stop_after,
-        warnings: drawing.warnings.clone(),
+        optimize,
+        warnings,
     };
     Ok(Meshed { mesh, report })
 }
@@ -320,15 +345,34 @@ fn bsp_trimesh(
     let bbox = padded_box(drawing, resolved.padding);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
     if params.paranoid {
-        let defects = times.time("check", || mesh.check());
-        if let Some(d) = defects.first() {
-            return Err(Error::meshing(
-                "bsp",
-                format!("internal: {} mesh defects, first: {d:?}", defects.len()),
-            ));
-        }
+        times.time("check", || check_trimesh(&mesh, "bsp"))?;
     }
     Ok((mesh, stats))
+}
+
+/// `--paranoid`: the full validator on a stage's mesh.
+fn check_trimesh(mesh: &TriMesh, stage: &'static str) -> Result<()> {
+    let defects = mesh.check();
+    match defects.first() {
+        Some(d) => Err(Error::meshing(
+            stage,
+            format!("internal: {} mesh defects, first: {d:?}", defects.len()),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The optimizer's options from the parameters (thesis §2.3.2: target `l`,
+/// sizing floor ε).
+pub fn optimize_options(params: &Params, resolved: &Resolved) -> OptimizeOptions {
+    OptimizeOptions {
+        l: resolved.l,
+        l_floor: resolved.eps.min(resolved.l),
+        stop_energy: params.stop_energy,
+        alpha_deg: params.alpha_deg,
+        max_passes: params.max_passes,
+        max_vertices: params.max_vertices as usize,
+    }
 }
 
 /// The delivered linear form of a mesh whose tags index `fs`.

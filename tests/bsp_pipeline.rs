@@ -5,7 +5,7 @@
 //! and checked: valid (counter-clockwise, conforming, manifold), covering the padded box,
 //! and every primary chord and secondary segment of the FeatureSet present as a chain of
 //! feature line elements whose vertices lie within 1e-9·d of it, in a physical curve named
-//! after the segment's source shape.
+//! after the segment's source shape (`<name>-curve` when a surface has that name).
 //!
 //! The dev-set run is ignored (slow, needs the corpus):
 //! `cargo test --release --test bsp_pipeline -- --ignored --nocapture`.
@@ -26,7 +26,7 @@ use triwild::{Drawing, Mesher, Params, Stage};
 
 fn bsp_params() -> Params {
     Params::DEFAULT
-        .with_mesher(Mesher::Bsp)
+        .with_mesher(Mesher::TriWild)
         .with_stop_after(Some(Stage::Bsp))
 }
 
@@ -66,7 +66,14 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
             SegmentTag::Primary(id) => fs.primary[id.0 as usize].source,
             SegmentTag::Secondary { polyline, .. } => fs.secondary[polyline.0 as usize].source,
         };
-        let name = drawing.shapes[source.shape.0 as usize].name();
+        let mut name = drawing.shapes[source.shape.0 as usize].name();
+        // Names are unique in a file: a curve named like a surface is written `<name>-curve`.
+        if m.physical_names
+            .iter()
+            .any(|((dim, _), n)| *dim == 2 && *n == name)
+        {
+            name.push_str("-curve");
+        }
         if let Err(e) = find_chain(line, &name, tol, &pos, &by_pos, &adj, &line_names) {
             defects.push(format!("{tag:?} {line:?} of {name}: {e}"));
         }

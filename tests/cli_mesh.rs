@@ -177,7 +177,7 @@ fn the_default_output_sits_beside_the_input() {
 
 #[test]
 fn named_shapes_give_named_physical_curves() {
-    // star-evenodd.svg has ids `path1` and `frame`.
+    // star-evenodd.svg has ids `path1` (filled) and `frame` (stroked).
     let out = support::out_dir("cli_names");
     let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg");
     let msh = out.join("star.msh");
@@ -190,6 +190,15 @@ fn named_shapes_give_named_physical_curves() {
         .filter(|((dim, _), _)| *dim == 1)
         .map(|(_, n)| n)
         .collect();
-    assert!(curves.iter().any(|n| *n == "path1"), "{curves:?}");
+    // `path1` is filled, so its surface is `path1` and its curve, written after it,
+    // `path1-curve` (names are unique in a file); `frame` is not filled.
+    assert!(curves.iter().any(|n| *n == "path1-curve"), "{curves:?}");
     assert!(curves.iter().any(|n| *n == "frame"), "{curves:?}");
+    assert!(
+        m.physical_names
+            .iter()
+            .any(|((dim, _), n)| *dim == 2 && n == "path1"),
+        "{:?}",
+        m.physical_names
+    );
 }

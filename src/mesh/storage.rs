@@ -3,8 +3,8 @@
 use super::ids::{FaceId, VertexId};
 use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use kurbo::Point;
+use rustc_hash::FxHashMap;
 use std::borrow::Cow;
-use std::collections::HashMap;
 
 /// What a vertex stands for. All false for an ordinary (Steiner) vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -105,7 +105,7 @@ pub struct TriMesh {
     pub(super) faces: Vec<Option<FaceData>>,
     pub(super) free_vertices: Vec<VertexId>,
     pub(super) free_faces: Vec<FaceId>,
-    pub(super) edge_tags: HashMap<EdgeKey, Vec<FeatureOn>>,
+    pub(super) edge_tags: FxHashMap<EdgeKey, Vec<FeatureOn>>,
     pub(super) live_vertices: usize,
     pub(super) live_faces: usize,
 }

@@ -10,7 +10,6 @@ use super::ids::{FaceId, VertexId};
 use super::storage::{EdgeKey, FaceData, FeatureOn, TriMesh, VertexData, VertexTag};
 use crate::exact::PointQ;
 use kurbo::Point;
-use std::collections::HashMap;
 
 #[derive(Clone, Copy, Debug)]
 enum FreeOp {
@@ -176,12 +175,13 @@ impl<'a> Transaction<'a> {
     /// new face ids, in the order of `new`. Purely topological.
     pub fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
         // The faces outside the region, by the edge they share with it.
-        let mut outside: HashMap<EdgeKey, FaceId> = HashMap::new();
+        // Regions are a few faces: linear scans beat hashing here.
+        let mut outside: Vec<(EdgeKey, FaceId)> = Vec::with_capacity(old.len() + 2);
         for &f in old {
             for (i, g) in self.mesh.neighbours(f).into_iter().enumerate() {
                 if let Some(g) = g.filter(|g| !old.contains(g)) {
                     let (a, b) = self.mesh.edge(f, i);
-                    outside.insert(EdgeKey::new(a, b), g);
+                    outside.push((EdgeKey::new(a, b), g));
                 }
             }
         }
@@ -189,21 +189,22 @@ impl<'a> Transaction<'a> {
             self.remove_face(f);
         }
         let ids: Vec<FaceId> = new.iter().map(|&v| self.add_face(v)).collect();
-        let mut inner: HashMap<EdgeKey, (FaceId, usize)> = HashMap::new();
+        let mut inner: Vec<(EdgeKey, FaceId, usize)> = Vec::with_capacity(new.len() * 2);
         for &f in &ids {
             for i in 0..3 {
                 let (a, b) = self.mesh.edge(f, i);
                 let key = EdgeKey::new(a, b);
-                if let Some((g, j)) = inner.remove(&key) {
+                if let Some(pos) = inner.iter().position(|(k, _, _)| *k == key) {
+                    let (_, g, j) = inner.swap_remove(pos);
                     self.set_neighbour(f, i, Some(g));
                     self.set_neighbour(g, j, Some(f));
-                } else if let Some(&g) = outside.get(&key) {
+                } else if let Some(&(_, g)) = outside.iter().find(|(k, _)| *k == key) {
                     if let Some(j) = self.mesh.edge_index(g, a, b) {
                         self.set_neighbour(f, i, Some(g));
                         self.set_neighbour(g, j, Some(f));
                     }
                 } else {
-                    inner.insert(key, (f, i));
+                    inner.push((key, f, i));
                 }
             }
         }

@@ -10,7 +10,9 @@
 //! keeps the mesh a manifold.
 
 use super::invariants::{self, Check};
-use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role, t_at};
+use super::{
+    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, ring, role, t_at,
+};
 use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
 
@@ -181,6 +183,22 @@ pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId)
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
+    // The energy rule needs positions only (u does not move): refuse early,
+    // without a transaction, what it would refuse anyway. An infinite energy
+    // (inverted or degenerate in f64) is left to the exact inversion test.
+    if ctx.energy == EnergyRule::NoWorseMax {
+        let new_max = plan
+            .new
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|x| mesh.position(x));
+                crate::optimize::energy::amips(a, b, c)
+            })
+            .fold(0.0, f64::max);
+        if new_max.is_finite() && new_max > plan.old_max_energy {
+            return Outcome::Rejected(Reject::Energy);
+        }
+    }
     let mut tx = Transaction::new(mesh);
     for &w in &plan.drop_tags {
         tx.take_edge_tags(plan.v, w);

@@ -1,5 +1,6 @@
 //! Local mesh operations under TriWild's invariants: edge split, edge
-//! collapse, edge swap, vertex smoothing and vertex rounding.
+//! collapse, edge swap, vertex smoothing, vertex rounding and vertex
+//! projection onto a primary curve.
 //!
 //! Each operation has the four steps of STYLE "Local operations and
 //! invariants": a plan that reads `&TriMesh` only and runs the topological and
@@ -27,15 +28,17 @@
 pub mod invariants;
 
 mod collapse;
+mod project;
 mod round;
 mod smooth;
 mod split;
 mod swap;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use collapse::{CollapsePlan, try_collapse};
+pub use project::try_project;
 pub use round::try_round;
 pub use smooth::{SmoothPlan, try_smooth};
 pub use split::{SplitPlan, try_split};
@@ -71,6 +74,25 @@ pub enum Reject {
     Envelope,
     /// The energy rule: the worst triangle would get worse.
     Energy,
+}
+
+impl Reject {
+    /// A short lower-case name (for statistics).
+    pub fn name(self) -> &'static str {
+        match self {
+            Reject::NotAnEdge => "not_an_edge",
+            Reject::FixedVertex => "fixed_vertex",
+            Reject::FeatureRule => "feature_rule",
+            Reject::Boundary => "boundary",
+            Reject::Topology => "topology",
+            Reject::NoChange => "no_change",
+            Reject::Inversion => "inversion",
+            Reject::OnCurve => "on_curve",
+            Reject::Curvature => "curvature",
+            Reject::Envelope => "envelope",
+            Reject::Energy => "energy",
+        }
+    }
 }
 
 /// What an applied operation changed.

@@ -37,7 +37,7 @@ fn curve() -> CubicBez {
 
 /// A CDT of the unit box with a curved primary chain (two sections of one
 /// cubic, split at t = 0.5), a secondary polyline and random points.
-fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
+pub(crate) fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
     let mut rng = Rng(seed);
     let c = curve();
     let parent = Parent::Cubic(c);
@@ -160,7 +160,7 @@ fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
 
 /// The BSP mesh of a random segment soup: odd segments primary (straight
 /// sections), even ones secondary (one polyline each).
-fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
+pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
     let mut rng = Rng(seed);
     let mut input = BspInput::default();
     let mut sections = Vec::new();
@@ -210,7 +210,12 @@ fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
 
 /// Every invariant on the whole mesh; `off` tracks each primary vertex's
 /// distance to its curve, which may never grow past the tolerance.
-fn assert_invariants(mesh: &TriMesh, ctx: &Context, off: &mut HashMap<VertexId, f64>, what: &str) {
+pub(crate) fn assert_invariants(
+    mesh: &TriMesh,
+    ctx: &Context,
+    off: &mut HashMap<VertexId, f64>,
+    what: &str,
+) {
     let defects = mesh.check();
     assert!(defects.is_empty(), "{what}: {defects:?}");
     for (key, tags) in mesh.tagged_edges() {
@@ -248,7 +253,7 @@ fn assert_invariants(mesh: &TriMesh, ctx: &Context, off: &mut HashMap<VertexId, 
 
 #[derive(Default, Debug)]
 struct Tally {
-    applied: [usize; 5],
+    applied: [usize; 6],
     rejected: HashMap<Reject, usize>,
 }
 
@@ -263,14 +268,15 @@ fn run_ops(mut mesh: TriMesh, ctx: &Context, seed: u64, n_ops: usize) -> Tally {
         let v = mesh.face(f);
         let i = rng.below(3);
         let (a, b) = (v[i], v[(i + 1) % 3]);
-        let kind = rng.below(5);
+        let kind = rng.below(6);
         let before = mesh.clone();
         let out = match kind {
             0 if mesh.num_vertices() < 600 => try_split(&mut mesh, ctx, a, b),
             0 | 1 => try_collapse(&mut mesh, ctx, a, b),
             2 => try_swap(&mut mesh, ctx, a, b),
             3 => try_smooth(&mut mesh, ctx, a),
-            _ => try_round(&mut mesh, ctx, a),
+            4 => try_round(&mut mesh, ctx, a),
+            _ => try_project(&mut mesh, ctx, a),
         };
         let what = format!("seed {seed} step {step} op {kind} on {a:?} {b:?}: {out:?}");
         match out {
@@ -304,7 +310,7 @@ fn random_ops_on_delaunay_meshes_keep_every_invariant() {
         };
         let (mesh, ctx) = delaunay_mesh(seed, rule);
         let t = run_ops(mesh, &ctx, seed, 400);
-        for k in 0..5 {
+        for k in 0..6 {
             total.applied[k] += t.applied[k];
         }
         for (r, n) in t.rejected {
@@ -546,4 +552,60 @@ fn curvature_refuses_pieces_that_turn_too_much_or_leave_the_section() {
     // The whole cubic turns about 27°, more than α = 15°.
     assert!(!curvature::holds(&ctx, 0, [0.0, 1.0]));
     assert!(curvature::holds(&ctx, 0, [0.0, 0.5]));
+}
+
+#[test]
+fn projection_moves_a_chord_vertex_onto_its_curve_or_closer() {
+    for seed in 0..6 {
+        let (mut mesh, ctx) = delaunay_mesh(seed, EnergyRule::NoWorseMax);
+        let Some(v) = mesh
+            .vertices()
+            .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        else {
+            continue;
+        };
+        let Role::Primary { along, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+            unreachable!()
+        };
+        let chord = mesh
+            .position(along[0].0)
+            .midpoint(mesh.position(along[1].0));
+        mesh.set_position(v, mesh.position(v).lerp(chord, 0.9));
+        if !mesh.check().is_empty() {
+            continue;
+        }
+        let off0 = on_curve::off_curve(&mesh, &ctx, v).expect("primary");
+        let before = mesh.clone();
+        match try_project(&mut mesh, &ctx, v) {
+            Outcome::Applied(_) => {
+                let off1 = on_curve::off_curve(&mesh, &ctx, v).expect("primary");
+                assert!(off1 < off0, "seed {seed}: {off1} >= {off0}");
+                assert!(mesh.check().is_empty());
+                // Again until on the curve or stuck: never farther.
+                for _ in 0..8 {
+                    if !try_project(&mut mesh, &ctx, v).is_applied() {
+                        break;
+                    }
+                }
+                let off2 = on_curve::off_curve(&mesh, &ctx, v).expect("primary");
+                assert!(off2 <= off1);
+            }
+            Outcome::Rejected(r) => {
+                assert!(mesh == before, "seed {seed}: {r:?} changed the mesh");
+                assert_ne!(r, Reject::NoChange, "seed {seed}: {off0} off is a change");
+            }
+        }
+        // A vertex on its curve is left alone.
+        let on = mesh.vertices().find(|&w| {
+            w != v
+                && matches!(role(&mesh, w, &ring(&mesh, w)), Role::Primary { .. })
+                && on_curve::off_curve(&mesh, &ctx, w).is_some_and(|d| d <= ctx.on_curve_abs)
+        });
+        if let Some(w) = on {
+            assert_eq!(
+                try_project(&mut mesh, &ctx, w),
+                Outcome::Rejected(Reject::NoChange)
+            );
+        }
+    }
 }

@@ -6,3 +6,9 @@
 //! §4.4.1, §4.4.3; DESIGN "Data flow" (optimize).
 
 pub mod energy;
+pub mod schedule;
+
+pub use schedule::{OptimizeOptions, OptimizeStats, optimize};
+
+#[cfg(test)]
+mod tests;

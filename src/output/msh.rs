@@ -4,6 +4,9 @@
 //! - one physical surface per used `FemMesh::surfaces` entry (physical tag = index + 1),
 //!   one physical curve per used `FemMesh::curves` entry (physical tag = index + 1);
 //!   groups without elements are not written;
+//! - physical names are unique within a file, across dimensions (meshio keys its
+//!   `field_data` by name alone): a surface keeps its name, a curve whose name is
+//!   taken is written as `<name>-curve` (then `-curve-2`, …); see `physical_names_of`;
 //! - one elementary entity per physical group, with the same tag, holding elements
 //!   of one type only (gmsh's API shows one element type per entity);
 //! - node tags 1..=N in `FemMesh::nodes` order; element tags 1..=M, triangles
@@ -341,40 +344,78 @@ fn header<W: Write>(w: &mut W, version: &str, binary: bool) -> io::Result<()> {
 /// Longest physical name gmsh documents (longer ones may not read back).
 const MAX_NAME_CHARS: usize = 127;
 
-/// A name as gmsh reads it: inside double quotes, on one line, at most
-/// [`MAX_NAME_CHARS`] characters.
-fn quoted(name: &str) -> String {
-    let clean: String = name
-        .chars()
+/// A name as gmsh reads it (without its quotes): on one line, no double quote,
+/// at most [`MAX_NAME_CHARS`] characters.
+fn clean_name(name: &str) -> String {
+    name.chars()
         .take(MAX_NAME_CHARS)
         .map(|c| match c {
             '"' => '\'',
             c if c.is_control() => ' ',
             c => c,
         })
-        .collect();
-    format!("\"{clean}\"")
+        .collect()
+}
+
+/// `base` shortened so that `base + suffix` fits in [`MAX_NAME_CHARS`].
+fn with_suffix(base: &str, suffix: &str) -> String {
+    let keep = MAX_NAME_CHARS.saturating_sub(suffix.chars().count());
+    let mut s: String = base.chars().take(keep).collect();
+    s.push_str(suffix);
+    s
+}
+
+/// The name written for each physical entity of `layout` (`None` for an entity
+/// without a physical group): the group's cleaned name, made unique within the
+/// file. meshio (and any reader that maps names to groups) keeps one group per
+/// name, so a surface and a curve of the same name (in `--regions shape`, a
+/// shape's surface and its feature edges) would lose one. Surfaces are named
+/// first and keep their names; a name already taken gets `-surface` / `-curve`,
+/// then `-2`, `-3`, … until it is free.
+fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<Option<String>> {
+    let mut taken = std::collections::HashSet::new();
+    let mut out = vec![None; layout.entities.len()];
+    let mut order: Vec<usize> = (0..layout.entities.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(layout.entities[i].dim));
+    for i in order {
+        let e = &layout.entities[i];
+        let Some(tag) = e.physical else { continue };
+        let (names, kind) = if e.dim == 2 {
+            (&mesh.surfaces, "-surface")
+        } else {
+            (&mesh.curves, "-curve")
+        };
+        let base = clean_name(&names[(tag - 1) as usize]);
+        let mut name = base.clone();
+        if taken.contains(&name) {
+            name = with_suffix(&base, kind);
+        }
+        let mut n = 2u64;
+        while taken.contains(&name) {
+            name = with_suffix(&base, &format!("{kind}-{n}"));
+            n += 1;
+        }
+        taken.insert(name.clone());
+        out[i] = Some(name);
+    }
+    out
 }
 
 fn physical_names<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout) -> io::Result<()> {
-    let named: Vec<&Entity> = layout
+    let names = physical_names_of(mesh, layout);
+    let named: Vec<(&Entity, String)> = layout
         .entities
         .iter()
-        .filter(|e| e.physical.is_some())
+        .zip(names)
+        .filter_map(|(e, n)| Some((e, n?)))
         .collect();
     if named.is_empty() {
         return Ok(());
     }
     writeln!(w, "$PhysicalNames\n{}", named.len())?;
-    for e in named {
-        let tag = e.physical.expect("internal: filtered on physical");
-        let names = if e.dim == 2 {
-            &mesh.surfaces
-        } else {
-            &mesh.curves
-        };
-        let name = &names[(tag - 1) as usize];
-        writeln!(w, "{} {tag} {}", e.dim, quoted(name))?;
+    for (e, name) in named {
+        let tag = e.physical.expect("internal: named entities are physical");
+        writeln!(w, "{} {tag} \"{name}\"", e.dim)?;
     }
     w.write_all(b"$EndPhysicalNames\n")
 }
@@ -638,8 +679,70 @@ mod tests {
     }
 
     #[test]
-    fn names_are_quoted_safely() {
-        assert_eq!(quoted("a\"b\nc"), "\"a'b c\"");
-        assert_eq!(quoted(&"é".repeat(200)).chars().count(), MAX_NAME_CHARS + 2);
+    fn names_are_cleaned() {
+        assert_eq!(clean_name("a\"b\nc"), "a'b c");
+        assert_eq!(clean_name(&"é".repeat(200)).chars().count(), MAX_NAME_CHARS);
+    }
+
+    /// The `$PhysicalNames` lines of a v2.2 file, as (dim, tag, name).
+    fn written_names(mesh: &FemMesh) -> Vec<(i32, i32, String)> {
+        let mut buf = Vec::new();
+        write_v22(&mut buf, mesh, false).expect("write");
+        let text = String::from_utf8(buf).expect("utf8");
+        let section = text
+            .split("$PhysicalNames\n")
+            .nth(1)
+            .and_then(|s| s.split("$EndPhysicalNames").next())
+            .expect("a $PhysicalNames section");
+        section
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let mut it = l.splitn(3, ' ');
+                let dim = it.next().expect("dim").parse().expect("int");
+                let tag = it.next().expect("tag").parse().expect("int");
+                let name = it.next().expect("name").trim_matches('"').to_owned();
+                (dim, tag, name)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_curve_named_like_a_surface_gets_a_distinct_name() {
+        let mut m = square();
+        m.curves = vec!["inside".into()];
+        assert_eq!(
+            written_names(&m),
+            [(2, 1, "inside".into()), (1, 1, "inside-curve".into())]
+        );
+        // A taken name gets the suffix, then a number: never a duplicate.
+        m.lines = vec![0, 1, 1, 2, 2, 3];
+        m.line_group = vec![0, 1, 2];
+        m.line_kind = vec![crate::fem::LineKind::Primary; 3];
+        m.curves = vec!["inside".into(), "inside-curve".into(), "inside".into()];
+        assert_eq!(
+            written_names(&m),
+            [
+                (2, 1, "inside".into()),
+                (1, 1, "inside-curve".into()),
+                (1, 2, "inside-curve-curve".into()),
+                (1, 3, "inside-curve-2".into()),
+            ]
+        );
+    }
+
+    #[test]
+    fn names_equal_after_truncation_stay_distinct_and_short() {
+        let mut m = square();
+        let long = "x".repeat(200);
+        m.surfaces = vec![format!("{long}1")];
+        m.curves = vec![format!("{long}2")];
+        let names = written_names(&m);
+        assert_eq!(names[0].2, "x".repeat(MAX_NAME_CHARS));
+        assert_eq!(
+            names[1].2,
+            format!("{}-curve", "x".repeat(MAX_NAME_CHARS - 6))
+        );
+        assert!(names.iter().all(|n| n.2.chars().count() <= MAX_NAME_CHARS));
     }
 }

@@ -39,6 +39,28 @@ impl Envelope {
     /// with radius `eps_abs` and sampling spacing `sample_abs` (clamped to
     /// `(0, 2 eps_abs)`), both in user units.
     pub fn new(polylines: &[Vec<Point>], eps_abs: f64, sample_abs: f64) -> Envelope {
+        let mut segments = Vec::new();
+        for (i, pl) in polylines.iter().enumerate() {
+            let id = u32::try_from(i).expect("internal: polyline count fits u32");
+            for w in pl.windows(2) {
+                segments.push((Line::new(w[0], w[1]), id));
+            }
+        }
+        Envelope::from_segments(segments, eps_abs, sample_abs)
+    }
+
+    /// The same input polylines with another radius and sampling spacing (the
+    /// envelope stages of thesis §2.3.4: denser sampling, then a larger ε).
+    pub fn restaged(&self, eps_abs: f64, sample_abs: f64) -> Envelope {
+        Envelope::from_segments(self.segments.clone(), eps_abs, sample_abs)
+    }
+
+    /// The sampling spacing (user units).
+    pub fn spacing(&self) -> f64 {
+        self.spacing
+    }
+
+    fn from_segments(segments: Vec<(Line, u32)>, eps_abs: f64, sample_abs: f64) -> Envelope {
         let eps = if eps_abs.is_finite() && eps_abs > 0.0 {
             eps_abs
         } else {
@@ -49,15 +71,10 @@ impl Envelope {
         } else {
             eps
         };
-        let mut segments = Vec::new();
         let mut bounds: Option<Rect> = None;
-        for (i, pl) in polylines.iter().enumerate() {
-            let id = u32::try_from(i).expect("internal: polyline count fits u32");
-            for w in pl.windows(2) {
-                segments.push((Line::new(w[0], w[1]), id));
-                let r = Rect::from_points(w[0], w[1]);
-                bounds = Some(bounds.map_or(r, |b| b.union(r)));
-            }
+        for (l, _) in &segments {
+            let r = Rect::from_points(l.p0, l.p1);
+            bounds = Some(bounds.map_or(r, |b| b.union(r)));
         }
         let b = bounds.unwrap_or(Rect::ZERO);
         let n = segments.len().max(1) as f64;

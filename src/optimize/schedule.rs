@@ -1,0 +1,776 @@
+//! The mesh improvement schedule (thesis §2.3.2 "Mesh Improvement", §4.4.1):
+//! passes of edge splitting, collapsing, swapping and vertex smoothing over the
+//! whole mesh, with a target edge length per vertex, until the mesh is good
+//! enough or the pass limit is reached.
+//!
+//! One pass:
+//! 1. split every edge longer than 4/3 of its endpoints' mean target length,
+//!    longest first (the new vertex gets that mean);
+//! 2. update the sizing field: a vertex's target is halved when a bad triangle
+//!    (AMIPS above the stop energy, or an angle below α) lies within its target
+//!    length, multiplied by 1.5 otherwise, and kept within `[l_floor, l]`;
+//! 3. collapse edges shorter than 4/5 of their mean target, shortest first
+//!    (edges made short by a collapse are queued again);
+//! 4. swap interior non-feature edges where the swap lowers the larger energy of
+//!    the two triangles, longest first;
+//! 5. smooth every movable vertex (Newton on the one-ring AMIPS; along its curve
+//!    for a primary vertex), in a fixed pseudo-random order;
+//! 6. round the vertices still rational and project off-curve primary vertices
+//!    toward their curve (invariant 5).
+//!
+//! Every operation goes through `crate::ops`, so every invariant holds after
+//! each one and refused operations leave the mesh as it was. Collapse, swap and
+//! smoothing never raise the local maximum energy; splits may.
+//!
+//! Stop rules: the mesh has every vertex in `f64` and on its curve, its size
+//! has settled (nothing longer than the split bound, or the face count changed
+//! by at most 1% in the pass), and the minimum angle exceeds α or the maximum
+//! energy is below the stop energy, both over the triangles not locked by
+//! three feature edges (the input's own shapes); or two passes in a row
+//! improved neither the maximum nor the mean energy by 0.1%; or the pass
+//! limit. Vertices still rational at the end go through the envelope
+//! stages of §2.3.4 (denser sampling, then a larger ε, each followed by more
+//! rounding and smoothing); a vertex left rational after them makes the mesh
+//! unusable, which the caller reports as an error.
+
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+use crate::ops::{
+    self, Context, Outcome, Reject, invariants::on_curve, try_collapse, try_project, try_round,
+    try_smooth, try_split, try_swap,
+};
+use crate::optimize::energy::amips;
+use kurbo::Point;
+use std::collections::{BTreeMap, BinaryHeap};
+
+/// Parameters of the schedule, in user units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OptimizeOptions {
+    /// Target edge length `l`: the sizing field's upper bound.
+    pub l: f64,
+    /// Lower bound of the sizing field (the thesis uses ε).
+    pub l_floor: f64,
+    /// AMIPS energy (1 for equilateral) below which a mesh is good enough.
+    pub stop_energy: f64,
+    /// Minimum angle, degrees, above which a mesh is good enough.
+    pub alpha_deg: f64,
+    /// Maximum number of passes.
+    pub max_passes: u32,
+    /// No split once the mesh has this many vertices.
+    pub max_vertices: usize,
+}
+
+/// How often an operation was applied and why it was refused.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct OpTally {
+    /// Applied operations.
+    pub applied: u64,
+    /// Refusals, by the rule or invariant that refused.
+    pub rejected: BTreeMap<&'static str, u64>,
+}
+
+impl OpTally {
+    fn record(&mut self, outcome: &Outcome) -> bool {
+        match outcome {
+            Outcome::Applied(_) => {
+                self.applied += 1;
+                true
+            }
+            Outcome::Rejected(r) => {
+                *self.rejected.entry(r.name()).or_default() += 1;
+                false
+            }
+        }
+    }
+}
+
+/// Why the schedule stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The quality goal was met (angle above α or energy below the stop energy).
+    Quality,
+    /// A pass changed nothing measurable.
+    Stalled,
+    /// The pass limit was reached.
+    PassLimit,
+}
+
+/// What the schedule did.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct OptimizeStats {
+    /// Passes run.
+    pub passes: u32,
+    /// Why it stopped.
+    pub stop: StopReason,
+    /// Edge splits.
+    pub split: OpTally,
+    /// Edge collapses.
+    pub collapse: OpTally,
+    /// Edge swaps.
+    pub swap: OpTally,
+    /// Vertex smoothing.
+    pub smooth: OpTally,
+    /// Rounding of rational vertices to `f64`.
+    pub round: OpTally,
+    /// Moves of off-curve primary vertices toward their curve.
+    pub project: OpTally,
+    /// Primary vertices that were off their curve at the start (or after a
+    /// fallback split) and ended on it.
+    pub projected_vertices: usize,
+    /// Primary vertices still off their curve at the end.
+    pub off_curve_left: usize,
+    /// Vertices still rational at the end (the mesh is unusable if not 0).
+    pub rational_left: usize,
+    /// Envelope stages run for leftover rational vertices (0 when none were needed).
+    pub envelope_stages: u32,
+    /// Smallest angle at the end, degrees.
+    pub min_angle_deg: f64,
+    /// Largest AMIPS energy at the end.
+    pub max_amips: f64,
+}
+
+/// Quality of a mesh for the stop rules.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Measure {
+    /// Smallest angle (degrees) of the triangles that are not locked.
+    min_angle: f64,
+    /// Largest energy of the triangles that are not locked.
+    max_energy: f64,
+    /// Mean energy of all triangles.
+    mean_energy: f64,
+    /// Smallest angle and largest energy of all triangles.
+    all: (f64, f64),
+    /// The longest edge.
+    longest: f64,
+}
+
+/// Whether the triangle `v` has three feature edges (see [`measure`]).
+fn locked(mesh: &TriMesh, v: [VertexId; 3]) -> bool {
+    (0..3).all(|i| !mesh.edge_tags(v[i], v[(i + 1) % 3]).is_empty())
+}
+
+/// Measure `mesh`. A triangle whose three edges are feature edges is locked:
+/// its shape is the input's (no swap, split or collapse can change it), so it
+/// is left out of the quality goal, though not out of `all`.
+fn measure(mesh: &TriMesh) -> Measure {
+    let mut m = Measure {
+        min_angle: 180.0,
+        max_energy: 0.0,
+        mean_energy: 0.0,
+        all: (180.0, 0.0),
+        longest: 0.0,
+    };
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for f in mesh.faces() {
+        let v = mesh.face(f);
+        let [a, b, c] = v.map(|x| mesh.position(x));
+        let e = amips(a, b, c);
+        let angle = min_angle_deg(a, b, c);
+        sum += e;
+        n += 1;
+        m.all = (m.all.0.min(angle), m.all.1.max(e));
+        m.longest = m
+            .longest
+            .max(a.distance(b))
+            .max(b.distance(c))
+            .max(c.distance(a));
+        if !locked(mesh, v) {
+            m.min_angle = m.min_angle.min(angle);
+            m.max_energy = m.max_energy.max(e);
+        }
+    }
+    if n == 0 {
+        return Measure {
+            min_angle: 0.0,
+            max_energy: 0.0,
+            mean_energy: 0.0,
+            all: (0.0, 0.0),
+            longest: 0.0,
+        };
+    }
+    m.mean_energy = sum / n as f64;
+    m
+}
+
+fn min_angle_deg(a: Point, b: Point, c: Point) -> f64 {
+    let angle = |p: Point, at: Point, q: Point| {
+        let (u, v) = (p - at, q - at);
+        u.cross(v).abs().atan2(u.dot(v))
+    };
+    angle(c, a, b)
+        .min(angle(a, b, c))
+        .min(angle(b, c, a))
+        .to_degrees()
+}
+
+/// Every edge once: `(key, faces on it)`.
+fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
+    let mut out = Vec::with_capacity(mesh.num_faces() * 3 / 2 + 4);
+    for f in mesh.faces() {
+        let v = mesh.face(f);
+        let adj = mesh.neighbours(f);
+        for i in 0..3 {
+            if adj[i].is_none_or(|g| g > f) {
+                out.push(EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]));
+            }
+        }
+    }
+    out
+}
+
+fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
+    mesh.position(k.lo).distance(mesh.position(k.hi))
+}
+
+/// A deterministic permutation generator (SplitMix64).
+struct Shuffle(u64);
+
+impl Shuffle {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn shuffle<T>(&mut self, v: &mut [T]) {
+        for i in (1..v.len()).rev() {
+            let j = (self.next() % (i as u64 + 1)) as usize;
+            v.swap(i, j);
+        }
+    }
+}
+
+/// The optimizer's state: the sizing field and the tallies.
+struct Schedule<'a> {
+    mesh: &'a mut TriMesh,
+    ctx: &'a mut Context,
+    opts: OptimizeOptions,
+    /// Target edge length by vertex slot.
+    target: Vec<f64>,
+    stats: OptimizeStats,
+    rng: Shuffle,
+    /// Operation clock: advanced by every applied operation.
+    clock: u64,
+    /// By vertex slot: the clock when a face around the vertex last changed.
+    stamp: Vec<u64>,
+    /// Collapses refused, with the clock then: retried only once a face
+    /// around either end has changed (the outcome depends on nothing else).
+    failed_collapse: rustc_hash::FxHashMap<EdgeKey, u64>,
+    /// Smoothing refused, by vertex slot, with the clock then.
+    failed_smooth: Vec<u64>,
+}
+
+impl Schedule<'_> {
+    /// Record an applied operation: every vertex of the faces it created (or
+    /// moved) gets the new clock.
+    fn touch(&mut self, outcome: &Outcome) {
+        let Outcome::Applied(ch) = outcome else {
+            return;
+        };
+        self.clock += 1;
+        for &f in &ch.created {
+            if !self.mesh.is_face_alive(f) {
+                continue;
+            }
+            for v in self.mesh.face(f) {
+                let i = v.0 as usize;
+                if i >= self.stamp.len() {
+                    self.stamp.resize(i + 1, 0);
+                }
+                self.stamp[i] = self.clock;
+            }
+        }
+    }
+
+    fn stamp_of(&self, v: VertexId) -> u64 {
+        self.stamp.get(v.0 as usize).copied().unwrap_or(0)
+    }
+
+    fn target_of(&mut self, v: VertexId) -> f64 {
+        let i = v.0 as usize;
+        if i >= self.target.len() {
+            self.target.resize(i + 1, self.opts.l);
+        }
+        self.target[i]
+    }
+
+    fn set_target(&mut self, v: VertexId, t: f64) {
+        let i = v.0 as usize;
+        if i >= self.target.len() {
+            self.target.resize(i + 1, self.opts.l);
+        }
+        self.target[i] = t;
+    }
+
+    fn mean_target(&mut self, k: EdgeKey) -> f64 {
+        0.5 * (self.target_of(k.lo) + self.target_of(k.hi))
+    }
+
+    /// Split every edge longer than 4/3 of its mean target once, longest first.
+    /// Returns the number of candidates and of splits applied.
+    fn split_pass(&mut self) -> (usize, u64) {
+        let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
+        for k in edges(self.mesh) {
+            let (len, t) = (length(self.mesh, k), self.mean_target(k));
+            if len > 4.0 / 3.0 * t {
+                cands.push((len, k, t));
+            }
+        }
+        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let n = cands.len();
+        let mut applied = 0;
+        for (_, k, t) in cands {
+            if self.mesh.num_vertices() >= self.opts.max_vertices {
+                break;
+            }
+            let out = try_split(self.mesh, self.ctx, k.lo, k.hi);
+            self.touch(&out);
+            if let Outcome::Applied(ch) = &out {
+                if let Some(m) = ch.new_vertex {
+                    self.set_target(m, t);
+                }
+                applied += 1;
+            }
+            self.stats.split.record(&out);
+        }
+        (n, applied)
+    }
+
+    /// Refine the sizing field where the worst triangles are, relax it
+    /// elsewhere. A triangle is bad when its energy exceeds
+    /// `max(worst / 100, 0.9 · stop energy)` (only the worst ones drive
+    /// refinement); each vertex of a bad triangle gets its target halved, and
+    /// vertices within `1.8 l` of one (scaled like the target) are refined less
+    /// the farther they are, so the sizing field grades smoothly. Every other
+    /// target grows by 1.5. Targets stay in `[l_floor, l]`. Returns whether some
+    /// target hit the floor.
+    fn update_sizing(&mut self, worst: f64) -> bool {
+        // Collapses refused under the old sizes may pass under the new ones.
+        self.failed_collapse.clear();
+        let threshold = (worst / 100.0).max(0.9 * self.opts.stop_energy);
+        let mut seeds: Vec<VertexId> = Vec::new();
+        for f in self.mesh.faces() {
+            let v = self.mesh.face(f);
+            let [a, b, c] = v.map(|x| self.mesh.position(x));
+            if amips(a, b, c) > threshold && !locked(self.mesh, v) {
+                seeds.extend(v);
+            }
+        }
+        seeds.sort_unstable();
+        seeds.dedup();
+        let cap = self.mesh.vertex_capacity();
+        let mut mult = vec![1.5f64; cap];
+        // Breadth-first from the bad vertices; `near[v]` = (seed, distance).
+        let mut seen = vec![false; cap];
+        let mut queue = std::collections::VecDeque::new();
+        for &v in &seeds {
+            mult[v.0 as usize] = 0.5;
+            seen[v.0 as usize] = true;
+            queue.push_back((v, v));
+        }
+        while let Some((v, seed)) = queue.pop_front() {
+            let radius = 1.8 * self.target_of(seed);
+            let ps = self.mesh.position(seed);
+            for w in ops::ring(self.mesh, v).neighbours {
+                let i = w.0 as usize;
+                if seen[i] {
+                    continue;
+                }
+                seen[i] = true;
+                let dist = self.mesh.position(w).distance(ps);
+                if dist < radius {
+                    let m = 0.5 + 0.5 * dist / radius;
+                    mult[i] = mult[i].min(m);
+                    queue.push_back((w, seed));
+                }
+            }
+        }
+        let mut hit_floor = false;
+        let verts: Vec<VertexId> = self.mesh.vertices().collect();
+        for v in verts {
+            let t = self.target_of(v) * mult[v.0 as usize];
+            if t < self.opts.l_floor {
+                hit_floor = true;
+            }
+            self.set_target(v, t.clamp(self.opts.l_floor, self.opts.l));
+        }
+        hit_floor
+    }
+
+    /// Collapse edges shorter than 4/5 of their mean target, shortest first.
+    fn collapse_pass(&mut self) -> u64 {
+        // Min-heap on length through reversed ordering of the bits of a
+        // non-negative f64 (monotone for non-negative values).
+        let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
+        for k in edges(self.mesh) {
+            let len = length(self.mesh, k);
+            if len < 0.8 * self.mean_target(k) {
+                heap.push(std::cmp::Reverse((len.to_bits(), k)));
+            }
+        }
+        let mut budget = 4 * heap.len() + 16;
+        let mut applied = 0;
+        while let Some(std::cmp::Reverse((bits, k))) = heap.pop() {
+            if budget == 0 {
+                break;
+            }
+            budget -= 1;
+            if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
+                continue;
+            }
+            let len = length(self.mesh, k);
+            if len.to_bits() != bits || len >= 0.8 * self.mean_target(k) {
+                continue;
+            }
+            if let Some(&at) = self.failed_collapse.get(&k) {
+                if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at {
+                    continue;
+                }
+            }
+            let mut applied_now = false;
+            let mut tried = false;
+            for (u, v) in [(k.lo, k.hi), (k.hi, k.lo)] {
+                if !self.keeps_lengths(u, v) {
+                    continue;
+                }
+                tried = true;
+                let out = try_collapse(self.mesh, self.ctx, u, v);
+                self.touch(&out);
+                if self.stats.collapse.record(&out) {
+                    applied_now = true;
+                    break;
+                }
+            }
+            if !tried {
+                *self
+                    .stats
+                    .collapse
+                    .rejected
+                    .entry("edge_length")
+                    .or_default() += 1;
+            }
+            if !applied_now {
+                self.failed_collapse.insert(k, self.clock);
+            }
+            if applied_now {
+                applied += 1;
+                let u = if self.mesh.is_vertex_alive(k.lo) {
+                    k.lo
+                } else {
+                    k.hi
+                };
+                for w in ops::ring(self.mesh, u).neighbours {
+                    let e = EdgeKey::new(u, w);
+                    let len = length(self.mesh, e);
+                    if len < 0.8 * self.mean_target(e) {
+                        heap.push(std::cmp::Reverse((len.to_bits(), e)));
+                    }
+                }
+            }
+        }
+        applied
+    }
+
+    /// Whether collapsing `v` into `u` makes no edge longer than 4/3 of its
+    /// mean target (else the split pass would cut it again: the two passes
+    /// would undo each other forever).
+    fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
+        let pu = self.mesh.position(u);
+        let tu = self.target_of(u);
+        for w in ops::ring(self.mesh, v).neighbours {
+            if w == u {
+                continue;
+            }
+            let t = 0.5 * (tu + self.target_of(w));
+            if pu.distance(self.mesh.position(w)) > 4.0 / 3.0 * t {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Swap edges where that lowers the larger energy of their two triangles.
+    fn swap_pass(&mut self) -> u64 {
+        let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
+        for k in edges(self.mesh) {
+            if !self.mesh.edge_tags(k.lo, k.hi).is_empty() {
+                continue;
+            }
+            if swap_gain(self.mesh, k).is_some() {
+                cands.push((length(self.mesh, k), k));
+            }
+        }
+        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut applied = 0;
+        for (_, k) in cands {
+            // Earlier swaps may have changed the quad.
+            if swap_gain(self.mesh, k).is_none() {
+                continue;
+            }
+            let out = try_swap(self.mesh, self.ctx, k.lo, k.hi);
+            self.touch(&out);
+            if self.stats.swap.record(&out) {
+                applied += 1;
+            }
+        }
+        applied
+    }
+
+    /// Smooth every vertex that may move, in a fixed pseudo-random order.
+    fn smooth_pass(&mut self) -> u64 {
+        let mut verts: Vec<VertexId> = self.mesh.vertices().collect();
+        self.rng.shuffle(&mut verts);
+        let mut applied = 0;
+        for v in verts {
+            let i = v.0 as usize;
+            if i >= self.failed_smooth.len() {
+                self.failed_smooth.resize(i + 1, u64::MAX);
+            }
+            let at = self.failed_smooth[i];
+            if at != u64::MAX && self.stamp_of(v) <= at {
+                continue;
+            }
+            let out = try_smooth(self.mesh, self.ctx, v);
+            self.touch(&out);
+            self.failed_smooth[i] = if out.is_applied() {
+                u64::MAX
+            } else {
+                self.clock
+            };
+            match out {
+                // Fixed vertices are the common case: not worth a tally.
+                Outcome::Rejected(Reject::FixedVertex) => {}
+                _ => {
+                    if self.stats.smooth.record(&out) {
+                        applied += 1;
+                    }
+                }
+            }
+        }
+        applied
+    }
+
+    /// Round every rational vertex that can be; returns how many stay rational.
+    fn round_all(&mut self) -> usize {
+        let rational: Vec<VertexId> = self
+            .mesh
+            .vertices()
+            .filter(|&v| self.mesh.is_rational(v))
+            .collect();
+        let mut left = 0;
+        for v in rational {
+            let out = try_round(self.mesh, self.ctx, v);
+            self.touch(&out);
+            if !self.stats.round.record(&out) {
+                left += 1;
+            }
+        }
+        left
+    }
+
+    /// Move off-curve primary vertices toward their curve; returns how many stay off.
+    fn project_all(&mut self, ever_off: &mut Vec<VertexId>) -> usize {
+        let off = off_curve_vertices(self.mesh, self.ctx);
+        let mut left = 0;
+        for v in off {
+            if !ever_off.contains(&v) {
+                ever_off.push(v);
+            }
+            let out = try_project(self.mesh, self.ctx, v);
+            self.touch(&out);
+            self.stats.project.record(&out);
+            if on_curve::off_curve(self.mesh, self.ctx, v).unwrap_or(0.0) > self.ctx.on_curve_abs {
+                left += 1;
+            }
+        }
+        left
+    }
+}
+
+/// Primary vertices farther than `ctx.on_curve_abs` from their curve point.
+pub fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
+    let mut primary: Vec<VertexId> = mesh
+        .tagged_edges()
+        .filter(|(_, tags)| tags.iter().any(|t| matches!(t, FeatureOn::Primary { .. })))
+        .flat_map(|(k, _)| [k.lo, k.hi])
+        .collect();
+    primary.sort_unstable();
+    primary.dedup();
+    primary
+        .into_iter()
+        .filter(|&v| on_curve::off_curve(mesh, ctx, v).unwrap_or(0.0) > ctx.on_curve_abs)
+        .collect()
+}
+
+/// The two faces on the interior edge `k` as `(f, g)`, with `f` holding `k`
+/// counter-clockwise as `a → b`, and the vertices `c` of `f` and `d` of `g`
+/// opposite it.
+fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
+    let faces: Vec<FaceId> = mesh
+        .incident_faces(k.lo)
+        .into_iter()
+        .filter(|&f| mesh.face(f).contains(&k.hi))
+        .collect();
+    let [f, g] = faces[..] else { return None };
+    let i = mesh.edge_index(f, k.lo, k.hi)?;
+    let v = mesh.face(f);
+    let (a, b, c) = (v[(i + 1) % 3], v[(i + 2) % 3], v[i]);
+    let d = *mesh.face(g).iter().find(|&&x| x != a && x != b)?;
+    Some(([f, g], [a, b, c, d]))
+}
+
+/// The energy gain of swapping `k` (old max minus new max) when positive.
+fn swap_gain(mesh: &TriMesh, k: EdgeKey) -> Option<f64> {
+    let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
+    let e = |t: [VertexId; 3]| {
+        let [x, y, z] = t.map(|v| mesh.position(v));
+        amips(x, y, z)
+    };
+    let old = e(mesh.face(f)).max(e(mesh.face(g)));
+    let new = e([a, d, c]).max(e([d, b, c]));
+    // A clear improvement only, so equal configurations never flip back and forth.
+    (new.is_finite() && new < old * (1.0 - 1e-9)).then_some(old - new)
+}
+
+/// Improve `mesh` in place (see the module doc). `ctx.envelope` may be
+/// restaged (denser sampling, larger ε) when rational vertices are left.
+pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -> OptimizeStats {
+    let mut ever_off = Vec::new();
+    let stats = OptimizeStats {
+        passes: 0,
+        stop: StopReason::PassLimit,
+        split: OpTally::default(),
+        collapse: OpTally::default(),
+        swap: OpTally::default(),
+        smooth: OpTally::default(),
+        round: OpTally::default(),
+        project: OpTally::default(),
+        projected_vertices: 0,
+        off_curve_left: 0,
+        rational_left: 0,
+        envelope_stages: 0,
+        min_angle_deg: 0.0,
+        max_amips: 0.0,
+    };
+    let mut s = Schedule {
+        target: vec![opts.l; mesh.vertex_capacity()],
+        mesh,
+        ctx,
+        opts: *opts,
+        stats,
+        rng: Shuffle(0x7472_6977_696c_64),
+        clock: 1,
+        stamp: Vec::new(),
+        failed_collapse: rustc_hash::FxHashMap::default(),
+        failed_smooth: Vec::new(),
+    };
+    let mut rational = s.round_all();
+    let mut off = s.project_all(&mut ever_off);
+    let mut last = measure(s.mesh);
+    let mut just_updated = false;
+    let mut hit_floor = false;
+    let mut history: Vec<(f64, f64)> = Vec::new();
+    for pass in 0..opts.max_passes {
+        let good = last.min_angle > opts.alpha_deg || last.max_energy < opts.stop_energy;
+        if good && rational == 0 && off == 0 && last.longest <= 4.0 / 3.0 * opts.l {
+            s.stats.stop = StopReason::Quality;
+            break;
+        }
+        s.stats.passes = pass + 1;
+        let (long, splits) = s.split_pass();
+        let collapses = s.collapse_pass();
+        let swaps = s.swap_pass();
+        let smooths = s.smooth_pass();
+        rational = s.round_all();
+        off = s.project_all(&mut ever_off);
+        let now = measure(s.mesh);
+        tracing::debug!(
+            pass,
+            long,
+            splits,
+            collapses,
+            swaps,
+            smooths,
+            rational,
+            off,
+            min_angle = now.min_angle,
+            max_energy = now.max_energy,
+            mean_energy = now.mean_energy,
+            faces = s.mesh.num_faces(),
+            "optimization pass"
+        );
+        // Refine the sizing field only when the operations stop paying off
+        // at the current sizes (then give them a pass to use the new sizes).
+        if !just_updated
+            && last.max_energy - now.max_energy < 0.25
+            && last.mean_energy - now.mean_energy < 0.025
+        {
+            hit_floor |= s.update_sizing(now.max_energy);
+            just_updated = true;
+        } else {
+            just_updated = false;
+        }
+        last = now;
+        history.push((now.max_energy, now.mean_energy));
+        // Once the sizes are at their floor, ten passes without any gain end it.
+        let n = history.len();
+        if hit_floor
+            && n > 10
+            && rational == 0
+            && off == 0
+            && (n - 10..n).all(|i| {
+                history[i].0 - history[i - 1].0 >= -1e-4 && history[i].1 - history[i - 1].1 >= -1e-4
+            })
+        {
+            s.stats.stop = StopReason::Stalled;
+            break;
+        }
+    }
+    // Coarsen where the sizing field was refined for nothing: targets back to
+    // `l`, one collapse pass (collapses never make the worst triangle worse).
+    let all: Vec<VertexId> = s.mesh.vertices().collect();
+    for v in all {
+        s.set_target(v, opts.l);
+    }
+    s.failed_collapse.clear();
+    s.collapse_pass();
+    // Envelope stages (§2.3.4): rational vertices left get more room.
+    let base = s.ctx.envelope.eps();
+    let spacing = s.ctx.envelope.spacing();
+    let stages = [
+        (base, 0.5 * spacing),
+        (1.5 * base, 0.5 * spacing),
+        (2.0 * base, 0.5 * spacing),
+    ];
+    for (eps, sp) in stages {
+        if rational == 0 {
+            break;
+        }
+        s.stats.envelope_stages += 1;
+        s.ctx.envelope = s.ctx.envelope.restaged(eps, sp);
+        for _ in 0..3 {
+            s.smooth_pass();
+            rational = s.round_all();
+            if rational == 0 {
+                break;
+            }
+        }
+    }
+    off = s.project_all(&mut ever_off);
+    let (min_angle, max_e) = measure(s.mesh).all;
+    s.stats.rational_left = rational;
+    s.stats.off_curve_left = off;
+    s.stats.projected_vertices = ever_off
+        .iter()
+        .filter(|&&v| {
+            s.mesh.is_vertex_alive(v)
+                && on_curve::off_curve(s.mesh, s.ctx, v).unwrap_or(0.0) <= s.ctx.on_curve_abs
+        })
+        .count();
+    s.stats.min_angle_deg = min_angle;
+    s.stats.max_amips = max_e;
+    s.stats
+}
