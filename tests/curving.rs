@@ -1,6 +1,6 @@
 //! The curving stage (issue 6) through the library API: a linear TriWild mesh
-//! (today the BSP mesh of `pipeline::bsp_stage`; the optimized one once the
-//! optimizer is wired in) is curved to order 3 and 2, every element is certified by
+//! (the BSP mesh of `pipeline::bsp_stage`, optimized by `optimize::optimize` unless
+//! the parameters stop after the BSP) is curved to order 3 and 2, every element is certified by
 //! `curve::certify_fem` and by the independent checker of `tests/support`, and
 //! the meshed disk of a `<circle>` has exactly the area its four cubics enclose.
 //! Meshes are written under `target/test-out/curving/` for CI's mshcheck.
@@ -8,7 +8,7 @@
 //! The dev-set run is ignored (slow, needs the corpus):
 //! `cargo test --release --test curving -- --ignored --nocapture` (every N-th file with
 //! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`, order 2
-//! with `TRIWILD_CURVING_ORDER=2`).
+//! with `TRIWILD_CURVING_ORDER=2`, the unoptimized BSP mesh with `TRIWILD_CURVING_BSP_ONLY=1`).
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
 mod support;
@@ -24,11 +24,32 @@ use triwild::output::{self, MshOptions};
 use triwild::pipeline;
 use triwild::regions::{self, RegionOptions};
 use triwild::svg::FeatureGeom;
-use triwild::{Drawing, FemMesh, Length, Params};
+use triwild::{Drawing, FemMesh, Length, Params, Stage};
+
+/// The linear TriWild mesh: the BSP mesh, optimized unless `params` stops after the BSP.
+fn linear(
+    drawing: &Drawing,
+    params: &Params,
+) -> (
+    triwild::mesh::TriMesh,
+    triwild::features::FeatureSet,
+    triwild::ops::Context,
+) {
+    let (mut mesh, fs, mut ctx) = pipeline::bsp_stage(drawing, params).expect("linear mesh");
+    if params.stop_after != Some(Stage::Bsp) {
+        let resolved = params.resolve(drawing.diagonal());
+        triwild::optimize::optimize(
+            &mut mesh,
+            &mut ctx,
+            &pipeline::optimize_options(params, &resolved),
+        );
+    }
+    (mesh, fs, ctx)
+}
 
 /// The linear mesh, curved to `order`, as a FemMesh with the default regions.
 fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveStats) {
-    let (mut mesh, fs, ctx) = pipeline::bsp_stage(drawing, params).expect("linear mesh");
+    let (mut mesh, fs, ctx) = linear(drawing, params);
     let d = drawing.diagonal();
     let opts = CurveOptions::new(order, d).with_l_min_abs(params.resolve(d).l_min);
     let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
@@ -167,8 +188,12 @@ fn devset_curving() {
         };
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("x");
         let t = std::time::Instant::now();
-        let Ok((mut mesh, fs, ctx)) = pipeline::bsp_stage(&drawing, &Params::DEFAULT) else {
-            println!("{name}: bsp failed");
+        let params = match std::env::var("TRIWILD_CURVING_BSP_ONLY") {
+            Ok(_) => Params::DEFAULT.with_stop_after(Some(Stage::Bsp)),
+            Err(_) => Params::DEFAULT,
+        };
+        let Ok((mut mesh, fs, ctx)) = std::panic::catch_unwind(|| linear(&drawing, &params)) else {
+            println!("{name}: linear mesh failed");
             continue;
         };
         let order = match std::env::var("TRIWILD_CURVING_ORDER").as_deref() {
