@@ -230,3 +230,41 @@ impl FemMesh {
         }
     }
 }
+
+impl FemMesh {
+    /// The FemMesh of a curved mesh (any order), with one physical surface
+    /// `surface` and one physical curve per shape that has feature lines (named
+    /// with `shape_name`), as [`FemMesh::from_linear`] does.
+    pub fn from_curved(
+        mesh: &crate::curve::CurvedMesh,
+        surface: &str,
+        shape_name: impl Fn(crate::svg::ShapeId) -> String,
+    ) -> FemMesh {
+        let order = mesh.order();
+        let mut curves: Vec<String> = Vec::new();
+        let mut curve_of: std::collections::HashMap<crate::svg::ShapeId, u32> =
+            std::collections::HashMap::new();
+        let mut line_group = Vec::with_capacity(mesh.line_feature.len());
+        let mut line_kind = Vec::with_capacity(mesh.line_feature.len());
+        for &(shape, kind) in &mesh.line_feature {
+            let g = *curve_of.entry(shape).or_insert_with(|| {
+                curves.push(shape_name(shape));
+                (curves.len() - 1) as u32
+            });
+            line_group.push(g);
+            line_kind.push(kind);
+        }
+        let triangles = mesh.triangles.len() / order.triangle_nodes();
+        FemMesh {
+            order: Some(order),
+            nodes: mesh.nodes.clone(),
+            triangles: mesh.triangles.clone(),
+            triangle_group: vec![0; triangles],
+            surfaces: vec![surface.to_owned()],
+            lines: mesh.lines.clone(),
+            line_group,
+            line_kind,
+            curves,
+        }
+    }
+}

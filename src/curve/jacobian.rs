@@ -632,5 +632,32 @@ mod tests {
                 prop_assert!(c.sampled_min < 0.0);
             }
         }
+
+        /// Known inverted elements: a cubic triangle with one edge node pushed
+        /// across the opposite corner (a negative det J at a dense sample proves
+        /// it inverted) is never certified, and is reported inverted.
+        #[test]
+        fn known_inverted_is_never_certified(
+            c in proptest::collection::vec(-0.3f64..0.3, 4),
+            node in 3usize..9,
+            push in 0.5f64..3.0,
+            scale in prop_oneof![Just(1.0), Just(1e-6), Just(1e6)],
+        ) {
+            let corners = [
+                Point::new(0.0, 0.0),
+                Point::new(1.0 + c[0], c[1]),
+                Point::new(c[2], 1.0 + c[3]),
+            ];
+            let mut n = cubic_nodes(corners, None);
+            // node 3 + 2e, 4 + 2e lies on edge e; the opposite corner is (e + 2) % 3
+            let opposite = corners[((node - 3) / 2 + 2) % 3];
+            n[node] = opposite + (opposite - n[node]) * push;
+            let n = n.map(|p| (p.to_vec2() * scale).to_point());
+            let m = dense_min(&n, 40);
+            prop_assume!(m < 0.0);
+            let c = certify(&det_cubic(&n), zero_abs(&n, 1e-12), &CertifyOptions::DEFAULT);
+            prop_assert!(!c.is_certified(), "{c:?}");
+            prop_assert_eq!(c.validity, Validity::Inverted);
+        }
     }
 }

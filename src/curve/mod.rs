@@ -10,18 +10,21 @@
 //! - [`jacobian`]: the Bernstein coefficients of `det J` computed from the map's
 //!   derivatives, and their certification by subdivision;
 //! - [`certify`]: a whole mesh's validity, Jacobian ratio and exact area (what
-//!   `triwild check` prints).
+//!   `triwild check` prints);
+//! - [`build`]: the curving stage, a linear `TriMesh` with primary feature edges
+//!   turned into a [`CurvedMesh`] whose every element is certified.
 //!
 //! Guarantee to the later stages: an element is valid only if [`jacobian::certify`]
 //! says [`jacobian::Validity::Certified`], which proves `det J > 0` on the whole
-//! element. The curved optimization and the least-squares fit (issue 6, items 3 and
-//! 6) will build on these.
+//! element. [`build::curve_mesh`] emits only such elements.
 
 pub mod bernstein;
+pub mod build;
 pub mod certify;
 pub mod jacobian;
 pub mod lagrange;
 
+pub use build::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
 pub use certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use jacobian::{Certificate, CertifyOptions, Validity};
 pub use lagrange::CurvedEdge;

@@ -1,0 +1,247 @@
+//! The curving stage (issue 6) through the library API: a linear TriWild mesh
+//! (the BSP mesh of `pipeline::bsp_stage`, optimized by `optimize::optimize` unless
+//! the parameters stop after the BSP) is curved to order 3 and 2, every element is certified by
+//! `curve::certify_fem` and by the independent checker of `tests/support`, and
+//! the meshed disk of a `<circle>` has exactly the area its four cubics enclose.
+//! Meshes are written under `target/test-out/curving/` for CI's mshcheck.
+//!
+//! The dev-set run is ignored (slow, needs the corpus):
+//! `cargo test --release --test curving -- --ignored --nocapture` (every N-th file with
+//! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`, order 2
+//! with `TRIWILD_CURVING_ORDER=2`, the unoptimized BSP mesh with `TRIWILD_CURVING_BSP_ONLY=1`).
+#![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
+
+mod support;
+
+use kurbo::ParamCurveArea;
+use std::path::Path;
+use support::devset::{devset_dir, svg_files};
+use support::{check_msh, out_dir};
+use triwild::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
+use triwild::fem::{LineKind, Order};
+use triwild::mesh::FeatureOn;
+use triwild::output::{self, MshOptions};
+use triwild::pipeline;
+use triwild::regions::{self, RegionOptions};
+use triwild::svg::FeatureGeom;
+use triwild::{Drawing, FemMesh, Length, Params, Stage};
+
+/// The linear TriWild mesh: the BSP mesh, optimized unless `params` stops after the BSP.
+fn linear(
+    drawing: &Drawing,
+    params: &Params,
+) -> (
+    triwild::mesh::TriMesh,
+    triwild::features::FeatureSet,
+    triwild::ops::Context,
+) {
+    let (mut mesh, fs, mut ctx) = pipeline::bsp_stage(drawing, params).expect("linear mesh");
+    if params.stop_after != Some(Stage::Bsp) {
+        let resolved = params.resolve(drawing.diagonal());
+        triwild::optimize::optimize(
+            &mut mesh,
+            &mut ctx,
+            &pipeline::optimize_options(params, &resolved),
+        );
+    }
+    (mesh, fs, ctx)
+}
+
+/// The linear mesh, curved to `order`, as a FemMesh with the default regions.
+fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveStats) {
+    let (mut mesh, fs, ctx) = linear(drawing, params);
+    let d = drawing.diagonal();
+    let opts = CurveOptions::new(order, d).with_l_min_abs(params.resolve(d).l_min);
+    let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
+        FeatureOn::Primary { section, .. } => {
+            (fs.primary[section as usize].source.shape, LineKind::Primary)
+        }
+        FeatureOn::Secondary { polyline } => (
+            fs.secondary[polyline as usize].source.shape,
+            LineKind::Secondary,
+        ),
+    })
+    .expect("curving");
+    let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
+    let (fem, _) = regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d).expect("regions");
+    (fem, stats)
+}
+
+fn circle() -> Drawing {
+    let svg = br#"<svg xmlns="http://www.w3.org/2000/svg" width="100" height="100">
+        <title>a filled circle: four cubic arcs</title>
+        <circle id="disk" cx="50" cy="50" r="40" fill="black"/></svg>"#;
+    triwild::svg::load_bytes(svg).expect("circle loads")
+}
+
+/// The exact area the drawing's cubics enclose (Green's theorem on the Béziers).
+fn green_area(drawing: &Drawing) -> f64 {
+    let mut a = 0.0;
+    for f in &drawing.features {
+        if let FeatureGeom::Cubic(c) = f.geom {
+            a += c.signed_area();
+        }
+    }
+    a.abs()
+}
+
+/// Write, certify with the library and with the independent checker.
+fn write_and_check(mesh: &FemMesh, dir: &Path, name: &str) {
+    let c = certify_fem(mesh, &triwild::curve::CertifyOptions::DEFAULT);
+    assert!(c.is_valid(), "{name}: {c:?}");
+    let path = dir.join(format!("{name}.msh"));
+    output::write_msh(mesh, &path, MshOptions::DEFAULT).expect("write");
+    let r = check_msh(&path);
+    assert!(r.defects.is_empty(), "{name}: {:?}", r.defects);
+}
+
+fn disk_area(mesh: &FemMesh) -> (f64, usize) {
+    let stats = regions::stats_of(mesh);
+    let disk = stats
+        .iter()
+        .find(|s| s.name == "disk")
+        .expect("a surface for the disk");
+    (disk.area, disk.triangles)
+}
+
+#[test]
+fn circle_area_is_exact_at_order_3() {
+    let dir = out_dir("curving");
+    let drawing = circle();
+    let want = green_area(&drawing);
+    let d = drawing.diagonal();
+    for (name, params) in [
+        ("circle-default", Params::DEFAULT),
+        ("circle-l-d4", Params::DEFAULT.with_l(Length::Rel(0.25))),
+    ] {
+        let (mesh, stats) = curved(&drawing, &params, Order::Cubic);
+        write_and_check(&mesh, &dir, name);
+        let (area, disk_triangles) = disk_area(&mesh);
+        println!(
+            "{name}: {} triangles ({disk_triangles} in the disk), area {area} vs {want}, {stats:?}",
+            mesh.triangle_count()
+        );
+        assert!(
+            ((area - want) / want).abs() < 1e-9,
+            "{name}: area {area} vs {want}"
+        );
+        assert!(stats.curved_triangles > 0);
+        assert_eq!(
+            stats.fitted_triangles + stats.straight_triangles,
+            0,
+            "{stats:?}"
+        );
+        assert!(stats.max_curve_distance_rel < 1e-12, "{stats:?}");
+        assert!(stats.min_jacobian_ratio > 0.0);
+        let _ = d;
+    }
+}
+
+#[test]
+fn circle_order_2_is_certified_and_close() {
+    let dir = out_dir("curving-order2");
+    let drawing = circle();
+    let want = green_area(&drawing);
+    let (mesh, stats) = curved(&drawing, &Params::DEFAULT, Order::Quadratic);
+    assert_eq!(mesh.order(), Order::Quadratic);
+    write_and_check(&mesh, &dir, "circle-p2");
+    let (area, _) = disk_area(&mesh);
+    // A quadratic through three points of each piece: close, not exact.
+    assert!(((area - want) / want).abs() < 1e-4, "area {area} vs {want}");
+    assert!(stats.max_curve_distance_rel < 1e-4, "{stats:?}");
+}
+
+#[test]
+fn order_1_is_the_linear_mesh() {
+    let drawing = circle();
+    let (mesh, stats) = curved(&drawing, &Params::DEFAULT, Order::Linear);
+    assert_eq!(mesh.order(), Order::Linear);
+    assert_eq!(stats.curved_triangles, 0);
+    let c = certify_fem(&mesh, &triwild::curve::CertifyOptions::DEFAULT);
+    assert!(c.is_valid());
+    assert!(
+        stats.max_curve_distance_rel > 0.0,
+        "chords are off the circle"
+    );
+}
+
+/// Curve every dev-set drawing (BSP mesh) at order 3 and report the counts.
+#[test]
+#[ignore = "slow: the whole dev corpus"]
+fn devset_curving() {
+    let mut files = Vec::new();
+    svg_files(&devset_dir(), &mut files);
+    let limit: usize = std::env::var("TRIWILD_CURVING_LIMIT")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(usize::MAX);
+    let every: usize = std::env::var("TRIWILD_CURVING_EVERY")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
+        .max(1);
+    let dir = out_dir("curving-devset");
+    let (mut curved_sum, mut fitted_sum, mut straight_sum) = (0, 0, 0);
+    for path in files.iter().step_by(every).take(limit) {
+        let Ok(drawing) = triwild::svg::load_file(path) else {
+            continue;
+        };
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("x");
+        let t = std::time::Instant::now();
+        let params = match std::env::var("TRIWILD_CURVING_BSP_ONLY") {
+            Ok(_) => Params::DEFAULT.with_stop_after(Some(Stage::Bsp)),
+            Err(_) => Params::DEFAULT,
+        };
+        let Ok((mut mesh, fs, ctx)) = std::panic::catch_unwind(|| linear(&drawing, &params)) else {
+            println!("{name}: linear mesh failed");
+            continue;
+        };
+        let order = match std::env::var("TRIWILD_CURVING_ORDER").as_deref() {
+            Ok("2") => Order::Quadratic,
+            _ => Order::Cubic,
+        };
+        let opts = CurveOptions::new(order, drawing.diagonal());
+        let r = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
+            FeatureOn::Primary { section, .. } => {
+                (fs.primary[section as usize].source.shape, LineKind::Primary)
+            }
+            FeatureOn::Secondary { polyline } => (
+                fs.secondary[polyline as usize].source.shape,
+                LineKind::Secondary,
+            ),
+        });
+        match r {
+            Ok((cm, s)) => {
+                let fem =
+                    FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
+                let c = certify_fem(&fem, &triwild::curve::CertifyOptions::VALIDITY);
+                let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
+                let _ =
+                    output::write_msh(&fem, &dir.join(format!("{name}.msh")), MshOptions::DEFAULT);
+                println!(
+                    "{name}: {} tris, curved {} fitted {} straight {} splits {}+{} smooth {} \
+                     maxdist {:.2e} (corners off {:.2e}) meandist {:.2e} minratio {:.3} valid {} {:.2}s",
+                    fem.triangle_count(),
+                    s.curved_triangles,
+                    s.fitted_triangles,
+                    s.straight_triangles,
+                    s.splits_multi_primary,
+                    s.splits_repair,
+                    s.smooths_repair,
+                    s.max_curve_distance_rel,
+                    s.max_corner_offset_rel,
+                    s.mean_curve_distance_rel,
+                    s.min_jacobian_ratio,
+                    c.is_valid(),
+                    t.elapsed().as_secs_f64()
+                );
+                assert!(c.is_valid(), "{name}");
+                curved_sum += s.curved_triangles;
+                fitted_sum += s.fitted_triangles;
+                straight_sum += s.straight_triangles;
+            }
+            Err(e) => println!("{name}: curving failed: {e}"),
+        }
+    }
+    println!("total: curved {curved_sum} fitted {fitted_sum} straight {straight_sum}");
+}
