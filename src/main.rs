@@ -287,6 +287,10 @@ struct ParamArgs {
     /// Stop after this stage and write its mesh (needs --mesher triwild).
     #[arg(long, value_enum, value_name = "STAGE")]
     stop_after: Option<StageArg>,
+    /// Element order: 3 = cubic triangles (gmsh type 21) whose edges are the
+    /// drawing's Béziers, 2 = quadratic (type 9), 1 = straight.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=3))]
+    order: u8,
     /// Write the optimized linear mesh (straight triangles, feature edges as
     /// physical curves), without curving: --stop-after optimize.
     #[arg(long, conflicts_with = "stop_after")]
@@ -370,6 +374,7 @@ impl ParamArgs {
                 (Some(StageArg::Optimize), _) | (None, true) => Some(Stage::Optimize),
                 (None, false) => None,
             })
+            .with_order(self.order)
             .with_l(len(self.edge_length, self.edge_length_abs))
             .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
             .with_mu(len(self.mu, self.mu_abs))

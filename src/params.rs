@@ -97,6 +97,9 @@ pub struct Params {
     pub stop_after: Option<Stage>,
     /// Run the full mesh validator after every stage (slow). Default false.
     pub paranoid: bool,
+    /// Order of the output elements of the TriWild mesher: 3 (cubic, gmsh type
+    /// 21, the curves exactly), 2 (quadratic, type 9) or 1 (straight). Default 3.
+    pub order: u8,
 }
 
 impl Params {
@@ -118,6 +121,7 @@ impl Params {
         mesher: Mesher::TriWild,
         stop_after: None,
         paranoid: false,
+        order: 3,
     };
 
     /// Set the feature envelope μ.
@@ -165,6 +169,12 @@ impl Params {
         self.max_vertices = n;
         self
     }
+    /// Set the element order of the TriWild mesher (1, 2 or 3).
+    pub fn with_order(mut self, order: u8) -> Self {
+        self.order = order;
+        self
+    }
+
     /// Choose the mesher.
     pub fn with_mesher(mut self, mesher: Mesher) -> Self {
         self.mesher = mesher;
@@ -224,6 +234,12 @@ impl Params {
             return Err(Error::InvalidParams(format!(
                 "--cdt-min-angle must be in [0, 34] degrees (refinement may not terminate above), got {}",
                 self.cdt_min_angle_deg
+            )));
+        }
+        if !(1..=3).contains(&self.order) {
+            return Err(Error::InvalidParams(format!(
+                "--order must be 1, 2 or 3, got {}",
+                self.order
             )));
         }
         if self.max_vertices < 16 {

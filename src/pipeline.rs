@@ -8,8 +8,9 @@
 //! the raw BSP mesh, `--linear` the optimized one.
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
+use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
 use crate::features::{self, FeatureCounts, FeatureSet};
-use crate::fem::{FemMesh, LineKind, LinearMesh};
+use crate::fem::{FemMesh, LineKind, LinearMesh, Order};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
@@ -162,6 +163,8 @@ pub struct Report {
     pub stopped_after: Option<Stage>,
     /// What the optimizer did (`--mesher triwild` unless stopped after `bsp`).
     pub optimize: Option<OptimizeStats>,
+    /// What curving did (`--mesher triwild` without `--linear` / `--stop-after`).
+    pub curve: Option<CurveStats>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
 }
@@ -215,18 +218,21 @@ pub fn mesh_drawing_with(
     let mut bsp = None;
     let mut optimize = None;
     let mut warnings = drawing.warnings.clone();
-    let linear = match params.mesher {
-        Mesher::Cdt => times.time("baseline", || crate::baseline::triangulate(drawing, params))?,
+    let mut curve = None;
+    let delivered = match params.mesher {
+        Mesher::Cdt => Delivered::Linear(
+            times.time("baseline", || crate::baseline::triangulate(drawing, params))?,
+        ),
         Mesher::TriWild => {
             let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
             features = Some(fs.counts);
             let (mut mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
             bsp = Some(stats);
             if params.stop_after == Some(Stage::Bsp) {
-                to_linear(&mesh, &fs, "bsp", &mut times)?
+                Delivered::Linear(to_linear(&mesh, &fs, "bsp", &mut times)?)
             } else {
+                let mut ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
                 let stats = times.time("optimize", || {
-                    let mut ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
                     crate::optimize::optimize(
                         &mut mesh,
                         &mut ctx,
@@ -243,11 +249,30 @@ pub fn mesh_drawing_with(
                     ));
                 }
                 optimize = Some(stats);
-                to_linear(&mesh, &fs, "optimize", &mut times)?
+                if params.stop_after == Some(Stage::Optimize) {
+                    Delivered::Linear(to_linear(&mesh, &fs, "optimize", &mut times)?)
+                } else {
+                    let (cm, cs) = times.time("curve", || {
+                        let order = match params.order {
+                            1 => Order::Linear,
+                            2 => Order::Quadratic,
+                            _ => Order::Cubic,
+                        };
+                        let opts =
+                            CurveOptions::new(order, resolved.d).with_l_min_abs(resolved.l_min);
+                        curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, t))
+                    })?;
+                    curve = Some(cs);
+                    Delivered::Curved(cm)
+                }
             }
         }
     };
-    let mesh = FemMesh::from_linear(&linear, "domain", |s| drawing.shapes[s.0 as usize].name());
+    let name = |s: crate::svg::ShapeId| drawing.shapes[s.0 as usize].name();
+    let mesh = match &delivered {
+        Delivered::Linear(linear) => FemMesh::from_linear(linear, "domain", name),
+        Delivered::Curved(cm) => FemMesh::from_curved(cm, "domain", name),
+    };
     let (mesh, region_report) = times.time("regions", || {
         crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
     })?;
@@ -266,6 +291,7 @@ pub fn mesh_drawing_with(
         bsp,
         stopped_after: params.stop_after,
         optimize,
+        curve,
         warnings,
     };
     Ok(Meshed { mesh, report })
@@ -401,16 +427,27 @@ fn to_linear(
     times: &mut Times,
 ) -> Result<LinearMesh> {
     times.time("linear", || {
-        LinearMesh::from_trimesh(mesh, stage, |t| match *t {
-            FeatureOn::Primary { section, .. } => {
-                (fs.primary[section as usize].source.shape, LineKind::Primary)
-            }
-            FeatureOn::Secondary { polyline } => (
-                fs.secondary[polyline as usize].source.shape,
-                LineKind::Secondary,
-            ),
-        })
+        LinearMesh::from_trimesh(mesh, stage, |t| feature_of(fs, t))
     })
+}
+
+/// The source shape and kind of the feature a tag stands for.
+fn feature_of(fs: &FeatureSet, tag: &FeatureOn) -> (crate::svg::ShapeId, LineKind) {
+    match *tag {
+        FeatureOn::Primary { section, .. } => {
+            (fs.primary[section as usize].source.shape, LineKind::Primary)
+        }
+        FeatureOn::Secondary { polyline } => (
+            fs.secondary[polyline as usize].source.shape,
+            LineKind::Secondary,
+        ),
+    }
+}
+
+/// What the mesher hands to the FEM conversion.
+enum Delivered {
+    Linear(LinearMesh),
+    Curved(CurvedMesh),
 }
 
 /// Load `input`, mesh it, write `output` (and the preview, if asked for).

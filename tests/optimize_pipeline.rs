@@ -167,8 +167,7 @@ fn optimized_meshes_keep_primary_vertices_on_curves_and_secondary_edges_in_the_e
     assert!(files.len() >= 5, "{files:?}");
     let dir = out_dir("optimize");
     for f in &files {
-        let s = optimize_and_check(f)
-            .unwrap_or_else(|e| panic!("{}: {e:#?}", f.display()));
+        let s = optimize_and_check(f).unwrap_or_else(|e| panic!("{}: {e:#?}", f.display()));
         assert!(s.triangles > 0);
         // The written --linear mesh, for the independent reader here and gmsh in CI.
         let stem = f.file_stem().expect("a file name").to_string_lossy();

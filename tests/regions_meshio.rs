@@ -61,8 +61,75 @@ fn node_box(mesh: &FemMesh) -> Rect {
     )
 }
 
-fn tri_area([a, b, c]: [Point; 3]) -> f64 {
-    (b - a).cross(c - a) / 2.0
+/// The exact area of a Lagrange triangle of any order (gmsh node order), by
+/// Green's theorem on its three polynomial edges: `½ ∮ x dy − y dx`, with a
+/// Gauss rule exact for the degree (at most 5) of the integrand.
+fn element_area(nodes: &[Point]) -> f64 {
+    // The nodes of each edge from its first corner to its second, evenly spaced.
+    let edges: Vec<Vec<Point>> = match nodes.len() {
+        3 => vec![
+            vec![nodes[0], nodes[1]],
+            vec![nodes[1], nodes[2]],
+            vec![nodes[2], nodes[0]],
+        ],
+        6 => vec![
+            vec![nodes[0], nodes[3], nodes[1]],
+            vec![nodes[1], nodes[4], nodes[2]],
+            vec![nodes[2], nodes[5], nodes[0]],
+        ],
+        10 => vec![
+            vec![nodes[0], nodes[3], nodes[4], nodes[1]],
+            vec![nodes[1], nodes[5], nodes[6], nodes[2]],
+            vec![nodes[2], nodes[7], nodes[8], nodes[0]],
+        ],
+        n => panic!("{n} nodes per triangle"),
+    };
+    // 4-point Gauss-Legendre on [0, 1]: exact to degree 7.
+    let g = [
+        (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+        (0.330_009_478_207_571_9, 0.326_072_577_431_273_07),
+        (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+        (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+    ];
+    let mut area = 0.0;
+    for e in &edges {
+        let k = e.len() - 1;
+        // Lagrange basis on the nodes s_i = i / k and its derivative.
+        let basis = |s: f64| -> (Vec<f64>, Vec<f64>) {
+            let xs: Vec<f64> = (0..=k).map(|i| i as f64 / k as f64).collect();
+            let mut l = vec![0.0; k + 1];
+            let mut dl = vec![0.0; k + 1];
+            for i in 0..=k {
+                let mut v = 1.0;
+                for j in (0..=k).filter(|&j| j != i) {
+                    v *= (s - xs[j]) / (xs[i] - xs[j]);
+                }
+                l[i] = v;
+                let mut dv = 0.0;
+                for m in (0..=k).filter(|&m| m != i) {
+                    let mut t = 1.0 / (xs[i] - xs[m]);
+                    for j in (0..=k).filter(|&j| j != i && j != m) {
+                        t *= (s - xs[j]) / (xs[i] - xs[j]);
+                    }
+                    dv += t;
+                }
+                dl[i] = dv;
+            }
+            (l, dl)
+        };
+        for (s, w) in g {
+            let (l, dl) = basis(s);
+            let (mut x, mut y, mut dx, mut dy) = (0.0, 0.0, 0.0, 0.0);
+            for i in 0..=k {
+                x += l[i] * e[i].x;
+                y += l[i] * e[i].y;
+                dx += dl[i] * e[i].x;
+                dy += dl[i] * e[i].y;
+            }
+            area += 0.5 * w * (x * dy - y * dx);
+        }
+    }
+    area
 }
 
 /// Every defect of the region sums and physical groups of `m` (empty: all good).
@@ -94,7 +161,12 @@ fn region_defects(m: &Meshed, drawing_box: Rect) -> Vec<String> {
         match tris.get_mut(g as usize) {
             Some(n) => {
                 *n += 1;
-                areas[g as usize] += tri_area(mesh.corners(i));
+                let nodes: Vec<Point> = mesh
+                    .triangle(i)
+                    .iter()
+                    .map(|&n| mesh.nodes[n as usize])
+                    .collect();
+                areas[g as usize] += element_area(&nodes);
             }
             None => defects.push(format!("triangle {i} in surface {g} of {}", tris.len())),
         }
