@@ -173,7 +173,7 @@ impl CollapsePlan {
     }
 }
 
-fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w: VertexId) -> bool {
+pub(crate) fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w: VertexId) -> bool {
     let with: Vec<&FaceId> = faces
         .iter()
         .filter(|&&f| mesh.face(f).contains(&w))

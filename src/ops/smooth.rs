@@ -76,9 +76,10 @@ impl SmoothPlan {
         let faces = r.faces.clone();
         let energy = |p: Point| ring_energy(mesh, v, &faces, p);
         let (pos, t) = match role(mesh, v, &r) {
-            Role::Fixed | Role::Boundary | Role::SecondaryJunction => {
+            Role::Fixed | Role::SecondaryJunction => {
                 return Err(Reject::FixedVertex);
             }
+            Role::Boundary => (slide_on_boundary(mesh, v, &r, &energy)?, None),
             Role::Free | Role::Secondary => {
                 let p0 = mesh.position(v);
                 let e0 = energy(p0).ok_or(Reject::NoChange)?;
@@ -173,6 +174,84 @@ impl SmoothPlan {
             t,
         })
     }
+}
+
+/// A boundary vertex between two boundary neighbours on one axis-parallel line
+/// (the box's sides) slides along that line, its other coordinate untouched, so
+/// it stays exactly on the boundary: Newton on the ring energy restricted to the
+/// line, kept strictly between the neighbours.
+fn slide_on_boundary(
+    mesh: &TriMesh,
+    v: VertexId,
+    r: &super::Ring,
+    energy: &impl Fn(Point) -> Option<Amips2>,
+) -> Result<Point, Reject> {
+    let ends: Vec<VertexId> = r
+        .neighbours
+        .iter()
+        .copied()
+        .filter(|&w| super::collapse::is_boundary_edge(mesh, &r.faces, v, w))
+        .collect();
+    let [a, b] = ends[..] else {
+        return Err(Reject::FixedVertex);
+    };
+    if mesh.is_rational(v) || mesh.is_rational(a) || mesh.is_rational(b) {
+        return Err(Reject::FixedVertex);
+    }
+    let (p, pa, pb) = (mesh.position(v), mesh.position(a), mesh.position(b));
+    // Which coordinate moves: x on a horizontal side, y on a vertical one.
+    let axis = if pa.y == p.y && pb.y == p.y {
+        0
+    } else if pa.x == p.x && pb.x == p.x {
+        1
+    } else {
+        return Err(Reject::FixedVertex);
+    };
+    let coord = |q: Point| if axis == 0 { q.x } else { q.y };
+    let at = |c: f64| {
+        if axis == 0 {
+            Point::new(c, p.y)
+        } else {
+            Point::new(p.x, c)
+        }
+    };
+    let (lo, hi) = (coord(pa).min(coord(pb)), coord(pa).max(coord(pb)));
+    let margin = 1e-3 * (hi - lo);
+    let (lo, hi) = (lo + margin, hi - margin);
+    if lo.partial_cmp(&hi) != Some(Ordering::Less) {
+        return Err(Reject::NoChange);
+    }
+    let e0 = energy(p).ok_or(Reject::NoChange)?;
+    let (mut c, mut e) = (coord(p).clamp(lo, hi), e0);
+    for _ in 0..NEWTON_ITERATIONS {
+        let (d1, d2) = (e.grad[axis], e.hess[(axis, axis)]);
+        let dc = if d2 > 0.0 {
+            -d1 / d2
+        } else {
+            -d1.signum() * 0.25 * (hi - lo)
+        };
+        let mut step = 1.0;
+        let mut found = None;
+        for _ in 0..LINE_SEARCH_STEPS {
+            let cn = (c + step * dc).clamp(lo, hi);
+            if let Some(en) = energy(at(cn)).filter(|en| en.value < e.value) {
+                found = Some((cn, en));
+                break;
+            }
+            step *= 0.5;
+        }
+        let Some((cn, en)) = found else { break };
+        let done = (cn - c).abs() <= 1e-14 * (hi - lo);
+        c = cn;
+        e = en;
+        if done {
+            break;
+        }
+    }
+    if e.value.partial_cmp(&e0.value) != Some(Ordering::Less) {
+        return Err(Reject::NoChange);
+    }
+    Ok(at(c))
 }
 
 fn line_search(

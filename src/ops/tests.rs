@@ -609,3 +609,51 @@ fn projection_moves_a_chord_vertex_onto_its_curve_or_closer() {
         }
     }
 }
+
+#[test]
+fn boundary_vertices_slide_along_the_box_side_and_stay_on_it() {
+    let mut moved = 0;
+    for seed in 0..4 {
+        let (mut mesh, ctx) = delaunay_mesh(seed, EnergyRule::NoWorseMax);
+        // Put vertices on the box sides: split every boundary edge, twice.
+        for _ in 0..2 {
+            let sides: Vec<(VertexId, VertexId)> = mesh
+                .faces()
+                .flat_map(|f| {
+                    let v = mesh.face(f);
+                    let adj = mesh.neighbours(f);
+                    (0..3)
+                        .filter(move |&i| adj[i].is_none())
+                        .map(move |i| (v[(i + 1) % 3], v[(i + 2) % 3]))
+                })
+                .collect();
+            for (a, b) in sides {
+                try_split(&mut mesh, &ctx, a, b);
+            }
+        }
+        let boundary: Vec<VertexId> = mesh
+            .vertices()
+            .filter(|&v| role(&mesh, v, &ring(&mesh, v)) == Role::Boundary)
+            .collect();
+        for v in boundary {
+            let p = mesh.position(v);
+            let before = mesh.clone();
+            match try_smooth(&mut mesh, &ctx, v) {
+                Outcome::Applied(_) => {
+                    let q = mesh.position(v);
+                    // Still exactly on the same side of the unit box.
+                    assert!(
+                        (q.x == p.x && (p.x == 0.0 || p.x == 1.0))
+                            || (q.y == p.y && (p.y == 0.0 || p.y == 1.0)),
+                        "seed {seed}: {p:?} -> {q:?}"
+                    );
+                    assert!((0.0..=1.0).contains(&q.x) && (0.0..=1.0).contains(&q.y));
+                    assert!(mesh.check().is_empty());
+                    moved += 1;
+                }
+                Outcome::Rejected(_) => assert!(mesh == before),
+            }
+        }
+    }
+    assert!(moved > 0, "no boundary vertex ever slid");
+}
