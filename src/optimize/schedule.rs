@@ -49,6 +49,9 @@ use std::collections::{BTreeMap, BinaryHeap};
 
 /// Edges shorter than this fraction of `l` are collapsed by the final coarsening.
 const COARSEN_FACTOR: f64 = 4.0 / 3.0;
+/// The final coarsening may create edges up to this multiple of `l` (no split
+/// pass follows it to undo them).
+const COARSEN_STRETCH: f64 = 1.6;
 /// At most this many polishing passes (swaps and smoothing) end the schedule.
 const POLISH_PASSES: usize = 6;
 
@@ -271,6 +274,8 @@ struct Schedule<'a> {
     failed_collapse: rustc_hash::FxHashMap<EdgeKey, u64>,
     /// Smoothing refused, by vertex slot, with the clock then.
     failed_smooth: Vec<u64>,
+    /// Longest edge a collapse may create, relative to its mean target.
+    max_stretch: f64,
 }
 
 impl Schedule<'_> {
@@ -510,7 +515,7 @@ impl Schedule<'_> {
                 continue;
             }
             let t = 0.5 * (tu + self.target_of(w));
-            if pu.distance(self.mesh.position(w)) > 4.0 / 3.0 * t {
+            if pu.distance(self.mesh.position(w)) > self.max_stretch * t {
                 return false;
             }
         }
@@ -691,6 +696,7 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         stamp: Vec::new(),
         failed_collapse: rustc_hash::FxHashMap::default(),
         failed_smooth: Vec::new(),
+        max_stretch: 4.0 / 3.0,
     };
     let mut rational = s.round_all();
     let mut off = s.project_all(&mut ever_off);
@@ -763,6 +769,7 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         s.set_target(v, opts.l);
     }
     s.failed_collapse.clear();
+    s.max_stretch = COARSEN_STRETCH;
     s.collapse_pass(COARSEN_FACTOR);
     // Polish: swaps and smoothing only (no change of size), each never making
     // a local worst triangle worse, while they still improve the mesh.
