@@ -1,7 +1,9 @@
-//! Meshing three drawings of the dev set (small, medium, large) with the exact BSP
-//! mesher (`--mesher bsp --stop-after bsp`: features + BSP) and with the CDT
-//! baseline, from a loaded `Drawing` (no file I/O). Skips drawings that are absent
-//! (the dev set lives in ../shared/data/svg-dev, beside the repository).
+//! Meshing three drawings of the dev set (small, medium, large) from a loaded
+//! `Drawing` (no file I/O): the exact BSP mesh (`--stop-after bsp`), the optimized
+//! linear mesh (`--linear`), the default curved mesh, and the CDT baseline.
+//! Skips drawings that are absent (the dev set lives in ../shared/data/svg-dev,
+//! beside the repository). The large drawing takes tens of seconds per run with
+//! the optimizer: `cargo bench --bench pipeline -- small` for a quick look.
 #![allow(missing_docs, reason = "criterion macros generate undocumented items")]
 #![allow(clippy::print_stdout, reason = "the bench reports per-stage times")]
 
@@ -32,8 +34,15 @@ fn bench(c: &mut Criterion) {
         let bsp = Params::DEFAULT
             .with_mesher(Mesher::TriWild)
             .with_stop_after(Some(Stage::Bsp));
-        let cdt = Params::DEFAULT;
-        for (name, params) in [("bsp", &bsp), ("cdt", &cdt)] {
+        let linear = Params::DEFAULT.with_stop_after(Some(Stage::Optimize));
+        let curved = Params::DEFAULT;
+        let cdt = Params::DEFAULT.with_mesher(Mesher::Cdt);
+        for (name, params) in [
+            ("bsp", &bsp),
+            ("linear", &linear),
+            ("curved", &curved),
+            ("cdt", &cdt),
+        ] {
             let once = pipeline::mesh_drawing(&drawing, params).expect("meshes");
             println!(
                 "{size} {file} {name}: {} triangles, stage seconds {:?}",
