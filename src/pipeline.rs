@@ -9,7 +9,7 @@
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
-use crate::features::{self, FeatureCounts, FeatureSet};
+use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
 use crate::fem::{FemMesh, LineKind, LinearMesh, Order};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
@@ -228,10 +228,11 @@ pub fn mesh_drawing_with(
             features = Some(fs.counts);
             let (mut mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
             bsp = Some(stats);
+            let mut ctx =
+                Context::from_chains(&fs, &fs.primary_chains(), resolved.eps, resolved.eps);
             if params.stop_after == Some(Stage::Bsp) {
-                Delivered::Linear(to_linear(&mesh, &fs, "bsp", &mut times)?)
+                Delivered::Linear(to_linear(&mesh, &fs, &ctx, "bsp", &mut times)?)
             } else {
-                let mut ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
                 let stats = times.time("optimize", || {
                     crate::optimize::optimize(
                         &mut mesh,
@@ -250,7 +251,7 @@ pub fn mesh_drawing_with(
                 }
                 optimize = Some(stats);
                 if params.stop_after == Some(Stage::Optimize) {
-                    Delivered::Linear(to_linear(&mesh, &fs, "optimize", &mut times)?)
+                    Delivered::Linear(to_linear(&mesh, &fs, &ctx, "optimize", &mut times)?)
                 } else {
                     let (cm, cs) = times.time("curve", || {
                         let order = match params.order {
@@ -260,7 +261,7 @@ pub fn mesh_drawing_with(
                         };
                         let opts =
                             CurveOptions::new(order, resolved.d).with_l_min_abs(resolved.l_min);
-                        curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, t))
+                        curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;
                     curve = Some(cs);
                     Delivered::Curved(cm)
@@ -310,7 +311,10 @@ fn padded_box(drawing: &Drawing, padding: f64) -> Rect {
 
 /// The BSP input of a feature set: every conforming segment with its tag,
 /// isolated points and section endpoints.
-fn bsp_input(fs: &FeatureSet) -> BspInput {
+/// The BSP's input: primary chords tagged with their chain and the parameter
+/// interval of their section, secondary segments, isolated points; only chain
+/// ends are fixed section endpoints.
+fn bsp_input(fs: &FeatureSet, chains: &PrimaryChains) -> BspInput {
     let ci = fs.conforming_input();
     let segments = ci
         .segments
@@ -320,7 +324,7 @@ fn bsp_input(fs: &FeatureSet) -> BspInput {
             b: line.p1,
             tag: match *tag {
                 features::SegmentTag::Primary(id) => bsp::SegmentTag::Primary {
-                    section: id.0,
+                    section: chains.chain_of[id.0 as usize],
                     t: fs.primary[id.0 as usize].t,
                 },
                 features::SegmentTag::Secondary { polyline, .. } => bsp::SegmentTag::Secondary {
@@ -329,11 +333,7 @@ fn bsp_input(fs: &FeatureSet) -> BspInput {
             },
         })
         .collect();
-    let section_endpoints = fs
-        .primary
-        .iter()
-        .flat_map(|s| [s.ctrl.p0, s.ctrl.p3])
-        .collect();
+    let section_endpoints = chains.chains.iter().flat_map(|c| c.ends).collect();
     BspInput {
         points: ci.points,
         section_endpoints,
@@ -356,7 +356,7 @@ pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, Feature
     let mut times = Times::default();
     let fs = FeatureSet::build(drawing, &resolved);
     let (mesh, _) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
-    let ctx = Context::from_features(&fs, resolved.eps, resolved.eps);
+    let ctx = Context::from_chains(&fs, &fs.primary_chains(), resolved.eps, resolved.eps);
     Ok((mesh, fs, ctx))
 }
 
@@ -385,7 +385,7 @@ fn bsp_trimesh(
     resolved: &Resolved,
     times: &mut Times,
 ) -> Result<(TriMesh, BspStats)> {
-    let input = bsp_input(fs);
+    let input = bsp_input(fs, &fs.primary_chains());
     let bbox = padded_box(drawing, resolved.padding);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
     if params.paranoid {
@@ -423,19 +423,28 @@ pub fn optimize_options(params: &Params, resolved: &Resolved) -> OptimizeOptions
 fn to_linear(
     mesh: &TriMesh,
     fs: &FeatureSet,
+    ctx: &Context,
     stage: &'static str,
     times: &mut Times,
 ) -> Result<LinearMesh> {
     times.time("linear", || {
-        LinearMesh::from_trimesh(mesh, stage, |t| feature_of(fs, t))
+        LinearMesh::from_trimesh(mesh, stage, |t| feature_of(fs, ctx, t))
     })
 }
 
-/// The source shape and kind of the feature a tag stands for.
-fn feature_of(fs: &FeatureSet, tag: &FeatureOn) -> (crate::svg::ShapeId, LineKind) {
+/// The source shape and kind of the feature a tag stands for (primary tags
+/// index `ctx.sections`, secondary ones `fs.secondary`).
+pub fn feature_of(
+    fs: &FeatureSet,
+    ctx: &Context,
+    tag: &FeatureOn,
+) -> (crate::svg::ShapeId, LineKind) {
     match *tag {
         FeatureOn::Primary { section, .. } => {
-            (fs.primary[section as usize].source.shape, LineKind::Primary)
+            let source = ctx.sections[section as usize]
+                .source
+                .expect("internal: the pipeline's sections name their source");
+            (source.shape, LineKind::Primary)
         }
         FeatureOn::Secondary { polyline } => (
             fs.secondary[polyline as usize].source.shape,

@@ -18,8 +18,7 @@ use std::path::Path;
 use support::devset::{devset_dir, svg_files};
 use support::{check_msh, out_dir};
 use triwild::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
-use triwild::fem::{LineKind, Order};
-use triwild::mesh::FeatureOn;
+use triwild::fem::Order;
 use triwild::output::{self, MshOptions};
 use triwild::pipeline;
 use triwild::regions::{self, RegionOptions};
@@ -52,14 +51,8 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
     let (mut mesh, fs, ctx) = linear(drawing, params);
     let d = drawing.diagonal();
     let opts = CurveOptions::new(order, d).with_l_min_abs(params.resolve(d).l_min);
-    let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
-        FeatureOn::Primary { section, .. } => {
-            (fs.primary[section as usize].source.shape, LineKind::Primary)
-        }
-        FeatureOn::Secondary { polyline } => (
-            fs.secondary[polyline as usize].source.shape,
-            LineKind::Secondary,
-        ),
+    let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| {
+        pipeline::feature_of(&fs, &ctx, t)
     })
     .expect("curving");
     let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
@@ -201,14 +194,8 @@ fn devset_curving() {
             _ => Order::Cubic,
         };
         let opts = CurveOptions::new(order, drawing.diagonal());
-        let r = curve_mesh(&mut mesh, &ctx, &opts, |t| match *t {
-            FeatureOn::Primary { section, .. } => {
-                (fs.primary[section as usize].source.shape, LineKind::Primary)
-            }
-            FeatureOn::Secondary { polyline } => (
-                fs.secondary[polyline as usize].source.shape,
-                LineKind::Secondary,
-            ),
+        let r = curve_mesh(&mut mesh, &ctx, &opts, |t| {
+            pipeline::feature_of(&fs, &ctx, t)
         });
         match r {
             Ok((cm, s)) => {

@@ -86,7 +86,7 @@ fn optimize_and_check(svg: &Path) -> Result<Summary, Vec<String>> {
     let d = drawing.diagonal();
     let params = Params::DEFAULT;
     let t = Instant::now();
-    let (mesh, fs, _ctx, stats) =
+    let (mesh, fs, ctx, stats) =
         pipeline::optimize_stage(&drawing, &params).map_err(|e| vec![format!("mesh: {e}")])?;
     let seconds = t.elapsed().as_secs_f64();
     let eps = params.resolve(d).eps;
@@ -110,7 +110,7 @@ fn optimize_and_check(svg: &Path) -> Result<Summary, Vec<String>> {
         for tag in tags {
             match *tag {
                 FeatureOn::Primary { section, .. } => {
-                    let sec = &fs.primary[section as usize];
+                    let sec = &ctx.sections[section as usize];
                     for p in [a, b] {
                         let dist = distance_to_piece(&sec.parent, sec.t, p);
                         s.primary_rel = s.primary_rel.max(dist / d);

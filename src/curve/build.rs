@@ -966,6 +966,7 @@ mod tests {
                 .map(|&c| CurveSection {
                     parent: Parent::Cubic(c),
                     t: [0.0, 1.0],
+                    source: None,
                 })
                 .collect(),
             envelope: Envelope::new(&[], 1e-3, 1e-3),

@@ -24,6 +24,7 @@
 //! chord or secondary segment. Sections that share an endpoint share it bit for bit.
 //! [`FeatureSet::conforming_input`] lists what the linear mesher must conform to.
 
+mod chains;
 mod classify;
 mod grid;
 mod json;
@@ -32,6 +33,7 @@ mod resample;
 mod separation;
 mod split;
 
+pub use chains::{PrimaryChain, PrimaryChains};
 pub use json::to_json;
 pub use preview::to_svg;
 

@@ -46,7 +46,7 @@ pub use smooth::{SmoothPlan, try_smooth};
 pub use split::{SplitPlan, try_split};
 pub use swap::{SwapPlan, try_swap};
 
-use crate::features::{FeatureSet, Parent};
+use crate::features::{FeatureSet, Parent, PrimaryChains};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use invariants::Envelope;
 
@@ -144,6 +144,8 @@ pub struct CurveSection {
     pub parent: Parent,
     /// The parameter interval of the section on `parent`.
     pub t: [f64; 2],
+    /// The input feature it came from (`None` where no drawing is behind it).
+    pub source: Option<crate::svg::FeatureSource>,
 }
 
 /// Everything the operations need besides the mesh: the curves that primary
@@ -175,8 +177,39 @@ impl Context {
             .map(|s| CurveSection {
                 parent: s.parent,
                 t: s.t,
+                source: Some(s.source),
             })
             .collect();
+        Context::with_sections(features, sections, eps_abs, sample_abs)
+    }
+
+    /// The context for a mesh whose primary tags index the chains of
+    /// `features` ([`FeatureSet::primary_chains`]): a vertex inside a chain
+    /// slides along the whole chain.
+    pub fn from_chains(
+        features: &FeatureSet,
+        chains: &PrimaryChains,
+        eps_abs: f64,
+        sample_abs: f64,
+    ) -> Context {
+        let sections = chains
+            .chains
+            .iter()
+            .map(|c| CurveSection {
+                parent: c.parent,
+                t: c.t,
+                source: Some(c.source),
+            })
+            .collect();
+        Context::with_sections(features, sections, eps_abs, sample_abs)
+    }
+
+    fn with_sections(
+        features: &FeatureSet,
+        sections: Vec<CurveSection>,
+        eps_abs: f64,
+        sample_abs: f64,
+    ) -> Context {
         let polylines: Vec<Vec<kurbo::Point>> = features
             .secondary
             .iter()

@@ -45,10 +45,12 @@ pub(crate) fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context)
         CurveSection {
             parent,
             t: [0.0, 0.5],
+            source: None,
         },
         CurveSection {
             parent,
             t: [0.5, 1.0],
+            source: None,
         },
     ];
     let polyline: Vec<Point> = [(0.1, 0.7), (0.3, 0.75), (0.5, 0.65), (0.7, 0.8), (0.9, 0.7)]
@@ -182,6 +184,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
             sections.push(CurveSection {
                 parent: Parent::Line(Line::new(a, b)),
                 t: [0.0, 1.0],
+                source: None,
             });
             input.section_endpoints.extend([a, b]);
             SegmentTag::Primary {
