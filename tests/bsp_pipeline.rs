@@ -196,22 +196,33 @@ fn sample_drawings_and_fixtures_mesh_valid_and_conforming() {
 }
 
 #[test]
-fn crossing_fixtures_exercise_rational_vertices() {
-    // The fixtures are only useful if the BSP really cuts: crossings make rational
-    // vertices, which rounding must all remove.
+fn crossing_fixtures_exercise_crossing_splits_and_rational_vertices() {
+    // Transversal crossings are split by the feature stage (both curves end at the
+    // crossing point); what stays (T-junctions within rounding, near-parallel and
+    // shallow crossings of secondary features) makes the BSP cut, and rational
+    // vertices appear, which rounding must all remove.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp");
     let dir = out_dir("bsp-crossings");
-    for name in ["crossing-lines", "overlapping-circles", "t-junction"] {
+    let (mut cuts, mut rational) = (0, 0);
+    for name in [
+        "crossing-lines",
+        "overlapping-circles",
+        "t-junction",
+        "near-parallel",
+    ] {
         let f = root.join(format!("{name}.svg"));
         let o = mesh_and_check(&f, &dir.join(format!("{name}.msh")))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let bsp = o.report.bsp.expect("bsp stats");
-        assert!(
-            bsp.cut_triangles > 0 && bsp.rational_before_rounding > 0,
-            "{name}: {bsp:?}"
-        );
         assert_eq!(bsp.rational_vertices, 0, "{name}");
+        cuts += bsp.cut_triangles;
+        rational += bsp.rational_before_rounding;
+        let features = o.report.features.expect("feature counts");
+        if name == "crossing-lines" || name == "overlapping-circles" {
+            assert!(features.crossing_splits >= 6, "{name}: {features:?}");
+        }
     }
+    assert!(cuts > 0 && rational > 0, "{cuts} cuts, {rational} rational");
 }
 
 #[test]

@@ -26,6 +26,7 @@
 
 mod chains;
 mod classify;
+mod crossings;
 mod grid;
 mod json;
 mod preview;
@@ -193,6 +194,9 @@ pub struct FeatureCounts {
     pub inflection_splits: usize,
     /// Splits that halve a total curvature of 180° or more.
     pub curvature_splits: usize,
+    /// Transversal crossings of two curves where both were split (so the
+    /// sections around a crossing share its point).
+    pub crossing_splits: usize,
     /// Discrete curve sections after resampling.
     pub sections: usize,
     /// Sections not eligible because of curvature above 2/l_m (or a refinement budget).
@@ -327,20 +331,44 @@ impl FeatureSet {
                 }
             }
         }
+        // 2b. Crossings: split both curves where they cross transversally.
+        let flat: Vec<(usize, crossings::Piece)> = pieces
+            .iter()
+            .enumerate()
+            .flat_map(|(k, (_, parent, intervals))| {
+                intervals
+                    .iter()
+                    .map(move |&t| (k, crossings::Piece { parent: *parent, t }))
+            })
+            .collect();
+        let found = crossings::find(&flat.iter().map(|f| f.1).collect::<Vec<_>>(), params);
+        counts.crossing_splits = found.count;
         timing.split_ms = ms(t);
 
         // 3. Resampling.
         let t = Instant::now();
         let mut sections = Vec::new();
-        for (i, parent, intervals) in &pieces {
-            for &[t0, t1] in intervals {
-                for p in resample::resample(parent, t0, t1, params) {
+        for (idx, (k, piece)) in flat.iter().enumerate() {
+            let (i, parent) = (pieces[*k].0, &pieces[*k].1);
+            let mut cuts = vec![piece.t[0]];
+            cuts.extend(found.splits[idx].iter().copied());
+            cuts.push(piece.t[1]);
+            for w in cuts.windows(2) {
+                for p in resample::resample(parent, w[0], w[1], params) {
+                    let mut ctrl = p.ctrl;
+                    // Sections meeting at a crossing share its point exactly.
+                    if let Some(&x) = found.points.get(&(idx, p.t0.to_bits())) {
+                        ctrl.p0 = x;
+                    }
+                    if let Some(&x) = found.points.get(&(idx, p.t1.to_bits())) {
+                        ctrl.p3 = x;
+                    }
                     sections.push(Section {
-                        feature: *i,
+                        feature: i,
                         parent: *parent,
                         t0: p.t0,
                         t1: p.t1,
-                        ctrl: p.ctrl,
+                        ctrl,
                         eligible: p.eligible,
                     });
                 }

@@ -7,11 +7,12 @@
 //! - the hull of every section it shares no end point with, and every isolated point, is at
 //!   least μ away from its hull (this catches crossings, near-parallel curves, close end
 //!   points and tangencies, also between parts of the same curve);
-//! - for every section it shares an end point `q` with, the part of either chord farther
-//!   than 1.01·μ from `q` stays μ away from the other chord (Definition 4.1 at a corner:
-//!   the μ-ball of a point must not reach the other branch unless it contains `q`), the two
-//!   chords meet at `q` at an angle of at least 4α (so the two curve pieces, each within
-//!   2α of its chord, cannot cross), and they do not share both end points.
+//! - for every section it shares an end point `q` with (a corner, or a crossing where both
+//!   curves were split), the two chords meet at `q` at an angle θ of at least 4α (so the
+//!   two curve pieces, each within 2α of its chord, cannot cross), they do not share both
+//!   end points, and the part of either chord farther than 1.01·μ / sin θ from `q` stays μ
+//!   away from the other chord (nearer to `q` than μ / sin θ two straight branches at angle
+//!   θ are closer than μ whatever they do: that stretch is the corner itself).
 //!
 //! Offending sections are demoted to secondary (conservatively: both of a pair). Candidate
 //! pairs come from a uniform grid over the hulls' boxes.
@@ -147,10 +148,13 @@ pub(super) fn violates(a: &CubicBez, b: &CubicBez, mu: f64, alpha: f64) -> bool 
         return true;
     }
     let (u, v) = (ca.p1 - q, cb.p1 - q);
-    if u.cross(v).abs().atan2(u.dot(v)) < 4.0 * alpha {
+    let angle = u.cross(v).abs().atan2(u.dot(v));
+    if angle < 4.0 * alpha {
         return true;
     }
-    let r = CORNER_RADIUS * mu;
+    // Near q the two chords are closer than μ for a length μ / sin(angle) (at
+    // most μ / sin(4α)): that part belongs to the corner.
+    let r = CORNER_RADIUS * mu / angle.sin().max((4.0 * alpha).min(1.0).sin());
     trimmed(ca, r).is_some_and(|t| segment_distance(t, cb) < mu)
         || trimmed(cb, r).is_some_and(|t| segment_distance(t, ca) < mu)
 }

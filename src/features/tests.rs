@@ -137,11 +137,10 @@ fn s_curve_is_cut_at_its_inflection() {
 }
 
 #[test]
-fn loop_cubic_is_secondary_only_near_its_self_crossing() {
+fn loop_cubic_is_split_at_its_self_crossing() {
     let c = [(0.0, 0.0), (3.0, 2.0), (-1.0, 2.0), (2.0, 0.0)];
     let (fs, _) = build(vec![cubic(c)], Params::DEFAULT);
     assert!(fs.counts.curvature_splits >= 1, "{:?}", fs.counts);
-    assert!(!fs.secondary.is_empty() && !fs.primary.is_empty());
     // The self-crossing is where x(t) = x(s), y(t) = y(s) for t ≠ s: by symmetry of this
     // curve about x = 1 it lies on x = 1; find it by bisection on t < 1/2.
     let cc = [c[0].into(), c[1].into(), c[2].into(), c[3].into()];
@@ -151,13 +150,18 @@ fn loop_cubic_is_secondary_only_near_its_self_crossing() {
         if bez(&cc, m).x < 1.0 { lo = m } else { hi = m }
     }
     let x = bez(&cc, lo);
-    let r = fs.params.l + fs.params.mu;
-    for p in secondary_points(&fs) {
-        assert!(
-            p.distance(x) <= 2.0 * r,
-            "secondary point {p:?} far from the crossing {x:?}"
-        );
-    }
+    // The two pieces through it (from either side of the curvature split) cross at a
+    // wide angle: both are split there, four sections share that point, all primary.
+    assert_eq!(fs.counts.crossing_splits, 1, "{:?}", fs.counts);
+    assert!(fs.secondary.is_empty(), "{:?}", fs.counts);
+    let ends: Vec<Point> = fs
+        .primary
+        .iter()
+        .flat_map(|s| [s.ctrl.p0, s.ctrl.p3])
+        .filter(|p| p.distance(x) <= 1e-9)
+        .collect();
+    assert_eq!(ends.len(), 4, "{ends:?}");
+    assert!(ends.iter().all(|p| *p == ends[0]));
 }
 
 #[test]
@@ -236,18 +240,35 @@ fn parallel_lines_closer_than_mu_are_secondary_farther_primary() {
 }
 
 #[test]
-fn crossing_lines_are_secondary_only_near_the_crossing() {
-    // Line 1 is cut at integer x: the crossing (0.5, 0) is inside its section [0, 1]; line 2
-    // is cut at integer y: the crossing is the end of its sections [-1, 0] and [0, 1].
+fn crossing_lines_are_split_at_the_crossing_and_stay_primary() {
+    // Line 1 is cut at its crossing (0.5, 0) and at integer x; line 2 at the crossing,
+    // which is also where its integer-y cuts fall. All sections stay primary, and the
+    // four around the crossing share its point exactly.
     let (fs, _) = build(
         vec![line((-5.0, 0.0), (5.0, 0.0)), line((0.5, -5.0), (0.5, 5.0))],
         abs_params(0.1, 1.0),
     );
-    assert_eq!(fs.primary.len(), 17);
-    assert_eq!(fs.counts.secondary_segments, 3);
-    for p in secondary_points(&fs) {
-        assert!(p.distance(Point::new(0.5, 0.0)) <= 1.0 + 1e-12, "{p:?}");
-    }
+    assert_eq!(fs.counts.crossing_splits, 1);
+    assert!(fs.secondary.is_empty(), "{:?}", fs.counts);
+    assert_eq!(fs.primary.len(), 21);
+    let x = Point::new(0.5, 0.0);
+    let ends = fs
+        .primary
+        .iter()
+        .flat_map(|s| [s.ctrl.p0, s.ctrl.p3])
+        .filter(|p| *p == x)
+        .count();
+    assert_eq!(ends, 4);
+    // A shallow crossing (below 4α) is not split: it stays secondary near the crossing.
+    let (shallow, _) = build(
+        vec![
+            line((-5.0, 0.0), (5.0, 0.0)),
+            line((-5.0, -0.5), (5.0, 0.5)),
+        ],
+        abs_params(0.1, 1.0),
+    );
+    assert_eq!(shallow.counts.crossing_splits, 0);
+    assert!(!shallow.secondary.is_empty());
 }
 
 #[test]

@@ -1,0 +1,209 @@
+//! Transversal crossings of curve pieces (thesis §4.3.1: curves are split where
+//! they intersect, so a crossing is a shared end point of the sections around it,
+//! not a place where two sections come closer than μ).
+//!
+//! Two pieces that cross at an angle of at least 4α, away (farther than μ) from
+//! their ends, are both split at the crossing, and the sections that end there
+//! all get the same end point (the mean of the two curves' points, which agree
+//! to rounding), so the μ-separation test sees a shared corner and keeps them
+//! primary when they are otherwise separated. Shallower crossings, tangencies
+//! and overlaps are left alone: the separation test demotes them as before.
+//!
+//! Candidates come from a grid over the pieces' control boxes; each candidate
+//! pair is flattened into a few chords, chord crossings seed a Newton solve of
+//! `c1(s) = c2(t)`, and only converged solutions inside both pieces count.
+//! Budgets bound the work per piece and in total.
+
+use super::Parent;
+use super::grid::Grid;
+use crate::params::Resolved;
+use kurbo::{ParamCurve, ParamCurveDeriv, Point, Rect, Vec2};
+use std::collections::HashMap;
+
+/// Chords per piece for the search.
+const CHORDS: usize = 16;
+/// At most this many crossings split one piece.
+const MAX_PER_PIECE: usize = 32;
+/// Newton iterations per seed.
+const NEWTON: usize = 30;
+
+/// A curve piece: its parent and parameter interval.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Piece {
+    pub(super) parent: Parent,
+    pub(super) t: [f64; 2],
+}
+
+/// Where the pieces are split, and the shared points there.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Crossings {
+    /// For each piece, the sorted interior parameters to split at.
+    pub(super) splits: Vec<Vec<f64>>,
+    /// The point every section ending at `(piece, t)` gets.
+    pub(super) points: HashMap<(usize, u64), Point>,
+    /// Crossings found.
+    pub(super) count: usize,
+}
+
+fn deriv(p: &Parent, t: f64) -> Vec2 {
+    match p {
+        Parent::Cubic(c) => c.deriv().eval(t).to_vec2(),
+        Parent::Line(l) => l.p1 - l.p0,
+    }
+}
+
+fn control_box(p: &Parent, t: [f64; 2]) -> Rect {
+    match p {
+        Parent::Cubic(_) => {
+            let c = p.restrict(t[0], t[1]);
+            Rect::from_points(c.p0, c.p3).union_pt(c.p1).union_pt(c.p2)
+        }
+        Parent::Line(_) => Rect::from_points(p.eval(t[0]), p.eval(t[1])),
+    }
+}
+
+/// The crossing parameters of segments `a b` and `c d` (as fractions), if they
+/// cross properly.
+fn chord_cross(a: Point, b: Point, c: Point, d: Point) -> Option<(f64, f64)> {
+    let r = b - a;
+    let s = d - c;
+    let den = r.cross(s);
+    if den == 0.0 || !den.is_finite() {
+        return None;
+    }
+    let u = (c - a).cross(s) / den;
+    let v = (c - a).cross(r) / den;
+    ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some((u, v))
+}
+
+/// Solve `p(s) = q(t)` by Newton from `(s, t)`, staying inside the intervals.
+/// Iterates to rounding level and accepts a gap of at most `tol`.
+fn newton(p: &Piece, q: &Piece, mut s: f64, mut t: f64, tol: f64) -> Option<(f64, f64)> {
+    for _ in 0..NEWTON {
+        let f = p.parent.eval(s) - q.parent.eval(t);
+        if f.hypot() <= 1e-6 * tol {
+            return Some((s, t));
+        }
+        let (ds, dt) = (deriv(&p.parent, s), -deriv(&q.parent, t));
+        let det = ds.cross(dt);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        // [ds dt] [Δs Δt]ᵀ = -f
+        let step_s = -(f.cross(dt)) / det;
+        let step_t = -(ds.cross(f)) / det;
+        s = (s + step_s).clamp(p.t[0], p.t[1]);
+        t = (t + step_t).clamp(q.t[0], q.t[1]);
+    }
+    let f = p.parent.eval(s) - q.parent.eval(t);
+    (f.hypot() <= tol).then_some((s, t))
+}
+
+/// Find the transversal crossings of `pieces` (see the module doc).
+pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
+    let n = pieces.len();
+    let mut out = Crossings {
+        splits: vec![Vec::new(); n],
+        ..Crossings::default()
+    };
+    if n < 2 {
+        return out;
+    }
+    let boxes: Vec<Rect> = pieces.iter().map(|p| control_box(&p.parent, p.t)).collect();
+    let bounds = boxes.iter().skip(1).fold(boxes[0], |r, b| r.union(*b));
+    let mut grid = Grid::new(bounds, params.l, n);
+    for (i, b) in boxes.iter().enumerate() {
+        grid.insert(
+            u32::try_from(i).expect("internal: piece count fits u32"),
+            *b,
+        );
+    }
+    // The two curves' points must agree far below the on-curve tolerance
+    // (1e-9·d): the shared point is their mean.
+    let tol = (1e-10 * params.d).max(f64::MIN_POSITIVE);
+    let min_sin = (4.0 * params.alpha).min(std::f64::consts::FRAC_PI_2).sin();
+    let chords = |p: &Piece| -> Vec<(Point, f64)> {
+        (0..=CHORDS)
+            .map(|k| {
+                let t = p.t[0] + (p.t[1] - p.t[0]) * k as f64 / CHORDS as f64;
+                (p.parent.eval(t), t)
+            })
+            .collect()
+    };
+    let mut found: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
+    for i in 0..n {
+        let mut near = grid.query(boxes[i]);
+        near.retain(|&j| (j as usize) > i && boxes[j as usize].overlaps(boxes[i]));
+        if near.is_empty() {
+            continue;
+        }
+        let ci = chords(&pieces[i]);
+        for j in near {
+            let j = j as usize;
+            let cj = chords(&pieces[j]);
+            for a in ci.windows(2) {
+                for b in cj.windows(2) {
+                    let Some((u, v)) = chord_cross(a[0].0, a[1].0, b[0].0, b[1].0) else {
+                        continue;
+                    };
+                    let s0 = a[0].1 + u * (a[1].1 - a[0].1);
+                    let t0 = b[0].1 + v * (b[1].1 - b[0].1);
+                    let Some((s, t)) = newton(&pieces[i], &pieces[j], s0, t0, tol) else {
+                        continue;
+                    };
+                    let (p, q) = (&pieces[i], &pieces[j]);
+                    let x = p.parent.eval(s).midpoint(q.parent.eval(t));
+                    // Away from every end of both pieces (no tiny sections).
+                    let ends = [
+                        p.parent.eval(p.t[0]),
+                        p.parent.eval(p.t[1]),
+                        q.parent.eval(q.t[0]),
+                        q.parent.eval(q.t[1]),
+                    ];
+                    if ends.iter().any(|e| e.distance(x) <= params.mu) {
+                        continue;
+                    }
+                    // Transversal: at least 4α between the tangents.
+                    let (dp, dq) = (deriv(&p.parent, s), deriv(&q.parent, t));
+                    let sin = dp.cross(dq).abs() / (dp.hypot() * dq.hypot());
+                    if !(sin >= min_sin) {
+                        continue;
+                    }
+                    // The same crossing from another chord pair.
+                    if found
+                        .iter()
+                        .any(|f| f.0 == i && f.2 == j && f.4.distance(x) <= params.mu)
+                    {
+                        continue;
+                    }
+                    found.push((i, s, j, t, x));
+                }
+            }
+        }
+    }
+    // Crossings within μ of each other on one piece would make tiny sections:
+    // keep the first of such a cluster (by order found) and drop its partners.
+    let mut kept: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
+    for f in found {
+        let clash = kept.iter().any(|k| {
+            (k.0 == f.0 || k.2 == f.0 || k.0 == f.2 || k.2 == f.2) && k.4.distance(f.4) <= params.mu
+        });
+        let full = out.splits[f.0].len() >= MAX_PER_PIECE || out.splits[f.2].len() >= MAX_PER_PIECE;
+        if clash || full {
+            continue;
+        }
+        out.splits[f.0].push(f.1);
+        out.splits[f.2].push(f.3);
+        kept.push(f);
+    }
+    for (i, s, j, t, x) in &kept {
+        out.points.insert((*i, s.to_bits()), *x);
+        out.points.insert((*j, t.to_bits()), *x);
+    }
+    out.count = kept.len();
+    for s in &mut out.splits {
+        s.sort_by(f64::total_cmp);
+        s.dedup();
+    }
+    out
+}
