@@ -166,7 +166,7 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
                     // Transversal: at least 4α between the tangents.
                     let (dp, dq) = (deriv(&p.parent, s), deriv(&q.parent, t));
                     let sin = dp.cross(dq).abs() / (dp.hypot() * dq.hypot());
-                    if !(sin >= min_sin) {
+                    if sin.is_nan() || sin < min_sin {
                         continue;
                     }
                     // The same crossing from another chord pair.
