@@ -809,6 +809,16 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
     let (min_angle, max_e) = measure(s.mesh).all;
     s.stats.rational_left = rational;
     s.stats.off_curve_left = off;
+    if off > 0 {
+        for v in off_curve_vertices(s.mesh, s.ctx) {
+            tracing::debug!(
+                vertex = ?s.mesh.position(v),
+                off = ?on_curve::off_curve(s.mesh, s.ctx, v),
+                tag = ?s.mesh.vertex_tag(v),
+                "primary vertex left off its curve"
+            );
+        }
+    }
     s.stats.projected_vertices = ever_off
         .iter()
         .filter(|&&v| {

@@ -8,9 +8,10 @@
 use super::super::{Context, CurveBudget, t_at};
 use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId};
 
-/// The distance from a primary vertex to its curve point `c(t)` (the largest
-/// over the sections it is on), or `None` for a vertex on no primary edge.
-/// `Some(∞)` when its edges disagree on `t` or name an unknown section.
+/// The distance from a primary vertex to its curve points `c(t)` (the largest
+/// over the sections and parameters its edges give it; a curve that passes
+/// through the vertex twice gives two), or `None` for a vertex on no primary
+/// edge. `Some(∞)` when an edge names an unknown section.
 pub fn off_curve(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Option<f64> {
     let mut seen: Vec<(u32, f64)> = Vec::new();
     for f in mesh.incident_faces(v) {
@@ -23,10 +24,10 @@ pub fn off_curve(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Option<f64> {
             for tag in mesh.edge_tags(v, w) {
                 if let FeatureOn::Primary { section, t } = *tag {
                     let tv = t_at(key, t, v);
-                    match seen.iter().find(|(s, _)| *s == section) {
-                        Some(&(_, t0)) if t0 != tv => return Some(f64::INFINITY),
-                        Some(_) => {}
-                        None => seen.push((section, tv)),
+                    // A curve through the vertex twice (a self-crossing split
+                    // there) carries two parameters: both must map to it.
+                    if !seen.contains(&(section, tv)) {
+                        seen.push((section, tv));
                     }
                 }
             }
