@@ -126,37 +126,9 @@ impl SmoothPlan {
                 } else {
                     energy(mesh.position(v)).map_or(f64::INFINITY, |e| e.value)
                 };
-                let mut tc = t0;
-                let mut e = e_at(t0);
-                if e.is_none() {
-                    return Err(Reject::NoChange);
-                }
-                for _ in 0..NEWTON_ITERATIONS {
-                    let cur = e.expect("internal: valid energy");
-                    let dt = if cur.d2 > 0.0 {
-                        -cur.d1 / cur.d2
-                    } else {
-                        -cur.d1.signum() * 0.25 * (hi - lo)
-                    };
-                    let mut step = 1.0;
-                    let mut found = None;
-                    for _ in 0..LINE_SEARCH_STEPS {
-                        let tn = (tc + step * dt).clamp(lo, hi);
-                        if let Some(en) = e_at(tn).filter(|en| en.value < cur.value) {
-                            found = Some((tn, en));
-                            break;
-                        }
-                        step *= 0.5;
-                    }
-                    let Some((tn, en)) = found else { break };
-                    let done = (tn - tc).abs() <= 1e-14 * (hi - lo);
-                    tc = tn;
-                    e = Some(en);
-                    if done {
-                        break;
-                    }
-                }
-                let value = e.expect("internal: valid energy").value;
+                let (tc, value) =
+                    minimize_1d(t0, lo, hi, |t| e_at(t).map(|e| (e.value, e.d1, e.d2)))
+                        .ok_or(Reject::NoChange)?;
                 if value.partial_cmp(&base) != Some(Ordering::Less) {
                     return Err(Reject::NoChange);
                 }
@@ -222,10 +194,31 @@ fn slide_on_boundary(
         return Err(Reject::NoChange);
     }
     let e0 = energy(p).ok_or(Reject::NoChange)?;
-    let (mut c, mut e) = (coord(p).clamp(lo, hi), e0);
+    let (c, value) = minimize_1d(coord(p).clamp(lo, hi), lo, hi, |c| {
+        energy(at(c)).map(|e| (e.value, e.grad[axis], e.hess[(axis, axis)]))
+    })
+    .ok_or(Reject::NoChange)?;
+    if value.partial_cmp(&e0.value) != Some(Ordering::Less) {
+        return Err(Reject::NoChange);
+    }
+    Ok(at(c))
+}
+
+/// Damped Newton for a univariate energy on `[lo, hi]` from `x0`: `f` gives
+/// the value and first two derivatives (or `None` where the energy is not
+/// defined); a step is halved until the value decreases. Returns the last
+/// iterate and its value (`x0` and its value when no step helps), or `None`
+/// when `f(x0)` is not defined.
+fn minimize_1d(
+    x0: f64,
+    lo: f64,
+    hi: f64,
+    f: impl Fn(f64) -> Option<(f64, f64, f64)>,
+) -> Option<(f64, f64)> {
+    let (mut x, mut e) = (x0, f(x0)?);
     for _ in 0..NEWTON_ITERATIONS {
-        let (d1, d2) = (e.grad[axis], e.hess[(axis, axis)]);
-        let dc = if d2 > 0.0 {
+        let (value, d1, d2) = e;
+        let dx = if d2 > 0.0 {
             -d1 / d2
         } else {
             -d1.signum() * 0.25 * (hi - lo)
@@ -233,25 +226,22 @@ fn slide_on_boundary(
         let mut step = 1.0;
         let mut found = None;
         for _ in 0..LINE_SEARCH_STEPS {
-            let cn = (c + step * dc).clamp(lo, hi);
-            if let Some(en) = energy(at(cn)).filter(|en| en.value < e.value) {
-                found = Some((cn, en));
+            let xn = (x + step * dx).clamp(lo, hi);
+            if let Some(en) = f(xn).filter(|en| en.0 < value) {
+                found = Some((xn, en));
                 break;
             }
             step *= 0.5;
         }
-        let Some((cn, en)) = found else { break };
-        let done = (cn - c).abs() <= 1e-14 * (hi - lo);
-        c = cn;
+        let Some((xn, en)) = found else { break };
+        let done = (xn - x).abs() <= 1e-14 * (hi - lo);
+        x = xn;
         e = en;
         if done {
             break;
         }
     }
-    if e.value.partial_cmp(&e0.value) != Some(Ordering::Less) {
-        return Err(Reject::NoChange);
-    }
-    Ok(at(c))
+    Some((x, e.0))
 }
 
 fn line_search(
