@@ -226,10 +226,11 @@ pub fn mesh_drawing_with(
         Mesher::TriWild => {
             let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
             features = Some(fs.counts);
-            let (mut mesh, stats) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
+            let chains = fs.primary_chains();
+            let (mut mesh, stats) =
+                bsp_trimesh(drawing, &fs, &chains, params, &resolved, &mut times)?;
             bsp = Some(stats);
-            let mut ctx =
-                Context::from_chains(&fs, &fs.primary_chains(), resolved.eps, resolved.eps);
+            let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
             if params.stop_after == Some(Stage::Bsp) {
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, "bsp", &mut times)?)
             } else {
@@ -355,8 +356,9 @@ pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, Feature
     let resolved = params.resolve(drawing.diagonal());
     let mut times = Times::default();
     let fs = FeatureSet::build(drawing, &resolved);
-    let (mesh, _) = bsp_trimesh(drawing, &fs, params, &resolved, &mut times)?;
-    let ctx = Context::from_chains(&fs, &fs.primary_chains(), resolved.eps, resolved.eps);
+    let chains = fs.primary_chains();
+    let (mesh, _) = bsp_trimesh(drawing, &fs, &chains, params, &resolved, &mut times)?;
+    let ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
     Ok((mesh, fs, ctx))
 }
 
@@ -381,11 +383,12 @@ pub fn optimize_stage(
 fn bsp_trimesh(
     drawing: &Drawing,
     fs: &FeatureSet,
+    chains: &PrimaryChains,
     params: &Params,
     resolved: &Resolved,
     times: &mut Times,
 ) -> Result<(TriMesh, BspStats)> {
-    let input = bsp_input(fs, &fs.primary_chains());
+    let input = bsp_input(fs, chains);
     let bbox = padded_box(drawing, resolved.padding);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
     if params.paranoid {

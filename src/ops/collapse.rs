@@ -11,7 +11,8 @@
 
 use super::invariants::{self, Check};
 use super::{
-    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, ring, role, t_at,
+    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, ring, role,
+    t_at,
 };
 use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -195,14 +196,7 @@ pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId)
     // without a transaction, what it would refuse anyway. An infinite energy
     // (inverted or degenerate in f64) is left to the exact inversion test.
     if ctx.energy == EnergyRule::NoWorseMax {
-        let new_max = plan
-            .new
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|x| mesh.position(x));
-                crate::optimize::energy::amips(a, b, c)
-            })
-            .fold(0.0, f64::max);
+        let new_max = max_energy_of(mesh, plan.new.iter().copied());
         if new_max.is_finite() && new_max > plan.old_max_energy {
             return Outcome::Rejected(Reject::Energy);
         }

@@ -166,26 +166,12 @@ pub struct Context {
 }
 
 impl Context {
-    /// The context for a mesh whose primary tags index `features.primary` (with
-    /// the parameter of the section's parent curve) and whose secondary tags
-    /// index `features.secondary`. `eps_abs` is the envelope ε,
-    /// `sample_abs` the envelope sampling spacing (thesis: ε), both user units.
-    pub fn from_features(features: &FeatureSet, eps_abs: f64, sample_abs: f64) -> Context {
-        let sections = features
-            .primary
-            .iter()
-            .map(|s| CurveSection {
-                parent: s.parent,
-                t: s.t,
-                source: Some(s.source),
-            })
-            .collect();
-        Context::with_sections(features, sections, eps_abs, sample_abs)
-    }
-
     /// The context for a mesh whose primary tags index the chains of
-    /// `features` ([`FeatureSet::primary_chains`]): a vertex inside a chain
-    /// slides along the whole chain.
+    /// `features` ([`FeatureSet::primary_chains`]), with the parameter of the
+    /// chain's parent curve, and whose secondary tags index
+    /// `features.secondary`: a vertex inside a chain slides along the whole
+    /// chain. `eps_abs` is the envelope ε, `sample_abs` the envelope sampling
+    /// spacing (thesis: ε), both user units.
     pub fn from_chains(
         features: &FeatureSet,
         chains: &PrimaryChains,
@@ -201,15 +187,6 @@ impl Context {
                 source: Some(c.source),
             })
             .collect();
-        Context::with_sections(features, sections, eps_abs, sample_abs)
-    }
-
-    fn with_sections(
-        features: &FeatureSet,
-        sections: Vec<CurveSection>,
-        eps_abs: f64,
-        sample_abs: f64,
-    ) -> Context {
         let polylines: Vec<Vec<kurbo::Point>> = features
             .secondary
             .iter()
@@ -340,10 +317,14 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
 
 /// The largest AMIPS energy of the faces (f64 positions).
 pub(crate) fn max_energy(mesh: &TriMesh, faces: &[FaceId]) -> f64 {
-    faces
-        .iter()
-        .map(|&f| {
-            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
+    max_energy_of(mesh, faces.iter().map(|&f| mesh.face(f)))
+}
+
+/// The largest AMIPS energy of triangles given by their vertices (f64 positions).
+pub(crate) fn max_energy_of(mesh: &TriMesh, tris: impl IntoIterator<Item = [VertexId; 3]>) -> f64 {
+    tris.into_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|x| mesh.position(x));
             crate::optimize::energy::amips(a, b, c)
         })
         .fold(0.0, f64::max)

@@ -655,12 +655,8 @@ fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
 /// The energy gain of swapping `k` (old max minus new max) when positive.
 fn swap_gain(mesh: &TriMesh, k: EdgeKey) -> Option<f64> {
     let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
-    let e = |t: [VertexId; 3]| {
-        let [x, y, z] = t.map(|v| mesh.position(v));
-        amips(x, y, z)
-    };
-    let old = e(mesh.face(f)).max(e(mesh.face(g)));
-    let new = e([a, d, c]).max(e([d, b, c]));
+    let old = ops::max_energy_of(mesh, [mesh.face(f), mesh.face(g)]);
+    let new = ops::max_energy_of(mesh, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.
     (new.is_finite() && new < old * (1.0 - 1e-9)).then_some(old - new)
 }
