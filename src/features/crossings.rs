@@ -141,6 +141,8 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
         for j in near {
             let j = j as usize;
             let cj = chords(&pieces[j]);
+            // This pair's crossings so far: found[pair..].
+            let pair = found.len();
             for a in ci.windows(2) {
                 for b in cj.windows(2) {
                     let Some((u, v)) = chord_cross(a[0].0, a[1].0, b[0].0, b[1].0) else {
@@ -170,10 +172,7 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
                         continue;
                     }
                     // The same crossing from another chord pair.
-                    if found
-                        .iter()
-                        .any(|f| f.0 == i && f.2 == j && f.4.distance(x) <= params.mu)
-                    {
+                    if found[pair..].iter().any(|f| f.4.distance(x) <= params.mu) {
                         continue;
                     }
                     found.push((i, s, j, t, x));
@@ -184,16 +183,20 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
     // Crossings within μ of each other on one piece would make tiny sections:
     // keep the first of such a cluster (by order found) and drop its partners.
     let mut kept: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
+    // The points kept on each piece.
+    let mut on_piece: Vec<Vec<Point>> = vec![Vec::new(); n];
     for f in found {
-        let clash = kept.iter().any(|k| {
-            (k.0 == f.0 || k.2 == f.0 || k.0 == f.2 || k.2 == f.2) && k.4.distance(f.4) <= params.mu
-        });
+        let clash = [f.0, f.2]
+            .iter()
+            .any(|&k| on_piece[k].iter().any(|x| x.distance(f.4) <= params.mu));
         let full = out.splits[f.0].len() >= MAX_PER_PIECE || out.splits[f.2].len() >= MAX_PER_PIECE;
         if clash || full {
             continue;
         }
         out.splits[f.0].push(f.1);
         out.splits[f.2].push(f.3);
+        on_piece[f.0].push(f.4);
+        on_piece[f.2].push(f.4);
         kept.push(f);
     }
     for (i, s, j, t, x) in &kept {
