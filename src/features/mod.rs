@@ -5,6 +5,8 @@
 //! sections (kept exactly, to be curved later) and *secondary* polylines (approximated
 //! within ε), plus isolated points. The stages, in order:
 //!
+//! 0. `snap`: curve ends (and points) closer than l_m meet at one point; curves that
+//!    collapse with it go (the drawing moves by at most l_m).
 //! 1. `classify`: degenerate curves (control points within ε_m of their mean) become
 //!    points, straight curves (control points within ε_m of their least-squares line) become
 //!    segments.
@@ -32,6 +34,7 @@ mod json;
 mod preview;
 mod resample;
 mod separation;
+mod snap;
 mod split;
 
 pub use chains::{PrimaryChain, PrimaryChains};
@@ -186,6 +189,10 @@ pub struct FeatureCounts {
     pub input_lines: usize,
     /// Input cubics.
     pub input_cubics: usize,
+    /// Curve ends (and points) moved onto another end closer than l_m (step 0).
+    pub snapped_ends: usize,
+    /// Curves shorter than l_m that collapsed onto their snapped ends (step 0).
+    pub snap_collapsed: usize,
     /// Curves (lines or cubics) that degenerated to a point.
     pub degenerate: usize,
     /// Cubics found straight and replaced by segments.
@@ -281,15 +288,22 @@ impl FeatureSet {
         let mut timing = FeatureTiming::default();
         let mut points = Vec::new();
 
-        // 1. Classification.
+        // 0. Ends closer than l_m meet.
         let t = Instant::now();
+        let snapped = snap::snap(&drawing.features, params.l_min);
+        counts.snapped_ends = snapped.moved;
+        counts.snap_collapsed = snapped.collapsed;
+
+        // 1. Classification.
         let mut curves: Vec<(u32, classify::Class)> = Vec::with_capacity(drawing.features.len());
-        for (i, f) in drawing.features.iter().enumerate() {
+        for f in &drawing.features {
             match f.geom {
                 FeatureGeom::Point(_) => counts.input_points += 1,
                 FeatureGeom::Line(_) => counts.input_lines += 1,
                 FeatureGeom::Cubic(_) => counts.input_cubics += 1,
             }
+        }
+        for (i, f) in snapped.features {
             let class = classify::classify(&f.geom, params.eps_m);
             match &class {
                 classify::Class::Point(p) => {
@@ -307,7 +321,6 @@ impl FeatureSet {
                 }
                 _ => {}
             }
-            let i = u32::try_from(i).expect("internal: more than 2^32 features");
             curves.push((i, class));
         }
         timing.classify_ms = ms(t);
