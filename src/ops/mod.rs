@@ -42,7 +42,7 @@ pub(crate) mod tests;
 pub use collapse::{CollapsePlan, try_collapse};
 pub use project::try_project;
 pub use round::try_round;
-pub use smooth::{SmoothPlan, try_smooth};
+pub use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_with};
 pub use split::{SplitPlan, try_split};
 pub use swap::{SwapPlan, try_swap};
 

@@ -33,7 +33,28 @@ pub struct SmoothPlan {
     old_max_energy: f64,
 }
 
-fn ring_energy(mesh: &TriMesh, v: VertexId, faces: &[FaceId], p: Point) -> Option<Amips2> {
+/// What smoothing minimises over the one-ring.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Objective {
+    /// The sum of the AMIPS energies (the schedule's smoothing).
+    Sum,
+    /// The sum of `(E / E_max)^8`, where `E_max` is the ring's largest energy
+    /// before the move: a smooth stand-in for the largest energy (min-max
+    /// smoothing, which lifts the worst angle of the ring).
+    MinMax,
+}
+
+/// The power of [`Objective::MinMax`].
+const MINMAX_POWER: i32 = 8;
+
+fn ring_energy(
+    mesh: &TriMesh,
+    v: VertexId,
+    faces: &[FaceId],
+    p: Point,
+    objective: Objective,
+    scale: f64,
+) -> Option<Amips2> {
     let mut sum = Amips2::ZERO;
     for &f in faces {
         let fv = mesh.face(f);
@@ -42,7 +63,12 @@ fn ring_energy(mesh: &TriMesh, v: VertexId, faces: &[FaceId], p: Point) -> Optio
             mesh.position(fv[(i + 1) % 3]),
             mesh.position(fv[(i + 2) % 3]),
         );
-        sum = sum + amips_free(p, b, c)?;
+        let e = amips_free(p, b, c)?;
+        sum = sum
+            + match objective {
+                Objective::Sum => e,
+                Objective::MinMax => e.powered(MINMAX_POWER, scale),
+            };
     }
     Some(sum)
 }
@@ -69,12 +95,35 @@ impl SmoothPlan {
     /// fixed or boundary one, [`Reject::NoChange`] when no position with a
     /// lower ring energy was found.
     pub fn new(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Result<Self, Reject> {
+        Self::with_objective(mesh, ctx, v, Objective::Sum)
+    }
+
+    /// [`SmoothPlan::new`] with the given objective.
+    ///
+    /// # Errors
+    /// As [`SmoothPlan::new`].
+    pub fn with_objective(
+        mesh: &TriMesh,
+        ctx: &Context,
+        v: VertexId,
+        objective: Objective,
+    ) -> Result<Self, Reject> {
         if !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
         let r = ring(mesh, v);
         let faces = r.faces.clone();
-        let energy = |p: Point| ring_energy(mesh, v, &faces, p);
+        let scale = match objective {
+            Objective::Sum => 1.0,
+            Objective::MinMax => {
+                let m = max_energy(mesh, &faces);
+                if !(m.is_finite() && m > 0.0) {
+                    return Err(Reject::NoChange);
+                }
+                m
+            }
+        };
+        let energy = |p: Point| ring_energy(mesh, v, &faces, p, objective, scale);
         let (pos, t) = match role(mesh, v, &r) {
             Role::Fixed | Role::SecondaryJunction => {
                 return Err(Reject::FixedVertex);
@@ -266,7 +315,18 @@ fn line_search(
 
 /// Smooth the vertex `v` (see the module doc).
 pub fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
-    let plan = match SmoothPlan::new(mesh, ctx, v) {
+    try_smooth_with(mesh, ctx, v, Objective::Sum)
+}
+
+/// Smooth the vertex `v` minimising `objective` over its ring (same rules and
+/// invariants as [`try_smooth`]).
+pub fn try_smooth_with(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    v: VertexId,
+    objective: Objective,
+) -> Outcome {
+    let plan = match SmoothPlan::with_objective(mesh, ctx, v, objective) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };

@@ -62,6 +62,22 @@ impl Amips2 {
         grad: Vector2::new(0.0, 0.0),
         hess: Matrix2::new(0.0, 0.0, 0.0, 0.0),
     };
+
+    /// `(E / scale)^power` with its derivatives (chain rule). Summed over a
+    /// one-ring with a large power, it is a smooth stand-in for the ring's
+    /// largest energy (min-max smoothing); `scale` (positive, e.g. the ring's
+    /// current maximum) keeps the powers in range.
+    pub fn powered(self, power: i32, scale: f64) -> Amips2 {
+        let p = f64::from(power);
+        let r = self.value / scale;
+        let d1 = p * r.powi(power - 1) / scale;
+        let d2 = p * (p - 1.0) * r.powi(power - 2) / (scale * scale);
+        Amips2 {
+            value: r.powi(power),
+            grad: self.grad * d1,
+            hess: self.hess * d1 + self.grad * self.grad.transpose() * d2,
+        }
+    }
 }
 
 /// AMIPS of the triangle `(p, b, c)` (counter-clockwise) with its derivatives
@@ -188,6 +204,36 @@ mod tests {
             // Cyclic order does not matter either.
             assert!((amips(t[1], t[2], t[0]) - e0).abs() < 1e-12 * e0);
         }
+    }
+
+    #[test]
+    fn powered_derivatives_agree_with_finite_differences() {
+        let (b, c) = (Point::new(1.0, 0.1), Point::new(0.3, 0.9));
+        let p = Point::new(0.2, 0.15);
+        let f = |q: Point| amips_free(q, b, c).expect("valid").powered(6, 2.0);
+        let e = f(p);
+        let h = 1e-6;
+        for (k, d) in [Vec2::new(h, 0.0), Vec2::new(0.0, h)]
+            .into_iter()
+            .enumerate()
+        {
+            let (fp, fm) = (f(p + d), f(p - d));
+            let g = (fp.value - fm.value) / (2.0 * h);
+            assert!(
+                (g - e.grad[k]).abs() <= 1e-5 * (1.0 + g.abs()),
+                "{g} vs {}",
+                e.grad[k]
+            );
+            let hk = (fp.grad - fm.grad) / (2.0 * h);
+            for j in 0..2 {
+                assert!((hk[j] - e.hess[(j, k)]).abs() <= 1e-4 * (1.0 + hk[j].abs()));
+            }
+        }
+        // Power 1 with scale 1 is the energy itself.
+        assert_eq!(
+            amips_free(p, b, c).expect("valid").powered(1, 1.0).value,
+            amips_free(p, b, c).expect("valid").value
+        );
     }
 
     #[test]

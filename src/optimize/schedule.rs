@@ -6,7 +6,7 @@
 //! One pass:
 //! 1. split every edge longer than 4/3 of its endpoints' mean target length,
 //!    longest first (the new vertex gets that mean);
-//! 2. collapse edges shorter than 4/5 of their mean target, shortest first
+//! 2. collapse edges shorter than their mean target, shortest first
 //!    (edges made short by a collapse are queued again; refused ones are
 //!    retried once their neighbourhood changed), never creating an edge longer
 //!    than 4/3 of its target (else splits and collapses would undo each other);
@@ -21,7 +21,10 @@
 //! the mean by less than 0.025), the sizing field is refined around the worst
 //! triangles and relaxed (×1.5, up to `l`) elsewhere (see `update_sizing`).
 //! After the last pass the targets go back to `l` and one more collapse pass
-//! coarsens what was refined for nothing, then swaps and smoothing polish it.
+//! over every edge coarsens what was refined for nothing (new edges up to
+//! `2 l`); swaps and smoothing polish it, then min-max smoothing (each ring's
+//! largest energy, through a high power of the energies) and swaps lift the
+//! worst triangles while that still pays.
 //!
 //! Every operation goes through `crate::ops`, so every invariant holds after
 //! each one and refused operations leave the mesh as it was. Collapse, swap and
@@ -40,18 +43,25 @@
 
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use crate::ops::{
-    self, Context, Outcome, Reject, invariants::on_curve, try_collapse, try_project, try_round,
-    try_smooth, try_split, try_swap,
+    self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
+    try_round, try_smooth_with, try_split, try_swap,
 };
 use crate::optimize::energy::amips;
 use kurbo::Point;
 use std::collections::{BTreeMap, BinaryHeap};
 
-/// Edges shorter than this fraction of `l` are collapsed by the final coarsening.
-const COARSEN_FACTOR: f64 = 4.0 / 3.0;
+/// Edges shorter than this fraction of their target are collapsed in a pass
+/// (the collapse may not make an edge longer than 4/3 of its target, so
+/// splits never undo it).
+const COLLAPSE_FACTOR: f64 = 1.0;
+/// Edges shorter than this multiple of `l` are collapsed by the final
+/// coarsening: every edge (the energy rule and [`COARSEN_STRETCH`] decide).
+const COARSEN_FACTOR: f64 = f64::INFINITY;
 /// The final coarsening may create edges up to this multiple of `l` (no split
 /// pass follows it to undo them).
-const COARSEN_STRETCH: f64 = 1.6;
+const COARSEN_STRETCH: f64 = 2.0;
+/// At most this many min-max polishing passes (min-max smoothing and swaps).
+const MINMAX_PASSES: usize = 10;
 /// At most this many polishing passes (swaps and smoothing) end the schedule.
 const POLISH_PASSES: usize = 6;
 
@@ -415,7 +425,7 @@ impl Schedule<'_> {
         hit_floor
     }
 
-    /// Collapse edges shorter than 4/5 of their mean target, shortest first.
+    /// Collapse edges shorter than `factor` times their mean target, shortest first.
     fn collapse_pass(&mut self, factor: f64) -> u64 {
         // Refused collapses are retried (in a new round) once a collapse has
         // changed their neighbourhood, as long as rounds make progress.
@@ -551,6 +561,11 @@ impl Schedule<'_> {
 
     /// Smooth every vertex that may move, in a fixed pseudo-random order.
     fn smooth_pass(&mut self) -> u64 {
+        self.smooth_pass_with(Objective::Sum)
+    }
+
+    /// [`Self::smooth_pass`] minimising `objective`.
+    fn smooth_pass_with(&mut self, objective: Objective) -> u64 {
         let mut verts: Vec<VertexId> = self.mesh.vertices().collect();
         self.rng.shuffle(&mut verts);
         let mut applied = 0;
@@ -563,7 +578,7 @@ impl Schedule<'_> {
             if at != u64::MAX && self.stamp_of(v) <= at {
                 continue;
             }
-            let out = try_smooth(self.mesh, self.ctx, v);
+            let out = try_smooth_with(self.mesh, self.ctx, v, objective);
             self.touch(&out);
             self.failed_smooth[i] = if out.is_applied() {
                 u64::MAX
@@ -708,7 +723,7 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         }
         s.stats.passes = pass + 1;
         let (long, splits) = s.split_pass();
-        let collapses = s.collapse_pass(0.8);
+        let collapses = s.collapse_pass(COLLAPSE_FACTOR);
         let swaps = s.swap_pass();
         let smooths = s.smooth_pass();
         rational = s.round_all();
@@ -776,6 +791,19 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
         let gain = before.mean_energy - now.mean_energy;
         before = now;
         if changed == 0 || gain < 1e-4 * now.mean_energy {
+            break;
+        }
+    }
+    // Min-max polish: smoothing that lowers each ring's largest energy (and
+    // swaps), while the worst triangle still improves.
+    s.failed_smooth.clear();
+    let mut worst = measure(s.mesh).max_energy;
+    for _ in 0..MINMAX_PASSES {
+        let changed = s.smooth_pass_with(Objective::MinMax) + s.swap_pass();
+        let now = measure(s.mesh).max_energy;
+        let gain = worst - now;
+        worst = now;
+        if changed == 0 || gain < 1e-3 * now {
             break;
         }
     }
