@@ -21,8 +21,10 @@
 pub mod bernstein;
 pub mod build;
 pub mod certify;
+pub mod element;
 pub mod jacobian;
 pub mod lagrange;
+pub mod optimize;
 
 pub use build::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
 pub use certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
