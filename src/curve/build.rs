@@ -40,10 +40,10 @@
 
 use super::element::{self, EDGES, straight_inner};
 use super::jacobian::{self, CertifyOptions};
+use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
 use crate::fem::{LineKind, Order};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use crate::ops::invariants::curved::{self, curved_tag, on_cubic, primary};
-use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
 use crate::ops::{self, Context, CurvedRule, Outcome};
 use crate::svg::ShapeId;
 use crate::{Error, Result};

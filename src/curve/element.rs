@@ -50,7 +50,13 @@ pub(crate) fn straight_inner(a: Point, b: Point, order: Order) -> Vec<Point> {
 /// The inner nodes (from `a` to `b`) of the edge whose corners `a`, `b` stand
 /// for `parent` at `t[0]`, `t[1]`: the piece at the node fractions, moved by
 /// the blend of the corner offsets (zero when the corners are on the curve).
-pub(crate) fn piece_inner(parent: &Parent, t: [f64; 2], a: Point, b: Point, order: Order) -> Vec<Point> {
+pub(crate) fn piece_inner(
+    parent: &Parent,
+    t: [f64; 2],
+    a: Point,
+    b: Point,
+    order: Order,
+) -> Vec<Point> {
     let (da, db) = (a - parent.eval(t[0]), b - parent.eval(t[1]));
     fractions(order)
         .iter()
@@ -191,10 +197,17 @@ mod tests {
         for order in [Order::Linear, Order::Quadratic, Order::Cubic] {
             let n = nodes(order, [a, b, c], [None; 3], Vec2::ZERO);
             let got = amips(order, &n);
-            assert!((got - want).abs() <= 1e-12 * want, "{order:?}: {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 1e-12 * want,
+                "{order:?}: {got} vs {want}"
+            );
         }
         let h = 3f64.sqrt() / 2.0;
-        let eq = [Point::new(5.0, 5.0), Point::new(6.0, 5.0), Point::new(5.5, 5.0 + h)];
+        let eq = [
+            Point::new(5.0, 5.0),
+            Point::new(6.0, 5.0),
+            Point::new(5.5, 5.0 + h),
+        ];
         let n = nodes(Order::Cubic, eq, [None; 3], Vec2::ZERO);
         assert!((amips(Order::Cubic, &n) - 1.0).abs() < 1e-12);
         // Clockwise: infinite.
@@ -208,21 +221,34 @@ mod tests {
         let (a, b) = (Point::new(0.0, 0.0), Point::new(1.0, 0.0));
         let h = 3f64.sqrt() / 2.0;
         let c = Point::new(0.5, h);
-        let straight = amips(Order::Cubic, &nodes(Order::Cubic, [a, b, c], [None; 3], Vec2::ZERO));
+        let straight = amips(
+            Order::Cubic,
+            &nodes(Order::Cubic, [a, b, c], [None; 3], Vec2::ZERO),
+        );
         let mut last = straight;
         for bulge in [0.1, 0.3, 0.6] {
-            let curve = CubicBez::new(a, (0.3, -bulge), (0.7, -bulge), b);
+            let curve = CubicBez::new(a, Point::new(0.3, -bulge), Point::new(0.7, -bulge), b);
             let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
-            let n = nodes(Order::Cubic, [a, b, c], [Some(&inner), None, None], Vec2::ZERO);
+            let n = nodes(
+                Order::Cubic,
+                [a, b, c],
+                [Some(&inner), None, None],
+                Vec2::ZERO,
+            );
             let e = amips(Order::Cubic, &n);
             assert!(e > last, "{bulge}: {e} vs {last}");
             assert!(is_certified(Order::Cubic, &n, &CertifyOptions::DEFAULT));
             last = e;
         }
         // A bulge through the opposite corner inverts the element.
-        let curve = CubicBez::new(a, (0.3, 1.5), (0.7, 1.5), b);
+        let curve = CubicBez::new(a, Point::new(0.3, 1.5), Point::new(0.7, 1.5), b);
         let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
-        let n = nodes(Order::Cubic, [a, b, c], [Some(&inner), None, None], Vec2::ZERO);
+        let n = nodes(
+            Order::Cubic,
+            [a, b, c],
+            [Some(&inner), None, None],
+            Vec2::ZERO,
+        );
         assert_eq!(amips(Order::Cubic, &n), f64::INFINITY);
         assert!(!is_certified(Order::Cubic, &n, &CertifyOptions::DEFAULT));
     }

@@ -333,7 +333,10 @@ pub fn optimize_curved(
     let Some(rule) = ctx.curved else {
         return CurvedOptimizeStats::default();
     };
-    if opts.max_passes == 0 || rule.order == Order::Linear || !(opts.l > 0.0) {
+    if opts.max_passes == 0
+        || rule.order == Order::Linear
+        || opts.l.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
         return CurvedOptimizeStats::default();
     }
     let _span = tracing::info_span!("curved optimization").entered();

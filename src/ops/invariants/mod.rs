@@ -69,9 +69,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
     // Curved mode: the elements first (cheaper than the envelope sampling).
     let new_max = match &ctx.curved {
         None => None,
-        Some(rule) => {
-            Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?)
-        }
+        Some(rule) => Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?),
     };
     if let (EnergyRule::NoWorseMax, Some(old), Some(new)) =
         (ctx.energy, check.old_max_energy, new_max)
@@ -90,8 +88,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
             }
         }
     }
-    if let (EnergyRule::NoWorseMax, Some(old), None) = (ctx.energy, check.old_max_energy, new_max)
-    {
+    if let (EnergyRule::NoWorseMax, Some(old), None) = (ctx.energy, check.old_max_energy, new_max) {
         if max_energy(mesh, ctx, check.faces) > old {
             return Err(Reject::Energy);
         }
