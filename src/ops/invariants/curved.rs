@@ -6,7 +6,7 @@
 //! A triangle's shape is read off the mesh: an edge is curved when it carries a
 //! primary tag whose section lies on a cubic parent (edges on straight parents
 //! stay straight); the curved edge takes its exact curve piece
-//! ([`crate::curve::element::piece_inner`]). A triangle passes when it has at
+//! (`curve::element::piece_inner`). A triangle passes when it has at
 //! most one curved edge and its element is certified
 //! ([`crate::curve::jacobian::certify_element`]).
 
