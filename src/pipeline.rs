@@ -260,8 +260,10 @@ pub fn mesh_drawing_with(
                             2 => Order::Quadratic,
                             _ => Order::Cubic,
                         };
-                        let opts =
-                            CurveOptions::new(order, resolved.d).with_l_min_abs(resolved.l_min);
+                        let opts = CurveOptions::new(order, resolved.d)
+                            .with_l_min_abs(resolved.l_min)
+                            .with_l_abs(resolved.l)
+                            .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
                         curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;
                     curve = Some(cs);

@@ -50,7 +50,11 @@ fn linear(
 fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveStats) {
     let (mut mesh, fs, ctx) = linear(drawing, params);
     let d = drawing.diagonal();
-    let opts = CurveOptions::new(order, d).with_l_min_abs(params.resolve(d).l_min);
+    let resolved = params.resolve(d);
+    let opts = CurveOptions::new(order, d)
+        .with_l_min_abs(resolved.l_min)
+        .with_l_abs(resolved.l)
+        .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
     let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| {
         pipeline::feature_of(&fs, &ctx, t)
     })
@@ -103,11 +107,25 @@ fn circle_area_is_exact_at_order_3() {
     let drawing = circle();
     let want = green_area(&drawing);
     let d = drawing.diagonal();
-    for (name, params) in [
-        ("circle-default", Params::DEFAULT),
-        ("circle-l-d4", Params::DEFAULT.with_l(Length::Rel(0.25))),
+    for (name, params, most) in [
+        ("circle-default", Params::DEFAULT, usize::MAX),
+        // The curved optimization coarsens the 10°-pieces of the linear stage.
+        ("circle-l-d4", Params::DEFAULT.with_l(Length::Rel(0.25)), 79),
+        // Without it (the stage skipped) the linear mesh is curved as it is.
+        (
+            "circle-l-d4-no-curved-opt",
+            Params::DEFAULT
+                .with_l(Length::Rel(0.25))
+                .with_stop_curved(10.0, 0),
+            usize::MAX,
+        ),
     ] {
         let (mesh, stats) = curved(&drawing, &params, Order::Cubic);
+        assert!(
+            mesh.triangle_count() <= most,
+            "{name}: {} triangles, {stats:?}",
+            mesh.triangle_count()
+        );
         write_and_check(&mesh, &dir, name);
         let (area, disk_triangles) = disk_area(&mesh);
         println!(
@@ -128,6 +146,26 @@ fn circle_area_is_exact_at_order_3() {
         assert!(stats.min_jacobian_ratio > 0.0);
         let _ = d;
     }
+}
+
+#[test]
+fn no_curved_passes_skip_the_curved_optimization() {
+    let drawing = circle();
+    let params = Params::DEFAULT
+        .with_l(Length::Rel(0.25))
+        .with_stop_curved(10.0, 0);
+    let (mesh, stats) = curved(&drawing, &params, Order::Cubic);
+    assert_eq!(
+        stats.optimization,
+        triwild::curve::CurvedOptimizeStats::default()
+    );
+    // The mesh of the curving stage before the curved optimization existed.
+    assert_eq!(mesh.triangle_count(), 142, "{stats:?}");
+    assert_eq!(stats.curved_triangles, 110, "{stats:?}");
+    let (mesh, stats) = curved(&drawing, &params.with_stop_curved(10.0, 10), Order::Cubic);
+    assert!(stats.optimization.passes >= 1, "{stats:?}");
+    assert!(stats.optimization.collapse.applied > 0, "{stats:?}");
+    assert!(mesh.triangle_count() < 142);
 }
 
 #[test]

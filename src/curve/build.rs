@@ -20,7 +20,12 @@
 //!    vertex opposite the curved edge, then split the curved edge at its
 //!    parameter midpoint (within [`CurveOptions::max_splits`] and never below
 //!    [`CurveOptions::l_min_abs`]), re-curving and re-certifying what changed;
-//! 5. the elements still not certified get a constrained fit of their free
+//! 5. curved optimization ([`super::optimize`]): collapse, swap and smoothing
+//!    with the invariants in curved mode (a primary edge's piece may turn up to
+//!    [`CurveOptions::curved_alpha`], every touched element certified with its
+//!    exact piece, curved energies), skipped when [`CurveOptions::max_passes`]
+//!    is 0; the exact shape is then taken again on the optimized mesh;
+//! 6. the elements still not certified get a constrained fit of their free
 //!    nodes (the curved edge's inner nodes, shared by both triangles on that
 //!    edge, and the two centres): the largest certified blend toward the
 //!    straight edge, then a pattern search minimising the nodes' distance to
@@ -33,10 +38,13 @@
 //! them and returns [`Error::Meshing`] otherwise). Nodes on an edge are shared by
 //! both triangles on it and by the edge's line element.
 
+use super::element::{self, EDGES, straight_inner};
 use super::jacobian::{self, CertifyOptions};
+use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
 use crate::fem::{LineKind, Order};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
-use crate::ops::{self, Context, Outcome};
+use crate::ops::invariants::curved::{self, curved_tag, on_cubic, primary};
+use crate::ops::{self, Context, CurvedRule, Outcome};
 use crate::svg::ShapeId;
 use crate::{Error, Result};
 use kurbo::{ParamCurveNearest, Point, Vec2};
@@ -64,11 +72,21 @@ pub struct CurveOptions {
     pub fit_min_ratio: f64,
     /// How elements are certified while curving.
     pub certify: CertifyOptions,
+    /// Target edge length `l` of the curved optimization (user units).
+    pub l_abs: f64,
+    /// Curved AMIPS energy below which the curved optimization stops.
+    pub stop_energy: f64,
+    /// Passes of the curved optimization after its preliminary one; 0 skips it.
+    pub max_passes: u32,
+    /// Bound on the turn of a primary edge's curve piece in the curved
+    /// optimization, radians (strict; less than π).
+    pub curved_alpha: f64,
 }
 
 impl CurveOptions {
     /// `d` as given, `l_min = 1e-4 · d`, 10 000 splits, 8 repair rounds, 80 fit
-    /// iterations, fitted ratio ≥ 0.01, validity-only certification.
+    /// iterations, fitted ratio ≥ 0.01, validity-only certification; curved
+    /// optimization with `l = d / 20`, stop energy 10, 10 passes, turn bound 90°.
     pub fn new(order: Order, d: f64) -> Self {
         CurveOptions {
             order,
@@ -79,6 +97,10 @@ impl CurveOptions {
             fit_iterations: 80,
             fit_min_ratio: 0.01,
             certify: CertifyOptions::VALIDITY,
+            l_abs: d / 20.0,
+            stop_energy: 10.0,
+            max_passes: 10,
+            curved_alpha: std::f64::consts::FRAC_PI_2,
         }
     }
     /// Set the minimal edge length below which curved edges are not split.
@@ -94,6 +116,17 @@ impl CurveOptions {
     /// Set the number of repair rounds.
     pub fn with_repair_rounds(mut self, n: usize) -> Self {
         self.repair_rounds = n;
+        self
+    }
+    /// Set the target edge length `l` (user units) of the curved optimization.
+    pub fn with_l_abs(mut self, l: f64) -> Self {
+        self.l_abs = l;
+        self
+    }
+    /// Set the curved optimization's stop energy and pass limit (0 skips it).
+    pub fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
+        self.stop_energy = energy;
+        self.max_passes = max_passes;
         self
     }
 }
@@ -128,6 +161,8 @@ pub struct CurveStats {
     /// Smallest certified Jacobian ratio (lower bound of `min det J / max det J`) of
     /// the curved elements (1 when none is curved).
     pub min_jacobian_ratio: f64,
+    /// What the curved optimization did.
+    pub optimization: CurvedOptimizeStats,
 }
 
 /// A mesh of Lagrange triangles of one order, with its feature lines (gmsh node order).
@@ -153,57 +188,10 @@ impl CurvedMesh {
     }
 }
 
-/// The gmsh edges of a triangle as corner pairs (0→1, 1→2, 2→0).
-const EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
-
-/// The primary tag of an edge: section and the parameters at `lo`, `hi`.
-fn primary(mesh: &TriMesh, key: EdgeKey) -> Option<(u32, [f64; 2])> {
-    mesh.edge_tags(key.lo, key.hi)
-        .iter()
-        .find_map(|t| match *t {
-            FeatureOn::Primary { section, t } => Some((section, t)),
-            FeatureOn::Secondary { .. } => None,
-        })
-}
-
-/// Whether the primary edge lies on a cubic (not a straight) parent.
-fn on_cubic(ctx: &Context, section: u32) -> bool {
-    ctx.section(section).is_some_and(|s| !s.parent.is_line())
-}
-
-/// The tag of a primary edge on a cubic parent: the edges that are curved.
-fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<(u32, [f64; 2])> {
-    primary(mesh, key).filter(|&(section, _)| on_cubic(ctx, section))
-}
-
-/// Fractions of an edge where its inner nodes sit.
-fn fractions(order: Order) -> &'static [f64] {
-    match order {
-        Order::Linear => &[],
-        Order::Quadratic => &[0.5],
-        Order::Cubic => &[1.0 / 3.0, 2.0 / 3.0],
-    }
-}
-
-/// Straight inner nodes of the edge from `a` to `b`.
-fn straight_inner(a: Point, b: Point, order: Order) -> Vec<Point> {
-    fractions(order).iter().map(|&s| a.lerp(b, s)).collect()
-}
-
 /// The curved inner nodes (from `lo` to `hi`) of a primary edge on a cubic, or
 /// `None` if the edge is not such an edge (straight parents stay straight).
 fn curved_inner(mesh: &TriMesh, ctx: &Context, order: Order, key: EdgeKey) -> Option<Vec<Point>> {
-    let (section, t) = curved_tag(mesh, ctx, key)?;
-    let parent = ctx.section(section)?.parent;
-    let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
-    // Offsets of the corners from the curve (zero when they are on it).
-    let (da, db) = (a - parent.eval(t[0]), b - parent.eval(t[1]));
-    Some(
-        fractions(order)
-            .iter()
-            .map(|&s| parent.eval(t[0] + s * (t[1] - t[0])) + (1.0 - s) * da + s * db)
-            .collect(),
-    )
+    curved::exact_inner(mesh, ctx, order, key)
 }
 
 /// Inner nodes and centre offsets that differ from the straight defaults.
@@ -219,25 +207,25 @@ impl Bend {
     /// The Lagrange nodes (gmsh order) of face `f`.
     fn element(&self, mesh: &TriMesh, order: Order, f: FaceId) -> Vec<Point> {
         let v = mesh.face(f);
-        let c = v.map(|x| mesh.position(x));
-        let mut n = c.to_vec();
-        if order == Order::Linear {
-            return n;
-        }
-        for [i, j] in EDGES {
+        let mut reversed: [Option<Vec<Point>>; 3] = [None, None, None];
+        let mut inner: [Option<&[Point]>; 3] = [None; 3];
+        for (e, [i, j]) in EDGES.into_iter().enumerate() {
             let key = EdgeKey::new(v[i], v[j]);
-            match self.edges.get(&key) {
-                Some(inner) if key.lo == v[i] => n.extend_from_slice(inner),
-                Some(inner) => n.extend(inner.iter().rev()),
-                None => n.extend(straight_inner(c[i], c[j], order)),
+            if let Some(pts) = self.edges.get(&key) {
+                if key.lo == v[i] {
+                    inner[e] = Some(pts);
+                } else {
+                    reversed[e] = Some(pts.iter().rev().copied().collect());
+                }
             }
         }
-        if order == Order::Cubic {
-            let sum = n.iter().fold(Vec2::ZERO, |s, p| s + p.to_vec2());
-            let off = self.centre.get(&f).copied().unwrap_or(Vec2::ZERO);
-            n.push((sum / 9.0).to_point() + off);
+        for (e, r) in reversed.iter().enumerate() {
+            if let Some(r) = r {
+                inner[e] = Some(r);
+            }
         }
-        n
+        let centre = self.centre.get(&f).copied().unwrap_or(Vec2::ZERO);
+        element::nodes(order, v.map(|x| mesh.position(x)), inner, centre)
     }
 
     /// Whether face `f` is certified with these nodes.
@@ -253,7 +241,7 @@ impl Bend {
         f: FaceId,
         opts: &CertifyOptions,
     ) -> Option<jacobian::Certificate> {
-        jacobian::certify_element(order, &self.element(mesh, order, f), opts)
+        element::certificate(order, &self.element(mesh, order, f), opts)
     }
 }
 
@@ -299,6 +287,19 @@ pub fn curve_mesh(
         let mut budget = opts.max_splits;
         stats.splits_multi_primary += split_multi_primary(mesh, ctx, &mut budget);
         repair(mesh, ctx, opts, &mut stats, &mut budget);
+        if opts.max_passes > 0 {
+            let rule = CurvedRule {
+                order,
+                certify: opts.certify,
+                alpha: opts.curved_alpha,
+            };
+            let curved_opts = CurvedOptimizeOptions {
+                l: opts.l_abs,
+                stop_energy: opts.stop_energy,
+                max_passes: opts.max_passes,
+            };
+            stats.optimization = optimize_curved(mesh, &ctx.with_curved(rule), &curved_opts);
+        }
         shape = exact_shape(mesh, ctx, order);
         fit_all(mesh, opts, &mut shape, &mut stats);
     }
@@ -973,6 +974,7 @@ mod tests {
             alpha: std::f64::consts::PI,
             on_curve_abs: 1e-12,
             energy: EnergyRule::NoWorseMax,
+            curved: None,
         }
     }
 

@@ -11,6 +11,11 @@
 //!   derivatives, and their certification by subdivision;
 //! - [`certify`]: a whole mesh's validity, Jacobian ratio and exact area (what
 //!   `triwild check` prints);
+//! - [`element`]: one Lagrange triangle's nodes from its edges' curve pieces, its
+//!   certification and its curved AMIPS energy (shared by `build` and the curved
+//!   mode of the operations' invariants);
+//! - [`optimize`]: the curved mesh optimization (collapse, swap, smoothing under
+//!   the invariants in curved mode), a step of the curving stage;
 //! - [`build`]: the curving stage, a linear `TriMesh` with primary feature edges
 //!   turned into a [`CurvedMesh`] whose every element is certified.
 //!
@@ -21,10 +26,13 @@
 pub mod bernstein;
 pub mod build;
 pub mod certify;
+pub mod element;
 pub mod jacobian;
 pub mod lagrange;
+pub mod optimize;
 
 pub use build::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
 pub use certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use jacobian::{Certificate, CertifyOptions, Validity};
 pub use lagrange::CurvedEdge;
+pub use optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};

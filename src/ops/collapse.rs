@@ -8,6 +8,10 @@
 //! then checked (envelope, curvature). A boundary `v` collapses only along a
 //! boundary edge where the boundary is exactly straight. The link condition
 //! keeps the mesh a manifold.
+//!
+//! In curved mode a feature that moves from `v w` to `u w` also reshapes the
+//! face on the other side of `u w` (outside `v`'s star): that face is checked,
+//! and weighed by the energy rule, with the created ones.
 
 use super::invariants::{self, Check};
 use super::{
@@ -30,6 +34,8 @@ pub struct CollapsePlan {
     retag: Vec<(VertexId, VertexId, FeatureOn)>,
     /// Vertices `w` whose edge `(v, w)` has tags to drop.
     drop_tags: Vec<VertexId>,
+    /// Curved mode: faces outside the star whose edge `u w` gets a primary tag.
+    reshaped: Vec<FaceId>,
     old_max_energy: f64,
 }
 
@@ -39,8 +45,9 @@ impl CollapsePlan {
     /// # Errors
     /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
     /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
-    /// `eps` is the envelope radius (how far a secondary junction may move).
-    pub fn new(mesh: &TriMesh, u: VertexId, v: VertexId, eps: f64) -> Result<Self, Reject> {
+    /// `ctx.envelope.eps()` bounds how far a secondary junction may move.
+    pub fn new(mesh: &TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Result<Self, Reject> {
+        let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
@@ -162,10 +169,26 @@ impl CollapsePlan {
                 }
             }
         }
+        let mut reshaped = Vec::new();
+        if ctx.curved.is_some() {
+            for &(a, w, tag) in &retag {
+                if !matches!(tag, FeatureOn::Primary { .. }) {
+                    continue;
+                }
+                for f in mesh.incident_faces(a) {
+                    if mesh.face(f).contains(&w) && !rv.faces.contains(&f) && !reshaped.contains(&f)
+                    {
+                        reshaped.push(f);
+                    }
+                }
+            }
+        }
+        let old: Vec<FaceId> = rv.faces.iter().chain(&reshaped).copied().collect();
         Ok(CollapsePlan {
             u,
             v,
-            old_max_energy: max_energy(mesh, &rv.faces),
+            old_max_energy: max_energy(mesh, ctx, &old),
+            reshaped,
             star: rv.faces,
             new,
             retag,
@@ -188,15 +211,16 @@ pub(crate) fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w:
 
 /// Collapse `v` into `u` (see the module doc).
 pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
-    let plan = match CollapsePlan::new(mesh, u, v, ctx.envelope.eps()) {
+    let plan = match CollapsePlan::new(mesh, ctx, u, v) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
     // The energy rule needs positions only (u does not move): refuse early,
     // without a transaction, what it would refuse anyway. An infinite energy
     // (inverted or degenerate in f64) is left to the exact inversion test.
-    if ctx.energy == EnergyRule::NoWorseMax {
-        let new_max = max_energy_of(mesh, plan.new.iter().copied());
+    // Curved energies depend on the moved tags: left to the invariants.
+    if ctx.energy == EnergyRule::NoWorseMax && ctx.curved.is_none() {
+        let new_max = max_energy_of(mesh, ctx, plan.new.iter().copied());
         if new_max.is_finite() && new_max > plan.old_max_energy {
             return Outcome::Rejected(Reject::Energy);
         }
@@ -210,8 +234,10 @@ pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId)
     for &(a, b, tag) in &plan.retag {
         tx.add_edge_tag(a, b, tag);
     }
+    let mut faces = created.clone();
+    faces.extend(&plan.reshaped);
     let check = Check {
-        faces: &created,
+        faces: &faces,
         changed: &[plan.u],
         budgets: &[],
         old_max_energy: Some(plan.old_max_energy),

@@ -76,6 +76,9 @@ pub enum Reject {
     Envelope,
     /// The energy rule: the worst triangle would get worse.
     Energy,
+    /// Curved mode: a curved element would not be certified valid, or a
+    /// triangle would get more than one curved edge.
+    Jacobian,
 }
 
 impl Reject {
@@ -93,6 +96,7 @@ impl Reject {
             Reject::Curvature => "curvature",
             Reject::Envelope => "envelope",
             Reject::Energy => "energy",
+            Reject::Jacobian => "jacobian",
         }
     }
 }
@@ -134,7 +138,37 @@ pub enum EnergyRule {
     Ignore,
     /// The largest AMIPS energy of the new triangles is no larger than that of
     /// the triangles they replace (collapse, swap, smoothing; never split).
+    /// In curved mode ([`Context::curved`]) the energies are the curved ones.
     NoWorseMax,
+}
+
+/// The curved mode of the invariants (thesis §4.4.2 "Curved Optimization"):
+/// every triangle has at most one curved edge (a primary edge on a cubic
+/// parent), takes the exact curve piece there and must be certified valid;
+/// energies are the curved AMIPS of the elements
+/// ([`crate::curve::element::amips`]; an uncertified element counts `+∞`);
+/// and a primary edge's piece need only turn less than [`CurvedRule::alpha`]
+/// instead of [`Context::alpha`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurvedRule {
+    /// Element order (quadratic or cubic).
+    pub order: crate::fem::Order,
+    /// How elements are certified.
+    pub certify: crate::curve::CertifyOptions,
+    /// Bound on the turn of a primary edge's curve piece, radians (strict).
+    pub alpha: f64,
+}
+
+impl CurvedRule {
+    /// The rule for `order` with validity-only certification and a turn
+    /// bound of 90° (Theorem 4.4 needs less than π; 90° keeps a margin).
+    pub fn new(order: crate::fem::Order) -> CurvedRule {
+        CurvedRule {
+            order,
+            certify: crate::curve::CertifyOptions::VALIDITY,
+            alpha: std::f64::consts::FRAC_PI_2,
+        }
+    }
 }
 
 /// The curve a primary section's edges lie on: `parent` on `t`.
@@ -163,6 +197,8 @@ pub struct Context {
     pub on_curve_abs: f64,
     /// The energy condition for collapse, swap and smoothing.
     pub energy: EnergyRule,
+    /// The curved mode of the invariants (`None`: the linear stage).
+    pub curved: Option<CurvedRule>,
 }
 
 impl Context {
@@ -198,12 +234,27 @@ impl Context {
             alpha: features.params.alpha,
             on_curve_abs: 1e-9 * features.params.d,
             energy: EnergyRule::NoWorseMax,
+            curved: None,
         }
     }
 
     /// The curve of a section tag, if the index is known.
     pub fn section(&self, section: u32) -> Option<&CurveSection> {
         self.sections.get(section as usize)
+    }
+
+    /// The bound on the turn of a primary edge's curve piece, radians: the
+    /// curved rule's when in curved mode, else α.
+    pub fn turn_bound(&self) -> f64 {
+        self.curved.map_or(self.alpha, |r| r.alpha)
+    }
+
+    /// This context in curved mode with `rule`.
+    pub fn with_curved(&self, rule: CurvedRule) -> Context {
+        Context {
+            curved: Some(rule),
+            ..self.clone()
+        }
     }
 }
 
@@ -315,19 +366,33 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
     }
 }
 
-/// The largest AMIPS energy of the faces (f64 positions).
-pub(crate) fn max_energy(mesh: &TriMesh, faces: &[FaceId]) -> f64 {
-    max_energy_of(mesh, faces.iter().map(|&f| mesh.face(f)))
+/// The largest AMIPS energy of the faces (f64 positions; curved energies in
+/// curved mode).
+pub(crate) fn max_energy(mesh: &TriMesh, ctx: &Context, faces: &[FaceId]) -> f64 {
+    max_energy_of(mesh, ctx, faces.iter().map(|&f| mesh.face(f)))
 }
 
-/// The largest AMIPS energy of triangles given by their vertices (f64 positions).
-pub(crate) fn max_energy_of(mesh: &TriMesh, tris: impl IntoIterator<Item = [VertexId; 3]>) -> f64 {
-    tris.into_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|x| mesh.position(x));
-            crate::optimize::energy::amips(a, b, c)
-        })
-        .fold(0.0, f64::max)
+/// The largest AMIPS energy of triangles given by their vertices (f64
+/// positions). In curved mode, the curved energy with the edge tags the mesh
+/// has now (an edge that does not exist yet is straight).
+pub(crate) fn max_energy_of(
+    mesh: &TriMesh,
+    ctx: &Context,
+    tris: impl IntoIterator<Item = [VertexId; 3]>,
+) -> f64 {
+    match ctx.curved {
+        None => tris
+            .into_iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|x| mesh.position(x));
+                crate::optimize::energy::amips(a, b, c)
+            })
+            .fold(0.0, f64::max),
+        Some(rule) => tris
+            .into_iter()
+            .map(|t| invariants::curved::energy(mesh, ctx, &rule, t).unwrap_or(f64::INFINITY))
+            .fold(0.0, f64::max),
+    }
 }
 
 /// Off-curve distance a primary vertex may have after an operation.

@@ -189,7 +189,7 @@ impl SmoothPlan {
         }
         Ok(SmoothPlan {
             v,
-            old_max_energy: max_energy(mesh, &faces),
+            old_max_energy: max_energy(mesh, ctx, &faces),
             faces,
             pos,
             t,

@@ -22,7 +22,7 @@ impl SwapPlan {
     /// # Errors
     /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (a
     /// tagged edge), [`Reject::Topology`] (`c d` is already an edge).
-    pub fn new(mesh: &TriMesh, a: VertexId, b: VertexId) -> Result<Self, Reject> {
+    pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
         if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
             return Err(Reject::NotAnEdge);
         }
@@ -67,14 +67,14 @@ impl SwapPlan {
             new: [[a, d, c], [d, b, c]],
             c,
             d,
-            old_max_energy: max_energy(mesh, &[f, g]),
+            old_max_energy: max_energy(mesh, ctx, &[f, g]),
         })
     }
 }
 
 /// Swap the edge `a b` (see the module doc).
 pub fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
-    let plan = match SwapPlan::new(mesh, a, b) {
+    let plan = match SwapPlan::new(mesh, ctx, a, b) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };

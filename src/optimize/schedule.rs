@@ -92,7 +92,8 @@ pub struct OpTally {
 }
 
 impl OpTally {
-    fn record(&mut self, outcome: &Outcome) -> bool {
+    /// Count `outcome`; returns whether it was applied.
+    pub(crate) fn record(&mut self, outcome: &Outcome) -> bool {
         match outcome {
             Outcome::Applied(_) => {
                 self.applied += 1;
@@ -168,7 +169,7 @@ struct Measure {
 }
 
 /// Whether the triangle `v` has three feature edges (see [`measure`]).
-fn locked(mesh: &TriMesh, v: [VertexId; 3]) -> bool {
+pub(crate) fn locked(mesh: &TriMesh, v: [VertexId; 3]) -> bool {
     (0..3).all(|i| !mesh.edge_tags(v[i], v[(i + 1) % 3]).is_empty())
 }
 
@@ -227,8 +228,8 @@ fn min_angle_deg(a: Point, b: Point, c: Point) -> f64 {
         .to_degrees()
 }
 
-/// Every edge once: `(key, faces on it)`.
-fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
+/// Every edge once.
+pub(crate) fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
     let mut out = Vec::with_capacity(mesh.num_faces() * 3 / 2 + 4);
     for f in mesh.faces() {
         let v = mesh.face(f);
@@ -242,12 +243,13 @@ fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
     out
 }
 
-fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
+/// The length of the edge `k`.
+pub(crate) fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
     mesh.position(k.lo).distance(mesh.position(k.hi))
 }
 
 /// A deterministic permutation generator (SplitMix64).
-struct Shuffle(u64);
+pub(crate) struct Shuffle(pub(crate) u64);
 
 impl Shuffle {
     fn next(&mut self) -> u64 {
@@ -258,7 +260,8 @@ impl Shuffle {
         z ^ (z >> 31)
     }
 
-    fn shuffle<T>(&mut self, v: &mut [T]) {
+    /// Shuffle `v` in place.
+    pub(crate) fn shuffle<T>(&mut self, v: &mut [T]) {
         for i in (1..v.len()).rev() {
             let j = (self.next() % (i as u64 + 1)) as usize;
             v.swap(i, j);
@@ -539,7 +542,7 @@ impl Schedule<'_> {
             if !self.mesh.edge_tags(k.lo, k.hi).is_empty() {
                 continue;
             }
-            if swap_gain(self.mesh, k).is_some() {
+            if swap_gain(self.mesh, self.ctx, k).is_some() {
                 cands.push((length(self.mesh, k), k));
             }
         }
@@ -547,7 +550,7 @@ impl Schedule<'_> {
         let mut applied = 0;
         for (_, k) in cands {
             // Earlier swaps may have changed the quad.
-            if swap_gain(self.mesh, k).is_none() {
+            if swap_gain(self.mesh, self.ctx, k).is_none() {
                 continue;
             }
             let out = try_swap(self.mesh, self.ctx, k.lo, k.hi);
@@ -667,11 +670,12 @@ fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
     Some(([f, g], [a, b, c, d]))
 }
 
-/// The energy gain of swapping `k` (old max minus new max) when positive.
-fn swap_gain(mesh: &TriMesh, k: EdgeKey) -> Option<f64> {
+/// The energy gain of swapping `k` (old max minus new max) when positive
+/// (curved energies in curved mode).
+pub(crate) fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
     let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
-    let old = ops::max_energy_of(mesh, [mesh.face(f), mesh.face(g)]);
-    let new = ops::max_energy_of(mesh, [[a, d, c], [d, b, c]]);
+    let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
+    let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.
     (new.is_finite() && new < old * (1.0 - 1e-9)).then_some(old - new)
 }

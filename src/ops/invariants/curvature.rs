@@ -27,7 +27,8 @@ pub fn turn(c: &CubicBez) -> f64 {
 }
 
 /// Whether the piece `[t0, t1]` (either order) of `section` turns less than
-/// `ctx.alpha` and lies inside the section's interval. An unknown section fails.
+/// `ctx.turn_bound()` (α, or the curved rule's bound in curved mode) and lies
+/// inside the section's interval. An unknown section fails.
 pub fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
     let Some(s) = ctx.section(section) else {
         return false;
@@ -42,5 +43,5 @@ pub fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
     if s.parent.is_line() {
         return true;
     }
-    turn(&s.parent.restrict(lo, hi)) < ctx.alpha
+    turn(&s.parent.restrict(lo, hi)) < ctx.turn_bound()
 }

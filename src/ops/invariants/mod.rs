@@ -6,8 +6,11 @@
 //! - [`on_curve`]: invariants 4 and 5, primary vertices on (or moving toward) their curve.
 //! - [`curvature`]: invariant 3, a primary edge's curve piece turns less than α.
 //! - [`envelope`]: invariant 2, secondary edges inside the ε-envelope (sampled, conservative).
+//! - [`curved`]: in curved mode only, every face has at most one curved edge and
+//!   is a certified curved element; the energy rule then compares curved energies.
 
 pub mod curvature;
+pub mod curved;
 pub mod envelope;
 pub mod inversion;
 pub mod on_curve;
@@ -26,7 +29,8 @@ pub(crate) struct Check<'a> {
     pub(crate) changed: &'a [VertexId],
     /// Allowed off-curve distance of primary vertices that moved or were added.
     pub(crate) budgets: &'a [CurveBudget],
-    /// Largest energy of the faces replaced, when the energy rule applies.
+    /// Largest energy of the faces replaced, when the energy rule applies
+    /// (curved energies in curved mode, `+∞` for an uncertified element).
     pub(crate) old_max_energy: Option<f64>,
 }
 
@@ -62,6 +66,18 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
             }
         }
     }
+    // Curved mode: the elements first (cheaper than the envelope sampling).
+    let new_max = match &ctx.curved {
+        None => None,
+        Some(rule) => Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?),
+    };
+    if let (EnergyRule::NoWorseMax, Some(old), Some(new)) =
+        (ctx.energy, check.old_max_energy, new_max)
+    {
+        if new > old {
+            return Err(Reject::Energy);
+        }
+    }
     for (key, tags) in &edges {
         let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
         for t in tags {
@@ -72,8 +88,8 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
             }
         }
     }
-    if let (EnergyRule::NoWorseMax, Some(old)) = (ctx.energy, check.old_max_energy) {
-        if max_energy(mesh, check.faces) > old {
+    if let (EnergyRule::NoWorseMax, Some(old), None) = (ctx.energy, check.old_max_energy, new_max) {
+        if max_energy(mesh, ctx, check.faces) > old {
             return Err(Reject::Energy);
         }
     }

@@ -1,0 +1,268 @@
+//! One Lagrange triangle of the curved mesh: its nodes from its corners and
+//! the curve pieces of its edges, its certification, and its curved AMIPS
+//! energy (thesis §4.4.2 "Splitting and Curving", "Curved Optimization",
+//! §4.4.3 "Curved AMIPS"; DESIGN "Curved elements").
+//!
+//! The same functions serve the curving stage (`build`) and the curved-mode
+//! invariant of the local operations (`ops::invariants::curved`), so an
+//! element is shaped and judged the same way everywhere.
+//!
+//! Nodes: an edge on a curve piece `[t0, t1]` of a cubic parent takes the curve
+//! at the parameter thirds (cubic elements: the piece exactly) or at the
+//! parameter midpoint (quadratic); when a corner is off its curve, the piece is
+//! moved by the linear blend of the two corner offsets so the edge still ends
+//! at its corners. Other edges are straight; the cubic centre node is the mean
+//! of the other nine plus an optional offset (the fit's).
+//!
+//! Energy ([`amips`]): the conformal AMIPS `tr(JᵀJ) / (2 det J)` of the map
+//! from the equilateral reference triangle, in the normalisation of
+//! [`crate::optimize::energy::amips`] (1 for an equilateral straight triangle,
+//! equal to it for any straight element), taken as the maximum over the 15
+//! points of the degree-4 barycentric lattice of the reference triangle
+//! (corners, edge quarter points, three interior points): `det J` is a
+//! degree-4 polynomial, and the lattice is where its Bernstein coefficients
+//! sit. `+∞` where `det J ≤ 0` at a sample.
+
+use super::bernstein::{BernsteinTri, lattice};
+use super::jacobian::{self, CertifyOptions};
+use super::lagrange;
+use crate::features::Parent;
+use crate::fem::Order;
+use kurbo::{Point, Vec2};
+
+/// The gmsh edges of a triangle as corner pairs (0→1, 1→2, 2→0).
+pub(crate) const EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
+
+/// Fractions of an edge where its inner nodes sit.
+pub(crate) fn fractions(order: Order) -> &'static [f64] {
+    match order {
+        Order::Linear => &[],
+        Order::Quadratic => &[0.5],
+        Order::Cubic => &[1.0 / 3.0, 2.0 / 3.0],
+    }
+}
+
+/// Straight inner nodes of the edge from `a` to `b`.
+pub(crate) fn straight_inner(a: Point, b: Point, order: Order) -> Vec<Point> {
+    fractions(order).iter().map(|&s| a.lerp(b, s)).collect()
+}
+
+/// The inner nodes (from `a` to `b`) of the edge whose corners `a`, `b` stand
+/// for `parent` at `t[0]`, `t[1]`: the piece at the node fractions, moved by
+/// the blend of the corner offsets (zero when the corners are on the curve).
+pub(crate) fn piece_inner(
+    parent: &Parent,
+    t: [f64; 2],
+    a: Point,
+    b: Point,
+    order: Order,
+) -> Vec<Point> {
+    let (da, db) = (a - parent.eval(t[0]), b - parent.eval(t[1]));
+    fractions(order)
+        .iter()
+        .map(|&s| parent.eval(t[0] + s * (t[1] - t[0])) + (1.0 - s) * da + s * db)
+        .collect()
+}
+
+/// The Lagrange nodes (gmsh order) of the triangle with `corners`, where
+/// `inner[e]` gives the inner nodes of edge `e` (in the edge's direction,
+/// `EDGES[e][0]` to `EDGES[e][1]`; `None` = straight) and `centre` offsets the
+/// cubic centre node from the mean of the other nine.
+pub(crate) fn nodes(
+    order: Order,
+    corners: [Point; 3],
+    inner: [Option<&[Point]>; 3],
+    centre: Vec2,
+) -> Vec<Point> {
+    let mut n = corners.to_vec();
+    if order == Order::Linear {
+        return n;
+    }
+    for (e, [i, j]) in EDGES.into_iter().enumerate() {
+        match inner[e] {
+            Some(pts) => n.extend_from_slice(pts),
+            None => n.extend(straight_inner(corners[i], corners[j], order)),
+        }
+    }
+    if order == Order::Cubic {
+        let sum = n.iter().fold(Vec2::ZERO, |s, p| s + p.to_vec2());
+        n.push((sum / 9.0).to_point() + centre);
+    }
+    n
+}
+
+/// The certificate of an element (`None` if `nodes` is not `order`'s count).
+pub(crate) fn certificate(
+    order: Order,
+    nodes: &[Point],
+    opts: &CertifyOptions,
+) -> Option<jacobian::Certificate> {
+    jacobian::certify_element(order, nodes, opts)
+}
+
+/// Whether the element is certified valid.
+pub(crate) fn is_certified(order: Order, nodes: &[Point], opts: &CertifyOptions) -> bool {
+    certificate(order, nodes, opts).is_some_and(|c| c.is_certified())
+}
+
+/// `1 / √3`.
+const INV_SQRT3: f64 = 0.577_350_269_189_625_8;
+
+/// AMIPS of the map whose derivatives along the reference axes `(1,0)` and
+/// `(0,1)` (reference triangle `(0,0), (1,0), (0,1)`) are `dxi`, `deta`, with
+/// the map composed from the equilateral reference triangle: 1 for an
+/// equilateral image, `+∞` when `det ≤ 0`.
+fn amips_of_jacobian(dxi: Vec2, deta: Vec2) -> f64 {
+    // Equilateral (0,0), (1,0), (1/2, √3/2) onto the right reference triangle:
+    // columns (1, 0) and (-1/√3, 2/√3).
+    let u = dxi;
+    let v = (2.0 * deta - dxi) * INV_SQRT3;
+    let det = u.cross(v);
+    if det <= 0.0 || !det.is_finite() {
+        return f64::INFINITY;
+    }
+    (u.hypot2() + v.hypot2()) / (2.0 * det)
+}
+
+/// The curved AMIPS energy of a Lagrange element (see the module doc): the
+/// maximum over the degree-4 lattice. `+∞` when `det J ≤ 0` at a sample or
+/// `nodes` is not `order`'s node count.
+pub fn amips(order: Order, nodes: &[Point]) -> f64 {
+    // Derivative nets (degree n − 1, lattice order) of the Bézier form.
+    let o = nodes.first().map_or(Vec2::ZERO, |p| p.to_vec2());
+    let net: Vec<Vec2> = match order {
+        Order::Linear => {
+            let Ok(c) = <[Point; 3]>::try_from(nodes) else {
+                return f64::INFINITY;
+            };
+            return amips_of_jacobian(c[1] - c[0], c[2] - c[0]);
+        }
+        Order::Quadratic => match <&[Point; 6]>::try_from(nodes) {
+            Ok(n) => lagrange::quadratic_to_bezier(&n.map(|p| p - o))
+                .iter()
+                .map(|p| p.to_vec2())
+                .collect(),
+            Err(_) => return f64::INFINITY,
+        },
+        Order::Cubic => match <&[Point; 10]>::try_from(nodes) {
+            Ok(n) => lagrange::cubic_to_bezier(&n.map(|p| p - o))
+                .iter()
+                .map(|p| p.to_vec2())
+                .collect(),
+            Err(_) => return f64::INFINITY,
+        },
+    };
+    let n = order as usize;
+    let m = n - 1;
+    let idx = super::bernstein::index;
+    let mut dx = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
+    for b in lattice(m) {
+        let (j, k) = (b[1], b[2]);
+        let base = net[idx(n, j, k)];
+        let a = n as f64 * (net[idx(n, j + 1, k)] - base);
+        let c = n as f64 * (net[idx(n, j, k + 1)] - base);
+        dx[0].push(a.x);
+        dx[1].push(a.y);
+        dx[2].push(c.x);
+        dx[3].push(c.y);
+    }
+    let polys = dx.map(|c| BernsteinTri::new(&c));
+    let mut worst: f64 = 0.0;
+    for b in lattice(4) {
+        let l = b.map(|x| x as f64 / 4.0);
+        let [ax, ay, cx, cy] = polys.each_ref().map(|p| p.eval(l));
+        worst = worst.max(amips_of_jacobian(Vec2::new(ax, ay), Vec2::new(cx, cy)));
+    }
+    worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optimize::energy;
+    use kurbo::CubicBez;
+
+    fn tri() -> [Point; 3] {
+        [
+            Point::new(0.3, -0.2),
+            Point::new(2.1, 0.4),
+            Point::new(0.7, 1.9),
+        ]
+    }
+
+    #[test]
+    fn straight_element_energy_is_linear_amips() {
+        let [a, b, c] = tri();
+        let want = energy::amips(a, b, c);
+        for order in [Order::Linear, Order::Quadratic, Order::Cubic] {
+            let n = nodes(order, [a, b, c], [None; 3], Vec2::ZERO);
+            let got = amips(order, &n);
+            assert!(
+                (got - want).abs() <= 1e-12 * want,
+                "{order:?}: {got} vs {want}"
+            );
+        }
+        let h = 3f64.sqrt() / 2.0;
+        let eq = [
+            Point::new(5.0, 5.0),
+            Point::new(6.0, 5.0),
+            Point::new(5.5, 5.0 + h),
+        ];
+        let n = nodes(Order::Cubic, eq, [None; 3], Vec2::ZERO);
+        assert!((amips(Order::Cubic, &n) - 1.0).abs() < 1e-12);
+        // Clockwise: infinite.
+        let n = nodes(Order::Cubic, [a, c, b], [None; 3], Vec2::ZERO);
+        assert_eq!(amips(Order::Cubic, &n), f64::INFINITY);
+        assert_eq!(amips(Order::Cubic, &n[..9]), f64::INFINITY);
+    }
+
+    #[test]
+    fn bending_raises_the_energy_and_inverting_makes_it_infinite() {
+        let (a, b) = (Point::new(0.0, 0.0), Point::new(1.0, 0.0));
+        let h = 3f64.sqrt() / 2.0;
+        let c = Point::new(0.5, h);
+        let straight = amips(
+            Order::Cubic,
+            &nodes(Order::Cubic, [a, b, c], [None; 3], Vec2::ZERO),
+        );
+        let mut last = straight;
+        for bulge in [0.1, 0.3, 0.6] {
+            let curve = CubicBez::new(a, Point::new(0.3, -bulge), Point::new(0.7, -bulge), b);
+            let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
+            let n = nodes(
+                Order::Cubic,
+                [a, b, c],
+                [Some(&inner), None, None],
+                Vec2::ZERO,
+            );
+            let e = amips(Order::Cubic, &n);
+            assert!(e > last, "{bulge}: {e} vs {last}");
+            assert!(is_certified(Order::Cubic, &n, &CertifyOptions::DEFAULT));
+            last = e;
+        }
+        // A bulge through the opposite corner inverts the element.
+        let curve = CubicBez::new(a, Point::new(0.3, 1.5), Point::new(0.7, 1.5), b);
+        let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
+        let n = nodes(
+            Order::Cubic,
+            [a, b, c],
+            [Some(&inner), None, None],
+            Vec2::ZERO,
+        );
+        assert_eq!(amips(Order::Cubic, &n), f64::INFINITY);
+        assert!(!is_certified(Order::Cubic, &n, &CertifyOptions::DEFAULT));
+    }
+
+    #[test]
+    fn piece_inner_follows_offset_corners() {
+        let curve = CubicBez::new((0.0, 0.0), (1.0, 1.0), (2.0, 1.0), (3.0, 0.0));
+        let p = Parent::Cubic(curve);
+        let (a, b) = (p.eval(0.2), p.eval(0.8));
+        let on = piece_inner(&p, [0.2, 0.8], a, b, Order::Cubic);
+        assert!((on[0] - p.eval(0.4)).hypot() < 1e-15);
+        let shift = Vec2::new(0.0, 0.3);
+        let off = piece_inner(&p, [0.2, 0.8], a + shift, b + shift, Order::Cubic);
+        assert!((off[1] - (p.eval(0.6) + shift)).hypot() < 1e-15);
+        assert_eq!(piece_inner(&p, [0.2, 0.8], a, b, Order::Quadratic).len(), 1);
+    }
+}

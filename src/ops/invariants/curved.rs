@@ -1,0 +1,130 @@
+//! The curved mode of the invariants (thesis §4.4.2 "Curved Optimization";
+//! DESIGN "Curved elements"): once the linear mesh is curved, the local
+//! operations keep every element they touch a valid curved element instead of
+//! keeping each primary edge's turn below α.
+//!
+//! A triangle's shape is read off the mesh: an edge is curved when it carries a
+//! primary tag whose section lies on a cubic parent (edges on straight parents
+//! stay straight); the curved edge takes its exact curve piece
+//! (`curve::element::piece_inner`). A triangle passes when it has at
+//! most one curved edge and its element is certified
+//! ([`crate::curve::jacobian::certify_element`]).
+
+use super::super::{Context, CurvedRule};
+use crate::curve::element;
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+use kurbo::{Point, Vec2};
+
+/// The primary tag of an edge: section and the parameters at `lo`, `hi`.
+pub(crate) fn primary(mesh: &TriMesh, key: EdgeKey) -> Option<(u32, [f64; 2])> {
+    mesh.edge_tags(key.lo, key.hi)
+        .iter()
+        .find_map(|t| match *t {
+            FeatureOn::Primary { section, t } => Some((section, t)),
+            FeatureOn::Secondary { .. } => None,
+        })
+}
+
+/// Whether the section lies on a cubic (not a straight) parent.
+pub(crate) fn on_cubic(ctx: &Context, section: u32) -> bool {
+    ctx.section(section).is_some_and(|s| !s.parent.is_line())
+}
+
+/// The tag of a primary edge on a cubic parent: the edges that are curved.
+pub(crate) fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<(u32, [f64; 2])> {
+    primary(mesh, key).filter(|&(section, _)| on_cubic(ctx, section))
+}
+
+/// The exact inner nodes (from `key.lo` to `key.hi`) of a curved edge, or
+/// `None` when the edge is not curved.
+pub(crate) fn exact_inner(
+    mesh: &TriMesh,
+    ctx: &Context,
+    order: crate::fem::Order,
+    key: EdgeKey,
+) -> Option<Vec<Point>> {
+    let (section, t) = curved_tag(mesh, ctx, key)?;
+    let parent = ctx.section(section)?.parent;
+    Some(element::piece_inner(
+        &parent,
+        t,
+        mesh.position(key.lo),
+        mesh.position(key.hi),
+        order,
+    ))
+}
+
+/// The Lagrange nodes of the triangle `tri` with its exact curved edge, or
+/// `None` when it has more than one curved edge.
+pub(crate) fn exact_nodes(
+    mesh: &TriMesh,
+    ctx: &Context,
+    order: crate::fem::Order,
+    tri: [VertexId; 3],
+) -> Option<Vec<Point>> {
+    let mut curved: Option<(usize, Vec<Point>)> = None;
+    for (e, [i, j]) in element::EDGES.into_iter().enumerate() {
+        let key = EdgeKey::new(tri[i], tri[j]);
+        if let Some(mut inner) = exact_inner(mesh, ctx, order, key) {
+            if curved.is_some() {
+                return None;
+            }
+            if key.lo != tri[i] {
+                inner.reverse();
+            }
+            curved = Some((e, inner));
+        }
+    }
+    let mut inner: [Option<&[Point]>; 3] = [None; 3];
+    if let Some((e, pts)) = &curved {
+        inner[*e] = Some(pts);
+    }
+    Some(element::nodes(
+        order,
+        tri.map(|v| mesh.position(v)),
+        inner,
+        Vec2::ZERO,
+    ))
+}
+
+/// The curved energy of the triangle `tri`, or `None` when it is not a valid
+/// curved element (more than one curved edge, or not certified).
+///
+/// A straight triangle takes a shortcut: its `det J` is the constant twice its
+/// area and its curved energy is the linear AMIPS, so it is judged from its
+/// corners when its area is clearly (twice) above the certification's zero
+/// tolerance; the full certification at the rule's order decides otherwise.
+pub(crate) fn energy(
+    mesh: &TriMesh,
+    ctx: &Context,
+    rule: &CurvedRule,
+    tri: [VertexId; 3],
+) -> Option<f64> {
+    let straight = element::EDGES
+        .iter()
+        .all(|&[i, j]| curved_tag(mesh, ctx, EdgeKey::new(tri[i], tri[j])).is_none());
+    if straight {
+        let [a, b, c] = tri.map(|v| mesh.position(v));
+        let det = (b - a).cross(c - a);
+        let zero = crate::curve::jacobian::zero_abs(&[a, b, c], rule.certify.zero_rel);
+        if det > 2.0 * zero {
+            return Some(crate::optimize::energy::amips(a, b, c));
+        }
+    }
+    let nodes = exact_nodes(mesh, ctx, rule.order, tri)?;
+    element::is_certified(rule.order, &nodes, &rule.certify)
+        .then(|| element::amips(rule.order, &nodes))
+}
+
+/// The largest curved energy of `faces`, or `None` when one of them is not a
+/// valid curved element.
+pub(crate) fn holds(
+    mesh: &TriMesh,
+    ctx: &Context,
+    rule: &CurvedRule,
+    faces: &[FaceId],
+) -> Option<f64> {
+    faces.iter().try_fold(0.0f64, |m, &f| {
+        energy(mesh, ctx, rule, mesh.face(f)).map(|e| m.max(e))
+    })
+}
