@@ -116,7 +116,14 @@ impl SmoothPlan {
         let scale = match objective {
             Objective::Sum => 1.0,
             Objective::MinMax => {
-                let m = max_energy(mesh, &faces);
+                // The linear energies' maximum: the objective's own scale.
+                let m = faces
+                    .iter()
+                    .map(|&f| {
+                        let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
+                        crate::optimize::energy::amips(a, b, c)
+                    })
+                    .fold(0.0, f64::max);
                 if !(m.is_finite() && m > 0.0) {
                     return Err(Reject::NoChange);
                 }
