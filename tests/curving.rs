@@ -159,13 +159,11 @@ fn no_curved_passes_skip_the_curved_optimization() {
         stats.optimization,
         triwild::curve::CurvedOptimizeStats::default()
     );
-    // The mesh of the curving stage before the curved optimization existed.
-    assert_eq!(mesh.triangle_count(), 142, "{stats:?}");
-    assert_eq!(stats.curved_triangles, 110, "{stats:?}");
+    let skipped = mesh.triangle_count();
     let (mesh, stats) = curved(&drawing, &params.with_stop_curved(10.0, 10), Order::Cubic);
     assert!(stats.optimization.passes >= 1, "{stats:?}");
     assert!(stats.optimization.collapse.applied > 0, "{stats:?}");
-    assert!(mesh.triangle_count() < 142);
+    assert!(mesh.triangle_count() < skipped, "{stats:?}");
 }
 
 #[test]

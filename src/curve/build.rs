@@ -974,6 +974,7 @@ mod tests {
             alpha: std::f64::consts::PI,
             on_curve_abs: 1e-12,
             energy: EnergyRule::NoWorseMax,
+            energy_floor: 0.0,
             curved: None,
         }
     }

@@ -221,7 +221,7 @@ pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId)
     // Curved energies depend on the moved tags: left to the invariants.
     if ctx.energy == EnergyRule::NoWorseMax && ctx.curved.is_none() {
         let new_max = max_energy_of(mesh, ctx, plan.new.iter().copied());
-        if new_max.is_finite() && new_max > plan.old_max_energy {
+        if new_max.is_finite() && new_max > plan.old_max_energy.max(ctx.energy_floor) {
             return Outcome::Rejected(Reject::Energy);
         }
     }

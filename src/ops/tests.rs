@@ -156,6 +156,7 @@ pub(crate) fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context)
         alpha: 15f64.to_radians(),
         on_curve_abs: 1e-12,
         energy,
+        energy_floor: 0.0,
         curved: None,
     };
     (mesh, ctx)
@@ -208,6 +209,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
         alpha: 10f64.to_radians(),
         on_curve_abs: 1e-12,
         energy,
+        energy_floor: 0.0,
         curved: None,
     };
     (mesh, ctx)

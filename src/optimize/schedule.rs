@@ -785,7 +785,12 @@ pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -
     }
     s.failed_collapse.clear();
     s.max_stretch = COARSEN_STRETCH;
+    // Coarsening may make a ring worse, up to the stop energy (the quality
+    // asked for) but never worse than the mesh's worst triangle (outside the
+    // locked ones): the quality the goal measured holds.
+    s.ctx.energy_floor = measure(s.mesh).max_energy.min(opts.stop_energy);
     s.collapse_pass(COARSEN_FACTOR);
+    s.ctx.energy_floor = 0.0;
     // Polish: swaps and smoothing only (no change of size), each never making
     // a local worst triangle worse, while they still improve the mesh.
     let mut before = measure(s.mesh);

@@ -71,9 +71,10 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
         None => None,
         Some(rule) => Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?),
     };
-    if let (EnergyRule::NoWorseMax, Some(old), Some(new)) =
-        (ctx.energy, check.old_max_energy, new_max)
-    {
+    // The rule compares with the replaced faces' largest energy, or with the
+    // context's floor where that is larger.
+    let old_max = check.old_max_energy.map(|e| e.max(ctx.energy_floor));
+    if let (EnergyRule::NoWorseMax, Some(old), Some(new)) = (ctx.energy, old_max, new_max) {
         if new > old {
             return Err(Reject::Energy);
         }
@@ -88,7 +89,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
             }
         }
     }
-    if let (EnergyRule::NoWorseMax, Some(old), None) = (ctx.energy, check.old_max_energy, new_max) {
+    if let (EnergyRule::NoWorseMax, Some(old), None) = (ctx.energy, old_max, new_max) {
         if max_energy(mesh, ctx, check.faces) > old {
             return Err(Reject::Energy);
         }
