@@ -187,7 +187,14 @@ impl CollapsePlan {
         Ok(CollapsePlan {
             u,
             v,
-            old_max_energy: max_energy(mesh, ctx, &old),
+            // A vertex without features may go where its faces get as bad as
+            // the context's floor; near features the plain rule keeps their
+            // neighbourhood (and the secondary geometry) as it is.
+            old_max_energy: if role_v == Role::Free {
+                max_energy(mesh, ctx, &old).max(ctx.energy_floor)
+            } else {
+                max_energy(mesh, ctx, &old)
+            },
             reshaped,
             star: rv.faces,
             new,
@@ -221,7 +228,7 @@ pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId)
     // Curved energies depend on the moved tags: left to the invariants.
     if ctx.energy == EnergyRule::NoWorseMax && ctx.curved.is_none() {
         let new_max = max_energy_of(mesh, ctx, plan.new.iter().copied());
-        if new_max.is_finite() && new_max > plan.old_max_energy.max(ctx.energy_floor) {
+        if new_max.is_finite() && new_max > plan.old_max_energy {
             return Outcome::Rejected(Reject::Energy);
         }
     }

@@ -197,10 +197,11 @@ pub struct Context {
     pub on_curve_abs: f64,
     /// The energy condition for collapse, swap and smoothing.
     pub energy: EnergyRule,
-    /// Under [`EnergyRule::NoWorseMax`], new faces may reach this energy even
-    /// where the faces they replace were better (0: the plain rule). The final
-    /// coarsening sets it to the mesh's worst energy, so coarsening never makes
-    /// the mesh's worst triangle worse.
+    /// Under [`EnergyRule::NoWorseMax`], the collapse of a vertex without
+    /// features may make new faces up to this energy even where the faces they
+    /// replace were better (0: the plain rule). The final coarsening sets it to
+    /// min(stop energy, the mesh's worst energy), so coarsening never makes the
+    /// mesh's worst triangle worse.
     pub energy_floor: f64,
     /// The curved mode of the invariants (`None`: the linear stage).
     pub curved: Option<CurvedRule>,

@@ -71,9 +71,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
         None => None,
         Some(rule) => Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?),
     };
-    // The rule compares with the replaced faces' largest energy, or with the
-    // context's floor where that is larger.
-    let old_max = check.old_max_energy.map(|e| e.max(ctx.energy_floor));
+    let old_max = check.old_max_energy;
     if let (EnergyRule::NoWorseMax, Some(old), Some(new)) = (ctx.energy, old_max, new_max) {
         if new > old {
             return Err(Reject::Energy);
