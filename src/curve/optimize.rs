@@ -30,19 +30,15 @@
 //! certified face became uncertified.
 
 use crate::fem::Order;
-use crate::mesh::{EdgeKey, TriMesh, VertexId};
+use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
-use crate::ops::{self, Context, Outcome, Reject, try_collapse, try_smooth, try_swap};
-use crate::optimize::schedule::{OpTally, Shuffle, edges, length, locked, swap_gain};
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use crate::ops::{self, Context};
+use crate::optimize::OptimizeOptions;
+use crate::optimize::schedule::{OpTally, Schedule, locked};
 
-/// Collapse edges shorter than this fraction of `l`.
+/// Collapse edges shorter than this fraction of `l` (the shared schedule's
+/// collapses never create an edge longer than 4/3 `l`).
 const COLLAPSE_BELOW: f64 = 4.0 / 5.0;
-/// A collapse may not create an edge longer than this multiple of `l`.
-const MAX_STRETCH: f64 = 4.0 / 3.0;
-/// Rounds of one collapse pass (refused collapses retried after changes).
-const COLLAPSE_ROUNDS: usize = 4;
 
 /// Parameters of the curved optimization, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -122,206 +118,6 @@ fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> Measure {
     m
 }
 
-/// The schedule's state: the retry stamps and the tallies.
-struct Schedule<'a> {
-    mesh: &'a mut TriMesh,
-    ctx: &'a Context,
-    opts: CurvedOptimizeOptions,
-    stats: CurvedOptimizeStats,
-    rng: Shuffle,
-    /// Operation clock: advanced by every applied operation.
-    clock: u64,
-    /// By vertex slot: the clock when a face around the vertex last changed.
-    stamp: Vec<u64>,
-    /// Refused collapses with the clock then.
-    failed_collapse: HashMap<EdgeKey, u64>,
-    /// Refused smoothing by vertex slot, with the clock then (`u64::MAX`: none).
-    failed_smooth: Vec<u64>,
-}
-
-impl Schedule<'_> {
-    fn touch(&mut self, outcome: &Outcome) {
-        let Outcome::Applied(ch) = outcome else {
-            return;
-        };
-        self.clock += 1;
-        for &f in &ch.created {
-            if !self.mesh.is_face_alive(f) {
-                continue;
-            }
-            for v in self.mesh.face(f) {
-                let i = v.0 as usize;
-                if i >= self.stamp.len() {
-                    self.stamp.resize(i + 1, 0);
-                }
-                self.stamp[i] = self.clock;
-            }
-        }
-    }
-
-    fn stamp_of(&self, v: VertexId) -> u64 {
-        self.stamp.get(v.0 as usize).copied().unwrap_or(0)
-    }
-
-    fn is_short(&self, k: EdgeKey) -> bool {
-        length(self.mesh, k) < COLLAPSE_BELOW * self.opts.l
-    }
-
-    /// Whether collapsing `v` into `u` creates no edge longer than 4/3 `l`.
-    fn keeps_lengths(&self, u: VertexId, v: VertexId) -> bool {
-        let pu = self.mesh.position(u);
-        ops::ring(self.mesh, v)
-            .neighbours
-            .into_iter()
-            .filter(|&w| w != u)
-            .all(|w| pu.distance(self.mesh.position(w)) <= MAX_STRETCH * self.opts.l)
-    }
-
-    fn collapse_pass(&mut self) -> u64 {
-        let mut total = 0;
-        for _ in 0..COLLAPSE_ROUNDS {
-            let n = self.collapse_round();
-            total += n;
-            if n == 0 {
-                break;
-            }
-        }
-        total
-    }
-
-    /// Every short edge once, shortest first.
-    fn collapse_round(&mut self) -> u64 {
-        let mut heap: BinaryHeap<Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
-        for k in edges(self.mesh) {
-            if self.is_short(k) {
-                heap.push(Reverse((length(self.mesh, k).to_bits(), k)));
-            }
-        }
-        let mut budget = 4 * heap.len() + 16;
-        let mut applied = 0;
-        while let Some(Reverse((bits, k))) = heap.pop() {
-            if budget == 0 {
-                break;
-            }
-            budget -= 1;
-            if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
-                continue;
-            }
-            if length(self.mesh, k).to_bits() != bits || !self.is_short(k) {
-                continue;
-            }
-            if let Some(&at) = self.failed_collapse.get(&k) {
-                if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at {
-                    continue;
-                }
-            }
-            let mut done = false;
-            let mut tried = false;
-            for (u, v) in [(k.lo, k.hi), (k.hi, k.lo)] {
-                if !self.keeps_lengths(u, v) {
-                    continue;
-                }
-                tried = true;
-                let out = try_collapse(self.mesh, self.ctx, u, v);
-                self.touch(&out);
-                if self.stats.collapse.record(&out) {
-                    done = true;
-                    break;
-                }
-            }
-            if !tried {
-                *self
-                    .stats
-                    .collapse
-                    .rejected
-                    .entry("edge_length")
-                    .or_default() += 1;
-            }
-            if !done {
-                self.failed_collapse.insert(k, self.clock);
-                continue;
-            }
-            applied += 1;
-            let u = if self.mesh.is_vertex_alive(k.lo) {
-                k.lo
-            } else {
-                k.hi
-            };
-            for w in ops::ring(self.mesh, u).neighbours {
-                let e = EdgeKey::new(u, w);
-                if self.is_short(e) {
-                    heap.push(Reverse((length(self.mesh, e).to_bits(), e)));
-                }
-            }
-        }
-        applied
-    }
-
-    fn swap_pass(&mut self) -> u64 {
-        let mut cands: Vec<(f64, EdgeKey)> = edges(self.mesh)
-            .into_iter()
-            .filter(|k| self.mesh.edge_tags(k.lo, k.hi).is_empty())
-            .filter(|&k| swap_gain(self.mesh, self.ctx, k).is_some())
-            .map(|k| (length(self.mesh, k), k))
-            .collect();
-        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut applied = 0;
-        for (_, k) in cands {
-            if swap_gain(self.mesh, self.ctx, k).is_none() {
-                continue;
-            }
-            let out = try_swap(self.mesh, self.ctx, k.lo, k.hi);
-            self.touch(&out);
-            if self.stats.swap.record(&out) {
-                applied += 1;
-            }
-        }
-        applied
-    }
-
-    fn smooth_pass(&mut self) -> u64 {
-        let mut verts: Vec<VertexId> = self.mesh.vertices().collect();
-        self.rng.shuffle(&mut verts);
-        let mut applied = 0;
-        for v in verts {
-            let i = v.0 as usize;
-            if i >= self.failed_smooth.len() {
-                self.failed_smooth.resize(i + 1, u64::MAX);
-            }
-            let at = self.failed_smooth[i];
-            if at != u64::MAX && self.stamp_of(v) <= at {
-                continue;
-            }
-            let out = try_smooth(self.mesh, self.ctx, v);
-            self.touch(&out);
-            self.failed_smooth[i] = if out.is_applied() {
-                u64::MAX
-            } else {
-                self.clock
-            };
-            if out != Outcome::Rejected(Reject::FixedVertex) && self.stats.smooth.record(&out) {
-                applied += 1;
-            }
-        }
-        applied
-    }
-
-    fn pass(&mut self) {
-        let collapses = self.collapse_pass();
-        let swaps = self.swap_pass();
-        let smooths = self.smooth_pass();
-        self.stats.passes += 1;
-        tracing::debug!(
-            pass = self.stats.passes,
-            collapses,
-            swaps,
-            smooths,
-            faces = self.mesh.num_faces(),
-            "curved optimization pass"
-        );
-    }
-}
-
 /// Optimize `mesh` in curved mode (see the module doc). `ctx` must be in curved
 /// mode (`ctx.curved` set); without it, or with `max_passes == 0` or a linear
 /// order, nothing is done.
@@ -341,38 +137,58 @@ pub fn optimize_curved(
     }
     let _span = tracing::info_span!("curved optimization").entered();
     let start = measure(mesh, ctx, &rule);
-    let mut s = Schedule {
-        stats: CurvedOptimizeStats {
-            max_amips_before: start.max_all,
-            triangles_before: mesh.num_faces(),
-            uncertified_before: start.uncertified,
-            ..CurvedOptimizeStats::default()
-        },
-        mesh,
-        ctx,
-        opts: *opts,
-        rng: Shuffle(0x0063_7572_7665_6421),
-        clock: 1,
-        stamp: Vec::new(),
-        failed_collapse: HashMap::new(),
-        failed_smooth: Vec::new(),
+    let mut stats = CurvedOptimizeStats {
+        max_amips_before: start.max_all,
+        triangles_before: mesh.num_faces(),
+        uncertified_before: start.uncertified,
+        ..CurvedOptimizeStats::default()
     };
-    s.pass();
-    let mut last = measure(s.mesh, ctx, &rule);
+    // The linear schedule's collapse, swap and smoothing passes, with every
+    // target at `l` (its sizing-field and stop fields are not used here).
+    let sched_opts = OptimizeOptions {
+        l: opts.l,
+        l_floor: opts.l,
+        stop_energy: opts.stop_energy,
+        alpha_deg: 0.0,
+        max_passes: opts.max_passes,
+        max_vertices: usize::MAX,
+    };
+    let mut sched_ctx = ctx.clone();
+    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, 0x0063_7572_7665_6421);
+    let mut pass = |s: &mut Schedule<'_>| {
+        let collapses = s.collapse_pass(COLLAPSE_BELOW);
+        let swaps = s.swap_pass();
+        let smooths = s.smooth_pass();
+        stats.passes += 1;
+        tracing::debug!(
+            pass = stats.passes,
+            collapses,
+            swaps,
+            smooths,
+            faces = s.mesh().num_faces(),
+            "curved optimization pass"
+        );
+    };
+    pass(&mut s);
+    let mut last = measure(s.mesh(), ctx, &rule);
     for _ in 0..opts.max_passes {
         if last.max < opts.stop_energy {
             break;
         }
-        s.pass();
-        let now = measure(s.mesh, ctx, &rule);
+        pass(&mut s);
+        let now = measure(s.mesh(), ctx, &rule);
         let stalled = last.max - now.max < 1e-2 && last.mean - now.mean < 1e-3;
         last = now;
         if stalled {
             break;
         }
     }
-    s.stats.max_amips_after = last.max_all;
-    s.stats.uncertified_after = last.uncertified;
-    s.stats.triangles_after = s.mesh.num_faces();
-    s.stats
+    let tallies = s.stats();
+    stats.collapse = tallies.collapse.clone();
+    stats.swap = tallies.swap.clone();
+    stats.smooth = tallies.smooth.clone();
+    stats.max_amips_after = last.max_all;
+    stats.uncertified_after = last.uncertified;
+    stats.triangles_after = s.mesh().num_faces();
+    stats
 }

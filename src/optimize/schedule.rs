@@ -229,7 +229,7 @@ fn min_angle_deg(a: Point, b: Point, c: Point) -> f64 {
 }
 
 /// Every edge once.
-pub(crate) fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
+fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
     let mut out = Vec::with_capacity(mesh.num_faces() * 3 / 2 + 4);
     for f in mesh.faces() {
         let v = mesh.face(f);
@@ -244,12 +244,12 @@ pub(crate) fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
 }
 
 /// The length of the edge `k`.
-pub(crate) fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
+fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
     mesh.position(k.lo).distance(mesh.position(k.hi))
 }
 
 /// A deterministic permutation generator (SplitMix64).
-pub(crate) struct Shuffle(pub(crate) u64);
+struct Shuffle(u64);
 
 impl Shuffle {
     fn next(&mut self) -> u64 {
@@ -261,7 +261,7 @@ impl Shuffle {
     }
 
     /// Shuffle `v` in place.
-    pub(crate) fn shuffle<T>(&mut self, v: &mut [T]) {
+    fn shuffle<T>(&mut self, v: &mut [T]) {
         for i in (1..v.len()).rev() {
             let j = (self.next() % (i as u64 + 1)) as usize;
             v.swap(i, j);
@@ -269,8 +269,10 @@ impl Shuffle {
     }
 }
 
-/// The optimizer's state: the sizing field and the tallies.
-struct Schedule<'a> {
+/// The optimizer's state: the sizing field, the retry stamps and the tallies.
+/// The curved stage (`crate::curve::optimize`) drives its collapse, swap and
+/// smoothing passes too, with a uniform target.
+pub(crate) struct Schedule<'a> {
     mesh: &'a mut TriMesh,
     ctx: &'a mut Context,
     opts: OptimizeOptions,
@@ -291,7 +293,56 @@ struct Schedule<'a> {
     max_stretch: f64,
 }
 
-impl Schedule<'_> {
+impl<'a> Schedule<'a> {
+    /// A schedule over `mesh` with every target at `opts.l`, collapses that
+    /// make no edge longer than 4/3 of its target, and the smoothing order
+    /// drawn from `seed`.
+    pub(crate) fn new(
+        mesh: &'a mut TriMesh,
+        ctx: &'a mut Context,
+        opts: &OptimizeOptions,
+        seed: u64,
+    ) -> Self {
+        Schedule {
+            target: vec![opts.l; mesh.vertex_capacity()],
+            mesh,
+            ctx,
+            opts: *opts,
+            stats: OptimizeStats {
+                passes: 0,
+                stop: StopReason::PassLimit,
+                split: OpTally::default(),
+                collapse: OpTally::default(),
+                swap: OpTally::default(),
+                smooth: OpTally::default(),
+                round: OpTally::default(),
+                project: OpTally::default(),
+                projected_vertices: 0,
+                off_curve_left: 0,
+                rational_left: 0,
+                envelope_stages: 0,
+                min_angle_deg: 0.0,
+                max_amips: 0.0,
+            },
+            rng: Shuffle(seed),
+            clock: 1,
+            stamp: Vec::new(),
+            failed_collapse: rustc_hash::FxHashMap::default(),
+            failed_smooth: Vec::new(),
+            max_stretch: 4.0 / 3.0,
+        }
+    }
+
+    /// The mesh being improved.
+    pub(crate) fn mesh(&self) -> &TriMesh {
+        self.mesh
+    }
+
+    /// The tallies so far.
+    pub(crate) fn stats(&self) -> &OptimizeStats {
+        &self.stats
+    }
+
     /// Record an applied operation: every vertex of the faces it created (or
     /// moved) gets the new clock.
     fn touch(&mut self, outcome: &Outcome) {
@@ -429,7 +480,7 @@ impl Schedule<'_> {
     }
 
     /// Collapse edges shorter than `factor` times their mean target, shortest first.
-    fn collapse_pass(&mut self, factor: f64) -> u64 {
+    pub(crate) fn collapse_pass(&mut self, factor: f64) -> u64 {
         // Refused collapses are retried (in a new round) once a collapse has
         // changed their neighbourhood, as long as rounds make progress.
         let mut total = 0;
@@ -536,7 +587,7 @@ impl Schedule<'_> {
     }
 
     /// Swap edges where that lowers the larger energy of their two triangles.
-    fn swap_pass(&mut self) -> u64 {
+    pub(crate) fn swap_pass(&mut self) -> u64 {
         let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
         for k in edges(self.mesh) {
             if !self.mesh.edge_tags(k.lo, k.hi).is_empty() {
@@ -563,7 +614,7 @@ impl Schedule<'_> {
     }
 
     /// Smooth every vertex that may move, in a fixed pseudo-random order.
-    fn smooth_pass(&mut self) -> u64 {
+    pub(crate) fn smooth_pass(&mut self) -> u64 {
         self.smooth_pass_with(Objective::Sum)
     }
 
@@ -672,7 +723,7 @@ fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
 
 /// The energy gain of swapping `k` (old max minus new max) when positive
 /// (curved energies in curved mode).
-pub(crate) fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
+fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
     let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
     let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
     let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
@@ -684,35 +735,7 @@ pub(crate) fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64
 /// restaged (denser sampling, larger ε) when rational vertices are left.
 pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -> OptimizeStats {
     let mut ever_off = Vec::new();
-    let stats = OptimizeStats {
-        passes: 0,
-        stop: StopReason::PassLimit,
-        split: OpTally::default(),
-        collapse: OpTally::default(),
-        swap: OpTally::default(),
-        smooth: OpTally::default(),
-        round: OpTally::default(),
-        project: OpTally::default(),
-        projected_vertices: 0,
-        off_curve_left: 0,
-        rational_left: 0,
-        envelope_stages: 0,
-        min_angle_deg: 0.0,
-        max_amips: 0.0,
-    };
-    let mut s = Schedule {
-        target: vec![opts.l; mesh.vertex_capacity()],
-        mesh,
-        ctx,
-        opts: *opts,
-        stats,
-        rng: Shuffle(0x0074_7269_7769_6c64),
-        clock: 1,
-        stamp: Vec::new(),
-        failed_collapse: rustc_hash::FxHashMap::default(),
-        failed_smooth: Vec::new(),
-        max_stretch: 4.0 / 3.0,
-    };
+    let mut s = Schedule::new(mesh, ctx, opts, 0x0074_7269_7769_6c64);
     let mut rational = s.round_all();
     let mut off = s.project_all(&mut ever_off);
     let mut last = measure(s.mesh);
