@@ -14,14 +14,15 @@
 //!    zero-derivative points (cusps), then recursively where the tangent bisects the total
 //!    turn, until every piece has constant-sign curvature and turns less than 180°.
 //! 3. `resample`: pieces are halved until each is shorter than l, within μ of its chord and
-//!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m are not eligible.
+//!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m, and windows shorter
+//!    than l_m (a cut next to a curve's end), are not eligible.
 //! 4. `separation`: μ-separation (Definition 4.1), decided conservatively on the sections'
 //!    control hulls with a uniform grid, then the secondary simplification (endpoints closer
 //!    than μ collapse to their barycentre).
 //!
 //! Guarantees to the next stage (checked by the property tests with an independent checker):
 //! every primary section has constant-sign curvature, turns less than α, is no longer than
-//! l, lies within μ of its chord, and is at least μ away from every section, secondary
+//! l and not shorter than l_m (control polygon), lies within μ of its chord, and is at least μ away from every section, secondary
 //! segment and point it does not share an endpoint with; no primary chord crosses any other
 //! chord or secondary segment. Sections that share an endpoint share it bit for bit.
 //! [`FeatureSet::conforming_input`] lists what the linear mesher must conform to.

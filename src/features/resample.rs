@@ -8,7 +8,10 @@
 //! given the previous splits), and its curvature, sampled, is at most 2/l_m. A section
 //! that breaks the curvature or turn condition when it is already no longer than μ (the
 //! part around a cusp or a curvature spike) is kept as a *non-eligible* section: it will be
-//! secondary. A depth and count budget bounds the work on any input.
+//! secondary. A section shorter than l_m (an inflection or crossing cut next to a curve's
+//! end: the snap stage merged every end closer than that) is not eligible either: as a
+//! primary section its two fixed end points would force a sliver of that size into the
+//! mesh. A depth and count budget bounds the work on any input.
 
 use super::Parent;
 use super::split::{end_tangent, start_tangent};
@@ -92,7 +95,7 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                     t0: w[0],
                     t1: w[1],
                     ctrl: parent.restrict(w[0], w[1]),
-                    eligible: true,
+                    eligible: len >= r.l_min,
                 });
             }
         }
@@ -110,8 +113,12 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                     depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
                 // Too curved and already short: secondary. A turn of α or more with bounded
                 // curvature always goes away by halving (turn ≤ length · 2/l_m).
-                let eligible = shape_ok && turn_ok && curvature_ok;
-                let done = eligible || (shape_ok && !curvature_ok && len <= r.mu) || !can_split;
+                let long_enough = len >= r.l_min;
+                let eligible = shape_ok && turn_ok && curvature_ok && long_enough;
+                let done = eligible
+                    || !long_enough
+                    || (shape_ok && !curvature_ok && len <= r.mu)
+                    || !can_split;
                 if done {
                     out.push(Piece {
                         t0: a,
@@ -160,5 +167,30 @@ mod tests {
         for w in ps.windows(2) {
             assert_eq!(w[0].ctrl.p3, w[1].ctrl.p0);
         }
+    }
+
+    #[test]
+    fn windows_shorter_than_l_min_are_one_non_eligible_section() {
+        // An inflection or crossing cut 1e-7·d from a curve's end leaves a window far
+        // below l_m: it must not become a primary section (two fixed ends 1e-7·d apart).
+        let d = 2.0 * 2f64.sqrt();
+        let r = Params::DEFAULT.resolve(d);
+        let k = 0.552_284_749_8;
+        let c = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
+        let ps = resample(&Parent::Cubic(c), 0.0, 1e-7, &r);
+        assert_eq!(ps.len(), 1);
+        assert!(!ps[0].eligible);
+        let l = Line::new((0.0, 0.0), (1.0, 0.0));
+        let ps = resample(&Parent::Line(l), 1.0 - 1e-7, 1.0, &r);
+        assert_eq!(ps.len(), 1);
+        assert!(!ps[0].eligible);
+        // Just above l_m both stay eligible.
+        let t = 2.0 * r.l_min;
+        assert!(resample(&Parent::Line(l), 0.0, t, &r)[0].eligible);
+        assert!(
+            resample(&Parent::Cubic(c), 0.0, t, &r)
+                .iter()
+                .all(|p| p.eligible)
+        );
     }
 }

@@ -113,6 +113,11 @@ pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
         if len > r.l * (1.0 + 1e-9) {
             bad.push(format!("p{i}: length {len} > l = {}", r.l));
         }
+        // Not a sliver-maker: a primary section's control polygon is at least l_m long, so
+        // its arc (turning less than α) is at least about that.
+        if len < 0.5 * r.l_min {
+            bad.push(format!("p{i}: length {len} < l_m / 2 = {}", 0.5 * r.l_min));
+        }
         // Chord within μ, both ways.
         let (a, b) = (s.ctrl.p0, s.ctrl.p3);
         let dev = pts.iter().map(|p| pt_seg(*p, a, b)).fold(0.0, f64::max);
