@@ -60,6 +60,8 @@ pub struct CurvedOptimizeStats {
     pub collapse: OpTally,
     /// Edge swaps.
     pub swap: OpTally,
+    /// Secondary feature edges rerouted through the apex of their sliver.
+    pub reroute: OpTally,
     /// Vertex smoothing.
     pub smooth: OpTally,
     /// Largest curved AMIPS of the certified triangles before the stage.
@@ -186,6 +188,7 @@ pub fn optimize_curved(
     let tallies = s.stats();
     stats.collapse = tallies.collapse.clone();
     stats.swap = tallies.swap.clone();
+    stats.reroute = tallies.reroute.clone();
     stats.smooth = tallies.smooth.clone();
     stats.max_amips_after = last.max_all;
     stats.uncertified_after = last.uncertified;

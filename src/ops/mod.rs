@@ -44,7 +44,7 @@ pub use project::try_project;
 pub use round::try_round;
 pub use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_with};
 pub use split::{SplitPlan, try_split};
-pub use swap::{SwapPlan, try_swap};
+pub use swap::{ReroutePlan, SwapPlan, try_reroute, try_swap};
 
 use crate::features::{FeatureSet, Parent, PrimaryChains};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};

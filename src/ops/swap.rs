@@ -1,10 +1,21 @@
 //! Edge swap: the diagonal `a b` of the quadrilateral of its two triangles is
 //! replaced by the other diagonal `c d`. Never on a feature edge (§4.4.1
 //! "Feature Handling" 3) nor on the mesh boundary.
+//!
+//! Reroute: the same change of triangles on a *secondary* feature edge `a b`
+//! whose opposite vertex `k` (`c` or `d`, the nearer) lies within ε of it. The
+//! feature then runs `a → k → b`: it is the split of `a b` at the foot of `k`
+//! followed by the collapse of that new vertex into `k`, in one step. It is
+//! what removes a sliver between two nearly coincident secondary features
+//! (three feature edges, none of which may be swapped and whose vertices are
+//! more than ε apart). `a`, `b` and `k` stay where they are; the envelope test
+//! decides on `a k` and `k b` as for any operation.
 
+use super::invariants::envelope::point_segment_distance;
 use super::invariants::{self, Check};
 use super::{Context, LocalChange, Outcome, Reject, max_energy};
-use crate::mesh::{FaceId, Transaction, TriMesh, VertexId};
+use crate::mesh::{FaceId, FeatureOn, Transaction, TriMesh, VertexId};
+use kurbo::Line;
 
 /// Everything a swap needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
@@ -23,45 +34,11 @@ impl SwapPlan {
     /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (a
     /// tagged edge), [`Reject::Topology`] (`c d` is already an edge).
     pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
-        if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
-            return Err(Reject::NotAnEdge);
-        }
-        let faces: Vec<FaceId> = mesh
-            .incident_faces(a)
-            .into_iter()
-            .filter(|&f| mesh.face(f).contains(&b))
-            .collect();
-        let [f, g] = match faces[..] {
-            [] => return Err(Reject::NotAnEdge),
-            [_] => return Err(Reject::Boundary),
-            [f, g] => [f, g],
-            _ => return Err(Reject::Topology),
-        };
+        let [f, g] = faces_on(mesh, a, b)?;
         if !mesh.edge_tags(a, b).is_empty() {
             return Err(Reject::FeatureRule);
         }
-        // Orient so that f = (a, b, c) counter-clockwise, g = (b, a, d).
-        let (a, b) = {
-            let i = mesh.edge_index(f, a, b).expect("internal: edge of f");
-            let v = mesh.face(f);
-            (v[(i + 1) % 3], v[(i + 2) % 3])
-        };
-        let third = |h: FaceId| {
-            *mesh
-                .face(h)
-                .iter()
-                .find(|&&x| x != a && x != b)
-                .expect("internal: third vertex")
-        };
-        let (c, d) = (third(f), third(g));
-        if c == d
-            || mesh
-                .incident_faces(c)
-                .iter()
-                .any(|&h| mesh.face(h).contains(&d))
-        {
-            return Err(Reject::Topology);
-        }
+        let [a, b, c, d] = diagonals(mesh, f, g, a, b)?;
         Ok(SwapPlan {
             faces: [f, g],
             new: [[a, d, c], [d, b, c]],
@@ -70,6 +47,57 @@ impl SwapPlan {
             old_max_energy: max_energy(mesh, ctx, &[f, g]),
         })
     }
+}
+
+/// The two faces on the interior edge `a b`.
+fn faces_on(mesh: &TriMesh, a: VertexId, b: VertexId) -> Result<[FaceId; 2], Reject> {
+    if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
+        return Err(Reject::NotAnEdge);
+    }
+    let faces: Vec<FaceId> = mesh
+        .incident_faces(a)
+        .into_iter()
+        .filter(|&f| mesh.face(f).contains(&b))
+        .collect();
+    match faces[..] {
+        [] => Err(Reject::NotAnEdge),
+        [_] => Err(Reject::Boundary),
+        [f, g] => Ok([f, g]),
+        _ => Err(Reject::Topology),
+    }
+}
+
+/// `[a, b, c, d]` with `f = (a, b, c)` counter-clockwise and `g = (b, a, d)`;
+/// [`Reject::Topology`] when `c d` is already an edge.
+fn diagonals(
+    mesh: &TriMesh,
+    f: FaceId,
+    g: FaceId,
+    a: VertexId,
+    b: VertexId,
+) -> Result<[VertexId; 4], Reject> {
+    let (a, b) = {
+        let i = mesh.edge_index(f, a, b).expect("internal: edge of f");
+        let v = mesh.face(f);
+        (v[(i + 1) % 3], v[(i + 2) % 3])
+    };
+    let third = |h: FaceId| {
+        *mesh
+            .face(h)
+            .iter()
+            .find(|&&x| x != a && x != b)
+            .expect("internal: third vertex")
+    };
+    let (c, d) = (third(f), third(g));
+    if c == d
+        || mesh
+            .incident_faces(c)
+            .iter()
+            .any(|&h| mesh.face(h).contains(&d))
+    {
+        return Err(Reject::Topology);
+    }
+    Ok([a, b, c, d])
 }
 
 /// Swap the edge `a b` (see the module doc).
@@ -85,6 +113,94 @@ pub fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> 
         changed: &[plan.c, plan.d],
         budgets: &[],
         old_max_energy: Some(plan.old_max_energy),
+    };
+    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+        return Outcome::Rejected(r);
+    }
+    tx.commit();
+    Outcome::Applied(LocalChange {
+        created,
+        ..LocalChange::default()
+    })
+}
+
+/// Everything a reroute needs, gathered from `&TriMesh`.
+#[derive(Clone, Debug)]
+pub struct ReroutePlan {
+    swap: SwapPlan,
+    a: VertexId,
+    b: VertexId,
+    /// The vertex the feature is rerouted through (`c` or `d`).
+    k: VertexId,
+    tags: Vec<FeatureOn>,
+}
+
+impl ReroutePlan {
+    /// Plan the reroute of the secondary edge `a b` (see the module doc).
+    ///
+    /// # Errors
+    /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (not
+    /// a secondary edge, a primary tag on it, or neither opposite vertex within
+    /// ε of it), [`Reject::Topology`] (`c d` is already an edge).
+    pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
+        let [f, g] = faces_on(mesh, a, b)?;
+        let tags = mesh.edge_tags(a, b);
+        if tags.is_empty()
+            || tags
+                .iter()
+                .any(|t| !matches!(t, FeatureOn::Secondary { .. }))
+        {
+            return Err(Reject::FeatureRule);
+        }
+        let tags = tags.to_vec();
+        let [a, b, c, d] = diagonals(mesh, f, g, a, b)?;
+        let ab = Line::new(mesh.position(a), mesh.position(b));
+        let (hc, hd) = (
+            point_segment_distance(mesh.position(c), ab),
+            point_segment_distance(mesh.position(d), ab),
+        );
+        let (k, h) = if hc <= hd { (c, hc) } else { (d, hd) };
+        if h.is_nan() || h > ctx.envelope.eps() {
+            return Err(Reject::FeatureRule);
+        }
+        Ok(ReroutePlan {
+            swap: SwapPlan {
+                faces: [f, g],
+                new: [[a, d, c], [d, b, c]],
+                c,
+                d,
+                old_max_energy: max_energy(mesh, ctx, &[f, g]),
+            },
+            a,
+            b,
+            k,
+            tags,
+        })
+    }
+}
+
+/// Reroute the secondary edge `a b` through the nearer opposite vertex (see the
+/// module doc).
+pub fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
+    let plan = match ReroutePlan::new(mesh, ctx, a, b) {
+        Ok(p) => p,
+        Err(r) => return Outcome::Rejected(r),
+    };
+    let mut tx = Transaction::new(mesh);
+    let created = tx.replace_faces(&plan.swap.faces, &plan.swap.new);
+    tx.take_edge_tags(plan.a, plan.b);
+    for &tag in &plan.tags {
+        for (x, y) in [(plan.a, plan.k), (plan.k, plan.b)] {
+            if !tx.edge_tags(x, y).contains(&tag) {
+                tx.add_edge_tag(x, y, tag);
+            }
+        }
+    }
+    let check = Check {
+        faces: &created,
+        changed: &[plan.swap.c, plan.swap.d],
+        budgets: &[],
+        old_max_energy: Some(plan.swap.old_max_energy),
     };
     if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);

@@ -260,7 +260,7 @@ pub(crate) fn assert_invariants(
 
 #[derive(Default, Debug)]
 struct Tally {
-    applied: [usize; 6],
+    applied: [usize; 7],
     rejected: HashMap<Reject, usize>,
 }
 
@@ -275,7 +275,7 @@ fn run_ops(mut mesh: TriMesh, ctx: &Context, seed: u64, n_ops: usize) -> Tally {
         let v = mesh.face(f);
         let i = rng.below(3);
         let (a, b) = (v[i], v[(i + 1) % 3]);
-        let kind = rng.below(6);
+        let kind = rng.below(7);
         let before = mesh.clone();
         let out = match kind {
             0 if mesh.num_vertices() < 600 => try_split(&mut mesh, ctx, a, b),
@@ -283,7 +283,8 @@ fn run_ops(mut mesh: TriMesh, ctx: &Context, seed: u64, n_ops: usize) -> Tally {
             2 => try_swap(&mut mesh, ctx, a, b),
             3 => try_smooth(&mut mesh, ctx, a),
             4 => try_round(&mut mesh, ctx, a),
-            _ => try_project(&mut mesh, ctx, a),
+            5 => try_project(&mut mesh, ctx, a),
+            _ => try_reroute(&mut mesh, ctx, a, b),
         };
         let what = format!("seed {seed} step {step} op {kind} on {a:?} {b:?}: {out:?}");
         match out {
@@ -317,7 +318,7 @@ fn random_ops_on_delaunay_meshes_keep_every_invariant() {
         };
         let (mesh, ctx) = delaunay_mesh(seed, rule);
         let t = run_ops(mesh, &ctx, seed, 400);
-        for k in 0..6 {
+        for k in 0..7 {
             total.applied[k] += t.applied[k];
         }
         for (r, n) in t.rejected {
@@ -469,6 +470,112 @@ fn smoothing_improves_a_bad_free_vertex() {
     }
     assert!(max_energy(&mesh, &ctx, &faces) <= e0);
     assert!(applied >= 1 || e0 < 1.5, "{e0}");
+}
+
+/// Three secondary features, `a b` and `a k b` with `k` at height `h` above
+/// `a b`: the BSP mesh holds the sliver `(a, b, k)`, whose three edges are
+/// features.
+fn sliver_of_three_features(h: f64) -> (TriMesh, Context, [VertexId; 3]) {
+    let (pa, pb, pk) = (
+        Point::new(0.1, 0.5),
+        Point::new(0.9, 0.5),
+        Point::new(0.45, 0.5 + h),
+    );
+    let mut mesh = TriMesh::new();
+    let corner = VertexTag {
+        box_corner: true,
+        ..VertexTag::default()
+    };
+    let end = VertexTag {
+        segment_endpoint: true,
+        ..VertexTag::default()
+    };
+    let [p0, p1, p2, p3] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+        .map(|(x, y)| mesh.add_vertex(Point::new(x, y), corner));
+    let [a, b, k] = [pa, pb, pk].map(|p| mesh.add_vertex(p, end));
+    for f in [
+        [a, b, k],
+        [p0, p1, b],
+        [p0, b, a],
+        [p0, a, p3],
+        [a, k, p3],
+        [k, p2, p3],
+        [k, b, p2],
+        [b, p1, p2],
+    ] {
+        mesh.add_face(f);
+    }
+    mesh.link_all();
+    // a, b and k are where features meet (each also ends a feature to a box
+    // corner), as in the drawings where this sliver shows up.
+    let edges = [(a, b), (a, k), (k, b), (a, p0), (b, p1), (k, p2)];
+    for (i, (u, v)) in edges.into_iter().enumerate() {
+        mesh.add_edge_tag(u, v, FeatureOn::Secondary { polyline: i as u32 });
+    }
+    assert!(mesh.check().is_empty(), "{:?}", mesh.check());
+    let polylines = edges.map(|(u, v)| vec![mesh.position(u), mesh.position(v)]);
+    let ctx = Context {
+        sections: Vec::new(),
+        envelope: Envelope::new(&polylines, 0.01, 0.01),
+        alpha: 10f64.to_radians(),
+        on_curve_abs: 1e-12,
+        energy: EnergyRule::NoWorseMax,
+        energy_floor: 0.0,
+        curved: None,
+    };
+    (mesh, ctx, [a, b, k])
+}
+
+#[test]
+fn reroute_removes_a_sliver_between_nearly_coincident_secondary_features() {
+    let (mut mesh, ctx, [a, b, k]) = sliver_of_three_features(1e-4);
+    // None of the plain operations can: the edges are features, the vertices
+    // ends of features farther apart than ε.
+    let before = mesh.clone();
+    assert_eq!(
+        try_swap(&mut mesh, &ctx, a, b),
+        Outcome::Rejected(Reject::FeatureRule)
+    );
+    for (u, v) in [(a, k), (k, a), (b, k), (k, b), (a, b), (b, a)] {
+        assert!(!try_collapse(&mut mesh, &ctx, u, v).is_applied());
+    }
+    assert!(mesh == before);
+    let out = try_reroute(&mut mesh, &ctx, a, b);
+    assert!(out.is_applied(), "{out:?}");
+    assert!(mesh.check().is_empty(), "{:?}", mesh.check());
+    assert!(mesh.edge_tags(a, b).is_empty());
+    let mut off = HashMap::new();
+    assert_invariants(&mesh, &ctx, &mut off, "after reroute");
+    let sec = |p: u32| FeatureOn::Secondary { polyline: p };
+    assert_eq!(mesh.edge_tags(a, k), &[sec(1), sec(0)]);
+    assert_eq!(mesh.edge_tags(k, b), &[sec(2), sec(0)]);
+    // No face holds all of a, b and k any more.
+    assert!(mesh.faces().all(|f| {
+        let v = mesh.face(f);
+        !(v.contains(&a) && v.contains(&b) && v.contains(&k))
+    }));
+}
+
+#[test]
+fn reroute_refuses_an_apex_beyond_eps_and_unfeatured_edges() {
+    let (mut mesh, ctx, [a, b, k]) = sliver_of_three_features(0.05);
+    let before = mesh.clone();
+    assert_eq!(
+        try_reroute(&mut mesh, &ctx, a, b),
+        Outcome::Rejected(Reject::FeatureRule)
+    );
+    // An interior edge without features: a p3 (a's edges in turn: b, k, p3, p0).
+    let p3 = mesh
+        .vertices()
+        .find(|&v| mesh.position(v) == Point::new(0.0, 1.0))
+        .expect("corner");
+    assert!(mesh.edge_tags(a, p3).is_empty());
+    assert_eq!(
+        try_reroute(&mut mesh, &ctx, a, p3),
+        Outcome::Rejected(Reject::FeatureRule)
+    );
+    assert!(mesh == before);
+    let _ = k;
 }
 
 #[test]

@@ -44,7 +44,7 @@
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
-    try_round, try_smooth_with, try_split, try_swap,
+    try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
 use crate::optimize::energy::amips;
 use kurbo::Point;
@@ -132,6 +132,8 @@ pub struct OptimizeStats {
     pub collapse: OpTally,
     /// Edge swaps.
     pub swap: OpTally,
+    /// Secondary feature edges rerouted through the apex of their sliver.
+    pub reroute: OpTally,
     /// Vertex smoothing.
     pub smooth: OpTally,
     /// Rounding of rational vertices to `f64`.
@@ -314,6 +316,7 @@ impl<'a> Schedule<'a> {
                 split: OpTally::default(),
                 collapse: OpTally::default(),
                 swap: OpTally::default(),
+                reroute: OpTally::default(),
                 smooth: OpTally::default(),
                 round: OpTally::default(),
                 project: OpTally::default(),
@@ -586,14 +589,17 @@ impl<'a> Schedule<'a> {
         true
     }
 
-    /// Swap edges where that lowers the larger energy of their two triangles.
+    /// Swap edges where that lowers the larger energy of their two triangles;
+    /// on secondary feature edges, the same change is a reroute (`ops::swap`).
     pub(crate) fn swap_pass(&mut self) -> u64 {
         let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
         for k in edges(self.mesh) {
-            if !self.mesh.edge_tags(k.lo, k.hi).is_empty() {
-                continue;
-            }
-            if swap_gain(self.mesh, self.ctx, k).is_some() {
+            let primary = self
+                .mesh
+                .edge_tags(k.lo, k.hi)
+                .iter()
+                .any(|t| matches!(t, FeatureOn::Primary { .. }));
+            if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
                 cands.push((length(self.mesh, k), k));
             }
         }
@@ -604,9 +610,27 @@ impl<'a> Schedule<'a> {
             if swap_gain(self.mesh, self.ctx, k).is_none() {
                 continue;
             }
-            let out = try_swap(self.mesh, self.ctx, k.lo, k.hi);
+            let tags = self.mesh.edge_tags(k.lo, k.hi);
+            let secondary = !tags.is_empty()
+                && tags
+                    .iter()
+                    .all(|t| matches!(t, FeatureOn::Secondary { .. }));
+            let (out, tally) = if tags.is_empty() {
+                (
+                    try_swap(self.mesh, self.ctx, k.lo, k.hi),
+                    &mut self.stats.swap,
+                )
+            } else if secondary {
+                (
+                    try_reroute(self.mesh, self.ctx, k.lo, k.hi),
+                    &mut self.stats.reroute,
+                )
+            } else {
+                continue;
+            };
+            let counted = tally.record(&out);
             self.touch(&out);
-            if self.stats.swap.record(&out) {
+            if counted {
                 applied += 1;
             }
         }

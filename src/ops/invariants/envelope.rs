@@ -24,7 +24,7 @@ pub struct Envelope {
     grid: HashMap<(i64, i64), Vec<u32>>,
 }
 
-fn point_segment_distance(p: Point, l: Line) -> f64 {
+pub(crate) fn point_segment_distance(p: Point, l: Line) -> f64 {
     let d = l.p1 - l.p0;
     let len2 = d.hypot2();
     if len2 == 0.0 {
