@@ -17,8 +17,10 @@
 //!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m, and windows shorter
 //!    than l_m (a cut next to a curve's end), are not eligible.
 //! 4. `separation`: μ-separation (Definition 4.1), decided conservatively on the sections'
-//!    control hulls with a uniform grid, then the secondary simplification (endpoints closer
-//!    than μ collapse to their barycentre).
+//!    control hulls with a uniform grid; a primary section shorter than μ that shares no end
+//!    point with another primary section is demoted too (its fixed ends, within μ of the
+//!    secondary features around it, would only force slivers); then the secondary
+//!    simplification (endpoints closer than μ collapse to their barycentre).
 //!
 //! Guarantees to the next stage (checked by the property tests with an independent checker):
 //! every primary section has constant-sign curvature, turns less than α, is no longer than
@@ -211,6 +213,9 @@ pub struct FeatureCounts {
     pub high_curvature: usize,
     /// Eligible sections demoted by the μ-separation test.
     pub not_separated: usize,
+    /// Primary sections shorter than μ sharing no end point with another primary
+    /// section, demoted (a lone sliver-maker between secondary features).
+    pub short_isolated: usize,
     /// Primary sections demoted after the secondary simplification moved a neighbour.
     pub demoted_after_simplify: usize,
     /// Secondary vertices moved by the simplification.
@@ -401,6 +406,8 @@ impl FeatureSet {
             .zip(&primary)
             .filter(|(s, p)| s.eligible && !**p)
             .count();
+        counts.short_isolated =
+            separation::demote_short_isolated(&sections, &mut primary, params.mu);
         timing.separation_ms = ms(t);
 
         // 5. Secondary simplification and assembly.

@@ -23,7 +23,7 @@
 //! demoting any that a moved segment came too close to.
 
 use super::grid::Grid;
-use super::resample::point_segment_distance;
+use super::resample::{point_segment_distance, polygon_length};
 use super::{FeaturePoint, SecondaryPolyline, Section};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
@@ -229,6 +229,25 @@ pub(super) fn separate(
     primary
 }
 
+/// Demote every primary section whose control polygon is shorter than `mu` and that
+/// shares no end point with another primary section; returns how many.
+pub(super) fn demote_short_isolated(sections: &[Section], primary: &mut [bool], mu: f64) -> usize {
+    let mut ends: std::collections::HashMap<(u64, u64), usize> = std::collections::HashMap::new();
+    for (s, _) in sections.iter().zip(primary.iter()).filter(|(_, p)| **p) {
+        *ends.entry(key(s.ctrl.p0)).or_default() += 1;
+        *ends.entry(key(s.ctrl.p3)).or_default() += 1;
+    }
+    let mut demoted = 0;
+    for (s, p) in sections.iter().zip(primary.iter_mut()) {
+        let lone = |q: Point| ends.get(&key(q)).copied().unwrap_or(0) <= 1;
+        if *p && polygon_length(&s.ctrl) < mu && lone(s.ctrl.p0) && lone(s.ctrl.p3) {
+            *p = false;
+            demoted += 1;
+        }
+    }
+    demoted
+}
+
 /// Result of greedy clustering.
 struct Clusters {
     positions: Vec<Point>,
@@ -387,6 +406,36 @@ mod tests {
     fn seg(a: (f64, f64), b: (f64, f64)) -> CubicBez {
         let (a, b) = (Point::from(a), Point::from(b));
         CubicBez::new(a, a.lerp(b, 1.0 / 3.0), a.lerp(b, 2.0 / 3.0), b)
+    }
+
+    #[test]
+    fn only_short_primary_sections_without_primary_neighbours_are_demoted() {
+        let section = |a: (f64, f64), b: (f64, f64)| {
+            let (pa, pb) = (Point::from(a), Point::from(b));
+            Section {
+                feature: 0,
+                parent: super::super::Parent::Line(Line::new(pa, pb)),
+                t0: 0.0,
+                t1: 1.0,
+                ctrl: seg(a, b),
+                eligible: true,
+            }
+        };
+        let sections = [
+            // Short and alone between two secondary sections: demoted.
+            section((0.0, 0.0), (5.0, 0.0)),
+            section((5.0, 0.0), (5.05, 0.0)),
+            section((5.05, 0.0), (9.0, 0.0)),
+            // Short but continued by a primary section: kept.
+            section((0.0, 2.0), (0.05, 2.0)),
+            section((0.05, 2.0), (4.0, 2.0)),
+            // Alone but not short: kept.
+            section((0.0, 4.0), (0.5, 4.0)),
+        ];
+        let mut primary = [false, true, false, true, true, true];
+        let n = demote_short_isolated(&sections, &mut primary, 0.1);
+        assert_eq!(n, 1);
+        assert_eq!(primary, [false, false, false, true, true, true]);
     }
 
     #[test]
