@@ -108,6 +108,17 @@ pub fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> 
     };
     let mut tx = Transaction::new(mesh);
     let created = tx.replace_faces(&plan.faces, &plan.new);
+    validate_and_commit(tx, ctx, &plan, created)
+}
+
+/// The invariants on the faces a swap (or reroute) created in `tx`, then commit,
+/// or roll back by dropping `tx`.
+fn validate_and_commit(
+    tx: Transaction<'_>,
+    ctx: &Context,
+    plan: &SwapPlan,
+    created: Vec<FaceId>,
+) -> Outcome {
     let check = Check {
         faces: &created,
         changed: &[plan.c, plan.d],
@@ -196,18 +207,5 @@ pub fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) 
             }
         }
     }
-    let check = Check {
-        faces: &created,
-        changed: &[plan.swap.c, plan.swap.d],
-        budgets: &[],
-        old_max_energy: Some(plan.swap.old_max_energy),
-    };
-    if let Err(r) = invariants::validate(&tx, ctx, &check) {
-        return Outcome::Rejected(r);
-    }
-    tx.commit();
-    Outcome::Applied(LocalChange {
-        created,
-        ..LocalChange::default()
-    })
+    validate_and_commit(tx, ctx, &plan.swap, created)
 }
