@@ -128,30 +128,16 @@ fn amips_of_jacobian(dxi: Vec2, deta: Vec2) -> f64 {
 /// maximum over the degree-4 lattice. `+∞` when `det J ≤ 0` at a sample or
 /// `nodes` is not `order`'s node count.
 pub fn amips(order: Order, nodes: &[Point]) -> f64 {
-    // Derivative nets (degree n − 1, lattice order) of the Bézier form.
-    let o = nodes.first().map_or(Vec2::ZERO, |p| p.to_vec2());
-    let net: Vec<Vec2> = match order {
-        Order::Linear => {
-            let Ok(c) = <[Point; 3]>::try_from(nodes) else {
-                return f64::INFINITY;
-            };
-            return amips_of_jacobian(c[1] - c[0], c[2] - c[0]);
-        }
-        Order::Quadratic => match <&[Point; 6]>::try_from(nodes) {
-            Ok(n) => lagrange::quadratic_to_bezier(&n.map(|p| p - o))
-                .iter()
-                .map(|p| p.to_vec2())
-                .collect(),
-            Err(_) => return f64::INFINITY,
-        },
-        Order::Cubic => match <&[Point; 10]>::try_from(nodes) {
-            Ok(n) => lagrange::cubic_to_bezier(&n.map(|p| p - o))
-                .iter()
-                .map(|p| p.to_vec2())
-                .collect(),
-            Err(_) => return f64::INFINITY,
-        },
+    if order == Order::Linear {
+        let Ok(c) = <[Point; 3]>::try_from(nodes) else {
+            return f64::INFINITY;
+        };
+        return amips_of_jacobian(c[1] - c[0], c[2] - c[0]);
+    }
+    let Some(net) = lagrange::relative_bezier_net(order, nodes) else {
+        return f64::INFINITY;
     };
+    // Derivative nets (degree n − 1, lattice order) of the Bézier form.
     let n = order as usize;
     let m = n - 1;
     let idx = super::bernstein::index;

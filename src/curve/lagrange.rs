@@ -170,6 +170,24 @@ pub fn bezier_to_cubic(net: &[Point; 10]) -> [Point; 10] {
     n
 }
 
+/// The Bézier control net (lattice order) of a quadratic or cubic Lagrange triangle
+/// (`nodes` in gmsh order), translated so that node 0 is the origin (no cancellation far
+/// from it). `None` for the linear order or a wrong node count.
+pub fn relative_bezier_net(order: crate::fem::Order, nodes: &[Point]) -> Option<Vec<kurbo::Vec2>> {
+    use crate::fem::Order;
+    let o = nodes.first()?.to_vec2();
+    let net: Vec<Point> = match order {
+        Order::Linear => return None,
+        Order::Quadratic => {
+            quadratic_to_bezier(&<[Point; 6]>::try_from(nodes).ok()?.map(|p| p - o)).to_vec()
+        }
+        Order::Cubic => {
+            cubic_to_bezier(&<[Point; 10]>::try_from(nodes).ok()?.map(|p| p - o)).to_vec()
+        }
+    };
+    Some(net.into_iter().map(|p| p.to_vec2()).collect())
+}
+
 /// The quadratic Bézier control net (lattice order) of the quadratic Lagrange triangle `nodes`.
 pub fn quadratic_to_bezier(nodes: &[Point; 6]) -> [Point; 6] {
     let v = |i: usize| nodes[i].to_vec2();
