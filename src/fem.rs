@@ -8,35 +8,10 @@
 //! the centre). Lines list their two ends, then interior nodes in order along the line
 //! (gmsh type 8: end, end, middle; type 26: end, end, 1/3, 2/3).
 
+pub use crate::element::Order;
 use crate::mesh::{FeatureOn, TriMesh, VertexId};
 use crate::{Error, Result};
 use kurbo::Point;
-
-/// Geometric order of the elements (1 linear, 2 quadratic, 3 cubic).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub enum Order {
-    /// Straight 3-node triangles (gmsh type 2) and 2-node lines (type 1).
-    Linear = 1,
-    /// 6-node triangles (type 9) and 3-node lines (type 8).
-    Quadratic = 2,
-    /// 10-node triangles (type 21) and 4-node lines (type 26).
-    Cubic = 3,
-}
-
-impl Order {
-    /// Nodes per triangle.
-    pub fn triangle_nodes(self) -> usize {
-        match self {
-            Order::Linear => 3,
-            Order::Quadratic => 6,
-            Order::Cubic => 10,
-        }
-    }
-    /// Nodes per line element.
-    pub fn line_nodes(self) -> usize {
-        self as usize + 1
-    }
-}
 
 /// What kind of feature a line element lies on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -195,58 +170,26 @@ impl LinearMesh {
 }
 
 impl FemMesh {
-    /// A linear FemMesh with one physical surface `surface` and one physical curve
-    /// per shape that has feature edges (named with `shape_name`).
-    pub fn from_linear(
-        mesh: &LinearMesh,
+    /// A FemMesh of `order` with one physical surface `surface` and one physical
+    /// curve per shape that has feature lines (named with `shape_name`, numbered in
+    /// order of first appearance): `lines` holds `order.line_nodes()` node indices per
+    /// line and `line_features` each line's shape and kind. Every mesher's output
+    /// (linear, BSP, curved) is delivered through here.
+    pub fn assemble(
+        order: Order,
+        nodes: Vec<Point>,
+        triangles: Vec<u32>,
+        lines: Vec<u32>,
+        line_features: impl ExactSizeIterator<Item = (crate::svg::ShapeId, LineKind)>,
         surface: &str,
         shape_name: impl Fn(crate::svg::ShapeId) -> String,
     ) -> FemMesh {
         let mut curves: Vec<String> = Vec::new();
         let mut curve_of: std::collections::HashMap<crate::svg::ShapeId, u32> =
             std::collections::HashMap::new();
-        let mut lines = Vec::with_capacity(mesh.edges.len() * 2);
-        let mut line_group = Vec::with_capacity(mesh.edges.len());
-        let mut line_kind = Vec::with_capacity(mesh.edges.len());
-        for e in &mesh.edges {
-            let g = *curve_of.entry(e.shape).or_insert_with(|| {
-                curves.push(shape_name(e.shape));
-                (curves.len() - 1) as u32
-            });
-            lines.extend_from_slice(&e.v);
-            line_group.push(g);
-            line_kind.push(e.kind);
-        }
-        FemMesh {
-            order: Some(Order::Linear),
-            nodes: mesh.vertices.clone(),
-            triangles: mesh.triangles.iter().flatten().copied().collect(),
-            triangle_group: vec![0; mesh.triangles.len()],
-            surfaces: vec![surface.to_owned()],
-            lines,
-            line_group,
-            line_kind,
-            curves,
-        }
-    }
-}
-
-impl FemMesh {
-    /// The FemMesh of a curved mesh (any order), with one physical surface
-    /// `surface` and one physical curve per shape that has feature lines (named
-    /// with `shape_name`), as [`FemMesh::from_linear`] does.
-    pub fn from_curved(
-        mesh: &crate::curve::CurvedMesh,
-        surface: &str,
-        shape_name: impl Fn(crate::svg::ShapeId) -> String,
-    ) -> FemMesh {
-        let order = mesh.order();
-        let mut curves: Vec<String> = Vec::new();
-        let mut curve_of: std::collections::HashMap<crate::svg::ShapeId, u32> =
-            std::collections::HashMap::new();
-        let mut line_group = Vec::with_capacity(mesh.line_feature.len());
-        let mut line_kind = Vec::with_capacity(mesh.line_feature.len());
-        for &(shape, kind) in &mesh.line_feature {
+        let mut line_group = Vec::with_capacity(line_features.len());
+        let mut line_kind = Vec::with_capacity(line_features.len());
+        for (shape, kind) in line_features {
             let g = *curve_of.entry(shape).or_insert_with(|| {
                 curves.push(shape_name(shape));
                 (curves.len() - 1) as u32
@@ -254,17 +197,35 @@ impl FemMesh {
             line_group.push(g);
             line_kind.push(kind);
         }
-        let triangles = mesh.triangles.len() / order.triangle_nodes();
+        let count = triangles.len() / order.triangle_nodes();
         FemMesh {
             order: Some(order),
-            nodes: mesh.nodes.clone(),
-            triangles: mesh.triangles.clone(),
-            triangle_group: vec![0; triangles],
+            nodes,
+            triangles,
+            triangle_group: vec![0; count],
             surfaces: vec![surface.to_owned()],
-            lines: mesh.lines.clone(),
+            lines,
             line_group,
             line_kind,
             curves,
         }
+    }
+
+    /// A linear FemMesh with one physical surface `surface` and one physical curve
+    /// per shape that has feature edges (named with `shape_name`).
+    pub fn from_linear(
+        mesh: &LinearMesh,
+        surface: &str,
+        shape_name: impl Fn(crate::svg::ShapeId) -> String,
+    ) -> FemMesh {
+        FemMesh::assemble(
+            Order::Linear,
+            mesh.vertices.clone(),
+            mesh.triangles.iter().flatten().copied().collect(),
+            mesh.edges.iter().flat_map(|e| e.v).collect(),
+            mesh.edges.iter().map(|e| (e.shape, e.kind)),
+            surface,
+            shape_name,
+        )
     }
 }

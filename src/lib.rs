@@ -24,6 +24,7 @@ pub mod baseline;
 pub mod batch;
 pub mod bsp;
 pub mod curve;
+pub mod element;
 pub mod error;
 pub mod exact;
 pub mod features;

@@ -10,7 +10,8 @@ use kurbo::{CubicBez, ParamCurveArea, Point};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use triwild::FemMesh;
-use triwild::fem::{LineKind, Order};
+use triwild::element::Order;
+use triwild::fem::LineKind;
 use triwild::output::{MshOptions, MshVersion, write_msh};
 
 fn scratch(name: &str) -> PathBuf {
@@ -89,7 +90,7 @@ fn cubic() -> (FemMesh, f64) {
         t0: 0.0,
         t1: 1.0,
     };
-    let n = triwild::curve::lagrange::cubic_nodes(
+    let n = triwild::element::lagrange::cubic_nodes(
         [
             Point::new(0.0, 0.0),
             Point::new(1.0, 0.0),
@@ -152,7 +153,7 @@ fn valid_meshes_of_every_order_and_format() {
     // the quarter disk's ratio is tight: min/max of det J sampled densely
     let (c, _) = cubic();
     let n: [Point; 10] = c.nodes.clone().try_into().expect("10 nodes");
-    let det = triwild::curve::jacobian::det_cubic(&n);
+    let det = triwild::element::jacobian::det_cubic(&n);
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..=50 {
         for k in 0..=50 - i {

@@ -18,7 +18,7 @@ use std::path::Path;
 use support::devset::{devset_dir, svg_files};
 use support::{check_msh, out_dir};
 use triwild::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
-use triwild::fem::Order;
+use triwild::element::Order;
 use triwild::output::{self, MshOptions};
 use triwild::pipeline;
 use triwild::regions::{self, RegionOptions};

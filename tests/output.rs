@@ -7,7 +7,8 @@ use kurbo::Point;
 use std::collections::HashMap;
 use std::path::Path;
 use support::{DefectKind, Msh, check_msh, out_dir, read_msh};
-use triwild::fem::{LineKind, Order};
+use triwild::element::Order;
+use triwild::fem::LineKind;
 use triwild::output::{self, MshOptions, MshVersion};
 use triwild::{Error, FemMesh};
 

@@ -38,10 +38,11 @@
 //! them and returns [`Error::Meshing`] otherwise). Nodes on an edge are shared by
 //! both triangles on it and by the edge's line element.
 
-use super::element::{self, EDGES, straight_inner};
-use super::jacobian::{self, CertifyOptions};
 use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
-use crate::fem::{LineKind, Order};
+use crate::element::Order;
+use crate::element::jacobian::{self, CertifyOptions};
+use crate::element::triangle::{self as element, EDGES, straight_inner};
+use crate::fem::{FemMesh, LineKind};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use crate::ops::invariants::curved::{self, curved_tag, on_cubic, primary};
 use crate::ops::{self, Context, CurvedRule, Outcome};
@@ -942,6 +943,28 @@ fn lagrange_edge(a: Point, b: Point, inner: &[Point], s: f64) -> Point {
         out += w * p.to_vec2();
     }
     out.to_point()
+}
+
+impl FemMesh {
+    /// The FemMesh of a curved mesh (any order), with one physical surface
+    /// `surface` and one physical curve per shape that has feature lines (named
+    /// with `shape_name`), as [`FemMesh::from_linear`] does.
+    /// (It lives here, with the curved mesh, so `fem` need not know the curving stage.)
+    pub fn from_curved(
+        mesh: &CurvedMesh,
+        surface: &str,
+        shape_name: impl Fn(crate::svg::ShapeId) -> String,
+    ) -> FemMesh {
+        FemMesh::assemble(
+            mesh.order(),
+            mesh.nodes.clone(),
+            mesh.triangles.clone(),
+            mesh.lines.clone(),
+            mesh.line_feature.iter().copied(),
+            surface,
+            shape_name,
+        )
+    }
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@
 //! (`min_detj_ratio`, `total_area`, invalid counts) this summary reproduces with
 //! its own code.
 
-use super::jacobian::{self, CertifyOptions, Validity};
-use crate::fem::Order;
+use crate::element::Order;
+use crate::element::jacobian::{self, CertifyOptions, Validity};
 use kurbo::Point;
 
 /// The certification summary of a mesh.
@@ -170,8 +170,8 @@ pub fn certify_mesh<'a>(
 fn is_curved(order: Order, p: &[Point], tol: f64) -> bool {
     let refs: &[[f64; 2]] = match order {
         Order::Linear => return false,
-        Order::Quadratic => &super::lagrange::QUADRATIC_REF,
-        Order::Cubic => &super::lagrange::CUBIC_REF,
+        Order::Quadratic => &crate::element::lagrange::QUADRATIC_REF,
+        Order::Cubic => &crate::element::lagrange::CUBIC_REF,
     };
     refs.iter().zip(p).skip(3).any(|(r, q)| {
         let s = p[0] + r[0] * (p[1] - p[0]) + r[1] * (p[2] - p[0]);
@@ -249,7 +249,7 @@ pub fn check_msh(m: &crate::input::MshMesh, opts: &CertifyOptions) -> FileCheck 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::curve::lagrange::{CurvedEdge, cubic_nodes};
+    use crate::element::lagrange::{CurvedEdge, cubic_nodes};
     use kurbo::CubicBez;
 
     fn square_nodes() -> Vec<Point> {

@@ -29,7 +29,7 @@
 //! created is a certified curved element with at most one curved edge, and no
 //! certified face became uncertified.
 
-use crate::fem::Order;
+use crate::element::Order;
 use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
 use crate::ops::{self, Context};

@@ -6,7 +6,7 @@
 //! not need (`$NodeData`, `$Periodic`, ...) are skipped. Never panics and never
 //! over-allocates on a malformed file: counts are checked against the bytes left.
 
-use crate::fem::Order;
+use crate::element::Order;
 use crate::{Error, Result};
 use kurbo::Point;
 use std::collections::HashMap;
@@ -137,12 +137,7 @@ fn element_shape(t: i32) -> Option<(i32, usize)> {
 }
 
 fn triangle_order(t: i32) -> Option<Order> {
-    match t {
-        2 => Some(Order::Linear),
-        9 => Some(Order::Quadratic),
-        21 => Some(Order::Cubic),
-        _ => None,
-    }
+    Order::from_gmsh_triangle_type(t)
 }
 
 type R<T> = std::result::Result<T, String>;
@@ -709,8 +704,6 @@ fn truncate(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::FemMesh;
-    use crate::output::{MshOptions, MshVersion};
 
     fn fixture(name: &str) -> Vec<u8> {
         let p = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -754,88 +747,6 @@ mod tests {
             } else {
                 first = Some(m);
             }
-        }
-    }
-
-    fn two_orders() -> FemMesh {
-        let nodes = vec![
-            Point::new(0.0, 0.0),
-            Point::new(1.0, 0.0),
-            Point::new(0.0, 1.0),
-            Point::new(0.5, -0.1),
-            Point::new(0.5, 0.5),
-            Point::new(0.0, 0.5),
-        ];
-        FemMesh {
-            order: Some(Order::Quadratic),
-            nodes,
-            triangles: vec![0, 1, 2, 3, 4, 5],
-            triangle_group: vec![0],
-            surfaces: vec!["s".into()],
-            lines: vec![0, 1, 3],
-            line_group: vec![0],
-            line_kind: vec![crate::fem::LineKind::Primary],
-            curves: vec!["c".into()],
-        }
-    }
-
-    #[test]
-    fn writer_round_trips_in_every_format() {
-        let m = two_orders();
-        let dir = tempfile::tempdir().expect("tempdir");
-        for version in [MshVersion::V22, MshVersion::V41] {
-            for binary in [false, true] {
-                let p = dir.path().join("m.msh");
-                crate::output::write_msh(&m, &p, MshOptions { version, binary }).expect("write");
-                let r = read_msh_file(&p).expect("read");
-                assert_eq!(r.format.binary, binary);
-                assert_eq!(r.nodes, m.nodes);
-                assert_eq!(r.triangle_blocks.len(), 1);
-                assert_eq!(r.triangle_blocks[0].order, Order::Quadratic);
-                assert_eq!(r.triangle_blocks[0].nodes, m.triangles);
-                assert_eq!(r.triangle_blocks[0].physical, Some(1));
-                assert_eq!(r.lines, 1);
-                assert_eq!(r.physical_names.len(), 2);
-            }
-        }
-    }
-
-    #[test]
-    fn malformed_files_are_errors() {
-        let good = {
-            let dir = tempfile::tempdir().expect("tempdir");
-            let p = dir.path().join("m.msh");
-            crate::output::write_msh(
-                &two_orders(),
-                &p,
-                MshOptions {
-                    version: MshVersion::V41,
-                    binary: true,
-                },
-            )
-            .expect("write");
-            std::fs::read(p).expect("read")
-        };
-        // every truncation is an error, never a panic
-        for n in 0..good.len() {
-            let _ = read_msh(&good[..n]);
-        }
-        assert!(read_msh(&good[..good.len() / 2]).is_err());
-        // flipping bytes never panics
-        for i in 0..good.len() {
-            let mut b = good.clone();
-            b[i] ^= 0x5a;
-            let _ = read_msh(&b);
-        }
-        for bad in [
-            &b""[..],
-            b"hello",
-            b"$MeshFormat\n4.0 0 8\n$EndMeshFormat\n",
-            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 2 0 1 2 3\n$EndElements\n",
-            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 nan 0 0\n$EndNodes\n",
-            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n99999999999\n$EndNodes\n",
-        ] {
-            assert!(matches!(read_msh(bad), Err(Error::BadMesh(_))), "{:?}", String::from_utf8_lossy(bad));
         }
     }
 

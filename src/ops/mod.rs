@@ -146,15 +146,15 @@ pub enum EnergyRule {
 /// every triangle has at most one curved edge (a primary edge on a cubic
 /// parent), takes the exact curve piece there and must be certified valid;
 /// energies are the curved AMIPS of the elements
-/// ([`crate::curve::element::amips`]; an uncertified element counts `+∞`);
+/// ([`crate::element::triangle::amips`]; an uncertified element counts `+∞`);
 /// and a primary edge's piece need only turn less than [`CurvedRule::alpha`]
 /// instead of [`Context::alpha`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CurvedRule {
     /// Element order (quadratic or cubic).
-    pub order: crate::fem::Order,
+    pub order: crate::element::Order,
     /// How elements are certified.
-    pub certify: crate::curve::CertifyOptions,
+    pub certify: crate::element::CertifyOptions,
     /// Bound on the turn of a primary edge's curve piece, radians (strict).
     pub alpha: f64,
 }
@@ -162,10 +162,10 @@ pub struct CurvedRule {
 impl CurvedRule {
     /// The rule for `order` with validity-only certification and a turn
     /// bound of 90° (Theorem 4.4 needs less than π; 90° keeps a margin).
-    pub fn new(order: crate::fem::Order) -> CurvedRule {
+    pub fn new(order: crate::element::Order) -> CurvedRule {
         CurvedRule {
             order,
-            certify: crate::curve::CertifyOptions::VALIDITY,
+            certify: crate::element::CertifyOptions::VALIDITY,
             alpha: std::f64::consts::FRAC_PI_2,
         }
     }
@@ -392,7 +392,7 @@ pub(crate) fn max_energy_of(
             .into_iter()
             .map(|t| {
                 let [a, b, c] = t.map(|x| mesh.position(x));
-                crate::optimize::energy::amips(a, b, c)
+                crate::element::energy::amips(a, b, c)
             })
             .fold(0.0, f64::max),
         Some(rule) => tris

@@ -10,9 +10,9 @@
 
 use super::invariants::{self, Check, on_curve};
 use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role};
+use crate::element::energy::{Amips2, CurveJet, along_curve, amips_free};
 use crate::features::Parent;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
-use crate::optimize::energy::{Amips2, CurveJet, along_curve, amips_free};
 use kurbo::{Point, Vec2};
 use nalgebra::Vector2;
 use std::cmp::Ordering;
@@ -121,7 +121,7 @@ impl SmoothPlan {
                     .iter()
                     .map(|&f| {
                         let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
-                        crate::optimize::energy::amips(a, b, c)
+                        crate::element::energy::amips(a, b, c)
                     })
                     .fold(0.0, f64::max);
                 if !(m.is_finite() && m > 0.0) {

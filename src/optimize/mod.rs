@@ -1,11 +1,8 @@
-//! Mesh optimization: the AMIPS energy the local operations minimise (and,
-//! next, the schedule of split / collapse / swap / smooth passes).
-//!
-//! Owns [`energy`]: the 2D conformal AMIPS of a triangle with analytic
-//! derivatives in one free vertex and along a feature curve. Thesis §2.3.2,
-//! §4.4.1, §4.4.3; DESIGN "Data flow" (optimize).
+//! Mesh optimization: the schedule of split / collapse / swap / smooth passes
+//! that drives the local operations (`ops`) over the whole mesh, with the sizing
+//! field and the stop rules. The energy it minimises is
+//! [`crate::element::energy`]. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
 
-pub mod energy;
 pub mod schedule;
 
 pub use schedule::{OptimizeOptions, OptimizeStats, optimize};

@@ -41,12 +41,12 @@
 //! rounding and smoothing); a vertex left rational after them makes the mesh
 //! unusable, which the caller reports as an error.
 
+use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
     try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
-use crate::optimize::energy::amips;
 use kurbo::Point;
 use std::collections::{BTreeMap, BinaryHeap};
 
@@ -272,7 +272,7 @@ impl Shuffle {
 }
 
 /// The optimizer's state: the sizing field, the retry stamps and the tallies.
-/// The curved stage (`crate::curve::optimize`) drives its collapse, swap and
+/// The curved stage (the curved mesh optimization, one layer up) drives its collapse, swap and
 /// smoothing passes too, with a uniform target.
 pub(crate) struct Schedule<'a> {
     mesh: &'a mut TriMesh,

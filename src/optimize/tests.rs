@@ -5,10 +5,10 @@
 //! deterministic. Fixed seeds.
 
 use super::schedule::{OptimizeOptions, StopReason, optimize};
+use crate::element::energy::amips;
 use crate::mesh::TriMesh;
 use crate::ops::tests::{assert_invariants, bsp_mesh, delaunay_mesh};
 use crate::ops::{Context, EnergyRule};
-use crate::optimize::energy::amips;
 use std::collections::HashMap;
 
 fn max_energy(mesh: &TriMesh) -> f64 {

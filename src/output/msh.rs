@@ -15,16 +15,12 @@
 //!   back bit-exactly; binary uses native byte order with gmsh's endianness marker.
 
 use crate::FemMesh;
-use crate::fem::Order;
+use crate::element::Order;
 use std::io::{self, Write};
 
 /// gmsh element type numbers of (triangle, line) for an element order.
 fn element_types(order: Order) -> (i32, i32) {
-    match order {
-        Order::Linear => (2, 1),
-        Order::Quadratic => (9, 8),
-        Order::Cubic => (21, 26),
-    }
+    (order.gmsh_triangle_type(), order.gmsh_line_type())
 }
 
 fn invalid(msg: String) -> io::Error {
@@ -599,6 +595,7 @@ pub(crate) fn write_v22<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::{MshOptions, MshVersion, write_msh};
     use kurbo::Point;
 
     fn square() -> FemMesh {
@@ -744,5 +741,89 @@ mod tests {
             format!("{}-curve", "x".repeat(MAX_NAME_CHARS - 6))
         );
         assert!(names.iter().all(|n| n.2.chars().count() <= MAX_NAME_CHARS));
+    }
+
+    /// Reading back what the writer wrote (the reader is `crate::input`, below
+    /// the writers: these tests live with the writer so `input` imports nothing above it).
+    fn two_orders() -> FemMesh {
+        let nodes = vec![
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(0.0, 1.0),
+            Point::new(0.5, -0.1),
+            Point::new(0.5, 0.5),
+            Point::new(0.0, 0.5),
+        ];
+        FemMesh {
+            order: Some(Order::Quadratic),
+            nodes,
+            triangles: vec![0, 1, 2, 3, 4, 5],
+            triangle_group: vec![0],
+            surfaces: vec!["s".into()],
+            lines: vec![0, 1, 3],
+            line_group: vec![0],
+            line_kind: vec![crate::fem::LineKind::Primary],
+            curves: vec!["c".into()],
+        }
+    }
+
+    #[test]
+    fn writer_round_trips_in_every_format() {
+        let m = two_orders();
+        let dir = tempfile::tempdir().expect("tempdir");
+        for version in [MshVersion::V22, MshVersion::V41] {
+            for binary in [false, true] {
+                let p = dir.path().join("m.msh");
+                write_msh(&m, &p, MshOptions { version, binary }).expect("write");
+                let r = crate::input::read_msh_file(&p).expect("read");
+                assert_eq!(r.format.binary, binary);
+                assert_eq!(r.nodes, m.nodes);
+                assert_eq!(r.triangle_blocks.len(), 1);
+                assert_eq!(r.triangle_blocks[0].order, Order::Quadratic);
+                assert_eq!(r.triangle_blocks[0].nodes, m.triangles);
+                assert_eq!(r.triangle_blocks[0].physical, Some(1));
+                assert_eq!(r.lines, 1);
+                assert_eq!(r.physical_names.len(), 2);
+            }
+        }
+    }
+
+    #[test]
+    fn malformed_files_are_errors() {
+        let good = {
+            let dir = tempfile::tempdir().expect("tempdir");
+            let p = dir.path().join("m.msh");
+            write_msh(
+                &two_orders(),
+                &p,
+                MshOptions {
+                    version: MshVersion::V41,
+                    binary: true,
+                },
+            )
+            .expect("write");
+            std::fs::read(p).expect("read")
+        };
+        // every truncation is an error, never a panic
+        for n in 0..good.len() {
+            let _ = crate::input::read_msh(&good[..n]);
+        }
+        assert!(crate::input::read_msh(&good[..good.len() / 2]).is_err());
+        // flipping bytes never panics
+        for i in 0..good.len() {
+            let mut b = good.clone();
+            b[i] ^= 0x5a;
+            let _ = crate::input::read_msh(&b);
+        }
+        for bad in [
+            &b""[..],
+            b"hello",
+            b"$MeshFormat\n4.0 0 8\n$EndMeshFormat\n",
+            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 2 0 1 2 3\n$EndElements\n",
+            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 nan 0 0\n$EndNodes\n",
+            b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n99999999999\n$EndNodes\n",
+        ] {
+            assert!(matches!(crate::input::read_msh(bad), Err(crate::Error::BadMesh(_))), "{:?}", String::from_utf8_lossy(bad));
+        }
     }
 }

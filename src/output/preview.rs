@@ -6,7 +6,8 @@
 //! y is flipped back (SVG y = −y), so the preview looks like the input drawing.
 
 use crate::FemMesh;
-use crate::fem::{LineKind, Order};
+use crate::element::Order;
+use crate::fem::LineKind;
 use kurbo::Point;
 use std::collections::HashSet;
 use std::io::{self, Write};

@@ -132,13 +132,14 @@ fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
 pub fn amips(corners: [Point; 3]) -> f64 {
     // One definition of the energy for measuring and for optimizing.
     let [a, b, c] = corners;
-    crate::optimize::energy::amips(a, b, c)
+    crate::element::energy::amips(a, b, c)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::{LinearMesh, Order};
+    use crate::element::Order;
+    use crate::fem::LinearMesh;
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0)

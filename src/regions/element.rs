@@ -2,7 +2,7 @@
 //! a point at barycentric coordinates of the reference triangle, and the exact area.
 //! Works for straight and curved (Lagrange P2, P3) triangles alike.
 
-use crate::fem::Order;
+use crate::element::Order;
 use kurbo::{CubicBez, Line, ParamCurveArea, Point, QuadBez};
 
 /// The image of the reference point with barycentric coordinates `l` under the

@@ -2,7 +2,8 @@
 //! (End-to-end tests on CDT meshes are in `tests/regions.rs`.)
 
 use super::*;
-use crate::fem::{LineKind, Order};
+use crate::element::Order;
+use crate::fem::LineKind;
 use crate::svg::{Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath};
 use kurbo::{Line, Point, Rect};
 

@@ -6,12 +6,12 @@
 //! A triangle's shape is read off the mesh: an edge is curved when it carries a
 //! primary tag whose section lies on a cubic parent (edges on straight parents
 //! stay straight); the curved edge takes its exact curve piece
-//! (`curve::element::piece_inner`). A triangle passes when it has at
+//! (`element::triangle::piece_inner`). A triangle passes when it has at
 //! most one curved edge and its element is certified
-//! ([`crate::curve::jacobian::certify_element`]).
+//! ([`crate::element::jacobian::certify_element`]).
 
 use super::super::{Context, CurvedRule};
-use crate::curve::element;
+use crate::element::triangle as element;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use kurbo::{Point, Vec2};
 
@@ -40,13 +40,13 @@ pub(crate) fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<
 pub(crate) fn exact_inner(
     mesh: &TriMesh,
     ctx: &Context,
-    order: crate::fem::Order,
+    order: crate::element::Order,
     key: EdgeKey,
 ) -> Option<Vec<Point>> {
     let (section, t) = curved_tag(mesh, ctx, key)?;
     let parent = ctx.section(section)?.parent;
     Some(element::piece_inner(
-        &parent,
+        |t| parent.eval(t),
         t,
         mesh.position(key.lo),
         mesh.position(key.hi),
@@ -59,7 +59,7 @@ pub(crate) fn exact_inner(
 pub(crate) fn exact_nodes(
     mesh: &TriMesh,
     ctx: &Context,
-    order: crate::fem::Order,
+    order: crate::element::Order,
     tri: [VertexId; 3],
 ) -> Option<Vec<Point>> {
     let mut curved: Option<(usize, Vec<Point>)> = None;
@@ -106,9 +106,9 @@ pub(crate) fn energy(
     if straight {
         let [a, b, c] = tri.map(|v| mesh.position(v));
         let det = (b - a).cross(c - a);
-        let zero = crate::curve::jacobian::zero_abs(&[a, b, c], rule.certify.zero_rel);
+        let zero = crate::element::jacobian::zero_abs(&[a, b, c], rule.certify.zero_rel);
         if det > 2.0 * zero {
-            return Some(crate::optimize::energy::amips(a, b, c));
+            return Some(crate::element::energy::amips(a, b, c));
         }
     }
     let nodes = exact_nodes(mesh, ctx, rule.order, tri)?;

@@ -173,8 +173,11 @@ pub fn bezier_to_cubic(net: &[Point; 10]) -> [Point; 10] {
 /// The Bézier control net (lattice order) of a quadratic or cubic Lagrange triangle
 /// (`nodes` in gmsh order), translated so that node 0 is the origin (no cancellation far
 /// from it). `None` for the linear order or a wrong node count.
-pub fn relative_bezier_net(order: crate::fem::Order, nodes: &[Point]) -> Option<Vec<kurbo::Vec2>> {
-    use crate::fem::Order;
+pub fn relative_bezier_net(
+    order: crate::element::Order,
+    nodes: &[Point],
+) -> Option<Vec<kurbo::Vec2>> {
+    use crate::element::Order;
     let o = nodes.first()?.to_vec2();
     let net: Vec<Point> = match order {
         Order::Linear => return None,

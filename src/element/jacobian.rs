@@ -23,7 +23,7 @@
 
 use super::bernstein::{self, BernsteinTri, index, lattice, len};
 use super::lagrange;
-use crate::fem::Order;
+use crate::element::Order;
 use kurbo::{Point, Vec2};
 
 /// The determinant of a straight triangle (constant; `2 ·` its signed area).
@@ -338,8 +338,8 @@ pub fn certify(det: &BernsteinTri, zero: f64, opts: &CertifyOptions) -> Certific
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::curve::bernstein::multinomial;
-    use crate::curve::lagrange::{CUBIC_REF, CurvedEdge, cubic_nodes, quadratic_nodes};
+    use crate::element::bernstein::multinomial;
+    use crate::element::lagrange::{CUBIC_REF, CurvedEdge, cubic_nodes, quadratic_nodes};
     use kurbo::CubicBez;
     use nalgebra::{DMatrix, DVector};
     use proptest::prelude::*;

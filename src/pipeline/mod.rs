@@ -9,8 +9,9 @@
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
+use crate::element::Order;
 use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
-use crate::fem::{FemMesh, LineKind, LinearMesh, Order};
+use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
@@ -493,3 +494,6 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     report.times.insert("total", t0.elapsed().as_secs_f64());
     Ok(report)
 }
+
+#[cfg(test)]
+mod tests;

@@ -16,18 +16,17 @@
 //!
 //! Energy ([`amips`]): the conformal AMIPS `tr(JᵀJ) / (2 det J)` of the map
 //! from the equilateral reference triangle, in the normalisation of
-//! [`crate::optimize::energy::amips`] (1 for an equilateral straight triangle,
+//! [`crate::element::energy::amips`] (1 for an equilateral straight triangle,
 //! equal to it for any straight element), taken as the maximum over the 15
 //! points of the degree-4 barycentric lattice of the reference triangle
 //! (corners, edge quarter points, three interior points): `det J` is a
 //! degree-4 polynomial, and the lattice is where its Bernstein coefficients
 //! sit. `+∞` where `det J ≤ 0` at a sample.
 
+use super::Order;
 use super::bernstein::{BernsteinTri, lattice};
 use super::jacobian::{self, CertifyOptions};
 use super::lagrange;
-use crate::features::Parent;
-use crate::fem::Order;
 use kurbo::{Point, Vec2};
 
 /// The gmsh edges of a triangle as corner pairs (0→1, 1→2, 2→0).
@@ -48,19 +47,20 @@ pub(crate) fn straight_inner(a: Point, b: Point, order: Order) -> Vec<Point> {
 }
 
 /// The inner nodes (from `a` to `b`) of the edge whose corners `a`, `b` stand
-/// for `parent` at `t[0]`, `t[1]`: the piece at the node fractions, moved by
-/// the blend of the corner offsets (zero when the corners are on the curve).
+/// for the curve `eval` (a parametrised curve, e.g. a feature's parent piece) at
+/// `t[0]`, `t[1]`: the piece at the node fractions, moved by the blend of the
+/// corner offsets (zero when the corners are on the curve).
 pub(crate) fn piece_inner(
-    parent: &Parent,
+    eval: impl Fn(f64) -> Point,
     t: [f64; 2],
     a: Point,
     b: Point,
     order: Order,
 ) -> Vec<Point> {
-    let (da, db) = (a - parent.eval(t[0]), b - parent.eval(t[1]));
+    let (da, db) = (a - eval(t[0]), b - eval(t[1]));
     fractions(order)
         .iter()
-        .map(|&s| parent.eval(t[0] + s * (t[1] - t[0])) + (1.0 - s) * da + s * db)
+        .map(|&s| eval(t[0] + s * (t[1] - t[0])) + (1.0 - s) * da + s * db)
         .collect()
 }
 
@@ -165,8 +165,8 @@ pub fn amips(order: Order, nodes: &[Point]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optimize::energy;
-    use kurbo::CubicBez;
+    use crate::element::energy;
+    use kurbo::{CubicBez, ParamCurve};
 
     fn tri() -> [Point; 3] {
         [
@@ -214,7 +214,7 @@ mod tests {
         let mut last = straight;
         for bulge in [0.1, 0.3, 0.6] {
             let curve = CubicBez::new(a, Point::new(0.3, -bulge), Point::new(0.7, -bulge), b);
-            let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
+            let inner = piece_inner(|t| curve.eval(t), [0.0, 1.0], a, b, Order::Cubic);
             let n = nodes(
                 Order::Cubic,
                 [a, b, c],
@@ -228,7 +228,7 @@ mod tests {
         }
         // A bulge through the opposite corner inverts the element.
         let curve = CubicBez::new(a, Point::new(0.3, 1.5), Point::new(0.7, 1.5), b);
-        let inner = piece_inner(&Parent::Cubic(curve), [0.0, 1.0], a, b, Order::Cubic);
+        let inner = piece_inner(|t| curve.eval(t), [0.0, 1.0], a, b, Order::Cubic);
         let n = nodes(
             Order::Cubic,
             [a, b, c],
@@ -242,13 +242,13 @@ mod tests {
     #[test]
     fn piece_inner_follows_offset_corners() {
         let curve = CubicBez::new((0.0, 0.0), (1.0, 1.0), (2.0, 1.0), (3.0, 0.0));
-        let p = Parent::Cubic(curve);
-        let (a, b) = (p.eval(0.2), p.eval(0.8));
-        let on = piece_inner(&p, [0.2, 0.8], a, b, Order::Cubic);
-        assert!((on[0] - p.eval(0.4)).hypot() < 1e-15);
+        let p = |t| curve.eval(t);
+        let (a, b) = (p(0.2), p(0.8));
+        let on = piece_inner(p, [0.2, 0.8], a, b, Order::Cubic);
+        assert!((on[0] - p(0.4)).hypot() < 1e-15);
         let shift = Vec2::new(0.0, 0.3);
-        let off = piece_inner(&p, [0.2, 0.8], a + shift, b + shift, Order::Cubic);
-        assert!((off[1] - (p.eval(0.6) + shift)).hypot() < 1e-15);
-        assert_eq!(piece_inner(&p, [0.2, 0.8], a, b, Order::Quadratic).len(), 1);
+        let off = piece_inner(p, [0.2, 0.8], a + shift, b + shift, Order::Cubic);
+        assert!((off[1] - (p(0.6) + shift)).hypot() < 1e-15);
+        assert_eq!(piece_inner(p, [0.2, 0.8], a, b, Order::Quadratic).len(), 1);
     }
 }
