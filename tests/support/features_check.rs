@@ -1,5 +1,5 @@
 //! An independent checker of the FeatureSet invariants (DESIGN `features`), shared by the
-//! unit tests of `src/features` and `tests/features_devset.rs`. It shares no code with the
+//! unit tests of `src/features` and `src/pipeline/tests/features_devset.rs`. It shares no code with the
 //! module under test: its own Bézier evaluation, distances and dense sampling. The including
 //! module provides `FeatureSet`, `Parent`, `Point`, `Vec2` and `Rect` in scope.
 #![allow(dead_code, reason = "each includer uses a different part")]

@@ -19,8 +19,13 @@ use std::path::PathBuf;
 
 /// A fresh (emptied) directory `target/test-out/<test>/` for a test's output files.
 pub(crate) fn out_dir(test: &str) -> PathBuf {
-    // CARGO_TARGET_TMPDIR is <target>/tmp; test output goes next to it.
-    let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    // CARGO_TARGET_TMPDIR is <target>/tmp; test output goes next to it. Cargo sets it
+    // for integration tests only; the library's own tests (which include this module
+    // from src/pipeline/tests) use the default target directory.
+    let tmp = option_env!("CARGO_TARGET_TMPDIR").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tmp"),
+        PathBuf::from,
+    );
     let dir = tmp
         .parent()
         .map(|t| t.join("test-out"))

@@ -8,21 +8,19 @@
 //! after the segment's source shape (`<name>-curve` when a surface has that name).
 //!
 //! The dev-set run is ignored (slow, needs the corpus):
-//! `cargo test --release --test bsp_pipeline -- --ignored --nocapture`.
+//! `cargo test --release --lib pipeline::tests::bsp_pipeline -- --ignored --nocapture`.
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
-mod support;
+use super::support::devset::{devset_dir, svg_files};
 
-use support::devset::{devset_dir, svg_files};
-
+use super::support::{Msh, check, out_dir, read_msh};
+use crate::features::{FeatureSet, SegmentTag};
+use crate::pipeline::{self, Report, RunOptions};
+use crate::{Drawing, Mesher, Params, Stage};
 use kurbo::{Line, Point};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 use std::time::Instant;
-use support::{Msh, check, out_dir, read_msh};
-use triwild::features::{FeatureSet, SegmentTag};
-use triwild::pipeline::{self, Report, RunOptions};
-use triwild::{Drawing, Mesher, Params, Stage};
 
 fn bsp_params() -> Params {
     Params::DEFAULT
@@ -136,7 +134,7 @@ struct Outcome {
 /// Mesh `svg` to `out` with the BSP path, read it back and check it.
 fn mesh_and_check(svg: &Path, out: &Path) -> Result<Outcome, String> {
     let params = bsp_params();
-    let drawing = triwild::svg::load_file(svg).map_err(|e| format!("load: {e}"))?;
+    let drawing = crate::svg::load_file(svg).map_err(|e| format!("load: {e}"))?;
     let t = Instant::now();
     let report = pipeline::run_file(svg, out, &RunOptions::new(params.clone()))
         .map_err(|e| format!("mesh: {e}"))?;
@@ -232,7 +230,7 @@ fn stop_after_bsp_needs_the_triwild_mesher() {
         .with_stop_after(Some(Stage::Bsp))
         .validate()
         .expect_err("cdt cannot stop after bsp");
-    assert_eq!(err.kind(), triwild::ErrorKind::BadInput);
+    assert_eq!(err.kind(), crate::ErrorKind::BadInput);
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -260,7 +258,7 @@ fn devset_meshes_valid_and_conforming() {
     );
     for (i, f) in files.iter().enumerate() {
         let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
-        if triwild::svg::load_file(f).is_err() {
+        if crate::svg::load_file(f).is_err() {
             unloadable += 1;
             continue;
         }

@@ -6,38 +6,36 @@
 //! Meshes are written under `target/test-out/curving/` for CI's mshcheck.
 //!
 //! The dev-set run is ignored (slow, needs the corpus):
-//! `cargo test --release --test curving -- --ignored --nocapture` (every N-th file with
+//! `cargo test --release --lib pipeline::tests::curving -- --ignored --nocapture` (every N-th file with
 //! `TRIWILD_CURVING_EVERY=N`, at most M files with `TRIWILD_CURVING_LIMIT=M`, order 2
 //! with `TRIWILD_CURVING_ORDER=2`, the unoptimized BSP mesh with `TRIWILD_CURVING_BSP_ONLY=1`).
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
-mod support;
-
+use super::support::devset::{devset_dir, svg_files};
+use super::support::{check_msh, out_dir};
+use crate::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
+use crate::element::Order;
+use crate::output::{self, MshOptions};
+use crate::pipeline;
+use crate::regions::{self, RegionOptions};
+use crate::svg::FeatureGeom;
+use crate::{Drawing, FemMesh, Length, Params, Stage};
 use kurbo::ParamCurveArea;
 use std::path::Path;
-use support::devset::{devset_dir, svg_files};
-use support::{check_msh, out_dir};
-use triwild::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
-use triwild::element::Order;
-use triwild::output::{self, MshOptions};
-use triwild::pipeline;
-use triwild::regions::{self, RegionOptions};
-use triwild::svg::FeatureGeom;
-use triwild::{Drawing, FemMesh, Length, Params, Stage};
 
 /// The linear TriWild mesh: the BSP mesh, optimized unless `params` stops after the BSP.
 fn linear(
     drawing: &Drawing,
     params: &Params,
 ) -> (
-    triwild::mesh::TriMesh,
-    triwild::features::FeatureSet,
-    triwild::ops::Context,
+    crate::mesh::TriMesh,
+    crate::features::FeatureSet,
+    crate::ops::Context,
 ) {
     let (mut mesh, fs, mut ctx) = pipeline::bsp_stage(drawing, params).expect("linear mesh");
     if params.stop_after != Some(Stage::Bsp) {
         let resolved = params.resolve(drawing.diagonal());
-        triwild::optimize::optimize(
+        crate::optimize::optimize(
             &mut mesh,
             &mut ctx,
             &pipeline::optimize_options(params, &resolved),
@@ -68,7 +66,7 @@ fn circle() -> Drawing {
     let svg = br#"<svg xmlns="http://www.w3.org/2000/svg" width="100" height="100">
         <title>a filled circle: four cubic arcs</title>
         <circle id="disk" cx="50" cy="50" r="40" fill="black"/></svg>"#;
-    triwild::svg::load_bytes(svg).expect("circle loads")
+    crate::svg::load_bytes(svg).expect("circle loads")
 }
 
 /// The exact area the drawing's cubics enclose (Green's theorem on the Béziers).
@@ -84,7 +82,7 @@ fn green_area(drawing: &Drawing) -> f64 {
 
 /// Write, certify with the library and with the independent checker.
 fn write_and_check(mesh: &FemMesh, dir: &Path, name: &str) {
-    let c = certify_fem(mesh, &triwild::curve::CertifyOptions::DEFAULT);
+    let c = certify_fem(mesh, &crate::curve::CertifyOptions::DEFAULT);
     assert!(c.is_valid(), "{name}: {c:?}");
     let path = dir.join(format!("{name}.msh"));
     output::write_msh(mesh, &path, MshOptions::DEFAULT).expect("write");
@@ -157,7 +155,7 @@ fn no_curved_passes_skip_the_curved_optimization() {
     let (mesh, stats) = curved(&drawing, &params, Order::Cubic);
     assert_eq!(
         stats.optimization,
-        triwild::curve::CurvedOptimizeStats::default()
+        crate::curve::CurvedOptimizeStats::default()
     );
     let skipped = mesh.triangle_count();
     let (mesh, stats) = curved(&drawing, &params.with_stop_curved(10.0, 10), Order::Cubic);
@@ -186,7 +184,7 @@ fn order_1_is_the_linear_mesh() {
     let (mesh, stats) = curved(&drawing, &Params::DEFAULT, Order::Linear);
     assert_eq!(mesh.order(), Order::Linear);
     assert_eq!(stats.curved_triangles, 0);
-    let c = certify_fem(&mesh, &triwild::curve::CertifyOptions::DEFAULT);
+    let c = certify_fem(&mesh, &crate::curve::CertifyOptions::DEFAULT);
     assert!(c.is_valid());
     assert!(
         stats.max_curve_distance_rel > 0.0,
@@ -212,7 +210,7 @@ fn devset_curving() {
     let dir = out_dir("curving-devset");
     let (mut curved_sum, mut fitted_sum, mut straight_sum) = (0, 0, 0);
     for path in files.iter().step_by(every).take(limit) {
-        let Ok(drawing) = triwild::svg::load_file(path) else {
+        let Ok(drawing) = crate::svg::load_file(path) else {
             continue;
         };
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("x");
@@ -234,7 +232,7 @@ fn devset_curving() {
             Ok((cm, s)) => {
                 let fem =
                     FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
-                let c = certify_fem(&fem, &triwild::curve::CertifyOptions::VALIDITY);
+                let c = certify_fem(&fem, &crate::curve::CertifyOptions::VALIDITY);
                 let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
                 let _ =
                     output::write_msh(&fem, &dir.join(format!("{name}.msh")), MshOptions::DEFAULT);

@@ -1,23 +1,19 @@
 //! Feature preprocessing on every file of the dev set (`../shared/data/svg-dev`, or
 //! `TRIWILD_DEVSET`): each loadable drawing's FeatureSet must keep every invariant, checked
 //! by the independent checker in `tests/support/features_check.rs`. Prints counts and time
-//! per file. Ignored (slow, needs the corpus): `cargo test --release --test features_devset
+//! per file. Ignored (slow, needs the corpus): `cargo test --release --lib pipeline::tests::features_devset
 //! -- --ignored --nocapture`.
 #![allow(clippy::print_stdout, reason = "the dev-set run reports its counts")]
 
+use crate::Params;
+use crate::features::{FeatureSet, Parent};
 use kurbo::{Point, Rect, Vec2};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use triwild::Params;
-use triwild::features::{FeatureSet, Parent};
 
-#[path = "support/features_check.rs"]
+use super::support::devset::{devset_dir, svg_files};
+#[path = "../../../tests/support/features_check.rs"]
 mod features_check;
-
-#[path = "support/devset.rs"]
-mod devset;
-
-use devset::{devset_dir, svg_files};
 
 /// CI's sample: every 15th file of the dev set under 40 KB (about 15 drawings from
 /// every collection), so the invariants are checked on real drawings in every run.
@@ -56,7 +52,7 @@ fn check_files(dir: &Path, files: &[PathBuf]) {
     let start = Instant::now();
     println!("file\tsections\tprimary\tsecondary_segments\tpoints\tms");
     for f in files {
-        let Ok(drawing) = triwild::svg::load_file(f) else {
+        let Ok(drawing) = crate::svg::load_file(f) else {
             unloadable += 1;
             continue;
         };

@@ -12,20 +12,18 @@
 //!
 //! The CI sample is the bundled drawings plus a few small dev files; the whole
 //! dev set is an ignored run:
-//! `cargo test --release --test optimize_pipeline -- --ignored --nocapture`.
+//! `cargo test --release --lib pipeline::tests::optimize_pipeline -- --ignored --nocapture`.
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
-mod support;
-
+use super::support::devset::{devset_dir, svg_files};
+use super::support::{check_msh, out_dir};
+use crate::features::Parent;
+use crate::mesh::FeatureOn;
+use crate::pipeline::{self, RunOptions};
+use crate::{Params, Stage};
 use kurbo::{Line, ParamCurveNearest, Point};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use support::devset::{devset_dir, svg_files};
-use support::{check_msh, out_dir};
-use triwild::features::Parent;
-use triwild::mesh::FeatureOn;
-use triwild::pipeline::{self, RunOptions};
-use triwild::{Params, Stage};
 
 /// The distance from `p` to the piece `[t0, t1]` of `parent`.
 fn distance_to_piece(parent: &Parent, t: [f64; 2], p: Point) -> f64 {
@@ -82,7 +80,7 @@ struct Summary {
 
 /// Optimize `svg` and check it; the defects in words.
 fn optimize_and_check(svg: &Path) -> Result<Summary, Vec<String>> {
-    let drawing = triwild::svg::load_file(svg).map_err(|e| vec![format!("load: {e}")])?;
+    let drawing = crate::svg::load_file(svg).map_err(|e| vec![format!("load: {e}")])?;
     let d = drawing.diagonal();
     let params = Params::DEFAULT;
     let t = Instant::now();
@@ -195,7 +193,7 @@ fn devset_optimized_meshes_meet_the_invariants() {
     let (mut ok, mut bad_input, mut failed) = (0, 0, Vec::new());
     let (mut worst_p, mut worst_s, mut total) = (0f64, 0f64, 0f64);
     for f in &files {
-        if triwild::svg::load_file(f).is_err() {
+        if crate::svg::load_file(f).is_err() {
             bad_input += 1;
             continue;
         }
