@@ -179,7 +179,19 @@ fn is_curved(order: Order, p: &[Point], tol: f64) -> bool {
     })
 }
 
-/// Certify every triangle of a [`crate::FemMesh`].
+/// Certify every triangle of a [`crate::FemMesh`] (what `triwild check` reports).
+///
+/// ```
+/// use triwild::{CertifyOptions, Length, Params, certify_fem, mesh_svg};
+/// let svg = br#"<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10">
+///     <circle cx="5" cy="5" r="4"/></svg>"#;
+/// let meshed = mesh_svg(svg, &Params::DEFAULT.with_l(Length::Rel(0.2)))?;
+/// let check = certify_fem(&meshed.mesh, &CertifyOptions::DEFAULT);
+/// assert!(check.is_valid());
+/// assert_eq!(check.certified, check.triangles);
+/// assert!(check.curved > 0);
+/// # Ok::<(), triwild::Error>(())
+/// ```
 pub fn certify_fem(mesh: &crate::FemMesh, opts: &CertifyOptions) -> MeshCheck {
     let order = mesh.order();
     certify_mesh(

@@ -230,6 +230,30 @@ pub fn zero_abs(nodes: &[Point], zero_rel: f64) -> f64 {
 
 /// Certify the Lagrange triangle `nodes` (gmsh order) of the given order.
 /// `None` if `nodes` does not hold that order's node count.
+///
+/// A cubic triangle whose edge 0→1 bulges along a Bézier arc is valid; pulled
+/// through the opposite corner, the same edge folds the element:
+///
+/// ```
+/// use kurbo::{CubicBez, Point};
+/// use triwild::element::jacobian::{Validity, certify_element};
+/// use triwild::element::lagrange::cubic_nodes;
+/// use triwild::element::{CertifyOptions, CurvedEdge, Order};
+///
+/// let corners = [Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.5, 1.0)];
+/// let bulge = |h: f64| CurvedEdge {
+///     edge: 0,
+///     curve: CubicBez::new((0.0, 0.0), (0.3, h), (0.7, h), (1.0, 0.0)),
+///     t0: 0.0,
+///     t1: 1.0,
+/// };
+/// let opts = CertifyOptions::DEFAULT;
+/// let good = cubic_nodes(corners, Some(&bulge(-0.2)));
+/// assert!(certify_element(Order::Cubic, &good, &opts).unwrap().is_certified());
+/// let folded = cubic_nodes(corners, Some(&bulge(2.0)));
+/// let cert = certify_element(Order::Cubic, &folded, &opts).unwrap();
+/// assert_ne!(cert.validity, Validity::Certified);
+/// ```
 pub fn certify_element(
     order: Order,
     nodes: &[Point],

@@ -46,6 +46,13 @@ impl Order {
     }
 
     /// The order of a gmsh triangle type (2, 9 or 21; `None` for any other type).
+    ///
+    /// ```
+    /// use triwild::Order;
+    /// assert_eq!(Order::from_gmsh_triangle_type(21), Some(Order::Cubic));
+    /// assert_eq!(Order::Cubic.triangle_nodes(), 10);
+    /// assert_eq!(Order::from_gmsh_triangle_type(3), None); // a quadrangle
+    /// ```
     pub fn from_gmsh_triangle_type(t: i32) -> Option<Order> {
         [Order::Linear, Order::Quadratic, Order::Cubic]
             .into_iter()

@@ -88,6 +88,19 @@ pub fn read_msh_file(path: &Path) -> Result<MshMesh> {
 
 /// Read a gmsh mesh from its bytes.
 ///
+/// ```
+/// use triwild::{Order, read_msh};
+/// let text = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n\
+///     $Nodes\n3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n$EndNodes\n\
+///     $Elements\n1\n1 2 2 7 7 1 2 3\n$EndElements\n";
+/// let mesh = read_msh(text.as_bytes())?;
+/// let (order, nodes) = mesh.triangles().next().unwrap();
+/// assert_eq!((order, nodes), (Order::Linear, &[0, 1, 2][..]));
+/// assert_eq!(mesh.triangle_blocks[0].physical, Some(7));
+/// assert!(read_msh(b"$MeshFormat\n2.2 0 8\n").is_err()); // truncated
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
 /// # Errors
 /// [`Error::BadMesh`] naming what is wrong and where.
 pub fn read_msh(bytes: &[u8]) -> Result<MshMesh> {

@@ -67,6 +67,44 @@ pub fn write_msh(mesh: &FemMesh, path: &Path, opts: MshOptions) -> Result<()> {
     })
 }
 
+/// Write `mesh` in gmsh format to any writer (a buffer, a socket): the bytes
+/// [`write_msh`] puts in a file.
+///
+/// ```
+/// use triwild::{FemMesh, MshOptions, Order, read_msh, write_msh_to};
+/// use kurbo::Point;
+///
+/// // One straight triangle in one physical surface.
+/// let mesh = FemMesh {
+///     order: Some(Order::Linear),
+///     nodes: vec![Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::new(0.0, 1.0)],
+///     triangles: vec![0, 1, 2],
+///     triangle_group: vec![0],
+///     surfaces: vec!["plate".into()],
+///     ..FemMesh::default()
+/// };
+/// let mut bytes = Vec::new();
+/// write_msh_to(&mesh, &mut bytes, MshOptions::DEFAULT)?;
+/// assert!(bytes.starts_with(b"$MeshFormat\n4.1 0 8"));
+/// let back = read_msh(&bytes)?;
+/// assert_eq!(back.nodes, mesh.nodes);
+/// assert_eq!(back.triangle_count(), 1);
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
+/// # Errors
+/// [`crate::Error::Write`] when `mesh` is malformed (as [`write_msh`]) or the writer fails.
+pub fn write_msh_to(mesh: &FemMesh, w: &mut impl std::io::Write, opts: MshOptions) -> Result<()> {
+    msh::validate(mesh).map_err(Error::Write)?;
+    let mut w = std::io::BufWriter::new(w);
+    match opts.version {
+        MshVersion::V41 => msh::write_v41(&mut w, mesh, opts.binary),
+        MshVersion::V22 => msh::write_v22(&mut w, mesh, opts.binary),
+    }
+    .and_then(|()| std::io::Write::flush(&mut w))
+    .map_err(Error::Write)
+}
+
 /// Write an SVG preview of `mesh` at `path` (atomically): grey triangle outlines
 /// (curved edges drawn as the Bézier curves they are), feature lines coloured by
 /// [`crate::fem::LineKind`] (primary red, secondary green, constraint blue), y

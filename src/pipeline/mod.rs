@@ -193,6 +193,16 @@ pub struct Meshed {
     pub report: Report,
 }
 
+/// Load an SVG document from memory ([`crate::load_bytes`]) and mesh it with the
+/// default regions ([`mesh_drawing`]).
+///
+/// # Errors
+/// [`crate::ErrorKind::BadInput`] for a document that is not a drawing (as
+/// [`crate::load_bytes`]), then as [`mesh_drawing`].
+pub fn mesh_svg(svg: &[u8], params: &Params) -> Result<Meshed> {
+    mesh_drawing(&crate::svg::load_bytes(svg)?, params)
+}
+
 /// Mesh an already loaded drawing, with the default regions (one surface per
 /// filled shape, plus `background`).
 ///

@@ -57,6 +57,18 @@ pub fn load_file(path: &Path) -> Result<Drawing> {
 
 /// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a BOM).
 ///
+/// ```
+/// use triwild::{ErrorKind, load_bytes};
+/// let d = load_bytes(br#"<svg xmlns="http://www.w3.org/2000/svg">
+///     <rect x="0" y="0" width="4" height="2"/></svg>"#)?;
+/// assert_eq!(d.shapes.len(), 1);
+/// assert_eq!(d.diagonal(), 20f64.sqrt());
+/// // Not a drawing: one clear error, never a panic.
+/// let e = load_bytes(b"<html><body>hello</body></html>").unwrap_err();
+/// assert_eq!(e.kind(), ErrorKind::BadInput);
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
 /// # Errors
 /// - [`Error::EmptyFile`]: no bytes, or only whitespace;
 /// - [`Error::NotSvg`]: binary data (PNG, gzip/.svgz, ...), broken XML, an HTML
