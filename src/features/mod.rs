@@ -525,4 +525,4 @@ fn assemble_primary(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -8,7 +8,7 @@ use kurbo::{Rect, Vec2};
 use proptest::prelude::*;
 
 #[path = "../../tests/support/features_check.rs"]
-mod features_check;
+pub(crate) mod features_check;
 use features_check::{bez, bez_d, bez_dd, check};
 
 // ---------- drawings built in code ----------

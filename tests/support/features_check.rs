@@ -83,7 +83,7 @@ struct Item {
 }
 
 /// Every violated FeatureSet invariant, as text (empty when all hold).
-pub(super) fn check(fs: &FeatureSet) -> Vec<String> {
+pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
     let r = &fs.params;
     let mut bad = Vec::new();
     let mut items = Vec::new();

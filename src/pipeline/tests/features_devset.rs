@@ -6,14 +6,12 @@
 #![allow(clippy::print_stdout, reason = "the dev-set run reports its counts")]
 
 use crate::Params;
-use crate::features::{FeatureSet, Parent};
-use kurbo::{Point, Rect, Vec2};
+use crate::features::FeatureSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::support::devset::{devset_dir, svg_files};
-#[path = "../../../tests/support/features_check.rs"]
-mod features_check;
+use crate::features::tests::features_check;
 
 /// CI's sample: every 15th file of the dev set under 40 KB (about 15 drawings from
 /// every collection), so the invariants are checked on real drawings in every run.
