@@ -15,8 +15,9 @@
 
 use super::Parent;
 use super::split::{end_tangent, start_tangent};
+use crate::mesh::point_segment_distance;
 use crate::params::Resolved;
-use kurbo::{CubicBez, Line, ParamCurveCurvature, Point};
+use kurbo::{CubicBez, Line, ParamCurveCurvature};
 
 /// Maximum halving depth of one piece.
 const MAX_DEPTH: u32 = 48;
@@ -39,17 +40,6 @@ pub(super) struct Piece {
 /// Length of the control polygon (an upper bound of the arc length).
 pub(super) fn polygon_length(c: &CubicBez) -> f64 {
     c.p0.distance(c.p1) + c.p1.distance(c.p2) + c.p2.distance(c.p3)
-}
-
-/// Distance from `p` to the segment `l`.
-pub(super) fn point_segment_distance(p: Point, l: Line) -> f64 {
-    let d = l.p1 - l.p0;
-    let len2 = d.hypot2();
-    if len2 == 0.0 {
-        return p.distance(l.p0);
-    }
-    let s = ((p - l.p0).dot(d) / len2).clamp(0.0, 1.0);
-    p.distance(l.p0 + d * s)
 }
 
 /// Upper bound of the distance from the curve to its chord.

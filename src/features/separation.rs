@@ -23,8 +23,9 @@
 //! demoting any that a moved segment came too close to.
 
 use super::grid::Grid;
-use super::resample::{point_segment_distance, polygon_length};
+use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
+use crate::mesh::point_segment_distance;
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;

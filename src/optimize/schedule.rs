@@ -41,13 +41,12 @@
 //! rounding and smoothing); a vertex left rational after them makes the mesh
 //! unusable, which the caller reports as an error.
 
-use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, min_angle_deg};
 use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
     try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
 use crate::optimize::energy::amips;
-use kurbo::Point;
 use std::collections::{BTreeMap, BinaryHeap};
 
 /// Edges shorter than this fraction of their target are collapsed in a pass
@@ -192,7 +191,7 @@ fn measure(mesh: &TriMesh) -> Measure {
         let v = mesh.face(f);
         let [a, b, c] = v.map(|x| mesh.position(x));
         let e = amips(a, b, c);
-        let angle = min_angle_deg(a, b, c);
+        let angle = min_angle_deg([a, b, c]);
         sum += e;
         n += 1;
         m.all = (m.all.0.min(angle), m.all.1.max(e));
@@ -217,37 +216,6 @@ fn measure(mesh: &TriMesh) -> Measure {
     }
     m.mean_energy = sum / n as f64;
     m
-}
-
-fn min_angle_deg(a: Point, b: Point, c: Point) -> f64 {
-    let angle = |p: Point, at: Point, q: Point| {
-        let (u, v) = (p - at, q - at);
-        u.cross(v).abs().atan2(u.dot(v))
-    };
-    angle(c, a, b)
-        .min(angle(a, b, c))
-        .min(angle(b, c, a))
-        .to_degrees()
-}
-
-/// Every edge once.
-fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
-    let mut out = Vec::with_capacity(mesh.num_faces() * 3 / 2 + 4);
-    for f in mesh.faces() {
-        let v = mesh.face(f);
-        let adj = mesh.neighbours(f);
-        for i in 0..3 {
-            if adj[i].is_none_or(|g| g > f) {
-                out.push(EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]));
-            }
-        }
-    }
-    out
-}
-
-/// The length of the edge `k`.
-fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
-    mesh.position(k.lo).distance(mesh.position(k.hi))
 }
 
 /// A deterministic permutation generator (SplitMix64).
@@ -395,8 +363,8 @@ impl<'a> Schedule<'a> {
     /// Returns the number of candidates and of splits applied.
     fn split_pass(&mut self) -> (usize, u64) {
         let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
-        for k in edges(self.mesh) {
-            let (len, t) = (length(self.mesh, k), self.mean_target(k));
+        for k in self.mesh.edges().collect::<Vec<_>>() {
+            let (len, t) = (self.mesh.distance(k.lo, k.hi), self.mean_target(k));
             if len > 4.0 / 3.0 * t {
                 cands.push((len, k, t));
             }
@@ -502,8 +470,8 @@ impl<'a> Schedule<'a> {
         // Min-heap on length through reversed ordering of the bits of a
         // non-negative f64 (monotone for non-negative values).
         let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
-        for k in edges(self.mesh) {
-            let len = length(self.mesh, k);
+        for k in self.mesh.edges().collect::<Vec<_>>() {
+            let len = self.mesh.distance(k.lo, k.hi);
             if len < factor * self.mean_target(k) {
                 heap.push(std::cmp::Reverse((len.to_bits(), k)));
             }
@@ -518,7 +486,7 @@ impl<'a> Schedule<'a> {
             if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
                 continue;
             }
-            let len = length(self.mesh, k);
+            let len = self.mesh.distance(k.lo, k.hi);
             if len.to_bits() != bits || len >= factor * self.mean_target(k) {
                 continue;
             }
@@ -561,7 +529,7 @@ impl<'a> Schedule<'a> {
                 };
                 for w in ops::ring(self.mesh, u).neighbours {
                     let e = EdgeKey::new(u, w);
-                    let len = length(self.mesh, e);
+                    let len = self.mesh.distance(e.lo, e.hi);
                     if len < factor * self.mean_target(e) {
                         heap.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
@@ -593,14 +561,14 @@ impl<'a> Schedule<'a> {
     /// on secondary feature edges, the same change is a reroute (`ops::swap`).
     pub(crate) fn swap_pass(&mut self) -> u64 {
         let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
-        for k in edges(self.mesh) {
+        for k in self.mesh.edges().collect::<Vec<_>>() {
             let primary = self
                 .mesh
                 .edge_tags(k.lo, k.hi)
                 .iter()
                 .any(|t| matches!(t, FeatureOn::Primary { .. }));
             if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
-                cands.push((length(self.mesh, k), k));
+                cands.push((self.mesh.distance(k.lo, k.hi), k));
             }
         }
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -728,27 +696,16 @@ pub fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
         .collect()
 }
 
-/// The two faces on the interior edge `k` as `(f, g)`, with `f` holding `k`
-/// counter-clockwise as `a → b`, and the vertices `c` of `f` and `d` of `g`
-/// opposite it.
-fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
-    let faces: Vec<FaceId> = mesh
-        .incident_faces(k.lo)
-        .into_iter()
-        .filter(|&f| mesh.face(f).contains(&k.hi))
-        .collect();
-    let [f, g] = faces[..] else { return None };
-    let i = mesh.edge_index(f, k.lo, k.hi)?;
-    let v = mesh.face(f);
-    let (a, b, c) = (v[(i + 1) % 3], v[(i + 2) % 3], v[i]);
-    let d = *mesh.face(g).iter().find(|&&x| x != a && x != b)?;
-    Some(([f, g], [a, b, c, d]))
-}
-
 /// The energy gain of swapping `k` (old max minus new max) when positive
 /// (curved energies in curved mode).
 fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
-    let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
+    let EdgeQuad {
+        faces: [f, g],
+        a,
+        b,
+        c,
+        d,
+    } = mesh.edge_quad(k.lo, k.hi, &mut Vec::new())?;
     let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
     let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.
