@@ -174,38 +174,60 @@ pub(crate) fn locked(mesh: &TriMesh, v: [VertexId; 3]) -> bool {
     (0..3).all(|i| !mesh.edge_tags(v[i], v[(i + 1) % 3]).is_empty())
 }
 
-/// Measure `mesh`. A triangle whose three edges are feature edges is locked:
-/// its shape is the input's (no swap, split or collapse can change it), so it
-/// is left out of the quality goal, though not out of `all`.
-fn measure(mesh: &TriMesh) -> Measure {
-    let mut m = Measure {
-        min_angle: 180.0,
-        max_energy: 0.0,
-        mean_energy: 0.0,
-        all: (180.0, 0.0),
-        longest: 0.0,
+/// The energies of a mesh's triangles, for the stop rules of both stages.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EnergyMeasure {
+    /// Largest energy of the measured triangles that are not locked.
+    pub(crate) max: f64,
+    /// Largest energy of all measured triangles.
+    pub(crate) max_all: f64,
+    /// Mean energy of the measured triangles (0 when none is).
+    pub(crate) mean: f64,
+    /// Triangles without an energy.
+    pub(crate) unmeasured: usize,
+}
+
+/// Measure the energies of `mesh`'s triangles: `energy(v, locked)` gives the
+/// energy of the triangle `v`, or `None` to leave it out (counted in
+/// `unmeasured`). A triangle whose three edges are feature edges is locked
+/// ([`locked`]): its shape is the input's (no swap, split or collapse can
+/// change it), so it is left out of `max`, though not out of `max_all`.
+pub(crate) fn measure_energy(
+    mesh: &TriMesh,
+    mut energy: impl FnMut([VertexId; 3], bool) -> Option<f64>,
+) -> EnergyMeasure {
+    let mut m = EnergyMeasure {
+        max: 0.0,
+        max_all: 0.0,
+        mean: 0.0,
+        unmeasured: 0,
     };
-    let mut sum = 0.0;
-    let mut n = 0usize;
+    let (mut sum, mut n) = (0.0, 0usize);
     for f in mesh.faces() {
         let v = mesh.face(f);
-        let [a, b, c] = v.map(|x| mesh.position(x));
-        let e = amips(a, b, c);
-        let angle = min_angle_deg([a, b, c]);
-        sum += e;
-        n += 1;
-        m.all = (m.all.0.min(angle), m.all.1.max(e));
-        m.longest = m
-            .longest
-            .max(a.distance(b))
-            .max(b.distance(c))
-            .max(c.distance(a));
-        if !locked(mesh, v) {
-            m.min_angle = m.min_angle.min(angle);
-            m.max_energy = m.max_energy.max(e);
+        let locked = locked(mesh, v);
+        match energy(v, locked) {
+            None => m.unmeasured += 1,
+            Some(e) => {
+                sum += e;
+                n += 1;
+                m.max_all = m.max_all.max(e);
+                if !locked {
+                    m.max = m.max.max(e);
+                }
+            }
         }
     }
-    if n == 0 {
+    if n > 0 {
+        m.mean = sum / n as f64;
+    }
+    m
+}
+
+/// Measure `mesh`: the AMIPS energies ([`measure_energy`]), angles and edge
+/// lengths. Locked triangles are left out of `min_angle` and `max_energy`.
+fn measure(mesh: &TriMesh) -> Measure {
+    if mesh.num_faces() == 0 {
         return Measure {
             min_angle: 0.0,
             max_energy: 0.0,
@@ -214,8 +236,27 @@ fn measure(mesh: &TriMesh) -> Measure {
             longest: 0.0,
         };
     }
-    m.mean_energy = sum / n as f64;
-    m
+    let (mut min_angle, mut min_angle_all, mut longest) = (180.0f64, 180.0f64, 0.0f64);
+    let e = measure_energy(mesh, |v, locked| {
+        let [a, b, c] = v.map(|x| mesh.position(x));
+        let angle = min_angle_deg([a, b, c]);
+        min_angle_all = min_angle_all.min(angle);
+        longest = longest
+            .max(a.distance(b))
+            .max(b.distance(c))
+            .max(c.distance(a));
+        if !locked {
+            min_angle = min_angle.min(angle);
+        }
+        Some(amips(a, b, c))
+    });
+    Measure {
+        min_angle,
+        max_energy: e.max,
+        mean_energy: e.mean,
+        all: (min_angle_all, e.max_all),
+        longest,
+    }
 }
 
 /// A deterministic permutation generator (SplitMix64).
