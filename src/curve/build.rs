@@ -738,7 +738,7 @@ fn assemble(
     let next =
         |nodes: &Vec<Point>| u32::try_from(nodes.len()).expect("internal: node count fits u32");
     for v in mesh.vertices() {
-        index[v.0 as usize] = next(&nodes);
+        index[v.index()] = next(&nodes);
         nodes.push(mesh.position(v));
     }
     let inner_count = order as usize - 1;
@@ -766,7 +766,7 @@ fn assemble(
     let mut triangles = Vec::with_capacity(faces.len() * order.triangle_nodes());
     for &f in &faces {
         let v = mesh.face(f);
-        triangles.extend(v.map(|x| index[x.0 as usize]));
+        triangles.extend(v.map(|x| index[x.index()]));
         if inner_count == 0 {
             continue;
         }
@@ -798,8 +798,8 @@ fn assemble(
                 continue;
             }
             line_feature.push(fk);
-            lines.push(index[key.lo.0 as usize]);
-            lines.push(index[key.hi.0 as usize]);
+            lines.push(index[key.lo.index()]);
+            lines.push(index[key.hi.index()]);
             if inner_count > 0 {
                 lines.extend(edge_inner(&mut nodes, key));
             }

@@ -110,10 +110,6 @@ pub struct TriMesh {
     pub(super) live_faces: usize,
 }
 
-pub(super) fn to_u32(n: usize) -> u32 {
-    u32::try_from(n).expect("internal: more than u32::MAX mesh elements")
-}
-
 impl TriMesh {
     /// An empty mesh.
     pub fn new() -> Self {
@@ -146,24 +142,24 @@ impl TriMesh {
     fn insert_vertex(&mut self, data: VertexData) -> VertexId {
         self.live_vertices += 1;
         if let Some(v) = self.free_vertices.pop() {
-            self.vertices[v.idx()] = Some(data);
+            self.vertices[v.index()] = Some(data);
             v
         } else {
             self.vertices.push(Some(data));
-            VertexId(to_u32(self.vertices.len() - 1))
+            VertexId::from_index(self.vertices.len() - 1)
         }
     }
 
     pub(super) fn vdata(&self, v: VertexId) -> &VertexData {
         self.vertices
-            .get(v.idx())
+            .get(v.index())
             .and_then(Option::as_ref)
             .expect("internal: dead or unknown vertex id")
     }
 
     fn vdata_mut(&mut self, v: VertexId) -> &mut VertexData {
         self.vertices
-            .get_mut(v.idx())
+            .get_mut(v.index())
             .and_then(Option::as_mut)
             .expect("internal: dead or unknown vertex id")
     }
@@ -172,7 +168,7 @@ impl TriMesh {
     /// be removed first; [`TriMesh::check`] reports faces on dead vertices.
     pub fn remove_vertex(&mut self, v: VertexId) {
         if self.is_vertex_alive(v) {
-            self.vertices[v.idx()] = None;
+            self.vertices[v.index()] = None;
             self.free_vertices.push(v);
             self.live_vertices -= 1;
         }
@@ -180,7 +176,7 @@ impl TriMesh {
 
     /// Whether `v` names a live vertex.
     pub fn is_vertex_alive(&self, v: VertexId) -> bool {
-        matches!(self.vertices.get(v.idx()), Some(Some(_)))
+        matches!(self.vertices.get(v.index()), Some(Some(_)))
     }
 
     /// The live vertices.
@@ -189,7 +185,7 @@ impl TriMesh {
             .iter()
             .enumerate()
             .filter(|(_, d)| d.is_some())
-            .map(|(i, _)| VertexId(to_u32(i)))
+            .map(|(i, _)| VertexId::from_index(i))
     }
 
     /// Number of live vertices.
@@ -292,11 +288,11 @@ impl TriMesh {
         let data = FaceData { v, adj: [None; 3] };
         self.live_faces += 1;
         let f = if let Some(f) = self.free_faces.pop() {
-            self.faces[f.idx()] = Some(data);
+            self.faces[f.index()] = Some(data);
             f
         } else {
             self.faces.push(Some(data));
-            FaceId(to_u32(self.faces.len() - 1))
+            FaceId::from_index(self.faces.len() - 1)
         };
         for x in v {
             self.vdata_mut(x).face = Some(f);
@@ -306,14 +302,14 @@ impl TriMesh {
 
     pub(super) fn fdata(&self, f: FaceId) -> &FaceData {
         self.faces
-            .get(f.idx())
+            .get(f.index())
             .and_then(Option::as_ref)
             .expect("internal: dead or unknown face id")
     }
 
     pub(super) fn fdata_mut(&mut self, f: FaceId) -> &mut FaceData {
         self.faces
-            .get_mut(f.idx())
+            .get_mut(f.index())
             .and_then(Option::as_mut)
             .expect("internal: dead or unknown face id")
     }
@@ -326,7 +322,7 @@ impl TriMesh {
         }
         let data = self.fdata(f).clone();
         for g in data.adj.into_iter().flatten() {
-            if let Some(Some(gd)) = self.faces.get_mut(g.idx()) {
+            if let Some(Some(gd)) = self.faces.get_mut(g.index()) {
                 for a in &mut gd.adj {
                     if *a == Some(f) {
                         *a = None;
@@ -334,7 +330,7 @@ impl TriMesh {
                 }
             }
         }
-        self.faces[f.idx()] = None;
+        self.faces[f.index()] = None;
         self.free_faces.push(f);
         self.live_faces -= 1;
         for (i, &v) in data.v.iter().enumerate() {
@@ -349,7 +345,7 @@ impl TriMesh {
 
     /// Whether `f` names a live face.
     pub fn is_face_alive(&self, f: FaceId) -> bool {
-        matches!(self.faces.get(f.idx()), Some(Some(_)))
+        matches!(self.faces.get(f.index()), Some(Some(_)))
     }
 
     /// The live faces.
@@ -358,7 +354,7 @@ impl TriMesh {
             .iter()
             .enumerate()
             .filter(|(_, d)| d.is_some())
-            .map(|(i, _)| FaceId(to_u32(i)))
+            .map(|(i, _)| FaceId::from_index(i))
     }
 
     /// Number of live faces.

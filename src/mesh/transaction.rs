@@ -66,14 +66,14 @@ impl<'a> Transaction<'a> {
 
     fn touch_v(&mut self, v: VertexId) {
         if !self.old_vertices.iter().any(|(x, _)| *x == v) {
-            let old = self.mesh.vertices.get(v.idx()).cloned().flatten();
+            let old = self.mesh.vertices.get(v.index()).cloned().flatten();
             self.old_vertices.push((v, old));
         }
     }
 
     fn touch_f(&mut self, f: FaceId) {
         if !self.old_faces.iter().any(|(x, _)| *x == f) {
-            let old = self.mesh.faces.get(f.idx()).cloned().flatten();
+            let old = self.mesh.faces.get(f.index()).cloned().flatten();
             self.old_faces.push((f, old));
         }
     }
@@ -90,7 +90,7 @@ impl<'a> Transaction<'a> {
             self.free_log.push(FreeOp::PopV(v));
             self.touch_v(v);
         } else {
-            self.touch_v(VertexId(super::storage::to_u32(self.mesh.vertices.len())));
+            self.touch_v(VertexId::from_index(self.mesh.vertices.len()));
         }
     }
 
@@ -127,7 +127,7 @@ impl<'a> Transaction<'a> {
             self.free_log.push(FreeOp::PopF(f));
             self.touch_f(f);
         } else {
-            self.touch_f(FaceId(super::storage::to_u32(self.mesh.faces.len())));
+            self.touch_f(FaceId::from_index(self.mesh.faces.len()));
         }
         for x in v {
             self.touch_v(x);
@@ -228,12 +228,12 @@ impl<'a> Transaction<'a> {
         m.vertices.truncate(self.vertex_len);
         m.faces.truncate(self.face_len);
         for (v, old) in self.old_vertices.drain(..) {
-            if let Some(slot) = m.vertices.get_mut(v.idx()) {
+            if let Some(slot) = m.vertices.get_mut(v.index()) {
                 *slot = old;
             }
         }
         for (f, old) in self.old_faces.drain(..) {
-            if let Some(slot) = m.faces.get_mut(f.idx()) {
+            if let Some(slot) = m.faces.get_mut(f.index()) {
                 *slot = old;
             }
         }

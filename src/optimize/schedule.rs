@@ -367,7 +367,7 @@ impl<'a> Schedule<'a> {
                 continue;
             }
             for v in self.mesh.face(f) {
-                let i = v.0 as usize;
+                let i = v.index();
                 if i >= self.stamp.len() {
                     self.stamp.resize(i + 1, 0);
                 }
@@ -377,11 +377,11 @@ impl<'a> Schedule<'a> {
     }
 
     fn stamp_of(&self, v: VertexId) -> u64 {
-        self.stamp.get(v.0 as usize).copied().unwrap_or(0)
+        self.stamp.get(v.index()).copied().unwrap_or(0)
     }
 
     fn target_of(&mut self, v: VertexId) -> f64 {
-        let i = v.0 as usize;
+        let i = v.index();
         if i >= self.target.len() {
             self.target.resize(i + 1, self.opts.l);
         }
@@ -389,7 +389,7 @@ impl<'a> Schedule<'a> {
     }
 
     fn set_target(&mut self, v: VertexId, t: f64) {
-        let i = v.0 as usize;
+        let i = v.index();
         if i >= self.target.len() {
             self.target.resize(i + 1, self.opts.l);
         }
@@ -458,15 +458,15 @@ impl<'a> Schedule<'a> {
         let mut seen = vec![false; cap];
         let mut queue = std::collections::VecDeque::new();
         for &v in &seeds {
-            mult[v.0 as usize] = 0.5;
-            seen[v.0 as usize] = true;
+            mult[v.index()] = 0.5;
+            seen[v.index()] = true;
             queue.push_back((v, v));
         }
         while let Some((v, seed)) = queue.pop_front() {
             let radius = 1.8 * self.target_of(seed);
             let ps = self.mesh.position(seed);
             for w in ops::ring(self.mesh, v).neighbours {
-                let i = w.0 as usize;
+                let i = w.index();
                 if seen[i] {
                     continue;
                 }
@@ -482,7 +482,7 @@ impl<'a> Schedule<'a> {
         let mut hit_floor = false;
         let verts: Vec<VertexId> = self.mesh.vertices().collect();
         for v in verts {
-            let t = self.target_of(v) * mult[v.0 as usize];
+            let t = self.target_of(v) * mult[v.index()];
             if t < self.opts.l_floor {
                 hit_floor = true;
             }
@@ -657,7 +657,7 @@ impl<'a> Schedule<'a> {
         self.rng.shuffle(&mut verts);
         let mut applied = 0;
         for v in verts {
-            let i = v.0 as usize;
+            let i = v.index();
             if i >= self.failed_smooth.len() {
                 self.failed_smooth.resize(i + 1, u64::MAX);
             }
