@@ -119,7 +119,7 @@ impl TriMesh {
     // ---- vertices ----------------------------------------------------------
 
     /// Add a vertex at an `f64` position.
-    pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
         self.insert_vertex(VertexData {
             pos,
             exact: None,
@@ -129,7 +129,7 @@ impl TriMesh {
     }
 
     /// Add a vertex at an exact position (kept rational unless it is an `f64` point).
-    pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
         let (pos, exact) = p.to_f64();
         self.insert_vertex(VertexData {
             pos,
@@ -166,7 +166,7 @@ impl TriMesh {
 
     /// Remove a vertex (its slot goes to the free list). Faces using it must
     /// be removed first; [`TriMesh::check`] reports faces on dead vertices.
-    pub fn remove_vertex(&mut self, v: VertexId) {
+    pub(crate) fn remove_vertex(&mut self, v: VertexId) {
         if self.is_vertex_alive(v) {
             self.vertices[v.index()] = None;
             self.free_vertices.push(v);
@@ -251,18 +251,10 @@ impl TriMesh {
     }
 
     /// Move a vertex to an `f64` position (drops the rational one).
-    pub fn set_position(&mut self, v: VertexId, pos: Point) {
+    pub(crate) fn set_position(&mut self, v: VertexId, pos: Point) {
         let d = self.vdata_mut(v);
         d.pos = pos;
         d.exact = None;
-    }
-
-    /// Move a vertex to an exact position.
-    pub fn set_position_q(&mut self, v: VertexId, p: PointQ) {
-        let (pos, exact) = p.to_f64();
-        let d = self.vdata_mut(v);
-        d.pos = pos;
-        d.exact = (!exact).then_some(p);
     }
 
     /// The vertex tag.
@@ -270,8 +262,9 @@ impl TriMesh {
         self.vdata(v).tag
     }
 
-    /// Replace the vertex tag.
-    pub fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
+    /// Replace the vertex tag (tests only: the pipeline tags a vertex when it adds it).
+    #[cfg(test)]
+    pub(crate) fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
         self.vdata_mut(v).tag = tag;
     }
 
@@ -284,7 +277,7 @@ impl TriMesh {
 
     /// Add a face (vertices counter-clockwise), with no adjacency yet: call
     /// [`TriMesh::link_all`] after a bulk build, or [`TriMesh::set_neighbour`].
-    pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
+    pub(crate) fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         let data = FaceData { v, adj: [None; 3] };
         self.live_faces += 1;
         let f = if let Some(f) = self.free_faces.pop() {
@@ -316,7 +309,7 @@ impl TriMesh {
 
     /// Remove a face: its neighbours forget it, its vertices point to another
     /// live incident face when one is adjacent, and the slot is freed.
-    pub fn remove_face(&mut self, f: FaceId) {
+    pub(crate) fn remove_face(&mut self, f: FaceId) {
         if !self.is_face_alive(f) {
             return;
         }
@@ -378,7 +371,7 @@ impl TriMesh {
     }
 
     /// Set the face across edge `i` of `f` (one side only; see [`TriMesh::link`]).
-    pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
+    pub(crate) fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
         self.fdata_mut(f).adj[i] = g;
     }
 
@@ -413,7 +406,7 @@ impl TriMesh {
 
     /// Record that the edge `a b` lies on a feature (no duplicate entries).
     /// For a primary, `t_a` / `t_b` are the parameters at `a` / `b`.
-    pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+    pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
         let key = EdgeKey::new(a, b);
         let tag = match tag {
             FeatureOn::Primary { section, t } if key.lo != a => FeatureOn::Primary {
@@ -429,7 +422,7 @@ impl TriMesh {
     }
 
     /// Remove and return every tag of the edge `a b`.
-    pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
         self.edge_tags
             .remove(&EdgeKey::new(a, b))
             .unwrap_or_default()

@@ -26,7 +26,7 @@ impl TriMesh {
 
     /// Make `f` and `g` neighbours across their shared edge (both sides).
     /// Returns `false`, changing nothing, if they share no edge.
-    pub fn link(&mut self, f: FaceId, g: FaceId) -> bool {
+    pub(crate) fn link(&mut self, f: FaceId, g: FaceId) -> bool {
         for i in 0..3 {
             let (a, b) = self.edge(f, i);
             if let Some(j) = self.edge_index(g, a, b) {
@@ -41,7 +41,7 @@ impl TriMesh {
     /// Recompute the adjacency of every live face from scratch. An edge used
     /// by more than two faces (non-manifold) links none of them; `check`
     /// reports it.
-    pub fn link_all(&mut self) {
+    pub(crate) fn link_all(&mut self) {
         let mut by_edge: HashMap<(VertexId, VertexId), Vec<(FaceId, usize)>> = HashMap::new();
         let faces: Vec<FaceId> = self.faces().collect();
         for &f in &faces {
