@@ -15,7 +15,7 @@
 
 use super::Parent;
 use super::split::{end_tangent, start_tangent};
-use crate::mesh::point_segment_distance;
+use crate::mesh::{angle_between, point_segment_distance};
 use crate::params::Resolved;
 use kurbo::{CubicBez, Line, ParamCurveCurvature};
 
@@ -54,7 +54,7 @@ fn end_tangent_angle(c: &CubicBez) -> f64 {
     if u.hypot2() == 0.0 || v.hypot2() == 0.0 {
         return std::f64::consts::PI;
     }
-    u.cross(v).abs().atan2(u.dot(v))
+    angle_between(u, v)
 }
 
 /// Whether the sampled curvature stays within `kappa_max` (a non-finite value, at a

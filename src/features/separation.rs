@@ -26,7 +26,7 @@ use super::grid::Grid;
 use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
 use crate::exact::orient2d;
-use crate::mesh::point_segment_distance;
+use crate::mesh::{angle_between, point_segment_distance};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;
@@ -147,7 +147,7 @@ pub(super) fn violates(a: &CubicBez, b: &CubicBez, mu: f64, alpha: f64) -> bool 
         return true;
     }
     let (u, v) = (ca.p1 - q, cb.p1 - q);
-    let angle = u.cross(v).abs().atan2(u.dot(v));
+    let angle = angle_between(u, v);
     if angle < 4.0 * alpha {
         return true;
     }

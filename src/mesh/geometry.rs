@@ -4,7 +4,7 @@
 
 use super::ids::VertexId;
 use super::storage::TriMesh;
-use kurbo::{Line, Point};
+use kurbo::{Line, Point, Vec2};
 
 impl TriMesh {
     /// The distance between the `f64` positions of `a` and `b` (an edge's length).
@@ -24,12 +24,16 @@ pub fn point_segment_distance(p: Point, l: Line) -> f64 {
     p.distance(l.p0 + d * s)
 }
 
+/// The unsigned angle between the vectors `u` and `v`, radians in `[0, π]`;
+/// 0 when either is zero.
+pub fn angle_between(u: Vec2, v: Vec2) -> f64 {
+    u.cross(v).abs().atan2(u.dot(v))
+}
+
 /// The unsigned angle at `at` between the directions to `prev` and `next`,
 /// radians in `[0, π]`; 0 when an adjacent edge has zero length.
 pub fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
-    let u = prev - at;
-    let v = next - at;
-    u.cross(v).abs().atan2(u.dot(v))
+    angle_between(prev - at, next - at)
 }
 
 /// The corner angles of the triangle `[a, b, c]`, radians, at `a`, `b`, `c`.

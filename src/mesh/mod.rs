@@ -22,7 +22,9 @@ mod topology;
 mod transaction;
 
 pub use check::Defect;
-pub use geometry::{corner_angle, corner_angles, min_angle_deg, point_segment_distance};
+pub use geometry::{
+    angle_between, corner_angle, corner_angles, min_angle_deg, point_segment_distance,
+};
 pub use ids::{FaceId, VertexId};
 pub use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
 pub use topology::{EdgeQuad, VertexRing};
