@@ -131,12 +131,12 @@ impl LinearMesh {
         let mut index = vec![u32::MAX; mesh.vertex_capacity()];
         let mut vertices = Vec::with_capacity(mesh.num_vertices());
         for v in mesh.vertices() {
-            index[v.0 as usize] =
+            index[v.index()] =
                 u32::try_from(vertices.len()).expect("internal: vertex count fits u32");
             vertices.push(mesh.position(v));
         }
         let id = |v: VertexId| {
-            let i = index[v.0 as usize];
+            let i = index[v.index()];
             debug_assert!(
                 i != u32::MAX,
                 "internal: face refers to a dead vertex {v:?}"

@@ -12,7 +12,7 @@
 //!   of the coordinates along the box's sides, where spade's refinement may round
 //!   a vertex it puts on a side);
 //! - every triangle is strictly counter-clockwise, decided with the exact
-//!   predicate `robust::orient2d` on the returned f64 vertices; otherwise the
+//!   predicate [`crate::exact::orient2d`] on the returned f64 vertices; otherwise the
 //!   result is an [`crate::Error::Meshing`], never a bad mesh;
 //! - every input point and polyline vertex is a mesh vertex (up to the ε_m merge),
 //!   and every constraint piece is a chain of mesh edges, listed in
@@ -28,6 +28,7 @@
 mod input;
 mod snap;
 
+use crate::exact::{Orientation, orient2d};
 use crate::fem::{FeatureEdge, LineKind};
 use crate::svg::ShapeId;
 use crate::{Drawing, Error, LinearMesh, Params, Result};
@@ -313,15 +314,19 @@ fn extract(
     for f in cdt.inner_faces() {
         let [a, b, c] = f.vertices().map(|v| v.fix().index());
         let t = [index(a)?, index(b)?, index(c)?];
-        let o = orient([vertices[a], vertices[b], vertices[c]]);
-        if o.is_nan() || o <= 0.0 {
+        let o = orient2d(vertices[a], vertices[b], vertices[c]);
+        if o != Orientation::CounterClockwise {
             return Err(Error::meshing(
                 "baseline",
                 format!(
                     "triangle {:?} at {:?} is {} after scaling back to user units",
                     t,
                     [vertices[a], vertices[b], vertices[c]],
-                    if o == 0.0 { "degenerate" } else { "clockwise" }
+                    if o == Orientation::Collinear {
+                        "degenerate"
+                    } else {
+                        "clockwise"
+                    }
                 ),
             ));
         }
@@ -333,12 +338,6 @@ fn extract(
         triangles,
         edges,
     })
-}
-
-/// The exact orientation of a triangle: positive when counter-clockwise.
-fn orient(p: [Point; 3]) -> f64 {
-    let c = |p: Point| robust::Coord { x: p.x, y: p.y };
-    robust::orient2d(c(p[0]), c(p[1]), c(p[2]))
 }
 
 /// The feature edges: for every input piece, the chain of constraint edges spade

@@ -58,7 +58,10 @@ pub(super) fn grid_pitch(d: f64, rel: f64) -> f64 {
     2f64.powi((e as i32).clamp(MIN_PITCH_EXP, 0))
 }
 
-fn orient(a: Ip, b: Ip, c: Ip) -> i128 {
+/// Twice the signed area of the grid triangle `a b c`, exact in `i128`: its
+/// sign is the orientation (snapped points are integers, so no filter is
+/// needed) and its magnitude gives distances and crossing parameters.
+fn area2(a: Ip, b: Ip, c: Ip) -> i128 {
     let (abx, aby) = (i128::from(b.0 - a.0), i128::from(b.1 - a.1));
     let (acx, acy) = (i128::from(c.0 - a.0), i128::from(c.1 - a.1));
     abx * acy - aby * acx
@@ -204,7 +207,7 @@ impl State {
                 if t <= 0 || t >= l2 {
                     continue;
                 }
-                let c = orient(a, b, p);
+                let c = area2(a, b, p);
                 // c² ≤ r² · l2, without overflow: c and l2 are below 2^106.
                 let near = if c.unsigned_abs() > (1u128 << 63) {
                     false
@@ -226,8 +229,8 @@ impl State {
             return None;
         }
         let [a, b, c, d] = [s.a, s.b, t.a, t.b].map(|k| self.pts[k as usize]);
-        let (o1, o2) = (orient(a, b, c), orient(a, b, d));
-        let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+        let (o1, o2) = (area2(a, b, c), area2(a, b, d));
+        let (o3, o4) = (area2(c, d, a), area2(c, d, b));
         if !(o1.signum() * o2.signum() < 0 && o3.signum() * o4.signum() < 0) {
             return None;
         }

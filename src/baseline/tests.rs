@@ -69,8 +69,13 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
     // Strictly CCW (exactly), indices in range.
     for t in &mesh.triangles {
         assert!(t.iter().all(|&i| i < n), "{t:?}");
-        let p = t.map(|i| mesh.vertices[i as usize]);
-        assert!(orient(p) > 0.0, "not CCW: {p:?}");
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        assert_eq!(
+            orient2d(a, b, c),
+            Orientation::CounterClockwise,
+            "not CCW: {:?}",
+            [a, b, c]
+        );
     }
     // Every edge has at most two triangles, one on each side.
     let mut directed: HashSet<(u32, u32)> = HashSet::new();

@@ -221,14 +221,14 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         for f in mesh.faces() {
             for v in mesh.face(f) {
                 if mesh.is_rational(v) {
-                    star[v.0 as usize].push(f);
+                    star[v.index()].push(f);
                 }
             }
         }
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
         for v in rational {
-            let star = &star[v.0 as usize];
+            let star = &star[v.index()];
             let fits = |p: kurbo::Point| {
                 star.iter()
                     .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise)

@@ -246,14 +246,6 @@ impl Bend {
     }
 }
 
-/// The faces on the edge `key`.
-fn faces_of(mesh: &TriMesh, key: EdgeKey) -> Vec<FaceId> {
-    mesh.incident_faces(key.lo)
-        .into_iter()
-        .filter(|&f| mesh.face(f).contains(&key.hi))
-        .collect()
-}
-
 /// The edges of face `f` as keys, in gmsh order.
 fn face_edges(mesh: &TriMesh, f: FaceId) -> [EdgeKey; 3] {
     let v = mesh.face(f);
@@ -397,8 +389,10 @@ fn exact_shape(mesh: &TriMesh, ctx: &Context, order: Order) -> Bend {
 /// Faces with a curved edge that are not certified.
 fn uncertified(mesh: &TriMesh, shape: &Bend, order: Order, opts: &CertifyOptions) -> Vec<FaceId> {
     let mut bad: Vec<FaceId> = Vec::new();
+    let mut on_edge = Vec::new();
     for key in shape.edges.keys() {
-        for f in faces_of(mesh, *key) {
+        mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
+        for &f in &on_edge {
             if !bad.contains(&f) && !shape.certified(mesh, order, f, opts) {
                 bad.push(f);
             }
@@ -549,6 +543,7 @@ fn fit_all(mesh: &TriMesh, opts: &CurveOptions, shape: &mut Bend, stats: &mut Cu
     let bad = uncertified(mesh, shape, order, &opts.certify);
     let mut fitted: Vec<FaceId> = Vec::new();
     let mut straight: Vec<FaceId> = Vec::new();
+    let mut faces = Vec::new();
     for f in bad {
         if shape.certified(mesh, order, f, &opts.certify) {
             continue; // fixed by the fit of a neighbouring edge
@@ -557,7 +552,7 @@ fn fit_all(mesh: &TriMesh, opts: &CurveOptions, shape: &mut Bend, stats: &mut Cu
             let Some(target) = shape.edges.get(&key).cloned() else {
                 continue;
             };
-            let faces = faces_of(mesh, key);
+            mesh.faces_on_edge(key.lo, key.hi, &mut faces);
             let out = fit_edge(mesh, opts, shape, key, &faces, &target);
             match out {
                 Fit::Fitted => fitted.extend(&faces),
@@ -568,7 +563,8 @@ fn fit_all(mesh: &TriMesh, opts: &CurveOptions, shape: &mut Bend, stats: &mut Cu
             // Last resort for a face whose edges failed together: all straight.
             for key in face_edges(mesh, f) {
                 if shape.edges.remove(&key).is_some() {
-                    for g in faces_of(mesh, key) {
+                    mesh.faces_on_edge(key.lo, key.hi, &mut faces);
+                    for &g in &faces {
                         shape.centre.remove(&g);
                         straight.push(g);
                     }
@@ -743,7 +739,7 @@ fn assemble(
     let next =
         |nodes: &Vec<Point>| u32::try_from(nodes.len()).expect("internal: node count fits u32");
     for v in mesh.vertices() {
-        index[v.0 as usize] = next(&nodes);
+        index[v.index()] = next(&nodes);
         nodes.push(mesh.position(v));
     }
     let inner_count = order as usize - 1;
@@ -771,7 +767,7 @@ fn assemble(
     let mut triangles = Vec::with_capacity(faces.len() * order.triangle_nodes());
     for &f in &faces {
         let v = mesh.face(f);
-        triangles.extend(v.map(|x| index[x.0 as usize]));
+        triangles.extend(v.map(|x| index[x.index()]));
         if inner_count == 0 {
             continue;
         }
@@ -803,8 +799,8 @@ fn assemble(
                 continue;
             }
             line_feature.push(fk);
-            lines.push(index[key.lo.0 as usize]);
-            lines.push(index[key.hi.0 as usize]);
+            lines.push(index[key.lo.index()]);
+            lines.push(index[key.hi.index()]);
             if inner_count > 0 {
                 lines.extend(edge_inner(&mut nodes, key));
             }
@@ -858,6 +854,7 @@ fn finish_stats(
     }
     // Curved elements: those with a curved edge on a cubic feature.
     let mut curved_faces: Vec<FaceId> = Vec::new();
+    let mut on_edge = Vec::new();
     let mut dist_sum = 0.0;
     let mut dist_count = 0usize;
     let mut dist_max = 0.0f64;
@@ -887,7 +884,8 @@ fn finish_stats(
         dist_sum += dist;
         dist_count += 1;
         if on_cubic(ctx, section) && shape.edges.contains_key(&key) && order != Order::Linear {
-            curved_faces.extend(faces_of(mesh, key));
+            mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
+            curved_faces.extend(&on_edge);
         }
     }
     curved_faces.sort_unstable();

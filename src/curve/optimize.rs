@@ -34,7 +34,7 @@ use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
 use crate::ops::{self, Context};
 use crate::optimize::OptimizeOptions;
-use crate::optimize::schedule::{OpTally, Schedule, locked};
+use crate::optimize::schedule::{EnergyMeasure, OpTally, Schedule, measure_energy};
 
 /// Collapse edges shorter than this fraction of `l` (the shared schedule's
 /// collapses never create an edge longer than 4/3 `l`).
@@ -79,45 +79,12 @@ pub struct CurvedOptimizeStats {
     pub uncertified_after: usize,
 }
 
-/// Curved energies of a mesh, for the stop rules.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Measure {
-    /// Largest energy of the certified triangles not locked.
-    max: f64,
-    /// Largest energy of all certified triangles.
-    max_all: f64,
-    /// Mean energy of the certified triangles.
-    mean: f64,
-    /// Triangles that are not certified curved elements.
-    uncertified: usize,
-}
-
-fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> Measure {
-    let mut m = Measure {
-        max: 0.0,
-        max_all: 0.0,
-        mean: 0.0,
-        uncertified: 0,
-    };
-    let (mut sum, mut n) = (0.0, 0usize);
-    for f in mesh.faces() {
-        let v = mesh.face(f);
-        match curved::energy(mesh, ctx, rule, v).filter(|e| e.is_finite()) {
-            None => m.uncertified += 1,
-            Some(e) => {
-                sum += e;
-                n += 1;
-                m.max_all = m.max_all.max(e);
-                if !locked(mesh, v) {
-                    m.max = m.max.max(e);
-                }
-            }
-        }
-    }
-    if n > 0 {
-        m.mean = sum / n as f64;
-    }
-    m
+/// Curved energies of a mesh, for the stop rules: triangles that are not
+/// certified curved elements are `unmeasured`.
+fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> EnergyMeasure {
+    measure_energy(mesh, |v, _| {
+        curved::energy(mesh, ctx, rule, v).filter(|e| e.is_finite())
+    })
 }
 
 /// Optimize `mesh` in curved mode (see the module doc). `ctx` must be in curved
@@ -142,7 +109,7 @@ pub fn optimize_curved(
     let mut stats = CurvedOptimizeStats {
         max_amips_before: start.max_all,
         triangles_before: mesh.num_faces(),
-        uncertified_before: start.uncertified,
+        uncertified_before: start.unmeasured,
         ..CurvedOptimizeStats::default()
     };
     // The linear schedule's collapse, swap and smoothing passes, with every
@@ -191,7 +158,7 @@ pub fn optimize_curved(
     stats.reroute = tallies.reroute.clone();
     stats.smooth = tallies.smooth.clone();
     stats.max_amips_after = last.max_all;
-    stats.uncertified_after = last.uncertified;
+    stats.uncertified_after = last.unmeasured;
     stats.triangles_after = s.mesh().num_faces();
     stats
 }

@@ -6,7 +6,7 @@
 //! non-negative and sum to 1), the three corner coefficients are its values at the
 //! corners, and the coefficients on a sub-triangle follow exactly from blossoming
 //! (repeated de Casteljau steps), which is how [`BernsteinTri::split4`] refines the
-//! bound. The Jacobian determinant of a Lagrange triangle (`curve::jacobian`) is kept
+//! bound. The Jacobian determinant of a Lagrange triangle (`element::jacobian`) is kept
 //! in this form.
 //!
 //! Lattice order: `α = (n − j − k, j, k)` lies at index

@@ -174,11 +174,6 @@ impl PointQ {
         (Point::new(x, y), ex && ey)
     }
 
-    /// The nearest `f64` point (see [`PointQ::to_f64`]).
-    pub fn approx(&self) -> Point {
-        self.to_f64().0
-    }
-
     /// Whether both coordinates are exactly representable as `f64`.
     pub fn is_f64(&self) -> bool {
         self.ix.lo == self.ix.hi && self.iy.lo == self.iy.hi
@@ -245,19 +240,6 @@ impl PointQ {
         let a = Rational::from(&self.x * &dx) + Rational::from(&self.y * &dy);
         let b = dx * &other.x + dy * &other.y;
         a.cmp(&b)
-    }
-
-    /// Lexicographic comparison (x, then y), exact.
-    pub fn cmp_xy(&self, other: &PointQ) -> Ordering {
-        self.x.cmp(&other.x).then_with(|| self.y.cmp(&other.y))
-    }
-
-    /// Number of bits of the numerators and denominators (a size measure).
-    pub fn bit_size(&self) -> u64 {
-        let s = |r: &Rational| {
-            u64::from(r.numer().significant_bits()) + u64::from(r.denom().significant_bits())
-        };
-        s(&self.x) + s(&self.y)
     }
 }
 

@@ -15,8 +15,9 @@
 
 use super::Parent;
 use super::split::{end_tangent, start_tangent};
+use crate::mesh::{angle_between, point_segment_distance};
 use crate::params::Resolved;
-use kurbo::{CubicBez, Line, ParamCurveCurvature, Point};
+use kurbo::{CubicBez, Line, ParamCurveCurvature};
 
 /// Maximum halving depth of one piece.
 const MAX_DEPTH: u32 = 48;
@@ -41,17 +42,6 @@ pub(super) fn polygon_length(c: &CubicBez) -> f64 {
     c.p0.distance(c.p1) + c.p1.distance(c.p2) + c.p2.distance(c.p3)
 }
 
-/// Distance from `p` to the segment `l`.
-pub(super) fn point_segment_distance(p: Point, l: Line) -> f64 {
-    let d = l.p1 - l.p0;
-    let len2 = d.hypot2();
-    if len2 == 0.0 {
-        return p.distance(l.p0);
-    }
-    let s = ((p - l.p0).dot(d) / len2).clamp(0.0, 1.0);
-    p.distance(l.p0 + d * s)
-}
-
 /// Upper bound of the distance from the curve to its chord.
 fn chord_deviation(c: &CubicBez) -> f64 {
     let chord = Line::new(c.p0, c.p3);
@@ -64,7 +54,7 @@ fn end_tangent_angle(c: &CubicBez) -> f64 {
     if u.hypot2() == 0.0 || v.hypot2() == 0.0 {
         return std::f64::consts::PI;
     }
-    u.cross(v).abs().atan2(u.dot(v))
+    angle_between(u, v)
 }
 
 /// Whether the sampled curvature stays within `kappa_max` (a non-finite value, at a

@@ -23,8 +23,10 @@
 //! demoting any that a moved segment came too close to.
 
 use super::grid::Grid;
-use super::resample::{point_segment_distance, polygon_length};
+use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
+use crate::exact::orient2d;
+use crate::mesh::{angle_between, point_segment_distance};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;
@@ -47,15 +49,11 @@ fn ctrl_box(c: &CubicBez) -> Rect {
         .fold(Rect::from_points(ps[0], ps[0]), |r, p| r.union_pt(*p))
 }
 
-fn orient(a: Point, b: Point, c: Point) -> f64 {
-    (b - a).cross(c - a)
-}
-
 /// Distance between two segments (0 if they cross or touch).
 pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
-    let (d1, d2) = (orient(a.p0, a.p1, b.p0), orient(a.p0, a.p1, b.p1));
-    let (d3, d4) = (orient(b.p0, b.p1, a.p0), orient(b.p0, b.p1, a.p1));
-    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
+    let (d1, d2) = (orient2d(a.p0, a.p1, b.p0), orient2d(a.p0, a.p1, b.p1));
+    let (d3, d4) = (orient2d(b.p0, b.p1, a.p0), orient2d(b.p0, b.p1, a.p1));
+    if d1.sign() * d2.sign() < 0 && d3.sign() * d4.sign() < 0 {
         return 0.0;
     }
     point_segment_distance(a.p0, b)
@@ -65,12 +63,13 @@ pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
 }
 
 fn in_triangle(p: Point, a: Point, b: Point, c: Point) -> bool {
-    let area = orient(a, b, c);
-    if area == 0.0 {
+    let s = orient2d(a, b, c).sign();
+    if s == 0 {
         return false;
     }
-    let s = area.signum();
-    s * orient(a, b, p) >= 0.0 && s * orient(b, c, p) >= 0.0 && s * orient(c, a, p) >= 0.0
+    s * orient2d(a, b, p).sign() >= 0
+        && s * orient2d(b, c, p).sign() >= 0
+        && s * orient2d(c, a, p).sign() >= 0
 }
 
 fn in_hull(p: Point, q: &[Point; 4]) -> bool {
@@ -148,7 +147,7 @@ pub(super) fn violates(a: &CubicBez, b: &CubicBez, mu: f64, alpha: f64) -> bool 
         return true;
     }
     let (u, v) = (ca.p1 - q, cb.p1 - q);
-    let angle = u.cross(v).abs().atan2(u.dot(v));
+    let angle = angle_between(u, v);
     if angle < 4.0 * alpha {
         return true;
     }

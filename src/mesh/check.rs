@@ -51,7 +51,7 @@ impl TriMesh {
             let mut ok = true;
             for &x in &v {
                 if self.is_vertex_alive(x) {
-                    used[x.0 as usize] = true;
+                    used[x.index()] = true;
                 } else {
                     out.push(Defect::DeadVertex(f, x));
                     ok = false;
@@ -107,7 +107,7 @@ impl TriMesh {
             }
         }
         for v in self.vertices() {
-            if !used[v.0 as usize] {
+            if !used[v.index()] {
                 out.push(Defect::IsolatedVertex(v));
             } else {
                 let ok = self
@@ -140,7 +140,7 @@ impl TriMesh {
         // Vertices sorted by their f64 x (within one ulp of the exact x).
         let mut by_x: Vec<(f64, VertexId)> = self
             .vertices()
-            .filter(|v| used[v.0 as usize])
+            .filter(|v| used[v.index()])
             .map(|v| (self.position(v).x, v))
             .collect();
         by_x.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -2,20 +2,44 @@
 
 /// A vertex of a [`TriMesh`](super::TriMesh). `Debug` prints `v12`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct VertexId(pub u32);
+pub struct VertexId(u32);
 
 /// A triangle of a [`TriMesh`](super::TriMesh). `Debug` prints `f3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct FaceId(pub u32);
+pub struct FaceId(u32);
+
+fn to_u32(i: usize) -> u32 {
+    u32::try_from(i).expect("internal: more than u32::MAX mesh elements")
+}
 
 impl VertexId {
-    pub(super) fn idx(self) -> usize {
+    /// The id of vertex slot `i`.
+    ///
+    /// # Panics
+    /// If `i` does not fit in a `u32`.
+    pub fn from_index(i: usize) -> Self {
+        VertexId(to_u32(i))
+    }
+
+    /// The slot index, for dense side tables (below
+    /// [`TriMesh::vertex_capacity`](super::TriMesh::vertex_capacity)).
+    pub fn index(self) -> usize {
         self.0 as usize
     }
 }
 
 impl FaceId {
-    pub(super) fn idx(self) -> usize {
+    /// The id of face slot `i`.
+    ///
+    /// # Panics
+    /// If `i` does not fit in a `u32`.
+    pub fn from_index(i: usize) -> Self {
+        FaceId(to_u32(i))
+    }
+
+    /// The slot index, for dense side tables (below
+    /// [`TriMesh::face_capacity`](super::TriMesh::face_capacity)).
+    pub fn index(self) -> usize {
         self.0 as usize
     }
 }
@@ -37,8 +61,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn short_debug() {
+    fn short_debug_and_index() {
         assert_eq!(format!("{:?}", VertexId(12)), "v12");
         assert_eq!(format!("{:?}", FaceId(3)), "f3");
+        assert_eq!(VertexId::from_index(7).index(), 7);
+        assert_eq!(FaceId::from_index(0), FaceId(0));
     }
 }

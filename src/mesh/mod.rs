@@ -10,16 +10,22 @@
 //! Guarantees: [`TriMesh::check`] reports every defect of a mesh (inverted or
 //! degenerate triangles decided exactly, asymmetric adjacency, non-manifold
 //! edges, T-junctions, dangling tags). Topology navigation (`topology.rs`)
-//! never reads a coordinate. [`Transaction`] journals changes and rolls them
+//! never reads a coordinate; `geometry.rs` holds the `f64` measurements
+//! (distances, corner angles) the stages share. [`Transaction`] journals changes and rolls them
 //! back on drop, for the optimizer's local operations. DESIGN "Invariants" 1 and "Exactness".
 
 mod check;
+mod geometry;
 mod ids;
 mod storage;
 mod topology;
 mod transaction;
 
 pub use check::Defect;
+pub use geometry::{
+    angle_between, corner_angle, corner_angles, min_angle_deg, point_segment_distance,
+};
 pub use ids::{FaceId, VertexId};
 pub use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
+pub use topology::{EdgeQuad, VertexRing};
 pub use transaction::Transaction;

@@ -110,10 +110,6 @@ pub struct TriMesh {
     pub(super) live_faces: usize,
 }
 
-pub(super) fn to_u32(n: usize) -> u32 {
-    u32::try_from(n).expect("internal: more than u32::MAX mesh elements")
-}
-
 impl TriMesh {
     /// An empty mesh.
     pub fn new() -> Self {
@@ -123,7 +119,7 @@ impl TriMesh {
     // ---- vertices ----------------------------------------------------------
 
     /// Add a vertex at an `f64` position.
-    pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
         self.insert_vertex(VertexData {
             pos,
             exact: None,
@@ -133,7 +129,7 @@ impl TriMesh {
     }
 
     /// Add a vertex at an exact position (kept rational unless it is an `f64` point).
-    pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
         let (pos, exact) = p.to_f64();
         self.insert_vertex(VertexData {
             pos,
@@ -146,33 +142,33 @@ impl TriMesh {
     fn insert_vertex(&mut self, data: VertexData) -> VertexId {
         self.live_vertices += 1;
         if let Some(v) = self.free_vertices.pop() {
-            self.vertices[v.idx()] = Some(data);
+            self.vertices[v.index()] = Some(data);
             v
         } else {
             self.vertices.push(Some(data));
-            VertexId(to_u32(self.vertices.len() - 1))
+            VertexId::from_index(self.vertices.len() - 1)
         }
     }
 
     pub(super) fn vdata(&self, v: VertexId) -> &VertexData {
         self.vertices
-            .get(v.idx())
+            .get(v.index())
             .and_then(Option::as_ref)
             .expect("internal: dead or unknown vertex id")
     }
 
     fn vdata_mut(&mut self, v: VertexId) -> &mut VertexData {
         self.vertices
-            .get_mut(v.idx())
+            .get_mut(v.index())
             .and_then(Option::as_mut)
             .expect("internal: dead or unknown vertex id")
     }
 
     /// Remove a vertex (its slot goes to the free list). Faces using it must
     /// be removed first; [`TriMesh::check`] reports faces on dead vertices.
-    pub fn remove_vertex(&mut self, v: VertexId) {
+    pub(crate) fn remove_vertex(&mut self, v: VertexId) {
         if self.is_vertex_alive(v) {
-            self.vertices[v.idx()] = None;
+            self.vertices[v.index()] = None;
             self.free_vertices.push(v);
             self.live_vertices -= 1;
         }
@@ -180,7 +176,7 @@ impl TriMesh {
 
     /// Whether `v` names a live vertex.
     pub fn is_vertex_alive(&self, v: VertexId) -> bool {
-        matches!(self.vertices.get(v.idx()), Some(Some(_)))
+        matches!(self.vertices.get(v.index()), Some(Some(_)))
     }
 
     /// The live vertices.
@@ -189,7 +185,7 @@ impl TriMesh {
             .iter()
             .enumerate()
             .filter(|(_, d)| d.is_some())
-            .map(|(i, _)| VertexId(to_u32(i)))
+            .map(|(i, _)| VertexId::from_index(i))
     }
 
     /// Number of live vertices.
@@ -255,18 +251,10 @@ impl TriMesh {
     }
 
     /// Move a vertex to an `f64` position (drops the rational one).
-    pub fn set_position(&mut self, v: VertexId, pos: Point) {
+    pub(crate) fn set_position(&mut self, v: VertexId, pos: Point) {
         let d = self.vdata_mut(v);
         d.pos = pos;
         d.exact = None;
-    }
-
-    /// Move a vertex to an exact position.
-    pub fn set_position_q(&mut self, v: VertexId, p: PointQ) {
-        let (pos, exact) = p.to_f64();
-        let d = self.vdata_mut(v);
-        d.pos = pos;
-        d.exact = (!exact).then_some(p);
     }
 
     /// The vertex tag.
@@ -274,8 +262,9 @@ impl TriMesh {
         self.vdata(v).tag
     }
 
-    /// Replace the vertex tag.
-    pub fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
+    /// Replace the vertex tag (tests only: the pipeline tags a vertex when it adds it).
+    #[cfg(test)]
+    pub(crate) fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
         self.vdata_mut(v).tag = tag;
     }
 
@@ -288,15 +277,15 @@ impl TriMesh {
 
     /// Add a face (vertices counter-clockwise), with no adjacency yet: call
     /// [`TriMesh::link_all`] after a bulk build, or [`TriMesh::set_neighbour`].
-    pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
+    pub(crate) fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         let data = FaceData { v, adj: [None; 3] };
         self.live_faces += 1;
         let f = if let Some(f) = self.free_faces.pop() {
-            self.faces[f.idx()] = Some(data);
+            self.faces[f.index()] = Some(data);
             f
         } else {
             self.faces.push(Some(data));
-            FaceId(to_u32(self.faces.len() - 1))
+            FaceId::from_index(self.faces.len() - 1)
         };
         for x in v {
             self.vdata_mut(x).face = Some(f);
@@ -306,27 +295,27 @@ impl TriMesh {
 
     pub(super) fn fdata(&self, f: FaceId) -> &FaceData {
         self.faces
-            .get(f.idx())
+            .get(f.index())
             .and_then(Option::as_ref)
             .expect("internal: dead or unknown face id")
     }
 
     pub(super) fn fdata_mut(&mut self, f: FaceId) -> &mut FaceData {
         self.faces
-            .get_mut(f.idx())
+            .get_mut(f.index())
             .and_then(Option::as_mut)
             .expect("internal: dead or unknown face id")
     }
 
     /// Remove a face: its neighbours forget it, its vertices point to another
     /// live incident face when one is adjacent, and the slot is freed.
-    pub fn remove_face(&mut self, f: FaceId) {
+    pub(crate) fn remove_face(&mut self, f: FaceId) {
         if !self.is_face_alive(f) {
             return;
         }
         let data = self.fdata(f).clone();
         for g in data.adj.into_iter().flatten() {
-            if let Some(Some(gd)) = self.faces.get_mut(g.idx()) {
+            if let Some(Some(gd)) = self.faces.get_mut(g.index()) {
                 for a in &mut gd.adj {
                     if *a == Some(f) {
                         *a = None;
@@ -334,7 +323,7 @@ impl TriMesh {
                 }
             }
         }
-        self.faces[f.idx()] = None;
+        self.faces[f.index()] = None;
         self.free_faces.push(f);
         self.live_faces -= 1;
         for (i, &v) in data.v.iter().enumerate() {
@@ -349,7 +338,7 @@ impl TriMesh {
 
     /// Whether `f` names a live face.
     pub fn is_face_alive(&self, f: FaceId) -> bool {
-        matches!(self.faces.get(f.idx()), Some(Some(_)))
+        matches!(self.faces.get(f.index()), Some(Some(_)))
     }
 
     /// The live faces.
@@ -358,7 +347,7 @@ impl TriMesh {
             .iter()
             .enumerate()
             .filter(|(_, d)| d.is_some())
-            .map(|(i, _)| FaceId(to_u32(i)))
+            .map(|(i, _)| FaceId::from_index(i))
     }
 
     /// Number of live faces.
@@ -382,7 +371,7 @@ impl TriMesh {
     }
 
     /// Set the face across edge `i` of `f` (one side only; see [`TriMesh::link`]).
-    pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
+    pub(crate) fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
         self.fdata_mut(f).adj[i] = g;
     }
 
@@ -417,7 +406,7 @@ impl TriMesh {
 
     /// Record that the edge `a b` lies on a feature (no duplicate entries).
     /// For a primary, `t_a` / `t_b` are the parameters at `a` / `b`.
-    pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+    pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
         let key = EdgeKey::new(a, b);
         let tag = match tag {
             FeatureOn::Primary { section, t } if key.lo != a => FeatureOn::Primary {
@@ -433,7 +422,7 @@ impl TriMesh {
     }
 
     /// Remove and return every tag of the edge `a b`.
-    pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
         self.edge_tags
             .remove(&EdgeKey::new(a, b))
             .unwrap_or_default()

@@ -1,7 +1,7 @@
 //! Navigation and adjacency: pure topology, never reads a coordinate.
 
 use super::ids::{FaceId, VertexId};
-use super::storage::TriMesh;
+use super::storage::{EdgeKey, TriMesh};
 use std::collections::HashMap;
 
 impl TriMesh {
@@ -26,7 +26,7 @@ impl TriMesh {
 
     /// Make `f` and `g` neighbours across their shared edge (both sides).
     /// Returns `false`, changing nothing, if they share no edge.
-    pub fn link(&mut self, f: FaceId, g: FaceId) -> bool {
+    pub(crate) fn link(&mut self, f: FaceId, g: FaceId) -> bool {
         for i in 0..3 {
             let (a, b) = self.edge(f, i);
             if let Some(j) = self.edge_index(g, a, b) {
@@ -41,7 +41,7 @@ impl TriMesh {
     /// Recompute the adjacency of every live face from scratch. An edge used
     /// by more than two faces (non-manifold) links none of them; `check`
     /// reports it.
-    pub fn link_all(&mut self) {
+    pub(crate) fn link_all(&mut self) {
         let mut by_edge: HashMap<(VertexId, VertexId), Vec<(FaceId, usize)>> = HashMap::new();
         let faces: Vec<FaceId> = self.faces().collect();
         for &f in &faces {
@@ -61,16 +61,26 @@ impl TriMesh {
     }
 
     /// The live faces around `v`, found by walking adjacency from
-    /// [`TriMesh::vertex_face`] in both directions (a bounded walk).
+    /// [`TriMesh::vertex_face`] in both directions (a bounded walk): first
+    /// counter-clockwise from it, then, if the fan is open, clockwise.
     pub fn incident_faces(&self, v: VertexId) -> Vec<FaceId> {
+        let mut out = Vec::new();
+        self.incident_faces_into(v, &mut out);
+        out
+    }
+
+    /// [`TriMesh::incident_faces`] into `out` (cleared first), so a loop can
+    /// reuse one buffer.
+    pub fn incident_faces_into(&self, v: VertexId, out: &mut Vec<FaceId>) {
+        out.clear();
         let Some(start) = self.vertex_face(v) else {
-            return Vec::new();
+            return;
         };
         if !self.is_face_alive(start) || self.local_index(start, v).is_none() {
-            return Vec::new();
+            return;
         }
         let budget = self.face_capacity() + 1;
-        let mut out = vec![start];
+        out.push(start);
         // Counter-clockwise: cross the edge v → next, i.e. the edge opposite prev.
         let step = |f: FaceId, forward: bool| -> Option<FaceId> {
             let i = self.local_index(f, v)?;
@@ -104,13 +114,153 @@ impl TriMesh {
                 }
             }
         }
-        out
     }
+
+    /// The live faces on the edge `a b`, into `out` (cleared first), in the
+    /// order [`TriMesh::incident_faces`] meets them around `a`: none when `a b`
+    /// is not an edge, one on the boundary, two inside (more only where
+    /// adjacency is broken).
+    pub fn faces_on_edge(&self, a: VertexId, b: VertexId, out: &mut Vec<FaceId>) {
+        self.incident_faces_into(a, out);
+        out.retain(|&f| self.face(f).contains(&b));
+    }
+
+    /// Whether some live face has the edge `a b` (found around `a`).
+    pub fn has_edge(&self, a: VertexId, b: VertexId) -> bool {
+        self.incident_faces(a)
+            .iter()
+            .any(|&f| self.face(f).contains(&b))
+    }
+
+    /// The vertex of `f` that is neither `a` nor `b` (the first one, if `f`
+    /// does not hold both).
+    pub fn opposite(&self, f: FaceId, a: VertexId, b: VertexId) -> Option<VertexId> {
+        self.face(f).into_iter().find(|&x| x != a && x != b)
+    }
+
+    /// The quadrilateral of the two faces `[f, g]` on the edge `a b`, with the
+    /// edge as `f` holds it counter-clockwise; `None` when `f` does not hold the
+    /// edge or a face has no third vertex.
+    pub fn quad(&self, [f, g]: [FaceId; 2], a: VertexId, b: VertexId) -> Option<EdgeQuad> {
+        let i = self.edge_index(f, a, b)?;
+        let v = self.face(f);
+        let (a, b, c) = (v[(i + 1) % 3], v[(i + 2) % 3], v[i]);
+        let d = self.opposite(g, a, b)?;
+        Some(EdgeQuad {
+            faces: [f, g],
+            a,
+            b,
+            c,
+            d,
+        })
+    }
+
+    /// The quadrilateral around the interior edge `a b` ([`TriMesh::quad`] of
+    /// [`TriMesh::faces_on_edge`], `buf` its scratch); `None` unless the edge
+    /// has exactly two faces.
+    pub fn edge_quad(&self, a: VertexId, b: VertexId, buf: &mut Vec<FaceId>) -> Option<EdgeQuad> {
+        self.faces_on_edge(a, b, buf);
+        let [f, g] = buf[..] else { return None };
+        self.quad([f, g], a, b)
+    }
+
+    /// Every edge of the live faces once, face by face in id order, each edge
+    /// at the first face that has it (boundary edges at their one face).
+    pub fn edges(&self) -> impl Iterator<Item = EdgeKey> + '_ {
+        self.faces().flat_map(move |f| {
+            let v = self.face(f);
+            let adj = self.neighbours(f);
+            (0..3)
+                .filter(move |&i| adj[i].is_none_or(|g| g > f))
+                .map(move |i| EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]))
+        })
+    }
+
+    /// The one-ring of `v`: its faces, its distinct neighbours and whether it
+    /// is on the boundary.
+    pub fn vertex_ring(&self, v: VertexId) -> VertexRing {
+        let mut ring = VertexRing {
+            vertex: v,
+            faces: Vec::new(),
+            neighbours: Vec::new(),
+            boundary: false,
+        };
+        self.vertex_ring_into(v, &mut ring);
+        ring
+    }
+
+    /// [`TriMesh::vertex_ring`] into `ring` (its buffers reused).
+    pub fn vertex_ring_into(&self, v: VertexId, ring: &mut VertexRing) {
+        self.incident_faces_into(v, &mut ring.faces);
+        ring.vertex = v;
+        ring.neighbours.clear();
+        ring.boundary = false;
+        for &f in &ring.faces {
+            let i = self
+                .local_index(f, v)
+                .expect("internal: incident face has v");
+            let (face, adj) = (self.face(f), self.neighbours(f));
+            for k in [1, 2] {
+                let w = face[(i + k) % 3];
+                if !ring.neighbours.contains(&w) {
+                    ring.neighbours.push(w);
+                }
+            }
+            // The two edges of f at v are opposite v[i+1] and v[i+2].
+            if adj[(i + 1) % 3].is_none() || adj[(i + 2) % 3].is_none() {
+                ring.boundary = true;
+            }
+        }
+    }
+
+    /// Whether the edge from the ring's vertex to `w` is a boundary edge: one
+    /// face of the ring has it, with no face across.
+    pub fn is_boundary_edge(&self, ring: &VertexRing, w: VertexId) -> bool {
+        let mut with = ring.faces.iter().filter(|&&f| self.face(f).contains(&w));
+        match (with.next(), with.next()) {
+            (Some(&f), None) => {
+                let i = self
+                    .edge_index(f, ring.vertex, w)
+                    .expect("internal: edge of f");
+                self.neighbours(f)[i].is_none()
+            }
+            _ => false,
+        }
+    }
+}
+
+/// The two triangles on an interior edge and the quadrilateral they form:
+/// `f = (a, b, c)` and `g = (b, a, d)`, both counter-clockwise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EdgeQuad {
+    /// `[f, g]`: `f` holds the edge as `a → b`, `g` as `b → a`.
+    pub faces: [FaceId; 2],
+    /// The edge's first vertex, as `f` holds it.
+    pub a: VertexId,
+    /// The edge's second vertex, as `f` holds it.
+    pub b: VertexId,
+    /// The vertex of `f` opposite the edge.
+    pub c: VertexId,
+    /// The vertex of `g` opposite the edge.
+    pub d: VertexId,
+}
+
+/// The one-ring of a vertex ([`TriMesh::vertex_ring`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VertexRing {
+    /// The vertex.
+    pub vertex: VertexId,
+    /// Its live faces, in [`TriMesh::incident_faces`] order.
+    pub faces: Vec<FaceId>,
+    /// Its distinct neighbour vertices, in the order the faces meet them.
+    pub neighbours: Vec<VertexId>,
+    /// Whether the vertex is on the mesh boundary (an edge at it has one face).
+    pub boundary: bool,
 }
 
 #[cfg(test)]
 mod tests {
-    use crate::mesh::{TriMesh, VertexTag};
+    use crate::mesh::{EdgeKey, TriMesh, VertexTag};
     use kurbo::Point;
 
     #[test]
@@ -137,5 +287,41 @@ mod tests {
         assert_eq!(around.len(), 5);
         assert!(m.check().is_empty(), "{:?}", m.check());
         assert_eq!(m.edge_index(faces[0], ring[1], c), Some(1));
+    }
+
+    #[test]
+    fn edge_queries_on_a_square() {
+        // a b c d counter-clockwise, split by the diagonal a c.
+        let mut m = TriMesh::new();
+        let t = VertexTag::default();
+        let [a, b, c, d] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .map(|(x, y)| m.add_vertex(Point::new(x, y), t));
+        let f = m.add_face([a, b, c]);
+        let g = m.add_face([a, c, d]);
+        m.link_all();
+        let mut buf = vec![f; 7];
+        m.faces_on_edge(c, a, &mut buf);
+        assert_eq!(buf.len(), 2);
+        m.faces_on_edge(a, b, &mut buf);
+        assert_eq!(buf, [f]);
+        m.faces_on_edge(b, d, &mut buf);
+        assert!(buf.is_empty());
+        assert!(m.has_edge(a, c) && !m.has_edge(b, d));
+        assert_eq!(m.opposite(f, a, c), Some(b));
+        let q = m.edge_quad(c, a, &mut buf).expect("interior edge");
+        assert_eq!(q.faces, [g, f]);
+        assert_eq!((q.a, q.b, q.c, q.d), (a, c, d, b));
+        assert_eq!(m.edge_quad(a, b, &mut buf), None);
+        let mut edges: Vec<EdgeKey> = m.edges().collect();
+        edges.sort();
+        let mut want = [(a, b), (b, c), (c, d), (d, a), (a, c)].map(|(x, y)| EdgeKey::new(x, y));
+        want.sort();
+        assert_eq!(edges, want);
+        let r = m.vertex_ring(a);
+        assert_eq!(r.faces.len(), 2);
+        assert_eq!(r.neighbours.len(), 3);
+        assert!(r.boundary);
+        assert!(m.is_boundary_edge(&r, b) && m.is_boundary_edge(&r, d));
+        assert!(!m.is_boundary_edge(&r, c));
     }
 }

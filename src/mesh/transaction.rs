@@ -5,6 +5,8 @@
 //! dropping the guard without [`Transaction::commit`] restores them, so the mesh
 //! compares equal (`PartialEq`) to what it was. STYLE "Local operations and
 //! invariants", step 2 and 4. Reads go through `Deref<Target = TriMesh>`.
+//! The mesh's own mutators are crate-private: outside the crate a mesh
+//! changes only through a transaction.
 
 use super::ids::{FaceId, VertexId};
 use super::storage::{EdgeKey, FaceData, FeatureOn, TriMesh, VertexData, VertexTag};
@@ -66,14 +68,14 @@ impl<'a> Transaction<'a> {
 
     fn touch_v(&mut self, v: VertexId) {
         if !self.old_vertices.iter().any(|(x, _)| *x == v) {
-            let old = self.mesh.vertices.get(v.idx()).cloned().flatten();
+            let old = self.mesh.vertices.get(v.index()).cloned().flatten();
             self.old_vertices.push((v, old));
         }
     }
 
     fn touch_f(&mut self, f: FaceId) {
         if !self.old_faces.iter().any(|(x, _)| *x == f) {
-            let old = self.mesh.faces.get(f.idx()).cloned().flatten();
+            let old = self.mesh.faces.get(f.index()).cloned().flatten();
             self.old_faces.push((f, old));
         }
     }
@@ -90,23 +92,25 @@ impl<'a> Transaction<'a> {
             self.free_log.push(FreeOp::PopV(v));
             self.touch_v(v);
         } else {
-            self.touch_v(VertexId(super::storage::to_u32(self.mesh.vertices.len())));
+            self.touch_v(VertexId::from_index(self.mesh.vertices.len()));
         }
     }
 
-    /// [`TriMesh::add_vertex`], journaled.
+    /// Add a vertex at an `f64` position, journaled.
     pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
         self.before_vertex_insert();
         self.mesh.add_vertex(pos, tag)
     }
 
-    /// [`TriMesh::add_vertex_q`], journaled.
+    /// Add a vertex at an exact position (kept rational unless it is an
+    /// `f64` point), journaled.
     pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
         self.before_vertex_insert();
         self.mesh.add_vertex_q(p, tag)
     }
 
-    /// [`TriMesh::remove_vertex`], journaled.
+    /// Remove a vertex (its slot goes to the free list; faces using it must
+    /// be removed first), journaled.
     pub fn remove_vertex(&mut self, v: VertexId) {
         if self.mesh.is_vertex_alive(v) {
             self.touch_v(v);
@@ -115,19 +119,19 @@ impl<'a> Transaction<'a> {
         }
     }
 
-    /// [`TriMesh::set_position`], journaled.
+    /// Move a vertex to an `f64` position (dropping its rational one), journaled.
     pub fn set_position(&mut self, v: VertexId, pos: Point) {
         self.touch_v(v);
         self.mesh.set_position(v, pos);
     }
 
-    /// [`TriMesh::add_face`], journaled.
+    /// Add a face (vertices counter-clockwise), with no adjacency yet, journaled.
     pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         if let Some(&f) = self.mesh.free_faces.last() {
             self.free_log.push(FreeOp::PopF(f));
             self.touch_f(f);
         } else {
-            self.touch_f(FaceId(super::storage::to_u32(self.mesh.faces.len())));
+            self.touch_f(FaceId::from_index(self.mesh.faces.len()));
         }
         for x in v {
             self.touch_v(x);
@@ -135,7 +139,8 @@ impl<'a> Transaction<'a> {
         self.mesh.add_face(v)
     }
 
-    /// [`TriMesh::remove_face`], journaled.
+    /// Remove a face (its neighbours forget it, its vertices point to another
+    /// live incident face when one is adjacent), journaled.
     pub fn remove_face(&mut self, f: FaceId) {
         if !self.mesh.is_face_alive(f) {
             return;
@@ -151,19 +156,20 @@ impl<'a> Transaction<'a> {
         self.mesh.remove_face(f);
     }
 
-    /// [`TriMesh::set_neighbour`], journaled.
+    /// Set the face across edge `i` of `f` (one side only), journaled.
     pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
         self.touch_f(f);
         self.mesh.set_neighbour(f, i, g);
     }
 
-    /// [`TriMesh::add_edge_tag`], journaled.
+    /// Record that the edge `a b` lies on a feature (no duplicate entries; a
+    /// primary's `t` is given at `a`, then `b`), journaled.
     pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
         self.touch_tag(EdgeKey::new(a, b));
         self.mesh.add_edge_tag(a, b, tag);
     }
 
-    /// [`TriMesh::take_edge_tags`], journaled.
+    /// Remove and return every tag of the edge `a b`, journaled.
     pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
         self.touch_tag(EdgeKey::new(a, b));
         self.mesh.take_edge_tags(a, b)
@@ -228,12 +234,12 @@ impl<'a> Transaction<'a> {
         m.vertices.truncate(self.vertex_len);
         m.faces.truncate(self.face_len);
         for (v, old) in self.old_vertices.drain(..) {
-            if let Some(slot) = m.vertices.get_mut(v.idx()) {
+            if let Some(slot) = m.vertices.get_mut(v.index()) {
                 *slot = old;
             }
         }
         for (f, old) in self.old_faces.drain(..) {
-            if let Some(slot) = m.faces.get_mut(f.idx()) {
+            if let Some(slot) = m.faces.get_mut(f.index()) {
                 *slot = old;
             }
         }

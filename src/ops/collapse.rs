@@ -56,21 +56,11 @@ impl CollapsePlan {
             return Err(Reject::NotAnEdge);
         }
         let ru = ring(mesh, u);
-        let edge_faces: Vec<FaceId> = rv
-            .faces
-            .iter()
-            .copied()
-            .filter(|&f| mesh.face(f).contains(&u))
-            .collect();
+        let mut edge_faces = Vec::new();
+        mesh.faces_on_edge(v, u, &mut edge_faces);
         let opposite: Vec<VertexId> = edge_faces
             .iter()
-            .map(|&f| {
-                *mesh
-                    .face(f)
-                    .iter()
-                    .find(|&&x| x != u && x != v)
-                    .expect("internal: third vertex")
-            })
+            .map(|&f| mesh.opposite(f, u, v).expect("internal: third vertex"))
             .collect();
         let boundary_edge = edge_faces.len() == 1;
         let role_v = role(mesh, v, &rv);
@@ -85,7 +75,7 @@ impl CollapsePlan {
                     .neighbours
                     .iter()
                     .copied()
-                    .filter(|&w| w != u && is_boundary_edge(mesh, &rv.faces, v, w))
+                    .filter(|&w| w != u && mesh.is_boundary_edge(&rv, w))
                     .collect();
                 let [w] = others[..] else {
                     return Err(Reject::Boundary);
@@ -107,7 +97,7 @@ impl CollapsePlan {
             Role::SecondaryJunction => {
                 // The features' ends and crossings move by at most ε, so the
                 // input stays within ε of the mesh there too.
-                if mesh.position(u).distance(mesh.position(v)) > eps {
+                if mesh.distance(u, v) > eps {
                     return Err(Reject::FeatureRule);
                 }
             }
@@ -171,13 +161,14 @@ impl CollapsePlan {
         }
         let mut reshaped = Vec::new();
         if ctx.curved.is_some() {
+            let mut on_edge = Vec::new();
             for &(a, w, tag) in &retag {
                 if !matches!(tag, FeatureOn::Primary { .. }) {
                     continue;
                 }
-                for f in mesh.incident_faces(a) {
-                    if mesh.face(f).contains(&w) && !rv.faces.contains(&f) && !reshaped.contains(&f)
-                    {
+                mesh.faces_on_edge(a, w, &mut on_edge);
+                for &f in &on_edge {
+                    if !rv.faces.contains(&f) && !reshaped.contains(&f) {
                         reshaped.push(f);
                     }
                 }
@@ -201,18 +192,6 @@ impl CollapsePlan {
             retag,
             drop_tags,
         })
-    }
-}
-
-pub(crate) fn is_boundary_edge(mesh: &TriMesh, faces: &[FaceId], v: VertexId, w: VertexId) -> bool {
-    let with: Vec<&FaceId> = faces
-        .iter()
-        .filter(|&&f| mesh.face(f).contains(&w))
-        .collect();
-    with.len() == 1 && {
-        let f = *with[0];
-        let i = mesh.edge_index(f, v, w).expect("internal: edge of f");
-        mesh.neighbours(f)[i].is_none()
     }
 }
 

@@ -270,40 +270,12 @@ pub(crate) fn t_at(key: EdgeKey, t: [f64; 2], v: VertexId) -> f64 {
     if key.lo == v { t[0] } else { t[1] }
 }
 
-/// The vertices, faces and features around one vertex.
-#[derive(Clone, Debug)]
-pub(crate) struct Ring {
-    pub(crate) faces: Vec<FaceId>,
-    /// Distinct neighbour vertices.
-    pub(crate) neighbours: Vec<VertexId>,
-    /// Whether the vertex is on the mesh boundary.
-    pub(crate) boundary: bool,
-}
+/// The vertices and faces around one vertex ([`TriMesh::vertex_ring`]).
+pub(crate) type Ring = crate::mesh::VertexRing;
 
+/// The one-ring of `v` ([`TriMesh::vertex_ring`]).
 pub(crate) fn ring(mesh: &TriMesh, v: VertexId) -> Ring {
-    let faces = mesh.incident_faces(v);
-    let mut neighbours = Vec::new();
-    let mut boundary = false;
-    for &f in &faces {
-        let i = mesh
-            .local_index(f, v)
-            .expect("internal: incident face has v");
-        for k in [1, 2] {
-            let w = mesh.face(f)[(i + k) % 3];
-            if !neighbours.contains(&w) {
-                neighbours.push(w);
-            }
-        }
-        // The two edges of f at v are opposite v[i+1] and v[i+2].
-        if mesh.neighbours(f)[(i + 1) % 3].is_none() || mesh.neighbours(f)[(i + 2) % 3].is_none() {
-            boundary = true;
-        }
-    }
-    Ring {
-        faces,
-        neighbours,
-        boundary,
-    }
+    mesh.vertex_ring(v)
 }
 
 /// What a vertex may do, from its tag and its incident feature edges.

@@ -218,7 +218,7 @@ fn slide_on_boundary(
         .neighbours
         .iter()
         .copied()
-        .filter(|&w| super::collapse::is_boundary_edge(mesh, &r.faces, v, w))
+        .filter(|&w| mesh.is_boundary_edge(r, w))
         .collect();
     let [a, b] = ends[..] else {
         return Err(Reject::FixedVertex);

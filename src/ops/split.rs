@@ -42,19 +42,17 @@ impl SplitPlan {
         if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
             return Err(Reject::NotAnEdge);
         }
-        let faces: Vec<(FaceId, usize)> = mesh
-            .incident_faces(a)
+        let mut on_edge = Vec::new();
+        mesh.faces_on_edge(a, b, &mut on_edge);
+        // Each face with the local index of its vertex opposite the edge.
+        let faces: Vec<(FaceId, usize)> = on_edge
             .into_iter()
-            .filter_map(|f| {
-                let v = mesh.face(f);
-                v.contains(&b).then(|| {
-                    (
-                        f,
-                        v.iter()
-                            .position(|&x| x != a && x != b)
-                            .expect("internal: third vertex"),
-                    )
-                })
+            .map(|f| {
+                let third = mesh.opposite(f, a, b).expect("internal: third vertex");
+                (
+                    f,
+                    mesh.local_index(f, third).expect("internal: vertex of f"),
+                )
             })
             .collect();
         if faces.is_empty() {

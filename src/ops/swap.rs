@@ -11,10 +11,11 @@
 //! more than ε apart). `a`, `b` and `k` stay where they are; the envelope test
 //! decides on `a k` and `k b` as for any operation.
 
-use super::invariants::envelope::point_segment_distance;
 use super::invariants::{self, Check};
 use super::{Context, LocalChange, Outcome, Reject, max_energy};
-use crate::mesh::{FaceId, FeatureOn, Transaction, TriMesh, VertexId};
+use crate::mesh::{
+    EdgeQuad, FaceId, FeatureOn, Transaction, TriMesh, VertexId, point_segment_distance,
+};
 use kurbo::Line;
 
 /// Everything a swap needs, gathered from `&TriMesh`.
@@ -34,11 +35,18 @@ impl SwapPlan {
     /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (a
     /// tagged edge), [`Reject::Topology`] (`c d` is already an edge).
     pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
-        let [f, g] = faces_on(mesh, a, b)?;
+        let q = quad(mesh, a, b)?;
         if !mesh.edge_tags(a, b).is_empty() {
             return Err(Reject::FeatureRule);
         }
-        let [a, b, c, d] = diagonals(mesh, f, g, a, b)?;
+        other_diagonal_free(mesh, &q)?;
+        let EdgeQuad {
+            faces: [f, g],
+            a,
+            b,
+            c,
+            d,
+        } = q;
         Ok(SwapPlan {
             faces: [f, g],
             new: [[a, d, c], [d, b, c]],
@@ -49,55 +57,30 @@ impl SwapPlan {
     }
 }
 
-/// The two faces on the interior edge `a b`.
-fn faces_on(mesh: &TriMesh, a: VertexId, b: VertexId) -> Result<[FaceId; 2], Reject> {
+/// The quadrilateral around the interior edge `a b`, or why there is none:
+/// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::Topology`] (more
+/// than two faces).
+fn quad(mesh: &TriMesh, a: VertexId, b: VertexId) -> Result<EdgeQuad, Reject> {
     if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
         return Err(Reject::NotAnEdge);
     }
-    let faces: Vec<FaceId> = mesh
-        .incident_faces(a)
-        .into_iter()
-        .filter(|&f| mesh.face(f).contains(&b))
-        .collect();
-    match faces[..] {
-        [] => Err(Reject::NotAnEdge),
-        [_] => Err(Reject::Boundary),
-        [f, g] => Ok([f, g]),
-        _ => Err(Reject::Topology),
-    }
+    let mut faces = Vec::new();
+    mesh.faces_on_edge(a, b, &mut faces);
+    let q = match faces[..] {
+        [] => return Err(Reject::NotAnEdge),
+        [_] => return Err(Reject::Boundary),
+        [f, g] => mesh.quad([f, g], a, b).expect("internal: edge of f"),
+        _ => return Err(Reject::Topology),
+    };
+    Ok(q)
 }
 
-/// `[a, b, c, d]` with `f = (a, b, c)` counter-clockwise and `g = (b, a, d)`;
-/// [`Reject::Topology`] when `c d` is already an edge.
-fn diagonals(
-    mesh: &TriMesh,
-    f: FaceId,
-    g: FaceId,
-    a: VertexId,
-    b: VertexId,
-) -> Result<[VertexId; 4], Reject> {
-    let (a, b) = {
-        let i = mesh.edge_index(f, a, b).expect("internal: edge of f");
-        let v = mesh.face(f);
-        (v[(i + 1) % 3], v[(i + 2) % 3])
-    };
-    let third = |h: FaceId| {
-        *mesh
-            .face(h)
-            .iter()
-            .find(|&&x| x != a && x != b)
-            .expect("internal: third vertex")
-    };
-    let (c, d) = (third(f), third(g));
-    if c == d
-        || mesh
-            .incident_faces(c)
-            .iter()
-            .any(|&h| mesh.face(h).contains(&d))
-    {
+/// [`Reject::Topology`] when the other diagonal `c d` of `q` is already an edge.
+fn other_diagonal_free(mesh: &TriMesh, q: &EdgeQuad) -> Result<(), Reject> {
+    if q.c == q.d || mesh.has_edge(q.c, q.d) {
         return Err(Reject::Topology);
     }
-    Ok([a, b, c, d])
+    Ok(())
 }
 
 /// Swap the edge `a b` (see the module doc).
@@ -154,7 +137,7 @@ impl ReroutePlan {
     /// a secondary edge, a primary tag on it, or neither opposite vertex within
     /// ε of it), [`Reject::Topology`] (`c d` is already an edge).
     pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
-        let [f, g] = faces_on(mesh, a, b)?;
+        let q = quad(mesh, a, b)?;
         let tags = mesh.edge_tags(a, b);
         if tags.is_empty()
             || tags
@@ -164,7 +147,14 @@ impl ReroutePlan {
             return Err(Reject::FeatureRule);
         }
         let tags = tags.to_vec();
-        let [a, b, c, d] = diagonals(mesh, f, g, a, b)?;
+        other_diagonal_free(mesh, &q)?;
+        let EdgeQuad {
+            faces: [f, g],
+            a,
+            b,
+            c,
+            d,
+        } = q;
         let ab = Line::new(mesh.position(a), mesh.position(b));
         let (hc, hd) = (
             point_segment_distance(mesh.position(c), ab),

@@ -42,12 +42,11 @@
 //! unusable, which the caller reports as an error.
 
 use crate::element::energy::amips;
-use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
+use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, min_angle_deg};
 use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
     try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
-use kurbo::Point;
 use std::collections::{BTreeMap, BinaryHeap};
 
 /// Edges shorter than this fraction of their target are collapsed in a pass
@@ -175,38 +174,60 @@ pub(crate) fn locked(mesh: &TriMesh, v: [VertexId; 3]) -> bool {
     (0..3).all(|i| !mesh.edge_tags(v[i], v[(i + 1) % 3]).is_empty())
 }
 
-/// Measure `mesh`. A triangle whose three edges are feature edges is locked:
-/// its shape is the input's (no swap, split or collapse can change it), so it
-/// is left out of the quality goal, though not out of `all`.
-fn measure(mesh: &TriMesh) -> Measure {
-    let mut m = Measure {
-        min_angle: 180.0,
-        max_energy: 0.0,
-        mean_energy: 0.0,
-        all: (180.0, 0.0),
-        longest: 0.0,
+/// The energies of a mesh's triangles, for the stop rules of both stages.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EnergyMeasure {
+    /// Largest energy of the measured triangles that are not locked.
+    pub(crate) max: f64,
+    /// Largest energy of all measured triangles.
+    pub(crate) max_all: f64,
+    /// Mean energy of the measured triangles (0 when none is).
+    pub(crate) mean: f64,
+    /// Triangles without an energy.
+    pub(crate) unmeasured: usize,
+}
+
+/// Measure the energies of `mesh`'s triangles: `energy(v, locked)` gives the
+/// energy of the triangle `v`, or `None` to leave it out (counted in
+/// `unmeasured`). A triangle whose three edges are feature edges is locked
+/// ([`locked`]): its shape is the input's (no swap, split or collapse can
+/// change it), so it is left out of `max`, though not out of `max_all`.
+pub(crate) fn measure_energy(
+    mesh: &TriMesh,
+    mut energy: impl FnMut([VertexId; 3], bool) -> Option<f64>,
+) -> EnergyMeasure {
+    let mut m = EnergyMeasure {
+        max: 0.0,
+        max_all: 0.0,
+        mean: 0.0,
+        unmeasured: 0,
     };
-    let mut sum = 0.0;
-    let mut n = 0usize;
+    let (mut sum, mut n) = (0.0, 0usize);
     for f in mesh.faces() {
         let v = mesh.face(f);
-        let [a, b, c] = v.map(|x| mesh.position(x));
-        let e = amips(a, b, c);
-        let angle = min_angle_deg(a, b, c);
-        sum += e;
-        n += 1;
-        m.all = (m.all.0.min(angle), m.all.1.max(e));
-        m.longest = m
-            .longest
-            .max(a.distance(b))
-            .max(b.distance(c))
-            .max(c.distance(a));
-        if !locked(mesh, v) {
-            m.min_angle = m.min_angle.min(angle);
-            m.max_energy = m.max_energy.max(e);
+        let locked = locked(mesh, v);
+        match energy(v, locked) {
+            None => m.unmeasured += 1,
+            Some(e) => {
+                sum += e;
+                n += 1;
+                m.max_all = m.max_all.max(e);
+                if !locked {
+                    m.max = m.max.max(e);
+                }
+            }
         }
     }
-    if n == 0 {
+    if n > 0 {
+        m.mean = sum / n as f64;
+    }
+    m
+}
+
+/// Measure `mesh`: the AMIPS energies ([`measure_energy`]), angles and edge
+/// lengths. Locked triangles are left out of `min_angle` and `max_energy`.
+fn measure(mesh: &TriMesh) -> Measure {
+    if mesh.num_faces() == 0 {
         return Measure {
             min_angle: 0.0,
             max_energy: 0.0,
@@ -215,39 +236,27 @@ fn measure(mesh: &TriMesh) -> Measure {
             longest: 0.0,
         };
     }
-    m.mean_energy = sum / n as f64;
-    m
-}
-
-fn min_angle_deg(a: Point, b: Point, c: Point) -> f64 {
-    let angle = |p: Point, at: Point, q: Point| {
-        let (u, v) = (p - at, q - at);
-        u.cross(v).abs().atan2(u.dot(v))
-    };
-    angle(c, a, b)
-        .min(angle(a, b, c))
-        .min(angle(b, c, a))
-        .to_degrees()
-}
-
-/// Every edge once.
-fn edges(mesh: &TriMesh) -> Vec<EdgeKey> {
-    let mut out = Vec::with_capacity(mesh.num_faces() * 3 / 2 + 4);
-    for f in mesh.faces() {
-        let v = mesh.face(f);
-        let adj = mesh.neighbours(f);
-        for i in 0..3 {
-            if adj[i].is_none_or(|g| g > f) {
-                out.push(EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]));
-            }
+    let (mut min_angle, mut min_angle_all, mut longest) = (180.0f64, 180.0f64, 0.0f64);
+    let e = measure_energy(mesh, |v, locked| {
+        let [a, b, c] = v.map(|x| mesh.position(x));
+        let angle = min_angle_deg([a, b, c]);
+        min_angle_all = min_angle_all.min(angle);
+        longest = longest
+            .max(a.distance(b))
+            .max(b.distance(c))
+            .max(c.distance(a));
+        if !locked {
+            min_angle = min_angle.min(angle);
         }
+        Some(amips(a, b, c))
+    });
+    Measure {
+        min_angle,
+        max_energy: e.max,
+        mean_energy: e.mean,
+        all: (min_angle_all, e.max_all),
+        longest,
     }
-    out
-}
-
-/// The length of the edge `k`.
-fn length(mesh: &TriMesh, k: EdgeKey) -> f64 {
-    mesh.position(k.lo).distance(mesh.position(k.hi))
 }
 
 /// A deterministic permutation generator (SplitMix64).
@@ -358,7 +367,7 @@ impl<'a> Schedule<'a> {
                 continue;
             }
             for v in self.mesh.face(f) {
-                let i = v.0 as usize;
+                let i = v.index();
                 if i >= self.stamp.len() {
                     self.stamp.resize(i + 1, 0);
                 }
@@ -368,11 +377,11 @@ impl<'a> Schedule<'a> {
     }
 
     fn stamp_of(&self, v: VertexId) -> u64 {
-        self.stamp.get(v.0 as usize).copied().unwrap_or(0)
+        self.stamp.get(v.index()).copied().unwrap_or(0)
     }
 
     fn target_of(&mut self, v: VertexId) -> f64 {
-        let i = v.0 as usize;
+        let i = v.index();
         if i >= self.target.len() {
             self.target.resize(i + 1, self.opts.l);
         }
@@ -380,7 +389,7 @@ impl<'a> Schedule<'a> {
     }
 
     fn set_target(&mut self, v: VertexId, t: f64) {
-        let i = v.0 as usize;
+        let i = v.index();
         if i >= self.target.len() {
             self.target.resize(i + 1, self.opts.l);
         }
@@ -395,8 +404,8 @@ impl<'a> Schedule<'a> {
     /// Returns the number of candidates and of splits applied.
     fn split_pass(&mut self) -> (usize, u64) {
         let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
-        for k in edges(self.mesh) {
-            let (len, t) = (length(self.mesh, k), self.mean_target(k));
+        for k in self.mesh.edges().collect::<Vec<_>>() {
+            let (len, t) = (self.mesh.distance(k.lo, k.hi), self.mean_target(k));
             if len > 4.0 / 3.0 * t {
                 cands.push((len, k, t));
             }
@@ -449,15 +458,15 @@ impl<'a> Schedule<'a> {
         let mut seen = vec![false; cap];
         let mut queue = std::collections::VecDeque::new();
         for &v in &seeds {
-            mult[v.0 as usize] = 0.5;
-            seen[v.0 as usize] = true;
+            mult[v.index()] = 0.5;
+            seen[v.index()] = true;
             queue.push_back((v, v));
         }
         while let Some((v, seed)) = queue.pop_front() {
             let radius = 1.8 * self.target_of(seed);
             let ps = self.mesh.position(seed);
             for w in ops::ring(self.mesh, v).neighbours {
-                let i = w.0 as usize;
+                let i = w.index();
                 if seen[i] {
                     continue;
                 }
@@ -473,7 +482,7 @@ impl<'a> Schedule<'a> {
         let mut hit_floor = false;
         let verts: Vec<VertexId> = self.mesh.vertices().collect();
         for v in verts {
-            let t = self.target_of(v) * mult[v.0 as usize];
+            let t = self.target_of(v) * mult[v.index()];
             if t < self.opts.l_floor {
                 hit_floor = true;
             }
@@ -502,8 +511,8 @@ impl<'a> Schedule<'a> {
         // Min-heap on length through reversed ordering of the bits of a
         // non-negative f64 (monotone for non-negative values).
         let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
-        for k in edges(self.mesh) {
-            let len = length(self.mesh, k);
+        for k in self.mesh.edges().collect::<Vec<_>>() {
+            let len = self.mesh.distance(k.lo, k.hi);
             if len < factor * self.mean_target(k) {
                 heap.push(std::cmp::Reverse((len.to_bits(), k)));
             }
@@ -518,7 +527,7 @@ impl<'a> Schedule<'a> {
             if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
                 continue;
             }
-            let len = length(self.mesh, k);
+            let len = self.mesh.distance(k.lo, k.hi);
             if len.to_bits() != bits || len >= factor * self.mean_target(k) {
                 continue;
             }
@@ -561,7 +570,7 @@ impl<'a> Schedule<'a> {
                 };
                 for w in ops::ring(self.mesh, u).neighbours {
                     let e = EdgeKey::new(u, w);
-                    let len = length(self.mesh, e);
+                    let len = self.mesh.distance(e.lo, e.hi);
                     if len < factor * self.mean_target(e) {
                         heap.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
@@ -593,14 +602,14 @@ impl<'a> Schedule<'a> {
     /// on secondary feature edges, the same change is a reroute (`ops::swap`).
     pub(crate) fn swap_pass(&mut self) -> u64 {
         let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
-        for k in edges(self.mesh) {
+        for k in self.mesh.edges().collect::<Vec<_>>() {
             let primary = self
                 .mesh
                 .edge_tags(k.lo, k.hi)
                 .iter()
                 .any(|t| matches!(t, FeatureOn::Primary { .. }));
             if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
-                cands.push((length(self.mesh, k), k));
+                cands.push((self.mesh.distance(k.lo, k.hi), k));
             }
         }
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -648,7 +657,7 @@ impl<'a> Schedule<'a> {
         self.rng.shuffle(&mut verts);
         let mut applied = 0;
         for v in verts {
-            let i = v.0 as usize;
+            let i = v.index();
             if i >= self.failed_smooth.len() {
                 self.failed_smooth.resize(i + 1, u64::MAX);
             }
@@ -728,27 +737,16 @@ pub fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
         .collect()
 }
 
-/// The two faces on the interior edge `k` as `(f, g)`, with `f` holding `k`
-/// counter-clockwise as `a → b`, and the vertices `c` of `f` and `d` of `g`
-/// opposite it.
-fn quad(mesh: &TriMesh, k: EdgeKey) -> Option<([FaceId; 2], [VertexId; 4])> {
-    let faces: Vec<FaceId> = mesh
-        .incident_faces(k.lo)
-        .into_iter()
-        .filter(|&f| mesh.face(f).contains(&k.hi))
-        .collect();
-    let [f, g] = faces[..] else { return None };
-    let i = mesh.edge_index(f, k.lo, k.hi)?;
-    let v = mesh.face(f);
-    let (a, b, c) = (v[(i + 1) % 3], v[(i + 2) % 3], v[i]);
-    let d = *mesh.face(g).iter().find(|&&x| x != a && x != b)?;
-    Some(([f, g], [a, b, c, d]))
-}
-
 /// The energy gain of swapping `k` (old max minus new max) when positive
 /// (curved energies in curved mode).
 fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
-    let ([f, g], [a, b, c, d]) = quad(mesh, k)?;
+    let EdgeQuad {
+        faces: [f, g],
+        a,
+        b,
+        c,
+        d,
+    } = mesh.edge_quad(k.lo, k.hi, &mut Vec::new())?;
     let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
     let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.

@@ -11,6 +11,7 @@
 //! inverted (clockwise) triangles.
 
 use crate::FemMesh;
+use crate::mesh::corner_angles;
 use kurbo::Point;
 
 /// Quality summary of a mesh (corner triangles).
@@ -98,11 +99,7 @@ impl TriangleQuality {
     /// Measure the triangle `corners` (expected counter-clockwise).
     pub fn of(corners: [Point; 3]) -> TriangleQuality {
         let [a, b, c] = corners;
-        let angles = [
-            corner_angle(c, a, b),
-            corner_angle(a, b, c),
-            corner_angle(b, c, a),
-        ];
+        let angles = corner_angles(corners);
         let min_angle_deg = angles
             .iter()
             .copied()
@@ -116,14 +113,6 @@ impl TriangleQuality {
             area: 0.5 * (b - a).cross(c - a),
         }
     }
-}
-
-/// The unsigned angle at `at` between the directions to `prev` and `next`, radians in
-/// `[0, π]`; 0 when an adjacent edge has zero length.
-fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
-    let u = prev - at;
-    let v = next - at;
-    u.cross(v).abs().atan2(u.dot(v))
 }
 
 /// The 2D conformal AMIPS energy `tr(JᵀJ) / (2 det J)` of the affine map `J` taking the

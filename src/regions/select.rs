@@ -4,6 +4,7 @@
 
 use super::classify::{RegionAssignment, edge_key};
 use super::element::element_area;
+use crate::exact::{Orientation, orient2d};
 use crate::fem::FemMesh;
 use crate::svg::Drawing;
 use crate::{Error, Result};
@@ -139,16 +140,10 @@ fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u
 
 /// The first triangle whose corner triangle contains `p` (exact test).
 fn locate(mesh: &FemMesh, p: Point) -> Option<usize> {
-    let o = |a: Point, b: Point| {
-        robust::orient2d(
-            robust::Coord { x: a.x, y: a.y },
-            robust::Coord { x: b.x, y: b.y },
-            robust::Coord { x: p.x, y: p.y },
-        )
-    };
+    let left_or_on = |a: Point, b: Point| orient2d(a, b, p) != Orientation::Clockwise;
     (0..mesh.triangle_count()).find(|&t| {
         let [a, b, c] = mesh.corners(t);
-        o(a, b) >= 0.0 && o(b, c) >= 0.0 && o(c, a) >= 0.0
+        left_or_on(a, b) && left_or_on(b, c) && left_or_on(c, a)
     })
 }
 

@@ -22,6 +22,7 @@
 //! subdivision stops), is reported as [`Winding::Near`] with a best-effort
 //! number, and the caller picks another point.
 
+use crate::exact::{Orientation, orient2d};
 use crate::svg::{FillRule, Segment, Shape, Subpath};
 use kurbo::{CubicBez, Point, Rect};
 
@@ -242,14 +243,6 @@ struct Acc {
     near: bool,
 }
 
-fn orient(a: Point, b: Point, c: Point) -> f64 {
-    robust::orient2d(
-        robust::Coord { x: a.x, y: a.y },
-        robust::Coord { x: b.x, y: b.y },
-        robust::Coord { x: c.x, y: c.y },
-    )
-}
-
 impl Acc {
     /// Exact crossing of the +x ray from `p` with the segment a→b (half-open rule).
     fn line(&mut self, a: Point, b: Point, p: Point) {
@@ -258,18 +251,16 @@ impl Acc {
             return;
         }
         if a.y <= p.y && p.y < b.y {
-            let o = orient(a, b, p);
-            if o > 0.0 {
-                self.w += 1;
-            } else if o == 0.0 {
-                self.near = true;
+            match orient2d(a, b, p) {
+                Orientation::CounterClockwise => self.w += 1,
+                Orientation::Collinear => self.near = true,
+                Orientation::Clockwise => {}
             }
         } else if b.y <= p.y && p.y < a.y {
-            let o = orient(a, b, p);
-            if o < 0.0 {
-                self.w -= 1;
-            } else if o == 0.0 {
-                self.near = true;
+            match orient2d(a, b, p) {
+                Orientation::Clockwise => self.w -= 1,
+                Orientation::Collinear => self.near = true,
+                Orientation::CounterClockwise => {}
             }
         } else if a.y == p.y && b.y == p.y && (a.x.min(b.x) <= p.x && p.x <= a.x.max(b.x)) {
             self.near = true;
@@ -576,7 +567,7 @@ mod tests {
 
     /// Exactly on the closed segment a–b.
     fn on_segment(p: Point, a: Point, b: Point) -> bool {
-        orient(a, b, p) == 0.0
+        orient2d(a, b, p) == Orientation::Collinear
             && a.x.min(b.x) <= p.x
             && p.x <= a.x.max(b.x)
             && a.y.min(b.y) <= p.y

@@ -6,6 +6,7 @@
 //! of its control polygon, the measure the feature stage bounds.
 
 use super::super::Context;
+use crate::mesh::angle_between;
 use kurbo::CubicBez;
 
 /// Angle (radians, in `[0, π]`) between the end tangents of a cubic; π when a
@@ -23,7 +24,7 @@ pub fn turn(c: &CubicBez) -> f64 {
     if u.hypot2() == 0.0 || v.hypot2() == 0.0 {
         return std::f64::consts::PI;
     }
-    u.cross(v).abs().atan2(u.dot(v))
+    angle_between(u, v)
 }
 
 /// Whether the piece `[t0, t1]` (either order) of `section` turns less than

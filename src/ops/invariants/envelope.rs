@@ -11,6 +11,7 @@
 //! that are provably inside. Distances are found through a uniform grid of the
 //! input segments, never a linear scan.
 
+use crate::mesh::point_segment_distance;
 use kurbo::{Line, Point, Rect};
 use std::collections::HashMap;
 
@@ -22,16 +23,6 @@ pub struct Envelope {
     cell: f64,
     segments: Vec<(Line, u32)>,
     grid: HashMap<(i64, i64), Vec<u32>>,
-}
-
-pub(crate) fn point_segment_distance(p: Point, l: Line) -> f64 {
-    let d = l.p1 - l.p0;
-    let len2 = d.hypot2();
-    if len2 == 0.0 {
-        return p.distance(l.p0);
-    }
-    let s = ((p - l.p0).dot(d) / len2).clamp(0.0, 1.0);
-    p.distance(l.p0.lerp(l.p1, s))
 }
 
 impl Envelope {

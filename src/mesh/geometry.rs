@@ -1,0 +1,73 @@
+//! `f64` measurements: distances and angles of points, lengths of mesh edges.
+//! The geometry `topology.rs` must not do, shared by every stage that measures
+//! with the same arithmetic (so their numbers agree bit for bit).
+
+use super::ids::VertexId;
+use super::storage::TriMesh;
+use kurbo::{Line, Point, Vec2};
+
+impl TriMesh {
+    /// The distance between the `f64` positions of `a` and `b` (an edge's length).
+    pub fn distance(&self, a: VertexId, b: VertexId) -> f64 {
+        self.position(a).distance(self.position(b))
+    }
+}
+
+/// The distance from `p` to the segment `l` (to `l.p0` when `l` has zero length).
+pub fn point_segment_distance(p: Point, l: Line) -> f64 {
+    let d = l.p1 - l.p0;
+    let len2 = d.hypot2();
+    if len2 == 0.0 {
+        return p.distance(l.p0);
+    }
+    let s = ((p - l.p0).dot(d) / len2).clamp(0.0, 1.0);
+    p.distance(l.p0 + d * s)
+}
+
+/// The unsigned angle between the vectors `u` and `v`, radians in `[0, π]`;
+/// 0 when either is zero.
+pub fn angle_between(u: Vec2, v: Vec2) -> f64 {
+    u.cross(v).abs().atan2(u.dot(v))
+}
+
+/// The unsigned angle at `at` between the directions to `prev` and `next`,
+/// radians in `[0, π]`; 0 when an adjacent edge has zero length.
+pub fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
+    angle_between(prev - at, next - at)
+}
+
+/// The corner angles of the triangle `[a, b, c]`, radians, at `a`, `b`, `c`.
+pub fn corner_angles([a, b, c]: [Point; 3]) -> [f64; 3] {
+    [
+        corner_angle(c, a, b),
+        corner_angle(a, b, c),
+        corner_angle(b, c, a),
+    ]
+}
+
+/// The smallest corner angle of the triangle `[a, b, c]`, degrees.
+pub fn min_angle_deg(corners: [Point; 3]) -> f64 {
+    let [x, y, z] = corner_angles(corners);
+    x.min(y).min(z).to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distances_and_angles() {
+        let l = Line::new(Point::new(0.0, 0.0), Point::new(2.0, 0.0));
+        assert_eq!(point_segment_distance(Point::new(1.0, 3.0), l), 3.0);
+        assert_eq!(point_segment_distance(Point::new(5.0, 4.0), l), 5.0);
+        let dot = Line::new(Point::new(1.0, 1.0), Point::new(1.0, 1.0));
+        assert_eq!(point_segment_distance(Point::new(4.0, 5.0), dot), 5.0);
+        let right = [Point::ZERO, Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+        assert!((min_angle_deg(right) - 45.0).abs() < 1e-12);
+        assert!((corner_angles(right)[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert_eq!(
+            corner_angle(Point::ZERO, Point::ZERO, Point::new(1.0, 0.0)),
+            0.0
+        );
+    }
+}
