@@ -18,6 +18,10 @@ use crate::{Error, Result};
 use kurbo::Point;
 use std::collections::HashMap;
 
+/// Accuracy of the distance statistics ([`edge_distance`]) relative to `d`.
+/// Introduced in ac447f1.
+const DISTANCE_ACCURACY_REL: f64 = 1e-12;
+
 /// Number the nodes and write the elements and feature lines.
 pub(super) fn assemble(
     mesh: &TriMesh,
@@ -169,7 +173,7 @@ pub(super) fn finish_stats(
             .max((b - sec.parent.eval(t[1])).hypot());
         corner_max = corner_max.max(off);
         let piece = sec.parent.restrict(t[0], t[1]);
-        let dist = edge_distance(a, b, &inner, &piece, 1e-12 * opts.d);
+        let dist = edge_distance(a, b, &inner, &piece, DISTANCE_ACCURACY_REL * opts.d);
         dist_max = dist_max.max(dist);
         dist_sum += dist;
         dist_count += 1;

@@ -90,39 +90,44 @@ pub struct CurveOptions {
     pub curved_alpha: f64,
 }
 
+/// Default [`CurveOptions::max_splits`]: a budget that only a runaway repair
+/// reaches. Empirical, introduced in ac447f1.
+const DEFAULT_MAX_SPLITS: usize = 10_000;
+/// Default [`CurveOptions::repair_rounds`]. Empirical, introduced in ac447f1.
+const DEFAULT_REPAIR_ROUNDS: usize = 8;
+/// Default [`CurveOptions::fit_iterations`]. Empirical, introduced in ac447f1.
+const DEFAULT_FIT_ITERATIONS: usize = 80;
+/// Default [`CurveOptions::fit_min_ratio`]: the fit keeps a certified Jacobian
+/// ratio of at least 1 % rather than creep to a degenerate element.
+/// Empirical, introduced in 7b6b441.
+const DEFAULT_FIT_MIN_RATIO: f64 = 0.01;
+
 impl CurveOptions {
-    /// `d` as given, `l_min = 1e-4 · d`, 10 000 splits, 8 repair rounds, 80 fit
-    /// iterations, fitted ratio ≥ 0.01, validity-only certification; curved
-    /// optimization with `l = d / 20`, stop energy 10, 10 passes, turn bound 90°.
+    /// `d` as given; `l_min`, `l`, the curved stop energy and pass limit from
+    /// [`crate::Params::DEFAULT`] (`1e-4 · d`, `0.05 · d`, 10, 10); 10 000
+    /// splits, 8 repair rounds, 80 fit iterations, fitted ratio ≥ 0.01; the
+    /// certification and turn bound of [`CurvedRule::new`] (validity only, 90°).
     pub fn new(order: Order, d: f64) -> Self {
+        let defaults = crate::Params::DEFAULT;
+        let rule = CurvedRule::new(order);
         CurveOptions {
             order,
             d,
-            l_min_abs: 1e-4 * d,
-            max_splits: 10_000,
-            repair_rounds: 8,
-            fit_iterations: 80,
-            fit_min_ratio: 0.01,
-            certify: CertifyOptions::VALIDITY,
-            l_abs: d / 20.0,
-            stop_energy: 10.0,
-            max_passes: 10,
-            curved_alpha: std::f64::consts::FRAC_PI_2,
+            l_min_abs: defaults.l_min.resolve(d),
+            max_splits: DEFAULT_MAX_SPLITS,
+            repair_rounds: DEFAULT_REPAIR_ROUNDS,
+            fit_iterations: DEFAULT_FIT_ITERATIONS,
+            fit_min_ratio: DEFAULT_FIT_MIN_RATIO,
+            certify: rule.certify,
+            l_abs: defaults.l.resolve(d),
+            stop_energy: defaults.stop_energy_curved,
+            max_passes: defaults.max_passes_curved,
+            curved_alpha: rule.alpha,
         }
     }
     /// Set the minimal edge length below which curved edges are not split.
     pub fn with_l_min_abs(mut self, l: f64) -> Self {
         self.l_min_abs = l;
-        self
-    }
-    /// Set the split budget.
-    pub fn with_max_splits(mut self, n: usize) -> Self {
-        self.max_splits = n;
-        self
-    }
-    /// Set the number of repair rounds.
-    pub fn with_repair_rounds(mut self, n: usize) -> Self {
-        self.repair_rounds = n;
         self
     }
     /// Set the target edge length `l` (user units) of the curved optimization.

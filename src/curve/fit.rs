@@ -10,6 +10,34 @@ use crate::element::triangle::straight_inner;
 use crate::mesh::{EdgeKey, FaceId, TriMesh};
 use kurbo::{ParamCurveNearest, Point, Vec2};
 
+/// Bisection steps of the largest certified blend toward the curve (the
+/// blend then within 2^-30 of the largest). Introduced in ac447f1.
+const BLEND_BISECTIONS: usize = 30;
+/// The pattern search's first step is at least this fraction of the edge
+/// length `h`. Empirical, introduced in ac447f1.
+const FIT_FIRST_STEP_REL: f64 = 1e-3;
+/// The pattern search stops once the nodes are within this fraction of `h`
+/// of the curve (in the root of the summed squares). Introduced in ac447f1.
+const FIT_CONVERGED_REL: f64 = 1e-12;
+/// A pattern-search node moves toward the curve by the step, or by its
+/// distance to the curve when smaller, but by at least this fraction of the
+/// step. Introduced in ac447f1.
+const FIT_MIN_MOVE: f64 = 0.5;
+/// The pattern search's step shrinks by this factor after a round without
+/// improvement. Introduced in ac447f1.
+const FIT_STEP_SHRINK: f64 = 0.5;
+/// ... and stops below this fraction of `h`. Introduced in ac447f1.
+const FIT_LAST_STEP_REL: f64 = 1e-9;
+/// A fit must bring the nodes closer to the curve than the straight edge by
+/// more than this fraction (of the squared distance), else the edge stays
+/// straight. Introduced in ac447f1.
+const FIT_MIN_GAIN: f64 = 1e-12;
+/// Samples of a Lagrange edge in [`edge_distance`]. Introduced in ac447f1.
+const SAMPLES: usize = 16;
+/// Smallest accuracy passed to kurbo's nearest-point search (an accuracy of 0
+/// would never end it). Introduced in ac447f1.
+const MIN_ACCURACY: f64 = 1e-300;
+
 /// How a failing curved edge ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Fit {
@@ -112,7 +140,7 @@ pub(super) fn fit_edge(
         return Fit::Straight;
     }
     let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..30 {
+    for _ in 0..BLEND_BISECTIONS {
         let mid = 0.5 * (lo + hi);
         shape.edges.insert(key, blend(mid));
         if feasible(shape).is_some() {
@@ -131,7 +159,7 @@ pub(super) fn fit_edge(
         .zip(target)
         .map(|(p, t)| (*p - *t).hypot())
         .fold(0.0, f64::max)
-        .max(1e-3 * h);
+        .max(FIT_FIRST_STEP_REL * h);
     let dirs = [
         Vec2::new(1.0, 0.0),
         Vec2::new(-1.0, 0.0),
@@ -139,7 +167,7 @@ pub(super) fn fit_edge(
         Vec2::new(0.0, -1.0),
     ];
     for _ in 0..opts.fit_iterations {
-        if best <= (1e-12 * h).powi(2) {
+        if best <= (FIT_CONVERGED_REL * h).powi(2) {
             break;
         }
         let mut improved = false;
@@ -154,7 +182,7 @@ pub(super) fn fit_edge(
             }
             for d in cand_dirs {
                 let mut cand = q.clone();
-                cand[i] += d * step.min(toward.hypot().max(step * 0.5));
+                cand[i] += d * step.min(toward.hypot().max(step * FIT_MIN_MOVE));
                 let dd = dist2(&cand);
                 if dd >= best {
                     continue;
@@ -194,14 +222,14 @@ pub(super) fn fit_edge(
             }
         }
         if !improved {
-            step *= 0.5;
-            if step < 1e-9 * h {
+            step *= FIT_STEP_SHRINK;
+            if step < FIT_LAST_STEP_REL * h {
                 break;
             }
         }
     }
     shape.edges.insert(key, q.clone());
-    if dist2(&q) >= dist2(&straight) * (1.0 - 1e-12) {
+    if dist2(&q) >= dist2(&straight) * (1.0 - FIT_MIN_GAIN) {
         // Nothing better than straight: the plain straight edge.
         shape.edges.remove(&key);
         for &f in faces {
@@ -221,12 +249,11 @@ pub(super) fn edge_distance(
     piece: &kurbo::CubicBez,
     acc: f64,
 ) -> f64 {
-    const SAMPLES: usize = 16;
     let mut worst = 0.0f64;
     for i in 0..=SAMPLES {
         let s = i as f64 / SAMPLES as f64;
         let p = lagrange_edge(a, b, inner, s);
-        let near = piece.nearest(p, acc.max(1e-300));
+        let near = piece.nearest(p, acc.max(MIN_ACCURACY));
         worst = worst.max(near.distance_sq.sqrt());
     }
     worst

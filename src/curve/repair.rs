@@ -14,6 +14,14 @@ use crate::ops::invariants::curved::curved_tag;
 use crate::ops::{self, Context, Outcome};
 use crate::{Error, Result};
 
+/// Passes of [`split_multi_primary`]: each pass halves the offending
+/// configurations, so a few suffice. Empirical, introduced in ac447f1.
+const MULTI_PRIMARY_PASSES: usize = 16;
+/// A curved edge is split for repair only if it is at least this multiple of
+/// [`CurveOptions::l_min_abs`] long (its halves stay about `l_min` or longer).
+/// Introduced in ac447f1.
+const SPLIT_MIN_MULTIPLE: f64 = 2.0;
+
 /// Round every rational vertex (the output has `f64` vertices only).
 pub(super) fn round_all(mesh: &mut TriMesh, ctx: &Context) -> Result<()> {
     let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
@@ -34,8 +42,7 @@ pub(super) fn round_all(mesh: &mut TriMesh, ctx: &Context) -> Result<()> {
 /// (or the budget runs out). Returns the number of splits.
 pub(super) fn split_multi_primary(mesh: &mut TriMesh, ctx: &Context, budget: &mut usize) -> usize {
     let mut done = 0;
-    // Each pass halves the offending configurations; a few passes suffice.
-    for _ in 0..16 {
+    for _ in 0..MULTI_PRIMARY_PASSES {
         let bad: Vec<FaceId> = mesh
             .faces()
             .filter(|&f| curved_edges(mesh, ctx, f).len() > 1)
@@ -183,7 +190,7 @@ pub(super) fn repair(
                 continue;
             }
             let len = (mesh.position(key.hi) - mesh.position(key.lo)).hypot();
-            if len < 2.0 * opts.l_min_abs || curved_tag(mesh, ctx, key).is_none() {
+            if len < SPLIT_MIN_MULTIPLE * opts.l_min_abs || curved_tag(mesh, ctx, key).is_none() {
                 continue;
             }
             if let Outcome::Applied(_) = ops::try_split(mesh, ctx, key.lo, key.hi) {
