@@ -9,7 +9,7 @@ use super::shape::{Bend, face_edges, faces_of};
 use crate::element::Order;
 use crate::element::jacobian::{self, CertifyOptions};
 use crate::element::triangle::{EDGES, straight_inner};
-use crate::fem::{FemMesh, LineKind};
+use crate::fem::{FemMesh, LineKind, VertexNumbers, feature_lines};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::ops::invariants::curved::{on_cubic, primary};
@@ -22,21 +22,18 @@ use std::collections::HashMap;
 /// Introduced in ac447f1.
 const DISTANCE_ACCURACY_REL: f64 = 1e-12;
 
-/// Number the nodes and write the elements and feature lines.
+/// Number the nodes (the vertices as every mesh delivered from a `TriMesh`
+/// numbers them, [`VertexNumbers`]; then edge and centre nodes) and write the
+/// elements and the feature lines ([`feature_lines`]).
 pub(super) fn assemble(
     mesh: &TriMesh,
     order: Order,
     shape: &Bend,
     feature: impl Fn(&FeatureOn) -> (ShapeId, LineKind),
 ) -> CurvedMesh {
-    let mut index = vec![u32::MAX; mesh.vertex_capacity()];
-    let mut nodes: Vec<Point> = Vec::with_capacity(mesh.num_vertices());
+    let (numbers, mut nodes) = VertexNumbers::of(mesh);
     let next =
         |nodes: &Vec<Point>| u32::try_from(nodes.len()).expect("internal: node count fits u32");
-    for v in mesh.vertices() {
-        index[v.0 as usize] = next(&nodes);
-        nodes.push(mesh.position(v));
-    }
     let inner_count = order as usize - 1;
     // Inner node indices of each edge, from lo to hi.
     let mut edge_nodes: HashMap<EdgeKey, Vec<u32>> = HashMap::new();
@@ -62,7 +59,7 @@ pub(super) fn assemble(
     let mut triangles = Vec::with_capacity(faces.len() * order.triangle_nodes());
     for &f in &faces {
         let v = mesh.face(f);
-        triangles.extend(v.map(|x| index[x.0 as usize]));
+        triangles.extend(v.map(|x| numbers.get(x)));
         if inner_count == 0 {
             continue;
         }
@@ -81,24 +78,14 @@ pub(super) fn assemble(
             nodes.push(el[9]);
         }
     }
-    let mut tagged: Vec<(EdgeKey, Vec<FeatureOn>)> =
-        mesh.tagged_edges().map(|(k, t)| (k, t.to_vec())).collect();
-    tagged.sort_unstable_by_key(|(k, _)| *k);
     let mut lines = Vec::new();
     let mut line_feature: Vec<(ShapeId, LineKind)> = Vec::new();
-    for (key, tags) in tagged {
-        let first = line_feature.len();
-        for t in &tags {
-            let fk = feature(t);
-            if line_feature[first..].contains(&fk) {
-                continue;
-            }
-            line_feature.push(fk);
-            lines.push(index[key.lo.0 as usize]);
-            lines.push(index[key.hi.0 as usize]);
-            if inner_count > 0 {
-                lines.extend(edge_inner(&mut nodes, key));
-            }
+    for (key, fk) in feature_lines(mesh, feature) {
+        line_feature.push(fk);
+        lines.push(numbers.get(key.lo));
+        lines.push(numbers.get(key.hi));
+        if inner_count > 0 {
+            lines.extend(edge_inner(&mut nodes, key));
         }
     }
     CurvedMesh {

@@ -7,12 +7,12 @@
 
 use super::build::{CurveOptions, CurveStats};
 use super::shape::{Bend, exact_shape, exact_shape_around, face_edges, uncertified};
+use crate::Result;
 use crate::element::Order;
 use crate::element::jacobian::CertifyOptions;
 use crate::mesh::{EdgeKey, FaceId, TriMesh, VertexId};
 use crate::ops::invariants::curved::curved_tag;
 use crate::ops::{self, Context, Outcome};
-use crate::{Error, Result};
 
 /// Passes of [`split_multi_primary`]: each pass halves the offending
 /// configurations, so a few suffice. Empirical, introduced in ac447f1.
@@ -28,14 +28,7 @@ pub(super) fn round_all(mesh: &mut TriMesh, ctx: &Context) -> Result<()> {
     for v in rational {
         ops::try_round(mesh, ctx, v);
     }
-    let left = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
-    if left > 0 {
-        return Err(Error::meshing(
-            "curve",
-            format!("{left} vertices could not be rounded to f64 without inverting a triangle"),
-        ));
-    }
-    Ok(())
+    crate::fem::require_f64(mesh, "curve")
 }
 
 /// Split triangles with two or three curved edges until each has at most one
