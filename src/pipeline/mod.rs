@@ -1,11 +1,14 @@
-//! The pipeline: load → mesh → (regions, curving) → output, with per-stage timings
-//! gathered into a [`Report`].
+//! The pipeline: load → mesh (and curve) → regions → output, with per-stage
+//! timings gathered into a [`Report`].
 //!
-//! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild's
-//! linear path, features → exact BSP (`bsp`) → rounded [`LinearMesh`]
-//! (`linear`) → AMIPS optimization (`optimize`); a vertex that stays rational
-//! is an error, never written (DESIGN "Exactness"). `--stop-after bsp` delivers
-//! the raw BSP mesh, `--linear` the optimized one.
+//! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild:
+//! features → exact BSP (`bsp`) → AMIPS optimization (`optimize`) → curving
+//! (`curve`); a vertex that stays rational is an error, never written (DESIGN
+//! "Exactness"). `--stop-after bsp` delivers the BSP mesh, `--linear` the
+//! optimized one, each as a [`LinearMesh`] (`linear`); the curved mesh is
+//! delivered as a [`CurvedMesh`]. Both become a [`FemMesh`] whose vertices are
+//! numbered and feature lines written the same way
+//! ([`crate::fem::VertexNumbers`], [`crate::fem::feature_lines`]).
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
@@ -154,9 +157,9 @@ pub struct Report {
     pub quality: Quality,
     /// Physical surfaces (triangles and area of each) and classification counts.
     pub regions: RegionReport,
-    /// Feature preprocessing counts (TriWild meshers only).
+    /// Feature preprocessing counts (TriWild mesher only).
     pub features: Option<FeatureCounts>,
-    /// Counts and timings of the BSP stage (`--mesher bsp` only); its
+    /// Counts and timings of the BSP stage (TriWild mesher only); its
     /// `rational_before_rounding` and `rational_vertices` say how many vertices
     /// were still rational before and after rounding.
     pub bsp: Option<BspStats>,
