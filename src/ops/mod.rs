@@ -79,6 +79,10 @@ pub enum Reject {
     /// Curved mode: a curved element would not be certified valid, or a
     /// triangle would get more than one curved edge.
     Jacobian,
+    /// The schedule's length rule: a collapse would make an edge longer than the
+    /// split threshold (4/3 of its target), so the split pass would undo it. Decided
+    /// by the schedule before the operation is planned.
+    EdgeLength,
 }
 
 impl Reject {
@@ -97,6 +101,7 @@ impl Reject {
             Reject::Envelope => "envelope",
             Reject::Energy => "energy",
             Reject::Jacobian => "jacobian",
+            Reject::EdgeLength => "edge_length",
         }
     }
 }

@@ -631,12 +631,9 @@ impl<'a> Schedule<'a> {
                 }
             }
             if !tried {
-                *self
-                    .stats
+                self.stats
                     .collapse
-                    .rejected
-                    .entry("edge_length")
-                    .or_default() += 1;
+                    .record(&Outcome::Rejected(Reject::EdgeLength));
             }
             if !applied_now {
                 self.failed_collapse.insert(k, self.clock);
