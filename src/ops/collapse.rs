@@ -15,8 +15,7 @@
 
 use super::invariants::{self, Check};
 use super::{
-    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, ring, role,
-    t_at,
+    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -51,11 +50,11 @@ impl CollapsePlan {
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let rv = ring(mesh, v);
+        let rv = mesh.vertex_ring(v);
         if !rv.neighbours.contains(&u) {
             return Err(Reject::NotAnEdge);
         }
-        let ru = ring(mesh, u);
+        let ru = mesh.vertex_ring(u);
         let mut edge_faces = Vec::new();
         mesh.faces_on_edge(v, u, &mut edge_faces);
         let opposite: Vec<VertexId> = edge_faces

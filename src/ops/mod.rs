@@ -275,14 +275,6 @@ pub(crate) fn t_at(key: EdgeKey, t: [f64; 2], v: VertexId) -> f64 {
     if key.lo == v { t[0] } else { t[1] }
 }
 
-/// The vertices and faces around one vertex ([`TriMesh::vertex_ring`]).
-pub(crate) type Ring = crate::mesh::VertexRing;
-
-/// The one-ring of `v` ([`TriMesh::vertex_ring`]).
-pub(crate) fn ring(mesh: &TriMesh, v: VertexId) -> Ring {
-    mesh.vertex_ring(v)
-}
-
 /// What a vertex may do, from its tag and its incident feature edges.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Role {
@@ -307,7 +299,7 @@ pub(crate) enum Role {
     },
 }
 
-pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
+pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) -> Role {
     let tag = mesh.vertex_tag(v);
     if tag.box_corner || tag.feature_point || tag.section_endpoint {
         return Role::Fixed;

@@ -7,7 +7,7 @@
 //! once the mesh around it has moved.
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, CurveBudget, LocalChange, Outcome, Reject, Role, ring, role};
+use super::{Context, CurveBudget, LocalChange, Outcome, Reject, Role, role};
 use crate::mesh::{Transaction, TriMesh, VertexId};
 
 /// Fractions of the way to the curve point tried, in order.
@@ -23,7 +23,7 @@ pub fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     if !mesh.is_vertex_alive(v) {
         return Outcome::Rejected(Reject::NotAnEdge);
     }
-    let r = ring(mesh, v);
+    let r = mesh.vertex_ring(v);
     let (section, t) = match role(mesh, v, &r) {
         Role::Primary { section, t, .. } => (section, t),
         Role::Fixed | Role::Boundary => return Outcome::Rejected(Reject::FixedVertex),

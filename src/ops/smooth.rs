@@ -9,7 +9,7 @@
 //! kept only if it lowers the ring's energy.
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role};
+use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, role};
 use crate::element::energy::{Amips2, CurveJet, along_curve, amips_free};
 use crate::features::Parent;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -111,7 +111,7 @@ impl SmoothPlan {
         if !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let r = ring(mesh, v);
+        let r = mesh.vertex_ring(v);
         let faces = r.faces.clone();
         let scale = match objective {
             Objective::Sum => 1.0,
@@ -211,7 +211,7 @@ impl SmoothPlan {
 fn slide_on_boundary(
     mesh: &TriMesh,
     v: VertexId,
-    r: &super::Ring,
+    r: &crate::mesh::VertexRing,
     energy: &impl Fn(Point) -> Option<Amips2>,
 ) -> Result<Point, Reject> {
     let ends: Vec<VertexId> = r
@@ -342,7 +342,7 @@ pub fn try_smooth_with(
     let mut tx = Transaction::new(mesh);
     tx.set_position(v, plan.pos);
     if let Some((section, tn)) = plan.t {
-        let r = ring(&tx, v);
+        let r = tx.vertex_ring(v);
         for &w in &r.neighbours {
             let tags = tx.edge_tags(v, w);
             if !tags

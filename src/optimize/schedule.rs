@@ -545,7 +545,7 @@ impl<'a> Schedule<'a> {
         while let Some((v, seed)) = queue.pop_front() {
             let radius = SIZING_RADIUS * self.target_of(seed);
             let ps = self.mesh.position(seed);
-            for w in ops::ring(self.mesh, v).neighbours {
+            for w in self.mesh.vertex_ring(v).neighbours {
                 let i = w.index();
                 if seen[i] {
                     continue;
@@ -645,7 +645,7 @@ impl<'a> Schedule<'a> {
                 } else {
                     k.hi
                 };
-                for w in ops::ring(self.mesh, u).neighbours {
+                for w in self.mesh.vertex_ring(u).neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
                     if len < factor * self.mean_target(e) {
@@ -663,7 +663,7 @@ impl<'a> Schedule<'a> {
     fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
         let pu = self.mesh.position(u);
         let tu = self.target_of(u);
-        for w in ops::ring(self.mesh, v).neighbours {
+        for w in self.mesh.vertex_ring(v).neighbours {
             if w == u {
                 continue;
             }
