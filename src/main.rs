@@ -374,7 +374,11 @@ impl ParamArgs {
                 (Some(StageArg::Optimize), _) | (None, true) => Some(Stage::Optimize),
                 (None, false) => None,
             })
-            .with_order(self.order)
+            .with_order(match self.order {
+                1 => triwild::fem::Order::Linear,
+                2 => triwild::fem::Order::Quadratic,
+                _ => triwild::fem::Order::Cubic,
+            })
             .with_l(len(self.edge_length, self.edge_length_abs))
             .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
             .with_mu(len(self.mu, self.mu_abs))
