@@ -15,6 +15,7 @@ mod cli {
     pub(crate) mod batch;
     pub(crate) mod check;
     pub(crate) mod features;
+    #[cfg(feature = "test-hooks")]
     pub(crate) mod hooks;
     pub(crate) mod mesh;
 }

@@ -38,7 +38,14 @@ Exit codes:
   2  usage error (bad flag, missing input, no .svg file found)
   4  I/O error (cannot write OUTDIR or the report)";
 
+/// The text after `triwild batch --help`'s options.
+#[cfg(not(feature = "test-hooks"))]
+fn after_help() -> &'static str {
+    BATCH_HELP
+}
+
 /// The text after `triwild batch --help`'s options, and the test hooks.
+#[cfg(feature = "test-hooks")]
 fn after_help() -> String {
     format!("{BATCH_HELP}\n\n{}", super::hooks::HELP)
 }

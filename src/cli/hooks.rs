@@ -1,5 +1,6 @@
-//! Test-only hooks, so the batch tests can make a child misbehave: each
-//! environment variable holds a substring of the input path that triggers it.
+//! Test-only hooks (cargo feature `test-hooks`), so the batch tests can make a
+//! child misbehave: each environment variable holds a substring of the input
+//! path that triggers it. The shipped binary is built without them.
 
 use std::path::Path;
 use std::time::Duration;

@@ -43,6 +43,7 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
         eprintln!("error: no input file given (try `triwild --help`)");
         return ExitCode::from(2);
     };
+    #[cfg(feature = "test-hooks")]
     super::hooks::trigger(input);
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     let opts = RunOptions::new(args.params.to_params())
