@@ -12,9 +12,9 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use triwild::batch::{self, Row};
 #[cfg(feature = "test-hooks")]
 use triwild::batch::{Cause, Status};
-use triwild::batch::{self, Row};
 
 const EXE: &str = env!("CARGO_BIN_EXE_triwild");
 
