@@ -269,12 +269,7 @@ pub fn mesh_drawing_with(
                     Delivered::Linear(to_linear(&mesh, &fs, &ctx, "optimize", &mut times)?)
                 } else {
                     let (cm, cs) = times.time("curve", || {
-                        let order = match params.order {
-                            1 => Order::Linear,
-                            2 => Order::Quadratic,
-                            _ => Order::Cubic,
-                        };
-                        let opts = CurveOptions::new(order, resolved.d)
+                        let opts = CurveOptions::new(params.order, resolved.d)
                             .with_l_min_abs(resolved.l_min)
                             .with_l_abs(resolved.l)
                             .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
