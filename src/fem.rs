@@ -8,8 +8,9 @@
 //! the centre). Lines list their two ends, then interior nodes in order along the line
 //! (gmsh type 8: end, end, middle; type 26: end, end, 1/3, 2/3).
 
-pub use crate::element::Order;
+use crate::element::Order;
 use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId};
+use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::Point;
 
@@ -116,9 +117,9 @@ impl LinearMesh {
     /// # Errors
     /// [`Error::Meshing`] in `stage` if some vertex still has a rational position
     /// (DESIGN "Exactness": such a mesh is never written).
-    pub fn from_trimesh(
+    pub(crate) fn from_trimesh(
         mesh: &TriMesh,
-        stage: &'static str,
+        stage: Stage,
         feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
     ) -> Result<LinearMesh> {
         require_f64(mesh, stage)?;
@@ -149,7 +150,7 @@ impl LinearMesh {
 ///
 /// # Errors
 /// [`Error::Meshing`] in `stage` if some vertex is still rational.
-pub fn require_f64(mesh: &TriMesh, stage: &'static str) -> Result<()> {
+pub(crate) fn require_f64(mesh: &TriMesh, stage: Stage) -> Result<()> {
     let rational = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
     if rational > 0 {
         return Err(Error::meshing(
@@ -164,11 +165,11 @@ pub fn require_f64(mesh: &TriMesh, stage: &'static str) -> Result<()> {
 /// Every mesh delivered from a `TriMesh` (linear, BSP and curved) numbers its
 /// vertices this way, before any high-order node.
 #[derive(Clone, Debug)]
-pub struct VertexNumbers(Vec<u32>);
+pub(crate) struct VertexNumbers(Vec<u32>);
 
 impl VertexNumbers {
     /// The numbers of `mesh`'s live vertices, and their positions in that order.
-    pub fn of(mesh: &TriMesh) -> (VertexNumbers, Vec<Point>) {
+    pub(crate) fn of(mesh: &TriMesh) -> (VertexNumbers, Vec<Point>) {
         let mut index = vec![u32::MAX; mesh.vertex_capacity()];
         let mut positions = Vec::with_capacity(mesh.num_vertices());
         for v in mesh.vertices() {
@@ -180,7 +181,7 @@ impl VertexNumbers {
     }
 
     /// The number of the live vertex `v`.
-    pub fn get(&self, v: VertexId) -> u32 {
+    pub(crate) fn get(&self, v: VertexId) -> u32 {
         let i = self.0[v.index()];
         debug_assert!(
             i != u32::MAX,
@@ -194,7 +195,7 @@ impl VertexNumbers {
 /// `(shape, kind)` that `feature` assigns to its tags (in tag order), edges in
 /// key order. Every mesh delivered from a `TriMesh` writes its lines in this
 /// order.
-pub fn feature_lines(
+pub(crate) fn feature_lines(
     mesh: &TriMesh,
     feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
 ) -> Vec<(EdgeKey, (crate::svg::ShapeId, LineKind))> {

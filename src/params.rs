@@ -4,7 +4,8 @@
 //! bounding box, or in absolute user units; [`Params::resolve`] turns them into
 //! absolute [`Resolved`] values once `d` is known.
 
-use crate::fem::Order;
+use crate::element::Order;
+pub(crate) use crate::stage::Stage;
 use crate::{Error, Result};
 
 /// The default value of every parameter, named once: [`Params::DEFAULT`] and
@@ -16,9 +17,9 @@ use crate::{Error, Result};
 /// stop rules); the values that are ours say so.
 ///
 /// The command line's other defaults live with the options they fill:
-/// [`crate::regions::RegionOptions::DEFAULT`] (`--regions shape`),
-/// [`crate::output::MshOptions::DEFAULT`] (`--msh-version 4.1`, ASCII) and
-/// [`crate::batch::BatchOptions::DEFAULT_TIMEOUT`] (`batch --timeout 600`).
+/// `RegionOptions::DEFAULT` (`--regions shape`), `MshOptions::DEFAULT`
+/// (`--msh-version 4.1`, ASCII) and `batch::BatchOptions::DEFAULT_TIMEOUT`
+/// (`batch --timeout 600`), in the modules above this one.
 pub mod defaults {
     use super::{Mesher, Order};
 
@@ -102,19 +103,6 @@ pub enum Mesher {
     TriWild,
 }
 
-/// A pipeline stage after which meshing may stop (`--stop-after`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-#[non_exhaustive]
-pub enum Stage {
-    /// The exact BSP mesh (needs [`Mesher::TriWild`]): every vertex rounded to `f64`
-    /// or an error, no optimization.
-    Bsp,
-    /// The optimized linear mesh (needs [`Mesher::TriWild`]): all `f64`, primary
-    /// vertices on their curves, no curving (`--linear`).
-    Optimize,
-}
-
 /// All meshing parameters. Start from [`Params::DEFAULT`] and use the `with_*` builders.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[non_exhaustive]
@@ -169,6 +157,18 @@ pub struct Params {
 
 impl Params {
     /// The defaults of [`defaults`] (DESIGN "Coordinates and parameters").
+    ///
+    /// ```
+    /// use triwild::{Length, Order, Params, defaults};
+    /// let p = Params::DEFAULT
+    ///     .with_l(Length::Abs(2.5)) // element size in user units
+    ///     .with_order(Order::Quadratic);
+    /// assert!(p.validate().is_ok());
+    /// assert_eq!(Params::DEFAULT.l, Length::Rel(defaults::EDGE_LENGTH_REL));
+    /// // lengths relative to the drawing's diagonal d become absolute once d is known
+    /// assert_eq!(p.resolve(100.0).l, 2.5);
+    /// assert!(Params::DEFAULT.with_l(Length::Rel(-1.0)).validate().is_err());
+    /// ```
     pub const DEFAULT: Params = Params {
         mu: Length::Rel(defaults::MU_REL),
         eps: Length::Rel(defaults::EPS_REL),
@@ -314,6 +314,13 @@ impl Params {
             if !(e.is_finite() && e >= 1.0) {
                 return Err(Error::InvalidParams(format!(
                     "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
+                )));
+            }
+        }
+        if let Some(stage) = self.stop_after {
+            if !stage.can_stop_after() {
+                return Err(Error::InvalidParams(format!(
+                    "meshing cannot stop after stage {stage}: only bsp and optimize deliver a mesh"
                 )));
             }
         }

@@ -6,11 +6,11 @@
 //! [`MshOptions::DEFAULT`] and [`RegionOptions::DEFAULT`].
 
 use clap::{Args, ValueEnum};
-use triwild::fem::Order;
-use triwild::output::{MshOptions, MshVersion};
-use triwild::params::defaults;
-use triwild::regions::{RegionMode, RegionOptions};
+use triwild::Order;
+use triwild::defaults;
 use triwild::{Length, Mesher, Params, Stage};
+use triwild::{MshOptions, MshVersion};
+use triwild::{RegionMode, RegionOptions};
 
 /// What becomes a physical surface, and what is dropped.
 #[derive(Args, Debug, Clone)]

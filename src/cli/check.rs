@@ -4,7 +4,7 @@
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use triwild::curve::FileCheck;
+use triwild::FileCheck;
 
 /// `triwild check` arguments.
 #[derive(Args, Debug, Clone)]
@@ -20,7 +20,7 @@ pub(crate) struct CheckArgs {
 /// 2 unreadable.
 pub(crate) fn run(args: &CheckArgs) -> ExitCode {
     let input = &args.input;
-    let mesh = match triwild::input::read_msh_file(input) {
+    let mesh = match triwild::read_msh_file(input) {
         Ok(m) => m,
         Err(e) => {
             if args.json {
@@ -31,8 +31,8 @@ pub(crate) fn run(args: &CheckArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let opts = triwild::curve::CertifyOptions::DEFAULT;
-    let r = triwild::curve::check_msh(&mesh, &opts);
+    let opts = triwild::CertifyOptions::DEFAULT;
+    let r = triwild::check_msh(&mesh, &opts);
     if args.json {
         let mut v = serde_json::to_value(&r).unwrap_or_default();
         if let Some(o) = v.as_object_mut() {

@@ -7,7 +7,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use triwild::Error;
-use triwild::features::{self, FeatureSet};
+use triwild::FeatureAnalysis;
 
 /// `triwild features` arguments.
 #[derive(Args, Debug, Clone)]
@@ -39,7 +39,7 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     if let Err(e) = params.validate() {
         return fail(input, e);
     }
-    let drawing = match triwild::svg::load_file(input) {
+    let drawing = match triwild::load_file(input) {
         Ok(d) => d,
         Err(e) => return fail(input, e),
     };
@@ -48,23 +48,22 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
             eprintln!("warning: {}: {w}", input.display());
         }
     }
-    let fs = FeatureSet::build(&drawing, &params.resolve(drawing.diagonal()));
+    let analysis = FeatureAnalysis::new(&drawing, &params);
     let output = args
         .output
         .clone()
         .unwrap_or_else(|| input.with_extension("features.json"));
-    let json = features::to_json(&fs).to_string();
-    if let Err(e) = triwild::output::write_file(&output, json.as_bytes()) {
+    let json = analysis.json().to_string();
+    if let Err(e) = triwild::write_file(&output, json.as_bytes()) {
         return fail(&output, e);
     }
     if let Some(p) = &args.preview {
-        if let Err(e) = triwild::output::write_file(p, features::to_svg(&fs, &drawing).as_bytes()) {
+        if let Err(e) = triwild::write_file(p, analysis.svg(&drawing).as_bytes()) {
             return fail(p, e);
         }
     }
     if args.stats {
-        let stats =
-            serde_json::json!({"input": input, "counts": fs.counts, "timing_ms": fs.timing});
+        let stats = serde_json::json!({"input": input, "counts": analysis.counts(), "timing_ms": analysis.timing()});
         println!("{stats}");
     }
     ExitCode::SUCCESS

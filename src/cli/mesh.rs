@@ -7,7 +7,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use triwild::Error;
-use triwild::pipeline::{self, RunOptions};
+use triwild::RunOptions;
 
 /// The single-file command's arguments.
 #[derive(Args, Debug, Clone)]
@@ -53,12 +53,12 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     // The library's write errors do not say which file; an unwritable preview
     // is reported here, naming the preview, before anything is meshed.
     if let Some(preview) = &args.preview {
-        if let Err(err) = triwild::output::check_writable(preview) {
+        if let Err(err) = triwild::check_writable(preview) {
             eprintln!("error: {}: {err}", preview.display());
             return exit_code(err.kind());
         }
     }
-    match pipeline::run_file(input, &output, &opts) {
+    match triwild::run_file(input, &output, &opts) {
         Ok(report) => {
             if !quiet {
                 for w in &report.warnings {

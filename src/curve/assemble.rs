@@ -13,6 +13,7 @@ use crate::fem::{FemMesh, LineKind, VertexNumbers, feature_lines};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::ops::invariants::curved::{on_cubic, primary};
+use crate::stage::Stage;
 use crate::svg::ShapeId;
 use crate::{Error, Result};
 use kurbo::Point;
@@ -123,7 +124,7 @@ pub(super) fn finish_stats(
                 .filter(|k| shape.edges.contains_key(k))
                 .count();
             return Err(Error::meshing(
-                "curve",
+                Stage::Curve,
                 format!(
                     "element {i} ({f:?}, {bent} curved edges, centre moved: {}) is not \
                      certified valid ({:?}): a straight sliver of the linear mesh that no \

@@ -60,7 +60,7 @@ use kurbo::Point;
 /// How the curving stage works.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
-pub struct CurveOptions {
+pub(crate) struct CurveOptions {
     /// Element order of the output (1: straight, 2: quadratic, 3: cubic).
     pub order: Order,
     /// The input's bounding-box diagonal `d` (user units): distances in
@@ -107,7 +107,7 @@ impl CurveOptions {
     /// [`crate::Params::DEFAULT`] (`1e-4 · d`, `0.05 · d`, 10, 10); 10 000
     /// splits, 8 repair rounds, 80 fit iterations, fitted ratio ≥ 0.01; the
     /// certification and turn bound of [`CurvedRule::new`] (validity only, 90°).
-    pub fn new(order: Order, d: f64) -> Self {
+    pub(crate) fn new(order: Order, d: f64) -> Self {
         let defaults = crate::Params::DEFAULT;
         let rule = CurvedRule::new(order);
         CurveOptions {
@@ -126,17 +126,17 @@ impl CurveOptions {
         }
     }
     /// Set the minimal edge length below which curved edges are not split.
-    pub fn with_l_min_abs(mut self, l: f64) -> Self {
+    pub(crate) fn with_l_min_abs(mut self, l: f64) -> Self {
         self.l_min_abs = l;
         self
     }
     /// Set the target edge length `l` (user units) of the curved optimization.
-    pub fn with_l_abs(mut self, l: f64) -> Self {
+    pub(crate) fn with_l_abs(mut self, l: f64) -> Self {
         self.l_abs = l;
         self
     }
     /// Set the curved optimization's stop energy and pass limit (0 skips it).
-    pub fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
+    pub(crate) fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
         self.stop_energy = energy;
         self.max_passes = max_passes;
         self
@@ -209,7 +209,7 @@ impl CurvedMesh {
 /// element cannot be certified even straight: a sliver of the linear mesh,
 /// exactly positive but with `det J` within the zero tolerance, that no local
 /// operation could remove (e.g. between two features 1e-16 apart).
-pub fn curve_mesh(
+pub(crate) fn curve_mesh(
     mesh: &mut TriMesh,
     ctx: &Context,
     opts: &CurveOptions,

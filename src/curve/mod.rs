@@ -22,14 +22,11 @@
 //! [`crate::element::jacobian::certify`] proves valid (`det J > 0` everywhere).
 
 mod assemble;
-pub mod build;
-pub mod certify;
+pub(crate) mod build;
+pub(crate) mod certify;
 mod fit;
-pub mod optimize;
+pub(crate) mod optimize;
 mod repair;
 mod shape;
 
-pub use crate::element::{Certificate, CertifyOptions, CurvedEdge, Validity};
-pub use build::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
-pub use certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
-pub use optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
+pub(crate) use build::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};

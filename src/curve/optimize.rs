@@ -52,7 +52,7 @@ const SEED: u64 = 0x0063_7572_7665_6421;
 
 /// Parameters of the curved optimization, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurvedOptimizeOptions {
+pub(crate) struct CurvedOptimizeOptions {
     /// Target edge length `l`.
     pub l: f64,
     /// Curved AMIPS energy (1 for equilateral) below which the mesh is good enough.
@@ -100,7 +100,7 @@ fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> EnergyMeasu
 /// Optimize `mesh` in curved mode (see the module doc). `ctx` must be in curved
 /// mode (`ctx.curved` set); without it, or with `max_passes == 0` or a linear
 /// order, nothing is done.
-pub fn optimize_curved(
+pub(crate) fn optimize_curved(
     mesh: &mut TriMesh,
     ctx: &Context,
     opts: &CurvedOptimizeOptions,

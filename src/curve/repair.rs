@@ -28,7 +28,7 @@ pub(super) fn round_all(mesh: &mut TriMesh, ctx: &Context) -> Result<()> {
     for v in rational {
         ops::try_round(mesh, ctx, v);
     }
-    crate::fem::require_f64(mesh, "curve")
+    crate::fem::require_f64(mesh, crate::Stage::Curve)
 }
 
 /// Split triangles with two or three curved edges until each has at most one

@@ -22,7 +22,7 @@ use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
 
 /// Everything a collapse of `v` into `u` needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
-pub struct CollapsePlan {
+pub(crate) struct CollapsePlan {
     u: VertexId,
     v: VertexId,
     /// Faces around `v` (all removed).
@@ -45,7 +45,12 @@ impl CollapsePlan {
     /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
     /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
     /// `ctx.envelope.eps()` bounds how far a secondary junction may move.
-    pub fn new(mesh: &TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Result<Self, Reject> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        ctx: &Context,
+        u: VertexId,
+        v: VertexId,
+    ) -> Result<Self, Reject> {
         let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
@@ -195,7 +200,7 @@ impl CollapsePlan {
 }
 
 /// Collapse `v` into `u` (see the module doc).
-pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
+pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
     let plan = match CollapsePlan::new(mesh, ctx, u, v) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),

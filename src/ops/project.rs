@@ -19,7 +19,7 @@ const FRACTIONS: [f64; 5] = [1.0, 0.5, 0.25, 0.125, 0.0625];
 /// `ctx.on_curve_abs`), [`Reject::FixedVertex`] for one that may not move, and
 /// with the last refusing invariant when no fraction of the move is allowed.
 /// The energy rule does not apply: the move restores an invariant.
-pub fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     if !mesh.is_vertex_alive(v) {
         return Outcome::Rejected(Reject::NotAnEdge);
     }

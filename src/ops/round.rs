@@ -7,7 +7,7 @@ use crate::mesh::{Transaction, TriMesh, VertexId};
 
 /// Round the rational vertex `v` to `f64`. [`Reject::NoChange`] when it
 /// already is `f64`.
-pub fn try_round(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_round(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     if !mesh.is_vertex_alive(v) {
         return Outcome::Rejected(Reject::NotAnEdge);
     }

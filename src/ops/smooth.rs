@@ -24,7 +24,7 @@ const LINE_SEARCH_STEPS: usize = 30;
 
 /// The planned move of one vertex.
 #[derive(Clone, Debug)]
-pub struct SmoothPlan {
+pub(crate) struct SmoothPlan {
     v: VertexId,
     faces: Vec<FaceId>,
     pos: Point,
@@ -35,7 +35,7 @@ pub struct SmoothPlan {
 
 /// What smoothing minimises over the one-ring.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Objective {
+pub(crate) enum Objective {
     /// The sum of the AMIPS energies (the schedule's smoothing).
     Sum,
     /// The sum of `(E / E_max)^8`, where `E_max` is the ring's largest energy
@@ -88,21 +88,13 @@ fn jet(parent: &Parent, t: f64) -> CurveJet {
 }
 
 impl SmoothPlan {
-    /// Find a better position for `v`.
+    /// Find a better position for `v` under `objective`.
     ///
     /// # Errors
     /// [`Reject::NotAnEdge`] for a dead vertex, [`Reject::FixedVertex`] for a
     /// fixed or boundary one, [`Reject::NoChange`] when no position with a
     /// lower ring energy was found.
-    pub fn new(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Result<Self, Reject> {
-        Self::with_objective(mesh, ctx, v, Objective::Sum)
-    }
-
-    /// [`SmoothPlan::new`] with the given objective.
-    ///
-    /// # Errors
-    /// As [`SmoothPlan::new`].
-    pub fn with_objective(
+    pub(crate) fn with_objective(
         mesh: &TriMesh,
         ctx: &Context,
         v: VertexId,
@@ -321,13 +313,13 @@ fn line_search(
 }
 
 /// Smooth the vertex `v` (see the module doc).
-pub fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     try_smooth_with(mesh, ctx, v, Objective::Sum)
 }
 
 /// Smooth the vertex `v` minimising `objective` over its ring (same rules and
 /// invariants as [`try_smooth`]).
-pub fn try_smooth_with(
+pub(crate) fn try_smooth_with(
     mesh: &mut TriMesh,
     ctx: &Context,
     v: VertexId,

@@ -6,9 +6,9 @@
 //! uniform target. Its tuning constants, with their provenance, head
 //! `schedule.rs`. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
 
-pub mod schedule;
+pub(crate) mod schedule;
 
-pub use schedule::{OptimizeOptions, OptimizeStats, optimize};
+pub(crate) use schedule::{OptimizeOptions, OptimizeStats, optimize};
 
 #[cfg(test)]
 mod tests;

@@ -145,7 +145,7 @@ const SEED: u64 = 0x0074_7269_7769_6c64;
 
 /// Parameters of the schedule, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OptimizeOptions {
+pub(crate) struct OptimizeOptions {
     /// Target edge length `l`: the sizing field's upper bound.
     pub l: f64,
     /// Lower bound of the sizing field (the thesis uses ε).
@@ -800,7 +800,7 @@ impl<'a> Schedule<'a> {
 }
 
 /// Primary vertices farther than `ctx.on_curve_abs` from their curve point.
-pub fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
+pub(crate) fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
     let mut primary: Vec<VertexId> = mesh
         .tagged_edges()
         .filter(|(_, tags)| tags.iter().any(|t| matches!(t, FeatureOn::Primary { .. })))
@@ -832,7 +832,11 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
 
 /// Improve `mesh` in place (see the module doc). `ctx.envelope` may be
 /// restaged (denser sampling, larger ε) when rational vertices are left.
-pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -> OptimizeStats {
+pub(crate) fn optimize(
+    mesh: &mut TriMesh,
+    ctx: &mut Context,
+    opts: &OptimizeOptions,
+) -> OptimizeStats {
     let mut ever_off = Vec::new();
     let mut s = Schedule::new(mesh, ctx, opts, SEED);
     let rational = s.improve(&mut ever_off);
