@@ -317,7 +317,7 @@ pub fn mesh_drawing_with(
             }
         }
     };
-    let name = |s: crate::svg::ShapeId| drawing.shapes[s.0 as usize].name();
+    let name = |s: crate::svg::ShapeId| drawing.shapes[s.index()].name();
     let mesh = match &delivered {
         Delivered::Linear(linear) => FemMesh::from_linear(linear, "domain", name),
         Delivered::Curved(cm) => FemMesh::from_curved(cm, "domain", name),

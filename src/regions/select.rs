@@ -133,7 +133,7 @@ fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u
     let tri = asg
         .owner
         .iter()
-        .map(|o| o.map_or(0, |s| of_shape[s.0 as usize]))
+        .map(|o| o.map_or(0, |s| of_shape[s.index()]))
         .collect();
     (tri, names)
 }

@@ -4,7 +4,14 @@ use kurbo::{CubicBez, Line, Point, Rect};
 
 /// Index of a [`Shape`] in [`Drawing::shapes`].
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
-pub struct ShapeId(pub u32);
+pub struct ShapeId(pub(crate) u32);
+
+impl ShapeId {
+    /// The index into [`Drawing::shapes`].
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
 
 impl std::fmt::Debug for ShapeId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

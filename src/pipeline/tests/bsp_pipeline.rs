@@ -64,7 +64,7 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
             SegmentTag::Primary(id) => fs.primary[id.0 as usize].source,
             SegmentTag::Secondary { polyline, .. } => fs.secondary[polyline.0 as usize].source,
         };
-        let mut name = drawing.shapes[source.shape.0 as usize].name();
+        let mut name = drawing.shapes[source.shape.index()].name();
         // Names are unique in a file: a curve named like a surface is written `<name>-curve`.
         if m.physical_names
             .iter()

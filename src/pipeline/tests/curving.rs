@@ -58,7 +58,7 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
         pipeline::feature_of(&fs, &ctx, t)
     })
     .expect("curving");
-    let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
+    let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
     let (fem, _) = regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d).expect("regions");
     (fem, stats)
 }
@@ -231,8 +231,7 @@ fn devset_curving() {
         });
         match r {
             Ok((cm, s)) => {
-                let fem =
-                    FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
+                let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
                 let c = certify_fem(&fem, &crate::CertifyOptions::VALIDITY);
                 let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
                 let _ =
