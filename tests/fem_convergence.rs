@@ -17,22 +17,56 @@
 
 mod support;
 
-use kurbo::ParamCurveArea;
+use kurbo::{CubicBez, ParamCurveArea};
 use support::fem::{Problem, Solution, solve};
-use triwild::svg::Segment;
 use triwild::{Drawing, FemMesh, Length, MshOptions, Params, RegionMode, RegionOptions};
 
-/// A G1 blob of four cubic arcs in a 2 × 2 view box, closed exactly on its start.
-const BLOB: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2">
-  <path id="blob" fill="black" d="M 1.9 1
-    C 1.9 1.5 1.35 1.8675 0.9 1.8
-    C 0.5 1.74 0.155 1.35 0.2 0.9
-    C 0.24 0.5 0.7 0.1 1.2 0.2
-    C 1.6 0.28 1.9 0.5 1.9 1 Z"/>
-</svg>"#;
+/// A G1 blob of four cubic arcs (control points in a 2 × 2 view box), closed exactly on
+/// its start. Every coordinate is a multiple of 1/256, so the SVG loader's `f32` holds
+/// it exactly and the area below is the drawing's.
+const ARCS: [[(f64, f64); 4]; 4] = [
+    [(1.875, 1.0), (1.875, 1.5), (1.375, 1.8125), (0.875, 1.75)],
+    [
+        (0.875, 1.75),
+        (0.5, 1.703125),
+        (0.125, 1.375),
+        (0.1875, 0.875),
+    ],
+    [
+        (0.1875, 0.875),
+        (0.234375, 0.5),
+        (0.6875, 0.09375),
+        (1.1875, 0.1875),
+    ],
+    [
+        (1.1875, 0.1875),
+        (1.5625, 0.2578125),
+        (1.875, 0.5),
+        (1.875, 1.0),
+    ],
+];
+
+/// The blob as an SVG document.
+fn blob_svg() -> String {
+    let mut d = format!("M {} {}", ARCS[0][0].0, ARCS[0][0].1);
+    for [_, c1, c2, p] in ARCS {
+        d += &format!(" C {} {} {} {} {} {}", c1.0, c1.1, c2.0, c2.1, p.0, p.1);
+    }
+    format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><path id="blob" fill="black" d="{d} Z"/></svg>"#
+    )
+}
+
+/// The exact area of the blob (Green's theorem on its cubics).
+fn blob_area() -> f64 {
+    ARCS.iter()
+        .map(|[a, b, c, d]| CubicBez::new(*a, *b, *c, *d).signed_area())
+        .sum::<f64>()
+        .abs()
+}
 
 /// Target edge lengths, relative to the drawing's diagonal.
-const LEVELS: [f64; 5] = [0.07, 0.05, 0.035, 0.025, 0.0175];
+const LEVELS: [f64; 5] = [0.08, 0.06, 0.035, 0.021, 0.0175];
 
 /// Errors below this are rounding, not discretisation: levels past it are not fitted.
 const FLOOR: f64 = 1e-11;
@@ -43,23 +77,6 @@ fn problem() -> Problem<'static> {
         grad: &|x, y| [x.exp() * y.sin() + 0.5 * x, x.exp() * y.cos() + 0.5 * y],
         f: &|_, _| -1.0,
     }
-}
-
-/// The exact area of the drawing's shape (Green's theorem on its cubics).
-fn drawing_area(d: &Drawing) -> f64 {
-    let mut a = 0.0;
-    for sp in &d.shapes[0].subpaths {
-        for s in &sp.segments {
-            a += match s {
-                Segment::Line(l) => l.signed_area(),
-                Segment::Cubic(c) => c.signed_area(),
-            };
-        }
-        if let Some(l) = sp.implicit_closing_segment() {
-            a += l.signed_area();
-        }
-    }
-    a.abs()
 }
 
 /// The blob meshed at `level` and `order`, the background cut away, written to
@@ -150,8 +167,8 @@ fn print_table(name: &str, rows: &[Solution]) {
 
 #[test]
 fn isoparametric_fem_converges_at_optimal_rates() {
-    let drawing = triwild::load_bytes(BLOB.as_bytes()).expect("the blob loads");
-    let exact_area = drawing_area(&drawing);
+    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
+    let exact_area = blob_area();
     let mut p2_on_3 = Vec::new();
     let mut tables = Vec::new();
     for order in [1u8, 2, 3] {
@@ -210,7 +227,7 @@ fn isoparametric_fem_converges_at_optimal_rates() {
 fn linear_functions_are_reproduced_on_curved_meshes() {
     // The isoparametric space holds every linear function of x, y: a check of the
     // solver and of the meshes' node order together.
-    let drawing = triwild::load_bytes(BLOB.as_bytes()).expect("the blob loads");
+    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
     let linear = Problem {
         u: &|x, y| 0.3 + 2.0 * x - 1.5 * y,
         grad: &|_, _| [2.0, -1.5],
