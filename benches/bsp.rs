@@ -7,7 +7,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use kurbo::{Point, Rect};
 use std::hint::black_box;
-use triwild::bsp::{BspInput, BspOptions, BspSegment, SegmentTag, build};
+use triwild::__bench::bsp_of_segments;
 
 struct Rng(u64);
 impl Rng {
@@ -19,35 +19,27 @@ impl Rng {
     }
 }
 
-fn soup(n: usize) -> BspInput {
+fn soup(n: usize) -> Vec<(Point, Point)> {
     let mut rng = Rng(7 + n as u64);
     let len = 3.0 / (n as f64).sqrt();
-    let segments = (0..n)
-        .map(|i| {
+    (0..n)
+        .map(|_| {
             let a = Point::new(rng.next_f64(), rng.next_f64());
             let ang = rng.next_f64() * std::f64::consts::TAU;
             let b = Point::new(
                 (a.x + len * ang.cos()).clamp(0.0, 1.0),
                 (a.y + len * ang.sin()).clamp(0.0, 1.0),
             );
-            BspSegment {
-                a,
-                b,
-                tag: SegmentTag::Secondary { polyline: i as u32 },
-            }
+            (a, b)
         })
-        .collect();
-    BspInput {
-        segments,
-        ..BspInput::default()
-    }
+        .collect()
 }
 
 fn bench(c: &mut Criterion) {
     let bbox = Rect::new(-0.1, -0.1, 1.1, 1.1);
     for n in [100, 1000, 10000] {
         let input = soup(n);
-        let (_, stats) = build(&input, bbox, &BspOptions::DEFAULT).expect("bsp builds");
+        let stats = bsp_of_segments(&input, bbox).expect("bsp builds");
         println!(
             "n={n}: {} seed triangles, {} cut, {} cells, {} vertices ({} rational before rounding, {} after), {} triangles, {:.3}s (seed {:.3}s, cut {:.3}s, finish {:.3}s)",
             stats.seed_triangles,
@@ -63,7 +55,7 @@ fn bench(c: &mut Criterion) {
             stats.finish_seconds,
         );
         c.bench_function(&format!("bsp soup {n}"), |bch| {
-            bch.iter(|| black_box(build(&input, bbox, &BspOptions::DEFAULT).expect("bsp builds")))
+            bch.iter(|| black_box(bsp_of_segments(&input, bbox).expect("bsp builds")))
         });
     }
 }

@@ -6,10 +6,10 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use kurbo::{CubicBez, Point};
 use std::hint::black_box;
-use triwild::curve::{CertifyOptions, certify_mesh};
-use triwild::element::Order;
+use triwild::Order;
 use triwild::element::jacobian::{certify, det_cubic, zero_abs};
 use triwild::element::lagrange::{CurvedEdge, cubic_nodes};
+use triwild::{CertifyOptions, certify_mesh};
 
 /// A triangle whose edge 0→1 is a cubic arc bulging by `bulge` (negative: inwards).
 fn element(bulge: f64) -> [Point; 10] {

@@ -11,8 +11,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
-use triwild::params::Stage;
-use triwild::{Mesher, Params, pipeline, svg};
+use triwild::Stage;
+use triwild::{Mesher, Params};
 
 const DRAWINGS: [(&str, &str); 3] = [
     ("small", "gilbarbara-logos/ello.svg"),
@@ -27,7 +27,7 @@ fn bench(c: &mut Criterion) {
         .sample_size(10)
         .measurement_time(Duration::from_secs(20));
     for (size, file) in DRAWINGS {
-        let Ok(drawing) = svg::load_file(&dev.join(file)) else {
+        let Ok(drawing) = triwild::load_file(&dev.join(file)) else {
             println!("{file}: not available, skipped");
             continue;
         };
@@ -43,13 +43,13 @@ fn bench(c: &mut Criterion) {
             ("curved", &curved),
             ("cdt", &cdt),
         ] {
-            let once = pipeline::mesh_drawing(&drawing, params).expect("meshes");
+            let once = triwild::mesh_drawing(&drawing, params).expect("meshes");
             println!(
                 "{size} {file} {name}: {} triangles, stage seconds {:?}",
                 once.report.output.triangles, once.report.times
             );
             group.bench_function(format!("{name}/{size}"), |b| {
-                b.iter(|| pipeline::mesh_drawing(black_box(&drawing), params).expect("meshes"))
+                b.iter(|| triwild::mesh_drawing(black_box(&drawing), params).expect("meshes"))
             });
         }
     }

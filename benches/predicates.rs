@@ -6,7 +6,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use kurbo::Point;
 use std::hint::black_box;
-use triwild::exact::{PointQ, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter};
+use triwild::__bench::{PointQ, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter};
 
 /// xorshift64*: deterministic, dependency-free.
 struct Rng(u64);

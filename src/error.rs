@@ -48,8 +48,8 @@ pub enum Error {
     /// A meshing stage failed.
     #[error("meshing failed in stage {stage}: {message}")]
     Meshing {
-        /// The pipeline stage (`baseline`, `bsp`, ...).
-        stage: &'static str,
+        /// The pipeline stage.
+        stage: crate::stage::Stage,
         /// What went wrong.
         message: String,
     },
@@ -77,7 +77,7 @@ impl Error {
     }
 
     /// A meshing error in `stage`.
-    pub fn meshing(stage: &'static str, message: impl Into<String>) -> Self {
+    pub fn meshing(stage: crate::stage::Stage, message: impl Into<String>) -> Self {
         Error::Meshing {
             stage,
             message: message.into(),

@@ -8,8 +8,9 @@
 //! the centre). Lines list their two ends, then interior nodes in order along the line
 //! (gmsh type 8: end, end, middle; type 26: end, end, 1/3, 2/3).
 
-pub use crate::element::Order;
-use crate::mesh::{FeatureOn, TriMesh, VertexId};
+use crate::element::Order;
+use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId};
+use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::Point;
 
@@ -107,66 +108,111 @@ pub struct LinearMesh {
 
 impl LinearMesh {
     /// The delivered form of a [`TriMesh`]: live vertices numbered compactly in
-    /// id order, its (counter-clockwise) triangles, and one [`FeatureEdge`] per
-    /// tagged edge and distinct `(shape, kind)` that `feature` assigns to its
-    /// tags, in edge order.
+    /// id order ([`VertexNumbers`]), its (counter-clockwise) triangles, and one
+    /// [`FeatureEdge`] per tagged edge and distinct `(shape, kind)` that
+    /// `feature` assigns to its tags, in edge order ([`feature_lines`]). The
+    /// curved mesh (`curve`) numbers its vertices and writes its lines through
+    /// the same two.
     ///
     /// # Errors
     /// [`Error::Meshing`] in `stage` if some vertex still has a rational position
     /// (DESIGN "Exactness": such a mesh is never written).
-    pub fn from_trimesh(
+    pub(crate) fn from_trimesh(
         mesh: &TriMesh,
-        stage: &'static str,
+        stage: Stage,
         feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
     ) -> Result<LinearMesh> {
-        let rational = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
-        if rational > 0 {
-            return Err(Error::meshing(
-                stage,
-                format!(
-                    "{rational} vertices could not be rounded to f64 without inverting a triangle"
-                ),
-            ));
-        }
-        let mut index = vec![u32::MAX; mesh.vertex_capacity()];
-        let mut vertices = Vec::with_capacity(mesh.num_vertices());
-        for v in mesh.vertices() {
-            index[v.index()] =
-                u32::try_from(vertices.len()).expect("internal: vertex count fits u32");
-            vertices.push(mesh.position(v));
-        }
-        let id = |v: VertexId| {
-            let i = index[v.index()];
-            debug_assert!(
-                i != u32::MAX,
-                "internal: face refers to a dead vertex {v:?}"
-            );
-            i
-        };
-        let triangles = mesh.faces().map(|f| mesh.face(f).map(id)).collect();
-        let mut tagged: Vec<_> = mesh.tagged_edges().collect();
-        tagged.sort_unstable_by_key(|(k, _)| *k);
-        let mut edges = Vec::with_capacity(tagged.len());
-        for (k, tags) in tagged {
-            let first = edges.len();
-            for t in tags {
-                let (shape, kind) = feature(t);
-                let e = FeatureEdge {
-                    v: [id(k.lo), id(k.hi)],
-                    shape,
-                    kind,
-                };
-                if !edges[first..].contains(&e) {
-                    edges.push(e);
-                }
-            }
-        }
+        require_f64(mesh, stage)?;
+        let (numbers, vertices) = VertexNumbers::of(mesh);
+        let triangles = mesh
+            .faces()
+            .map(|f| mesh.face(f).map(|v| numbers.get(v)))
+            .collect();
+        let edges = feature_lines(mesh, feature)
+            .into_iter()
+            .map(|(k, (shape, kind))| FeatureEdge {
+                v: [numbers.get(k.lo), numbers.get(k.hi)],
+                shape,
+                kind,
+            })
+            .collect();
         Ok(LinearMesh {
             vertices,
             triangles,
             edges,
         })
     }
+}
+
+/// The check every mesh delivered from a [`TriMesh`] passes first: no vertex
+/// still has a rational position (DESIGN "Exactness": such a mesh is never
+/// written).
+///
+/// # Errors
+/// [`Error::Meshing`] in `stage` if some vertex is still rational.
+pub(crate) fn require_f64(mesh: &TriMesh, stage: Stage) -> Result<()> {
+    let rational = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
+    if rational > 0 {
+        return Err(Error::meshing(
+            stage,
+            format!("{rational} vertices could not be rounded to f64 without inverting a triangle"),
+        ));
+    }
+    Ok(())
+}
+
+/// The node numbers of a [`TriMesh`]'s live vertices: compact, in id order.
+/// Every mesh delivered from a `TriMesh` (linear, BSP and curved) numbers its
+/// vertices this way, before any high-order node.
+#[derive(Clone, Debug)]
+pub(crate) struct VertexNumbers(Vec<u32>);
+
+impl VertexNumbers {
+    /// The numbers of `mesh`'s live vertices, and their positions in that order.
+    pub(crate) fn of(mesh: &TriMesh) -> (VertexNumbers, Vec<Point>) {
+        let mut index = vec![u32::MAX; mesh.vertex_capacity()];
+        let mut positions = Vec::with_capacity(mesh.num_vertices());
+        for v in mesh.vertices() {
+            index[v.index()] =
+                u32::try_from(positions.len()).expect("internal: vertex count fits u32");
+            positions.push(mesh.position(v));
+        }
+        (VertexNumbers(index), positions)
+    }
+
+    /// The number of the live vertex `v`.
+    pub(crate) fn get(&self, v: VertexId) -> u32 {
+        let i = self.0[v.index()];
+        debug_assert!(
+            i != u32::MAX,
+            "internal: face refers to a dead vertex {v:?}"
+        );
+        i
+    }
+}
+
+/// The feature lines of a [`TriMesh`]: one per tagged edge and distinct
+/// `(shape, kind)` that `feature` assigns to its tags (in tag order), edges in
+/// key order. Every mesh delivered from a `TriMesh` writes its lines in this
+/// order.
+pub(crate) fn feature_lines(
+    mesh: &TriMesh,
+    feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
+) -> Vec<(EdgeKey, (crate::svg::ShapeId, LineKind))> {
+    let mut tagged: Vec<_> = mesh.tagged_edges().collect();
+    tagged.sort_unstable_by_key(|(k, _)| *k);
+    let mut lines: Vec<(EdgeKey, (crate::svg::ShapeId, LineKind))> =
+        Vec::with_capacity(tagged.len());
+    for (k, tags) in tagged {
+        let first = lines.len();
+        for t in tags {
+            let line = (k, feature(t));
+            if !lines[first..].contains(&line) {
+                lines.push(line);
+            }
+        }
+    }
+    lines
 }
 
 impl FemMesh {

@@ -40,37 +40,81 @@
 //! # Ok::<(), triwild::Error>(())
 //! ```
 
-pub mod baseline;
+mod baseline;
 pub mod batch;
-pub mod bsp;
-pub mod curve;
+mod bsp;
+mod curve;
 pub mod element;
-pub mod error;
-pub mod exact;
-pub mod features;
-pub mod fem;
-pub mod input;
-pub mod mesh;
-pub mod ops;
-pub mod optimize;
-pub mod output;
-pub mod params;
-pub mod pipeline;
-pub mod quality;
-pub mod regions;
-pub mod svg;
+mod error;
+mod exact;
+mod features;
+mod fem;
+mod input;
+mod mesh;
+mod ops;
+mod optimize;
+mod output;
+mod params;
+mod pipeline;
+mod quality;
+mod regions;
+mod stage;
+mod svg;
 
-pub use curve::{FileCheck, MeshCheck, certify_fem, check_msh};
+pub use curve::certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use element::{CertifyOptions, Order};
 pub use error::{Error, ErrorKind, Result};
 pub use fem::{FeatureEdge, FemMesh, LineKind, LinearMesh};
-pub use input::{MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file};
+pub use input::msh::{MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file};
 pub use output::{
     MshOptions, MshVersion, check_writable, write_file, write_msh, write_msh_to, write_preview,
 };
-pub use params::{Length, Mesher, Params, Stage};
+pub use params::{Length, Mesher, Params, defaults};
 pub use pipeline::{
-    Meshed, Report, RunOptions, mesh_drawing, mesh_drawing_with, mesh_svg, run_file,
+    FeatureAnalysis, Meshed, Report, RunOptions, mesh_drawing, mesh_drawing_with, mesh_svg,
+    run_file,
 };
-pub use regions::{RegionMode, RegionOptions, RegionStat};
-pub use svg::{Drawing, load_bytes, load_file};
+pub use regions::select::{RegionMode, RegionOptions, RegionStat};
+pub use stage::Stage;
+pub use svg::drawing::{
+    Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
+};
+pub use svg::{load_bytes, load_file};
+
+/// Not part of the API (hidden, no stability promise): the internals that the
+/// criterion benchmarks in `benches/` time directly, the exact kernel and the BSP.
+#[doc(hidden)]
+pub mod __bench {
+    pub use crate::bsp::BspStats;
+    pub use crate::exact::predicates::{
+        Orientation, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter,
+    };
+    pub use crate::exact::rational::PointQ;
+
+    /// The BSP mesh (§2.3.1) of secondary segments inside `bbox`, with the default
+    /// options: its statistics (the mesh itself is dropped).
+    ///
+    /// # Errors
+    /// As the BSP stage: a cell that cannot be fanned, a vertex that cannot be rounded.
+    pub fn bsp_of_segments(
+        segments: &[(kurbo::Point, kurbo::Point)],
+        bbox: kurbo::Rect,
+    ) -> crate::Result<BspStats> {
+        use crate::bsp::{BspInput, BspOptions, BspSegment, SegmentTag};
+        let input = BspInput {
+            segments: segments
+                .iter()
+                .enumerate()
+                .map(|(i, &(a, b))| BspSegment {
+                    a,
+                    b,
+                    tag: SegmentTag::Secondary {
+                        polyline: u32::try_from(i).expect("segment count fits u32"),
+                    },
+                })
+                .collect(),
+            ..BspInput::default()
+        };
+        crate::bsp::build(&input, bbox, &BspOptions::DEFAULT).map(|(_, stats)| stats)
+    }
+}

@@ -4,7 +4,67 @@
 //! bounding box, or in absolute user units; [`Params::resolve`] turns them into
 //! absolute [`Resolved`] values once `d` is known.
 
+use crate::element::Order;
+pub(crate) use crate::stage::Stage;
 use crate::{Error, Result};
+
+/// The default value of every parameter, named once: [`Params::DEFAULT`] and
+/// the command line's `[default: …]` are both built from these constants.
+///
+/// Lengths are relative to `d`, the diagonal of the drawing's bounding box.
+/// "The thesis" is the TriWild chapter of the WildMeshing thesis (§4.4 lists
+/// μ, ε, ε_m, α, l and l_m "in our experiments"; §4.4.1 and §4.4.2 give the
+/// stop rules); the values that are ours say so.
+///
+/// The command line's other defaults live with the options they fill:
+/// `RegionOptions::DEFAULT` (`--regions shape`), `MshOptions::DEFAULT`
+/// (`--msh-version 4.1`, ASCII) and `batch::BatchOptions::DEFAULT_TIMEOUT`
+/// (`batch --timeout 600`), in the modules above this one.
+pub mod defaults {
+    use super::{Mesher, Order};
+
+    /// Feature envelope μ = 1e-3·d: the distance that separates primary
+    /// features (thesis §4.4).
+    pub const MU_REL: f64 = 1e-3;
+    /// Envelope ε of secondary features = 2e-3·d, i.e. 2μ (thesis §4.4).
+    pub const EPS_REL: f64 = 2e-3;
+    /// Numerical tolerance ε_m = 1e-8·d for degenerate and straight curves
+    /// (the thesis's 1e-8, §4.4, taken relative to d like every other length).
+    pub const EPS_M_REL: f64 = 1e-8;
+    /// Target edge length l = d/20 (thesis §4.4, as in TetWild).
+    pub const EDGE_LENGTH_REL: f64 = 0.05;
+    /// Minimal edge length l_m = 1e-4·d; curvature above 2/l_m is not primary
+    /// (thesis §4.3.1, §4.4).
+    pub const MIN_EDGE_LENGTH_REL: f64 = 1e-4;
+    /// Padding of the meshed box around the drawing = 0.05·d (the reference
+    /// implementation's).
+    pub const PADDING_REL: f64 = 0.05;
+    /// Minimal angle α = 10° the optimizer aims for, also the turning bound of
+    /// a primary section (thesis §4.4, Theorem 4.4).
+    pub const ALPHA_DEG: f64 = 10.0;
+    /// AMIPS energy at which linear optimization stops = 5: the thesis's 10
+    /// (§4.4.1, TetWild's default) in our normalisation, where an equilateral
+    /// triangle has energy 1 (the thesis's `tr(JᵀJ)/det J` gives it 2).
+    pub const STOP_ENERGY: f64 = 5.0;
+    /// Maximum linear optimization passes = 80 (thesis §4.4.1).
+    pub const MAX_PASSES: u32 = 80;
+    /// AMIPS energy at which curved optimization stops = 10: the thesis's 20
+    /// (§4.4.2) in our normalisation (1 = equilateral).
+    pub const STOP_ENERGY_CURVED: f64 = 10.0;
+    /// Maximum curved optimization passes = 10 (thesis §4.4.2).
+    pub const MAX_PASSES_CURVED: u32 = 10;
+    /// Minimum angle 25° the CDT baseline refines to (ours: the baseline is
+    /// not in the thesis; refinement may not terminate above 34°).
+    pub const CDT_MIN_ANGLE_DEG: f64 = 25.0;
+    /// Vertex budget 200 000 of the CDT baseline's refinement, so that it
+    /// always terminates (ours).
+    pub const MAX_VERTICES: u32 = 200_000;
+    /// The mesher: TriWild (features, exact BSP, optimization, curving).
+    pub const MESHER: Mesher = Mesher::TriWild;
+    /// Element order: cubic, whose edges reproduce the drawing's Béziers
+    /// exactly (the thesis's cubic Lagrange map, §4.4.2).
+    pub const ORDER: Order = Order::Cubic;
+}
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -43,85 +103,90 @@ pub enum Mesher {
     TriWild,
 }
 
-/// A pipeline stage after which meshing may stop (`--stop-after`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-#[non_exhaustive]
-pub enum Stage {
-    /// The exact BSP mesh (needs [`Mesher::TriWild`]): every vertex rounded to `f64`
-    /// or an error, no optimization.
-    Bsp,
-    /// The optimized linear mesh (needs [`Mesher::TriWild`]): all `f64`, primary
-    /// vertices on their curves, no curving (`--linear`).
-    Optimize,
-}
-
 /// All meshing parameters. Start from [`Params::DEFAULT`] and use the `with_*` builders.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct Params {
     /// Feature envelope μ: distance that separates primary features (§4.3.1).
-    /// Default 1e-3·d. Larger: fewer primary features, coarser meshes.
+    /// Default [`defaults::MU_REL`]·d. Larger: fewer primary features, coarser meshes.
     pub mu: Length,
-    /// Envelope ε for secondary features (§4.4.1). Default 2e-3·d (2μ).
+    /// Envelope ε for secondary features (§4.4.1). Default [`defaults::EPS_REL`]·d (2μ).
     pub eps: Length,
-    /// Numerical tolerance ε_m for degenerate and straight curves (§4.4). Default 1e-8·d.
+    /// Numerical tolerance ε_m for degenerate and straight curves (§4.4).
+    /// Default [`defaults::EPS_M_REL`]·d.
     pub eps_m: Length,
-    /// Target edge length l. Default d/20.
+    /// Target edge length l. Default [`defaults::EDGE_LENGTH_REL`]·d.
     pub l: Length,
-    /// Minimal edge length l_m; curvature above 2/l_m is not primary (§4.3.1). Default 1e-4·d.
+    /// Minimal edge length l_m; curvature above 2/l_m is not primary (§4.3.1).
+    /// Default [`defaults::MIN_EDGE_LENGTH_REL`]·d.
     pub l_min: Length,
-    /// Padding of the meshed box around the input. Default 0.05·d (the reference's).
+    /// Padding of the meshed box around the input. Default [`defaults::PADDING_REL`]·d.
     pub padding: Length,
     /// Minimal angle α in degrees the optimizer aims for; also the turning bound of
-    /// a primary section (Theorem 4.4). Default 10.
+    /// a primary section (Theorem 4.4). Default [`defaults::ALPHA_DEG`].
     pub alpha_deg: f64,
     /// AMIPS energy (1 for equilateral) at which linear optimization stops.
-    /// Default 5: the thesis's 10 in its normalization `tr(JᵀJ)/det J` (2 for equilateral).
+    /// Default [`defaults::STOP_ENERGY`] (the thesis's 10 in its normalization).
     pub stop_energy: f64,
     /// AMIPS energy (1 for equilateral) at which curved optimization stops.
-    /// Default 10: the thesis's 20.
+    /// Default [`defaults::STOP_ENERGY_CURVED`] (the thesis's 20).
     pub stop_energy_curved: f64,
-    /// Maximum linear optimization passes. Default 80.
+    /// Maximum linear optimization passes. Default [`defaults::MAX_PASSES`].
     pub max_passes: u32,
-    /// Maximum curved optimization passes. Default 10.
+    /// Maximum curved optimization passes. Default [`defaults::MAX_PASSES_CURVED`].
     pub max_passes_curved: u32,
-    /// Minimum angle (degrees) the CDT baseline refines to. Default 25.
+    /// Minimum angle (degrees) the CDT baseline refines to. Default
+    /// [`defaults::CDT_MIN_ANGLE_DEG`].
     pub cdt_min_angle_deg: f64,
-    /// Vertex budget of the CDT baseline's refinement, so it always terminates. Default 200 000.
+    /// Vertex budget of the CDT baseline's refinement, so it always terminates.
+    /// Default [`defaults::MAX_VERTICES`].
     pub max_vertices: u32,
-    /// The mesher. Default [`Mesher::TriWild`].
+    /// The mesher. Default [`defaults::MESHER`].
     pub mesher: Mesher,
     /// Stop after this stage and deliver its mesh. Default `None` (run every
     /// stage that exists). [`Stage::Bsp`] needs [`Mesher::TriWild`].
     pub stop_after: Option<Stage>,
     /// Run the full mesh validator after every stage (slow). Default false.
     pub paranoid: bool,
-    /// Order of the output elements of the TriWild mesher: 3 (cubic, gmsh type
-    /// 21, the curves exactly), 2 (quadratic, type 9) or 1 (straight). Default 3.
-    pub order: u8,
+    /// Order of the output elements of the TriWild mesher: cubic (gmsh type
+    /// 21, the curves exactly), quadratic (type 9) or linear (straight).
+    /// Default [`defaults::ORDER`]. Serialized as its number (3, 2 or 1).
+    #[serde(serialize_with = "serialize_order")]
+    pub order: Order,
 }
 
 impl Params {
-    /// The paper's defaults (DESIGN "Coordinates and parameters").
+    /// The defaults of [`defaults`] (DESIGN "Coordinates and parameters").
+    ///
+    /// ```
+    /// use triwild::{Length, Order, Params, defaults};
+    /// let p = Params::DEFAULT
+    ///     .with_l(Length::Abs(2.5)) // element size in user units
+    ///     .with_order(Order::Quadratic);
+    /// assert!(p.validate().is_ok());
+    /// assert_eq!(Params::DEFAULT.l, Length::Rel(defaults::EDGE_LENGTH_REL));
+    /// // lengths relative to the drawing's diagonal d become absolute once d is known
+    /// assert_eq!(p.resolve(100.0).l, 2.5);
+    /// assert!(Params::DEFAULT.with_l(Length::Rel(-1.0)).validate().is_err());
+    /// ```
     pub const DEFAULT: Params = Params {
-        mu: Length::Rel(1e-3),
-        eps: Length::Rel(2e-3),
-        eps_m: Length::Rel(1e-8),
-        l: Length::Rel(0.05),
-        l_min: Length::Rel(1e-4),
-        padding: Length::Rel(0.05),
-        alpha_deg: 10.0,
-        stop_energy: 5.0,
-        stop_energy_curved: 10.0,
-        max_passes: 80,
-        max_passes_curved: 10,
-        cdt_min_angle_deg: 25.0,
-        max_vertices: 200_000,
-        mesher: Mesher::TriWild,
+        mu: Length::Rel(defaults::MU_REL),
+        eps: Length::Rel(defaults::EPS_REL),
+        eps_m: Length::Rel(defaults::EPS_M_REL),
+        l: Length::Rel(defaults::EDGE_LENGTH_REL),
+        l_min: Length::Rel(defaults::MIN_EDGE_LENGTH_REL),
+        padding: Length::Rel(defaults::PADDING_REL),
+        alpha_deg: defaults::ALPHA_DEG,
+        stop_energy: defaults::STOP_ENERGY,
+        stop_energy_curved: defaults::STOP_ENERGY_CURVED,
+        max_passes: defaults::MAX_PASSES,
+        max_passes_curved: defaults::MAX_PASSES_CURVED,
+        cdt_min_angle_deg: defaults::CDT_MIN_ANGLE_DEG,
+        max_vertices: defaults::MAX_VERTICES,
+        mesher: defaults::MESHER,
         stop_after: None,
         paranoid: false,
-        order: 3,
+        order: defaults::ORDER,
     };
 
     /// Set the feature envelope μ.
@@ -169,8 +234,8 @@ impl Params {
         self.max_vertices = n;
         self
     }
-    /// Set the element order of the TriWild mesher (1, 2 or 3).
-    pub fn with_order(mut self, order: u8) -> Self {
+    /// Set the element order of the TriWild mesher.
+    pub fn with_order(mut self, order: Order) -> Self {
         self.order = order;
         self
     }
@@ -236,12 +301,6 @@ impl Params {
                 self.cdt_min_angle_deg
             )));
         }
-        if !(1..=3).contains(&self.order) {
-            return Err(Error::InvalidParams(format!(
-                "--order must be 1, 2 or 3, got {}",
-                self.order
-            )));
-        }
         if self.max_vertices < 16 {
             return Err(Error::InvalidParams(format!(
                 "--max-vertices must be at least 16, got {}",
@@ -255,6 +314,13 @@ impl Params {
             if !(e.is_finite() && e >= 1.0) {
                 return Err(Error::InvalidParams(format!(
                     "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
+                )));
+            }
+        }
+        if let Some(stage) = self.stop_after {
+            if !stage.can_stop_after() {
+                return Err(Error::InvalidParams(format!(
+                    "meshing cannot stop after stage {stage}: only bsp and optimize deliver a mesh"
                 )));
             }
         }
@@ -279,6 +345,14 @@ impl Params {
             alpha: self.alpha_deg.to_radians(),
         }
     }
+}
+
+/// [`Params::order`] as its number (1, 2 or 3) rather than the variant's name.
+fn serialize_order<S: serde::Serializer>(
+    order: &Order,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_u8(*order as u8)
 }
 
 impl Default for Params {
@@ -319,6 +393,14 @@ mod tests {
         assert_eq!(r.l, 10.0);
         assert_eq!(r.mu, 0.2);
         assert_eq!(r.eps, 0.4);
+    }
+
+    #[test]
+    fn order_serializes_as_its_number() {
+        let json = |p: Params| serde_json::to_value(p).unwrap()["order"].clone();
+        assert_eq!(json(Params::DEFAULT), 3);
+        assert_eq!(json(Params::DEFAULT.with_order(Order::Quadratic)), 2);
+        assert_eq!(json(Params::DEFAULT.with_order(Order::Linear)), 1);
     }
 
     #[test]

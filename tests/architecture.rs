@@ -48,8 +48,10 @@ fn lib_modules() -> (BTreeSet<String>, BTreeMap<String, String>) {
     let mut aliases = BTreeMap::new();
     for line in lib.lines().map(str::trim) {
         let decl = line.strip_prefix("pub ").unwrap_or(line);
-        if let Some(m) = decl.strip_prefix("mod ") {
-            modules.insert(m.trim_end_matches(';').trim().to_owned());
+        // `mod x;` declares a module of src/; an inline `mod x { .. }` (the hidden
+        // bench re-exports) holds no code of its own
+        if let Some(m) = decl.strip_prefix("mod ").and_then(|m| m.strip_suffix(';')) {
+            modules.insert(m.trim().to_owned());
         }
         if let Some(u) = line.strip_prefix("pub use ") {
             let u = u.trim_end_matches(';');

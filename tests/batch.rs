@@ -3,11 +3,18 @@
 //!
 //! Meshes are written under `target/test-out/batch/` (CI checks every .msh
 //! there with gmsh; failed files leave none).
+//!
+//! The tests that make a child panic, hang or hog memory need the binary's
+//! test hooks: they run with `cargo test --features test-hooks` (the
+//! project's test command) and are left out without it.
 
+#[cfg(feature = "test-hooks")]
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use triwild::batch::{self, Cause, Row, Status};
+use triwild::batch::{self, Row};
+#[cfg(feature = "test-hooks")]
+use triwild::batch::{Cause, Status};
 
 const EXE: &str = env!("CARGO_BIN_EXE_triwild");
 
@@ -100,6 +107,7 @@ fn rows(report: &Path) -> Vec<Row> {
     r.rows
 }
 
+#[cfg(feature = "test-hooks")]
 fn by_file(rows: &[Row], file: &str) -> Row {
     rows.iter()
         .find(|r| r.file == file)
@@ -112,6 +120,7 @@ fn normalized(mut rows: Vec<Row>) -> Vec<Row> {
     rows.iter().map(Row::without_measurements).collect()
 }
 
+#[cfg(feature = "test-hooks")]
 fn assert_ok(row: &Row, out: &Path) {
     assert_eq!(row.status, Status::Ok, "{row:#?}");
     let mesh = out.join(row.output.as_ref().expect("ok row has an output"));
@@ -119,6 +128,7 @@ fn assert_ok(row: &Row, out: &Path) {
     assert!(row.triangles().is_some_and(|t| t > 0), "{row:#?}");
 }
 
+#[cfg(feature = "test-hooks")]
 #[test]
 fn failures_are_rows_and_the_rest_succeeds() {
     let base = out_dir("isolation");
@@ -240,6 +250,7 @@ fn failures_are_rows_and_the_rest_succeeds() {
     );
 }
 
+#[cfg(feature = "test-hooks")]
 #[test]
 fn resume_meshes_only_the_rest() {
     let base = out_dir("resume");
@@ -301,6 +312,7 @@ fn resume_meshes_only_the_rest() {
 
 /// A substring of the input paths of `files` and of no other good file:
 /// their common directory prefix (the first two good files share `a/`).
+#[cfg(feature = "test-hooks")]
 fn common_hook(files: &[&str]) -> String {
     let first = files[0];
     let mut prefix = first.to_string();
@@ -383,7 +395,7 @@ fn usage_errors_exit_2() {
 
 /// The polling memory guard (used when `prlimit` is missing) kills a child
 /// that grows past the limit.
-#[cfg(target_os = "linux")]
+#[cfg(all(target_os = "linux", feature = "test-hooks"))]
 #[test]
 fn polling_memory_guard_kills() {
     let base = out_dir("memory-poll");
@@ -406,4 +418,25 @@ fn polling_memory_guard_kills() {
     );
     assert_eq!(row.cause, Some(Cause::Memory), "{row:#?}");
     assert!(row.peak_rss.is_some_and(|p| p > 200 << 20), "{row:#?}");
+}
+
+/// Without the `test-hooks` feature the binary has no hooks: the variables
+/// change nothing, and `batch --help` does not mention them.
+#[cfg(not(feature = "test-hooks"))]
+#[test]
+fn hooks_are_not_built_in() {
+    let base = out_dir("no-hooks");
+    write(&base, "panic-me.svg", SQUARE.as_bytes());
+    let o = triwild(
+        &[
+            &base.join("panic-me.svg"),
+            &"-o",
+            &base.join("panic-me.msh"),
+        ],
+        &[("TRIWILD_TEST_PANIC_ON", "panic-me")],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let o = triwild(&[&"batch", &"--help"], &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("TRIWILD_TEST"));
 }

@@ -1,5 +1,5 @@
 //! `triwild check`: valid and invalid meshes of order 1, 2 and 3, written with
-//! `triwild::output::write_msh` from hand-made `FemMesh` values, checked for exit
+//! `triwild::write_msh` from hand-made `FemMesh` values, checked for exit
 //! codes and numbers (invalid count, Jacobian ratio, exact area). Valid meshes go
 //! to `target/test-out/check_cmd/` (CI validates them with mshcheck); invalid ones
 //! to a scratch directory.
@@ -10,9 +10,9 @@ use kurbo::{CubicBez, ParamCurveArea, Point};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use triwild::FemMesh;
-use triwild::element::Order;
-use triwild::fem::LineKind;
-use triwild::output::{MshOptions, MshVersion, write_msh};
+use triwild::LineKind;
+use triwild::Order;
+use triwild::{MshOptions, MshVersion, write_msh};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -84,7 +84,7 @@ fn quadratic() -> (FemMesh, f64) {
 fn cubic() -> (FemMesh, f64) {
     let k = 0.551_915_024_494;
     let arc = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
-    let e = triwild::curve::CurvedEdge {
+    let e = triwild::element::CurvedEdge {
         edge: 1,
         curve: arc,
         t0: 0.0,

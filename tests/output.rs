@@ -7,10 +7,10 @@ use kurbo::Point;
 use std::collections::HashMap;
 use std::path::Path;
 use support::{DefectKind, Msh, check_msh, out_dir, read_msh};
-use triwild::element::Order;
-use triwild::fem::LineKind;
-use triwild::output::{self, MshOptions, MshVersion};
+use triwild::LineKind;
+use triwild::Order;
 use triwild::{Error, FemMesh};
+use triwild::{MshOptions, MshVersion};
 
 const FORMATS: [(MshVersion, bool, &str); 4] = [
     (MshVersion::V41, false, "v41-ascii"),
@@ -198,7 +198,7 @@ fn roundtrip(test: &str, mesh: &FemMesh, area: f64) {
     let dir = out_dir(test);
     for (version, binary, tag) in FORMATS {
         let path = dir.join(format!("{test}-{tag}.msh"));
-        output::write_msh(mesh, &path, opts(version, binary)).expect("write");
+        triwild::write_msh(mesh, &path, opts(version, binary)).expect("write");
         let msh = read_msh(&path).unwrap_or_else(|e| panic!("{tag}: unreadable: {e}"));
         assert_eq!(msh.binary, binary, "{tag}");
         assert_eq!(
@@ -279,7 +279,7 @@ fn checker_rejects_a_clockwise_triangle() {
     let dir = scratch("checker-clockwise");
     for (version, binary, tag) in FORMATS {
         let path = dir.join(format!("{tag}.msh"));
-        output::write_msh(&mesh, &path, opts(version, binary)).expect("write");
+        triwild::write_msh(&mesh, &path, opts(version, binary)).expect("write");
         let report = check_msh(&path);
         assert!(report.has(DefectKind::Clockwise), "{tag}: {report:#?}");
         assert!(report.has(DefectKind::NonConforming), "{tag}: {report:#?}");
@@ -294,7 +294,7 @@ fn checker_rejects_an_inverted_cubic_with_ccw_corners() {
     mesh.nodes[n] = Point::new(0.33, 0.9);
     let dir = scratch("checker-inverted");
     let path = dir.join("inverted.msh");
-    output::write_msh(&mesh, &path, MshOptions::DEFAULT).expect("write");
+    triwild::write_msh(&mesh, &path, MshOptions::DEFAULT).expect("write");
     let report = check_msh(&path);
     assert!(report.has(DefectKind::Inverted), "{report:#?}");
     assert!(!report.has(DefectKind::Clockwise));
@@ -320,7 +320,7 @@ fn checker_certifies_a_curved_element_that_needs_subdivision() {
         ..FemMesh::default()
     };
     let path = out_dir("output-subdivided").join("subdivided.msh");
-    output::write_msh(&mesh, &path, MshOptions::DEFAULT).expect("write");
+    triwild::write_msh(&mesh, &path, MshOptions::DEFAULT).expect("write");
     let report = check_msh(&path);
     report.assert_valid("strongly curved");
     assert_eq!(report.subdivided, 1, "{report:#?}");
@@ -341,12 +341,12 @@ fn checker_rejects_elements_without_a_physical_group() {
 fn writing_into_a_missing_directory_fails_and_creates_nothing() {
     let dir = scratch("atomic-missing");
     let target = dir.join("missing/sub/out.msh");
-    let err = output::write_msh(&linear_square(), &target, MshOptions::DEFAULT)
+    let err = triwild::write_msh(&linear_square(), &target, MshOptions::DEFAULT)
         .expect_err("missing directory");
     assert!(matches!(err, Error::Write(_)), "{err:?}");
     assert!(err.to_string().contains("does not exist"), "{err}");
     assert!(!dir.join("missing").exists());
-    let err = output::check_writable(&target).expect_err("missing directory");
+    let err = triwild::check_writable(&target).expect_err("missing directory");
     assert!(matches!(err, Error::Write(_)), "{err:?}");
     assert_eq!(std::fs::read_dir(&dir).expect("list").count(), 0);
 }
@@ -360,16 +360,16 @@ fn failed_writes_leave_an_existing_file_untouched() {
     let last = bad.nodes.len() - 1;
     bad.nodes[last].y = f64::NAN;
     for (version, binary, tag) in FORMATS {
-        let err = output::write_msh(&bad, &target, opts(version, binary)).expect_err(tag);
+        let err = triwild::write_msh(&bad, &target, opts(version, binary)).expect_err(tag);
         assert!(matches!(err, Error::Write(_)), "{err:?}");
         assert_eq!(std::fs::read(&target).expect("read"), b"previous result");
     }
-    let err = output::write_preview(&bad, &target).expect_err("preview");
+    let err = triwild::write_preview(&bad, &target).expect_err("preview");
     assert!(matches!(err, Error::Write(_)), "{err:?}");
     // A directory in the way: the rename fails, the temporary file is removed.
     let blocked = dir.join("blocked.msh");
     std::fs::create_dir(&blocked).expect("mkdir");
-    let err = output::write_msh(&linear_square(), &blocked, MshOptions::DEFAULT)
+    let err = triwild::write_msh(&linear_square(), &blocked, MshOptions::DEFAULT)
         .expect_err("a directory");
     assert!(matches!(err, Error::Write(_)), "{err:?}");
     let mut left: Vec<String> = std::fs::read_dir(&dir)
@@ -386,7 +386,7 @@ fn preview_draws_curved_edges_and_feature_kinds() {
     let dir = out_dir("output-preview");
     let mesh = bent_square(Order::Cubic);
     let path = dir.join("cubic.svg");
-    output::write_preview(&mesh, &path).expect("preview");
+    triwild::write_preview(&mesh, &path).expect("preview");
     let svg = std::fs::read_to_string(&path).expect("read");
     assert!(svg.starts_with("<svg"));
     assert!(svg.trim_end().ends_with("</svg>"));
@@ -394,8 +394,8 @@ fn preview_draws_curved_edges_and_feature_kinds() {
     let grey = svg.lines().find(|l| l.contains("#808080")).expect("mesh");
     assert_eq!(grey.matches('C').count(), 5, "{grey}");
     assert!(svg.contains("#d62728") && svg.contains("#2ca02c"));
-    output::write_preview(&linear_square(), &dir.join("linear.svg")).expect("preview");
-    output::write_preview(&bent_square(Order::Quadratic), &dir.join("quadratic.svg"))
+    triwild::write_preview(&linear_square(), &dir.join("linear.svg")).expect("preview");
+    triwild::write_preview(&bent_square(Order::Quadratic), &dir.join("quadratic.svg"))
         .expect("preview");
 }
 
@@ -482,7 +482,7 @@ fn write_a_million_triangles() {
         for (version, binary, tag) in FORMATS {
             let path = dir.join(format!("{tag}.msh"));
             let t = std::time::Instant::now();
-            output::write_msh(&mesh, &path, opts(version, binary)).expect("write");
+            triwild::write_msh(&mesh, &path, opts(version, binary)).expect("write");
             let secs = t.elapsed().as_secs_f64();
             let bytes = std::fs::metadata(&path).expect("meta").len();
             #[allow(clippy::print_stderr, reason = "a timing report is this test's output")]

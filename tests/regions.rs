@@ -3,11 +3,11 @@
 //! curves themselves.
 
 use kurbo::{BezPath, ParamCurveArea, Point};
-use triwild::fem::FemMesh;
-use triwild::pipeline::{Meshed, mesh_drawing_with};
-use triwild::regions::{RegionMode, RegionOptions, RegionStat};
-use triwild::svg::{self, Drawing, Segment};
-use triwild::{Params, output};
+use triwild::FemMesh;
+use triwild::{Drawing, Segment};
+use triwild::{Meshed, mesh_drawing_with};
+use triwild::{MshOptions, MshVersion, Params};
+use triwild::{RegionMode, RegionOptions, RegionStat};
 
 mod support;
 
@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 fn mesh(svg: &str, opts: &RegionOptions) -> (Drawing, Meshed) {
-    let drawing = svg::load_bytes(svg.as_bytes()).expect("test SVG loads");
+    let drawing = triwild::load_bytes(svg.as_bytes()).expect("test SVG loads");
     let meshed = mesh_drawing_with(&drawing, &Params::DEFAULT, opts).expect("meshing succeeds");
     (drawing, meshed)
 }
@@ -123,16 +123,13 @@ fn clip(subject: &[Point], clip: &[Point]) -> Vec<Point> {
 fn write_if_valid(mesh: &FemMesh, name: &str) {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     let dir = DIR.get_or_init(|| support::out_dir("regions"));
-    for (version, tag) in [
-        (output::MshVersion::V41, "v41"),
-        (output::MshVersion::V22, "v22"),
-    ] {
-        let opts = output::MshOptions {
+    for (version, tag) in [(MshVersion::V41, "v41"), (MshVersion::V22, "v22")] {
+        let opts = MshOptions {
             version,
             binary: false,
         };
         let tmp = dir.join(format!("{name}-{tag}.msh.tmp"));
-        output::write_msh(mesh, &tmp, opts).expect("msh written");
+        triwild::write_msh(mesh, &tmp, opts).expect("msh written");
         let report = support::check_msh(&tmp);
         let msh = support::read_msh(&tmp).expect("msh readable");
         let named: Vec<&String> = msh

@@ -19,10 +19,10 @@
 use kurbo::{Point, Rect};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use triwild::fem::FemMesh;
-use triwild::output::{self, MshOptions, MshVersion};
-use triwild::pipeline::{Meshed, mesh_drawing};
-use triwild::{Params, svg};
+use triwild::FemMesh;
+use triwild::Params;
+use triwild::{Meshed, mesh_drawing};
+use triwild::{MshOptions, MshVersion};
 
 mod support;
 
@@ -280,7 +280,7 @@ fn write_with_sidecars(mesh: &FemMesh, dir: &Path, stem: &str, binary: bool) -> 
                 version,
                 binary: bin,
             };
-            output::write_msh(mesh, &path, opts).expect("msh written");
+            triwild::write_msh(mesh, &path, opts).expect("msh written");
             let sidecar = serde_json::json!({
                 "msh": name,
                 "version": tag,
@@ -334,7 +334,7 @@ fn run(files: &[PathBuf], out: Option<&Path>) -> Tally {
     let start = Instant::now();
     for f in files {
         let name = f.display().to_string();
-        let Ok(drawing) = svg::load_file(f) else {
+        let Ok(drawing) = triwild::load_file(f) else {
             t.unloadable.push(name);
             continue;
         };

@@ -30,6 +30,7 @@ mod snap;
 
 use crate::exact::{Orientation, orient2d};
 use crate::fem::{FeatureEdge, LineKind};
+use crate::stage::Stage;
 use crate::svg::ShapeId;
 use crate::{Drawing, Error, LinearMesh, Params, Result};
 use input::{FlattenParams, PlanarInput, Pow2Scale};
@@ -53,7 +54,7 @@ fn equilateral_area(l: f64) -> f64 {
 /// [`crate::Error::Meshing`] (stage `baseline`) if spade rejects the input or the
 /// result is not a valid counter-clockwise triangulation; neither happens for a
 /// drawing that keeps the loader's guarantees.
-pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
+pub(crate) fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
     let r = params.resolve(drawing.diagonal());
     let bx = input::padded_box(drawing, r.padding);
     let magnitude = [bx.x0, bx.y0, bx.x1, bx.y1]
@@ -61,7 +62,7 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
         .fold(0.0f64, |m, c| m.max(c.abs()));
     if !(magnitude.is_finite() && magnitude > 0.0) {
         return Err(Error::meshing(
-            "baseline",
+            Stage::Baseline,
             format!("the padded box {bx:?} is not finite"),
         ));
     }
@@ -118,7 +119,7 @@ pub fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
         last = defects;
     }
     Err(Error::meshing(
-        "baseline",
+        Stage::Baseline,
         format!(
             "the mesh keeps {} near-duplicate nodes and {} degenerate triangles after snap rounding",
             last.0, last.1
@@ -177,7 +178,7 @@ fn mesh_planar(
     });
     let Ok(built) = built else {
         return Err(Error::meshing(
-            "baseline",
+            Stage::Baseline,
             "spade failed (panicked) on this input",
         ));
     };
@@ -246,10 +247,10 @@ fn build_cdt(
 ) -> Result<(Cdt, usize)> {
     let n_input = vertices.len();
     let mut cdt = Cdt::bulk_load_cdt(vertices.to_vec(), Vec::new())
-        .map_err(|e| Error::meshing("baseline", format!("spade rejected a point: {e}")))?;
+        .map_err(|e| Error::meshing(Stage::Baseline, format!("spade rejected a point: {e}")))?;
     if cdt.num_vertices() != n_input {
         return Err(Error::meshing(
-            "baseline",
+            Stage::Baseline,
             format!(
                 "spade merged input points ({} of {n_input} kept)",
                 cdt.num_vertices()
@@ -304,7 +305,7 @@ fn extract(
     strict: bool,
 ) -> Result<LinearMesh> {
     let index = |i: usize| {
-        u32::try_from(i).map_err(|_| Error::meshing("baseline", "more than 2^32 vertices"))
+        u32::try_from(i).map_err(|_| Error::meshing(Stage::Baseline, "more than 2^32 vertices"))
     };
     let vertices: Vec<Point> = cdt
         .vertices()
@@ -317,7 +318,7 @@ fn extract(
         let o = orient2d(vertices[a], vertices[b], vertices[c]);
         if o != Orientation::CounterClockwise {
             return Err(Error::meshing(
-                "baseline",
+                Stage::Baseline,
                 format!(
                     "triangle {:?} at {:?} is {} after scaling back to user units",
                     t,
@@ -372,7 +373,7 @@ fn attribute_edges(
         }
         found.then_some(()).ok_or_else(|| {
             Error::meshing(
-                "baseline",
+                Stage::Baseline,
                 format!(
                     "internal: lost the constraint chain of a piece of shape {:?} between {:?} and {:?}",
                     p.shape,

@@ -4,6 +4,7 @@ use super::seed::Seed;
 use super::{BspInput, BspOptions, BspSegment, BspStats, fan};
 use crate::exact::{Orientation, PointQ, line_intersection, orient2d, orient2d_q};
 use crate::mesh::{TriMesh, VertexId};
+use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::{Point, Rect};
 use std::collections::HashMap;
@@ -244,7 +245,7 @@ pub(super) fn cut_all(
         }
         if mesh.num_vertices() > opts.max_vertices as usize {
             return Err(Error::meshing(
-                "bsp",
+                Stage::Bsp,
                 format!(
                     "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
                     opts.max_vertices

@@ -3,6 +3,7 @@
 use super::{BspInput, SegmentTag};
 use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
+use crate::stage::Stage;
 use crate::{Error, Result};
 use std::cmp::Ordering;
 use std::collections::HashMap;
@@ -82,7 +83,7 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
         .collect();
     let not_conforming = |what: &str| {
         Error::meshing(
-            "bsp",
+            Stage::Bsp,
             format!("internal: segment is not a chain of mesh edges ({what})"),
         )
     };

@@ -39,7 +39,7 @@ use std::time::Instant;
 /// Which input feature a segment belongs to; the mesher copies it onto the
 /// mesh edges along the segment and never interprets it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SegmentTag {
+pub(crate) enum SegmentTag {
     /// A piece of a primary feature section, with the section parameter at
     /// the segment's `a` and `b` ends.
     Primary {
@@ -57,7 +57,7 @@ pub enum SegmentTag {
 
 /// One input segment.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BspSegment {
+pub(crate) struct BspSegment {
     /// Start point.
     pub a: Point,
     /// End point.
@@ -68,7 +68,7 @@ pub struct BspSegment {
 
 /// The mesher's input: independent of the feature stage.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct BspInput {
+pub(crate) struct BspInput {
     /// Isolated feature points (become vertices tagged `feature_point`).
     pub points: Vec<Point>,
     /// Endpoints of primary sections (become vertices tagged `section_endpoint`).
@@ -80,7 +80,7 @@ pub struct BspInput {
 /// Options of [`build`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
-pub struct BspOptions {
+pub(crate) struct BspOptions {
     /// Round rational vertices to `f64` where no incident triangle inverts
     /// (default `true`). Off, the output is exactly conforming in rationals.
     pub round: bool,
@@ -94,20 +94,22 @@ pub struct BspOptions {
 
 impl BspOptions {
     /// The defaults.
-    pub const DEFAULT: BspOptions = BspOptions {
+    pub(crate) const DEFAULT: BspOptions = BspOptions {
         round: true,
         round_passes: 4,
         max_vertices: 50_000_000,
     };
 
     /// Set [`BspOptions::round`].
-    pub fn with_round(mut self, round: bool) -> Self {
+    #[cfg(test)]
+    pub(crate) fn with_round(mut self, round: bool) -> Self {
         self.round = round;
         self
     }
 
     /// Set [`BspOptions::max_vertices`].
-    pub fn with_max_vertices(mut self, n: u32) -> Self {
+    #[cfg(test)]
+    pub(crate) fn with_max_vertices(mut self, n: u32) -> Self {
         self.max_vertices = n;
         self
     }
@@ -119,7 +121,7 @@ impl Default for BspOptions {
     }
 }
 
-/// Counts and timings of one [`build`].
+/// Counts and timings of one BSP build (§2.3.1).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct BspStats {
     /// Distinct vertices given to the Delaunay triangulation.
@@ -165,7 +167,11 @@ pub struct BspStats {
 /// brings into the Delaunay step's range (about 2^-142 .. 2^201 after
 /// scaling); [`crate::Error::InvalidParams`] for an empty or non-finite box;
 /// [`crate::Error::Meshing`] when [`BspOptions::max_vertices`] is exceeded.
-pub fn build(input: &BspInput, bbox: Rect, opts: &BspOptions) -> Result<(TriMesh, BspStats)> {
+pub(crate) fn build(
+    input: &BspInput,
+    bbox: Rect,
+    opts: &BspOptions,
+) -> Result<(TriMesh, BspStats)> {
     let t0 = Instant::now();
     let mut stats = BspStats::default();
     let seed = seed::seed(input, bbox)?;

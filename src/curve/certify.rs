@@ -225,7 +225,7 @@ pub struct FileCheck {
     pub reasons: Vec<String>,
 }
 
-/// Certify a mesh read by [`crate::input::read_msh`].
+/// Certify a mesh read by [`crate::read_msh`].
 pub fn check_msh(m: &crate::input::MshMesh, opts: &CertifyOptions) -> FileCheck {
     let mesh = certify_mesh(&m.nodes, m.triangles(), opts);
     let mut reasons = Vec::new();
@@ -367,7 +367,7 @@ mod tests {
             2 1 2 1\n1 1 2 3\n\
             2 1 21 1\n2 2 4 3 5 6 7 8 10 11 9\n\
             2 1 3 1\n3 1 2 4 3\n$EndElements\n";
-        let m = crate::input::read_msh(text.as_bytes()).expect("read");
+        let m = crate::read_msh(text.as_bytes()).expect("read");
         assert_eq!(m.triangle_blocks.len(), 2);
         let r = check_msh(&m, &CertifyOptions::DEFAULT);
         assert_eq!(r.mesh.by_order, [1, 0, 1]);

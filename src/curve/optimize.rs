@@ -37,12 +37,22 @@ use crate::optimize::OptimizeOptions;
 use crate::optimize::schedule::{EnergyMeasure, OpTally, Schedule, measure_energy};
 
 /// Collapse edges shorter than this fraction of `l` (the shared schedule's
-/// collapses never create an edge longer than 4/3 `l`).
+/// collapses never create an edge longer than 4/3 `l`): thesis §2.3.2,
+/// "collapse an edge if its length is smaller than 4ℓ/5".
 const COLLAPSE_BELOW: f64 = 4.0 / 5.0;
+/// The stage stops after a pass that lowered the largest curved energy by less
+/// than this (and the mean by less than [`STALL_MEAN`]). Empirical,
+/// introduced in cecb629.
+const STALL_MAX: f64 = 1e-2;
+/// See [`STALL_MAX`].
+const STALL_MEAN: f64 = 1e-3;
+/// Seed of the curved stage's smoothing order: "curve!" in ASCII. Introduced
+/// in cecb629.
+const SEED: u64 = 0x0063_7572_7665_6421;
 
 /// Parameters of the curved optimization, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurvedOptimizeOptions {
+pub(crate) struct CurvedOptimizeOptions {
     /// Target edge length `l`.
     pub l: f64,
     /// Curved AMIPS energy (1 for equilateral) below which the mesh is good enough.
@@ -90,7 +100,7 @@ fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> EnergyMeasu
 /// Optimize `mesh` in curved mode (see the module doc). `ctx` must be in curved
 /// mode (`ctx.curved` set); without it, or with `max_passes == 0` or a linear
 /// order, nothing is done.
-pub fn optimize_curved(
+pub(crate) fn optimize_curved(
     mesh: &mut TriMesh,
     ctx: &Context,
     opts: &CurvedOptimizeOptions,
@@ -123,7 +133,7 @@ pub fn optimize_curved(
         max_vertices: usize::MAX,
     };
     let mut sched_ctx = ctx.clone();
-    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, 0x0063_7572_7665_6421);
+    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED);
     let mut pass = |s: &mut Schedule<'_>| {
         let collapses = s.collapse_pass(COLLAPSE_BELOW);
         let swaps = s.swap_pass();
@@ -146,7 +156,7 @@ pub fn optimize_curved(
         }
         pass(&mut s);
         let now = measure(s.mesh(), ctx, &rule);
-        let stalled = last.max - now.max < 1e-2 && last.mean - now.mean < 1e-3;
+        let stalled = last.max - now.max < STALL_MAX && last.mean - now.mean < STALL_MEAN;
         last = now;
         if stalled {
             break;

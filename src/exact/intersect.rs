@@ -6,7 +6,7 @@ use rug::Rational;
 
 /// How two closed segments meet.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum SegmentIntersection {
+pub(crate) enum SegmentIntersection {
     /// They have no common point.
     Disjoint,
     /// They cross at one point interior to both.
@@ -19,20 +19,9 @@ pub enum SegmentIntersection {
     Overlap(PointQ, PointQ),
 }
 
-/// How a closed segment meets a line.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum SegmentLine {
-    /// No common point (or the line is undefined: its two points coincide).
-    Disjoint,
-    /// Exactly one common point (an endpoint of the segment, or a crossing).
-    Point(PointQ),
-    /// The segment lies on the line.
-    Contained,
-}
-
 /// The intersection point of the line through `a`, `b` and the line through
 /// `c`, `d`; `None` when they are parallel, identical or undefined.
-pub fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> Option<PointQ> {
+pub(crate) fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> Option<PointQ> {
     let bax = Rational::from(&b.x - &a.x);
     let bay = Rational::from(&b.y - &a.y);
     let dcx = Rational::from(&d.x - &c.x);
@@ -70,7 +59,12 @@ fn on_segment(p: &PointQ, a: &PointQ, b: &PointQ) -> bool {
 }
 
 /// How the closed segments `a b` and `c d` meet, exactly.
-pub fn segment_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> SegmentIntersection {
+pub(crate) fn segment_intersection(
+    a: &PointQ,
+    b: &PointQ,
+    c: &PointQ,
+    d: &PointQ,
+) -> SegmentIntersection {
     if a == b || c == d {
         let (p, (s, t)) = if a == b { (a, (c, d)) } else { (c, (a, b)) };
         return if on_segment(p, s, t) {
@@ -122,24 +116,6 @@ pub fn segment_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) -> S
     }
     let x = line_intersection(a, b, c, d).expect("internal: crossing segments are not parallel");
     SegmentIntersection::Crossing(x)
-}
-
-/// How the closed segment `a b` meets the line through `p` and `q`, exactly.
-pub fn segment_line(a: &PointQ, b: &PointQ, p: &PointQ, q: &PointQ) -> SegmentLine {
-    if p == q {
-        return SegmentLine::Disjoint;
-    }
-    let oa = orient2d_q(p, q, a);
-    let ob = orient2d_q(p, q, b);
-    match (oa, ob) {
-        (Orientation::Collinear, Orientation::Collinear) => SegmentLine::Contained,
-        (Orientation::Collinear, _) => SegmentLine::Point(a.clone()),
-        (_, Orientation::Collinear) => SegmentLine::Point(b.clone()),
-        _ if oa == ob => SegmentLine::Disjoint,
-        _ => SegmentLine::Point(
-            line_intersection(a, b, p, q).expect("internal: a crossing line is not parallel"),
-        ),
-    }
 }
 
 #[cfg(test)]
@@ -206,31 +182,6 @@ mod tests {
             &q(1.0, 1.0 - 1e-16),
         );
         assert!(matches!(r, SI::Crossing(_)), "{r:?}");
-    }
-
-    #[test]
-    fn segment_line_cases() {
-        let (p, qq) = (q(0.0, 0.0), q(1.0, 0.0));
-        assert_eq!(
-            segment_line(&q(5.0, -1.0), &q(5.0, 1.0), &p, &qq),
-            SegmentLine::Point(q(5.0, 0.0))
-        );
-        assert_eq!(
-            segment_line(&q(5.0, 0.0), &q(5.0, 1.0), &p, &qq),
-            SegmentLine::Point(q(5.0, 0.0))
-        );
-        assert_eq!(
-            segment_line(&q(5.0, 0.0), &q(-5.0, 0.0), &p, &qq),
-            SegmentLine::Contained
-        );
-        assert_eq!(
-            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &qq),
-            SegmentLine::Disjoint
-        );
-        assert_eq!(
-            segment_line(&q(5.0, 1.0), &q(-5.0, 2.0), &p, &p),
-            SegmentLine::Disjoint
-        );
     }
 
     fn pt() -> impl Strategy<Value = PointQ> {

@@ -22,11 +22,9 @@
 )]
 
 mod intersect;
-mod predicates;
-mod rational;
+pub(crate) mod predicates;
+pub(crate) mod rational;
 
-pub use intersect::{
-    SegmentIntersection, SegmentLine, line_intersection, segment_intersection, segment_line,
-};
-pub use predicates::{Orientation, orient2d, orient2d_q, orient2d_q_exact, orient2d_q_filter};
-pub use rational::PointQ;
+pub(crate) use intersect::{SegmentIntersection, line_intersection, segment_intersection};
+pub(crate) use predicates::{Orientation, orient2d, orient2d_q};
+pub(crate) use rational::PointQ;

@@ -15,7 +15,7 @@ use kurbo::Point;
 
 /// One chain: consecutive primary sections of one parent curve.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PrimaryChain {
+pub(crate) struct PrimaryChain {
     /// The curve.
     pub parent: Parent,
     /// The parameter interval on `parent` the chain covers, `t[0] < t[1]`.
@@ -28,7 +28,7 @@ pub struct PrimaryChain {
 
 /// The chains of a [`FeatureSet`]'s primary sections.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct PrimaryChains {
+pub(crate) struct PrimaryChains {
     /// For each primary section (by index), its chain.
     pub chain_of: Vec<u32>,
     /// The chains.
@@ -39,7 +39,7 @@ impl FeatureSet {
     /// Join the primary sections into chains: a section continues the one
     /// before it (`prev`) when both lie on the same parent curve and their
     /// parameter intervals meet.
-    pub fn primary_chains(&self) -> PrimaryChains {
+    pub(crate) fn primary_chains(&self) -> PrimaryChains {
         let n = self.primary.len();
         let continues = |a: usize, b: usize| {
             // b follows a on the same curve.

@@ -15,7 +15,7 @@ fn ctrl(c: &CubicBez) -> Value {
 /// The feature set as a JSON value: `d`, `params`, `counts`, `timing_ms`, `points`,
 /// `point_sources`, `primary` and `secondary` (see `docs/features-json.md`). Coordinates
 /// are output coordinates (y flipped).
-pub fn to_json(fs: &FeatureSet) -> Value {
+pub(crate) fn to_json(fs: &FeatureSet) -> Value {
     let p = &fs.params;
     let primary: Vec<Value> = fs
         .primary

@@ -40,9 +40,9 @@ mod separation;
 mod snap;
 mod split;
 
-pub use chains::{PrimaryChain, PrimaryChains};
-pub use json::to_json;
-pub use preview::to_svg;
+pub(crate) use chains::PrimaryChains;
+pub(crate) use json::to_json;
+pub(crate) use preview::to_svg;
 
 use crate::params::Resolved;
 use crate::svg::{Drawing, FeatureGeom, FeatureSource};
@@ -51,7 +51,7 @@ use std::time::Instant;
 
 /// Index of a primary section in [`FeatureSet::primary`].
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SectionId(pub u32);
+pub(crate) struct SectionId(pub u32);
 
 impl std::fmt::Debug for SectionId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -61,7 +61,7 @@ impl std::fmt::Debug for SectionId {
 
 /// Index of a secondary polyline in [`FeatureSet::secondary`].
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct PolylineId(pub u32);
+pub(crate) struct PolylineId(pub u32);
 
 impl std::fmt::Debug for PolylineId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -72,7 +72,7 @@ impl std::fmt::Debug for PolylineId {
 /// An isolated feature point: an input point, a degenerate curve, or a secondary polyline
 /// that collapsed to a single point.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FeaturePoint {
+pub(crate) struct FeaturePoint {
     /// Position (output coordinates).
     pub pos: Point,
     /// The input feature it came from.
@@ -81,7 +81,7 @@ pub struct FeaturePoint {
 
 /// The input curve a section was cut from.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Parent {
+pub(crate) enum Parent {
     /// An input cubic Bézier (parameter t of the cubic).
     Cubic(CubicBez),
     /// A straight segment: an input line, or a straight input cubic replaced by the segment
@@ -92,7 +92,7 @@ pub enum Parent {
 
 impl Parent {
     /// The point at parameter `t`; exactly the end points at `t = 0` and `t = 1`.
-    pub fn eval(&self, t: f64) -> Point {
+    pub(crate) fn eval(&self, t: f64) -> Point {
         match self {
             Parent::Cubic(c) if t == 0.0 => c.p0,
             Parent::Cubic(c) if t == 1.0 => c.p3,
@@ -106,7 +106,7 @@ impl Parent {
     /// The control polygon of the restriction to `[t0, t1]`; its end points are exactly
     /// `self.eval(t0)` and `self.eval(t1)`. For a line the controls are collinear, at 1/3 and
     /// 2/3.
-    pub fn restrict(&self, t0: f64, t1: f64) -> CubicBez {
+    pub(crate) fn restrict(&self, t0: f64, t1: f64) -> CubicBez {
         let (a, b) = (self.eval(t0), self.eval(t1));
         match self {
             Parent::Cubic(c) => {
@@ -118,7 +118,7 @@ impl Parent {
     }
 
     /// Whether this is a straight segment.
-    pub fn is_line(&self) -> bool {
+    pub(crate) fn is_line(&self) -> bool {
         matches!(self, Parent::Line(_))
     }
 }
@@ -126,7 +126,7 @@ impl Parent {
 /// A primary discrete curve section: a piece of one input curve that the mesh represents
 /// by a single (later curved) edge.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PrimarySection {
+pub(crate) struct PrimarySection {
     /// The curve it was cut from.
     pub parent: Parent,
     /// The input feature it came from.
@@ -145,7 +145,7 @@ pub struct PrimarySection {
 
 impl PrimarySection {
     /// The chord: the straight edge the linear mesher conforms to.
-    pub fn chord(&self) -> Line {
+    pub(crate) fn chord(&self) -> Line {
         Line::new(self.ctrl.p0, self.ctrl.p3)
     }
 }
@@ -153,7 +153,7 @@ impl PrimarySection {
 /// A secondary feature: a polyline within μ of (a run of consecutive secondary sections of)
 /// one input curve, after the secondary simplification.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SecondaryPolyline {
+pub(crate) struct SecondaryPolyline {
     /// The vertices, at least two, consecutive ones distinct.
     pub points: Vec<Point>,
     /// The input feature it came from.
@@ -162,7 +162,7 @@ pub struct SecondaryPolyline {
 
 /// What a segment of [`ConformingInput`] represents.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum SegmentTag {
+pub(crate) enum SegmentTag {
     /// The chord of a primary section.
     Primary(SectionId),
     /// Segment `index` (from `points[index]` to `points[index + 1]`) of a secondary polyline.
@@ -176,7 +176,7 @@ pub enum SegmentTag {
 
 /// Everything the linear (BSP) mesher must conform to.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ConformingInput {
+pub(crate) struct ConformingInput {
     /// Straight segments with what they represent; primary chords first.
     pub segments: Vec<(Line, SegmentTag)>,
     /// Isolated points.
@@ -232,7 +232,7 @@ pub struct FeatureCounts {
 
 /// Wall time of each preprocessing stage, in milliseconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct FeatureTiming {
+pub(crate) struct FeatureTiming {
     /// Degenerate / straight classification.
     pub classify_ms: f64,
     /// Inflection and total-curvature splits.
@@ -249,7 +249,7 @@ pub struct FeatureTiming {
 
 /// The preprocessed features: what the meshers consume (DESIGN `features`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct FeatureSet {
+pub(crate) struct FeatureSet {
     /// The absolute parameters it was built with.
     pub params: Resolved,
     /// Isolated points.
@@ -287,7 +287,7 @@ impl FeatureSet {
     ///
     /// Never fails and always terminates: every refinement loop has a budget; what exceeds
     /// it is made secondary.
-    pub fn build(drawing: &Drawing, params: &Resolved) -> FeatureSet {
+    pub(crate) fn build(drawing: &Drawing, params: &Resolved) -> FeatureSet {
         let _span = tracing::debug_span!("features").entered();
         let start = Instant::now();
         let mut counts = FeatureCounts::default();
@@ -447,7 +447,7 @@ impl FeatureSet {
 
     /// Every straight segment the linear mesher must conform to (primary chords, then the
     /// segments of secondary polylines) with what it represents, and every isolated point.
-    pub fn conforming_input(&self) -> ConformingInput {
+    pub(crate) fn conforming_input(&self) -> ConformingInput {
         let mut segments = Vec::with_capacity(self.primary.len() + self.counts.secondary_segments);
         for (i, s) in self.primary.iter().enumerate() {
             let id = SectionId(u32::try_from(i).expect("internal: section count fits u32"));

@@ -12,7 +12,7 @@ fn p(q: Point) -> String {
 }
 
 /// The preview document.
-pub fn to_svg(fs: &FeatureSet, drawing: &Drawing) -> String {
+pub(crate) fn to_svg(fs: &FeatureSet, drawing: &Drawing) -> String {
     let b = drawing.bbox;
     let d = drawing.diagonal();
     let pad = 0.02 * d;

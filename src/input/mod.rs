@@ -7,6 +7,6 @@
 //! is the library's own; the integration tests keep an independent one in
 //! `tests/support`.
 
-pub mod msh;
+pub(crate) mod msh;
 
-pub use msh::{MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file};
+pub(crate) use msh::{MshFormat, MshMesh};

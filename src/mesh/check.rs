@@ -8,7 +8,7 @@ use std::collections::HashMap;
 /// One thing wrong with a [`TriMesh`].
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
-pub enum Defect {
+pub(crate) enum Defect {
     /// A face uses a dead or unknown vertex.
     DeadVertex(FaceId, VertexId),
     /// A face repeats a vertex.
@@ -42,7 +42,7 @@ impl TriMesh {
     /// Every defect of the mesh (empty when valid). Orientation is decided
     /// exactly; conformity is checked on boundary edges (exact point-on-edge
     /// tests against the vertices whose `x` lies in the edge's range).
-    pub fn check(&self) -> Vec<Defect> {
+    pub(crate) fn check(&self) -> Vec<Defect> {
         let mut out = Vec::new();
         let mut used = vec![false; self.vertex_capacity()];
         let mut edges: HashMap<EdgeKey, Vec<(FaceId, VertexId)>> = HashMap::new();

@@ -8,13 +8,13 @@ use kurbo::{Line, Point, Vec2};
 
 impl TriMesh {
     /// The distance between the `f64` positions of `a` and `b` (an edge's length).
-    pub fn distance(&self, a: VertexId, b: VertexId) -> f64 {
+    pub(crate) fn distance(&self, a: VertexId, b: VertexId) -> f64 {
         self.position(a).distance(self.position(b))
     }
 }
 
 /// The distance from `p` to the segment `l` (to `l.p0` when `l` has zero length).
-pub fn point_segment_distance(p: Point, l: Line) -> f64 {
+pub(crate) fn point_segment_distance(p: Point, l: Line) -> f64 {
     let d = l.p1 - l.p0;
     let len2 = d.hypot2();
     if len2 == 0.0 {
@@ -26,18 +26,18 @@ pub fn point_segment_distance(p: Point, l: Line) -> f64 {
 
 /// The unsigned angle between the vectors `u` and `v`, radians in `[0, π]`;
 /// 0 when either is zero.
-pub fn angle_between(u: Vec2, v: Vec2) -> f64 {
+pub(crate) fn angle_between(u: Vec2, v: Vec2) -> f64 {
     u.cross(v).abs().atan2(u.dot(v))
 }
 
 /// The unsigned angle at `at` between the directions to `prev` and `next`,
 /// radians in `[0, π]`; 0 when an adjacent edge has zero length.
-pub fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
+pub(crate) fn corner_angle(prev: Point, at: Point, next: Point) -> f64 {
     angle_between(prev - at, next - at)
 }
 
 /// The corner angles of the triangle `[a, b, c]`, radians, at `a`, `b`, `c`.
-pub fn corner_angles([a, b, c]: [Point; 3]) -> [f64; 3] {
+pub(crate) fn corner_angles([a, b, c]: [Point; 3]) -> [f64; 3] {
     [
         corner_angle(c, a, b),
         corner_angle(a, b, c),
@@ -46,7 +46,7 @@ pub fn corner_angles([a, b, c]: [Point; 3]) -> [f64; 3] {
 }
 
 /// The smallest corner angle of the triangle `[a, b, c]`, degrees.
-pub fn min_angle_deg(corners: [Point; 3]) -> f64 {
+pub(crate) fn min_angle_deg(corners: [Point; 3]) -> f64 {
     let [x, y, z] = corner_angles(corners);
     x.min(y).min(z).to_degrees()
 }

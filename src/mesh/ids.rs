@@ -2,11 +2,11 @@
 
 /// A vertex of a [`TriMesh`](super::TriMesh). `Debug` prints `v12`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct VertexId(u32);
+pub(crate) struct VertexId(u32);
 
 /// A triangle of a [`TriMesh`](super::TriMesh). `Debug` prints `f3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct FaceId(u32);
+pub(crate) struct FaceId(u32);
 
 fn to_u32(i: usize) -> u32 {
     u32::try_from(i).expect("internal: more than u32::MAX mesh elements")
@@ -17,13 +17,13 @@ impl VertexId {
     ///
     /// # Panics
     /// If `i` does not fit in a `u32`.
-    pub fn from_index(i: usize) -> Self {
+    pub(crate) fn from_index(i: usize) -> Self {
         VertexId(to_u32(i))
     }
 
     /// The slot index, for dense side tables (below
     /// [`TriMesh::vertex_capacity`](super::TriMesh::vertex_capacity)).
-    pub fn index(self) -> usize {
+    pub(crate) fn index(self) -> usize {
         self.0 as usize
     }
 }
@@ -33,13 +33,13 @@ impl FaceId {
     ///
     /// # Panics
     /// If `i` does not fit in a `u32`.
-    pub fn from_index(i: usize) -> Self {
+    pub(crate) fn from_index(i: usize) -> Self {
         FaceId(to_u32(i))
     }
 
     /// The slot index, for dense side tables (below
     /// [`TriMesh::face_capacity`](super::TriMesh::face_capacity)).
-    pub fn index(self) -> usize {
+    pub(crate) fn index(self) -> usize {
         self.0 as usize
     }
 }

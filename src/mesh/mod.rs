@@ -21,11 +21,8 @@ mod storage;
 mod topology;
 mod transaction;
 
-pub use check::Defect;
-pub use geometry::{
-    angle_between, corner_angle, corner_angles, min_angle_deg, point_segment_distance,
-};
-pub use ids::{FaceId, VertexId};
-pub use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
-pub use topology::{EdgeQuad, VertexRing};
-pub use transaction::Transaction;
+pub(crate) use geometry::{angle_between, corner_angles, min_angle_deg, point_segment_distance};
+pub(crate) use ids::{FaceId, VertexId};
+pub(crate) use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
+pub(crate) use topology::{EdgeQuad, VertexRing};
+pub(crate) use transaction::Transaction;

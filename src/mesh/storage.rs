@@ -8,7 +8,7 @@ use std::borrow::Cow;
 
 /// What a vertex stands for. All false for an ordinary (Steiner) vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct VertexTag {
+pub(crate) struct VertexTag {
     /// A corner of the padded box.
     pub box_corner: bool,
     /// An isolated input feature point.
@@ -21,7 +21,7 @@ pub struct VertexTag {
 
 impl VertexTag {
     /// The union of two tags.
-    pub fn union(self, o: VertexTag) -> VertexTag {
+    pub(crate) fn union(self, o: VertexTag) -> VertexTag {
         VertexTag {
             box_corner: self.box_corner || o.box_corner,
             feature_point: self.feature_point || o.feature_point,
@@ -31,14 +31,14 @@ impl VertexTag {
     }
 
     /// Whether any flag is set.
-    pub fn any(self) -> bool {
+    pub(crate) fn any(self) -> bool {
         self != VertexTag::default()
     }
 }
 
 /// One input feature an edge lies on.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FeatureOn {
+pub(crate) enum FeatureOn {
     /// A primary section, with the section parameter at the edge's two ends,
     /// ordered as the [`EdgeKey`] (`t[0]` at the smaller vertex id).
     Primary {
@@ -56,7 +56,7 @@ pub enum FeatureOn {
 
 /// An undirected edge, as its two vertices with `lo < hi`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct EdgeKey {
+pub(crate) struct EdgeKey {
     /// The smaller vertex id.
     pub lo: VertexId,
     /// The larger vertex id.
@@ -65,7 +65,7 @@ pub struct EdgeKey {
 
 impl EdgeKey {
     /// The key of the edge between `a` and `b` (in any order).
-    pub fn new(a: VertexId, b: VertexId) -> Self {
+    pub(crate) fn new(a: VertexId, b: VertexId) -> Self {
         if a <= b {
             EdgeKey { lo: a, hi: b }
         } else {
@@ -100,7 +100,7 @@ pub(super) struct FaceData {
 /// `PartialEq` compares every slot, free list and tag (a rolled-back
 /// [`Transaction`](super::Transaction) leaves a mesh equal to before).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct TriMesh {
+pub(crate) struct TriMesh {
     pub(super) vertices: Vec<Option<VertexData>>,
     pub(super) faces: Vec<Option<FaceData>>,
     pub(super) free_vertices: Vec<VertexId>,
@@ -112,7 +112,7 @@ pub struct TriMesh {
 
 impl TriMesh {
     /// An empty mesh.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         TriMesh::default()
     }
 
@@ -175,12 +175,12 @@ impl TriMesh {
     }
 
     /// Whether `v` names a live vertex.
-    pub fn is_vertex_alive(&self, v: VertexId) -> bool {
+    pub(crate) fn is_vertex_alive(&self, v: VertexId) -> bool {
         matches!(self.vertices.get(v.index()), Some(Some(_)))
     }
 
     /// The live vertices.
-    pub fn vertices(&self) -> impl Iterator<Item = VertexId> + '_ {
+    pub(crate) fn vertices(&self) -> impl Iterator<Item = VertexId> + '_ {
         self.vertices
             .iter()
             .enumerate()
@@ -189,12 +189,12 @@ impl TriMesh {
     }
 
     /// Number of live vertices.
-    pub fn num_vertices(&self) -> usize {
+    pub(crate) fn num_vertices(&self) -> usize {
         self.live_vertices
     }
 
     /// Upper bound (exclusive) of vertex indices ever used, for dense side tables.
-    pub fn vertex_capacity(&self) -> usize {
+    pub(crate) fn vertex_capacity(&self) -> usize {
         self.vertices.len()
     }
 
@@ -202,28 +202,28 @@ impl TriMesh {
     ///
     /// # Panics
     /// If `v` is not a live vertex.
-    pub fn position(&self, v: VertexId) -> Point {
+    pub(crate) fn position(&self, v: VertexId) -> Point {
         self.vdata(v).pos
     }
 
     /// The exact position, if the vertex is not an `f64` point.
-    pub fn exact(&self, v: VertexId) -> Option<&PointQ> {
+    pub(crate) fn exact(&self, v: VertexId) -> Option<&PointQ> {
         self.vdata(v).exact.as_ref()
     }
 
     /// Whether the vertex has a rational (not yet rounded) position.
-    pub fn is_rational(&self, v: VertexId) -> bool {
+    pub(crate) fn is_rational(&self, v: VertexId) -> bool {
         self.vdata(v).exact.is_some()
     }
 
     /// The exact position as a rational point.
-    pub fn point_q(&self, v: VertexId) -> PointQ {
+    pub(crate) fn point_q(&self, v: VertexId) -> PointQ {
         let d = self.vdata(v);
         d.exact.clone().unwrap_or_else(|| PointQ::from_point(d.pos))
     }
 
     /// The exact position, borrowed when the vertex is rational.
-    pub fn point_q_ref(&self, v: VertexId) -> Cow<'_, PointQ> {
+    pub(crate) fn point_q_ref(&self, v: VertexId) -> Cow<'_, PointQ> {
         let d = self.vdata(v);
         match &d.exact {
             Some(q) => Cow::Borrowed(q),
@@ -232,7 +232,7 @@ impl TriMesh {
     }
 
     /// The exact orientation of face `f` if vertex `v` were at the `f64` point `p`.
-    pub fn orientation_if_moved(&self, f: FaceId, v: VertexId, p: Point) -> Orientation {
+    pub(crate) fn orientation_if_moved(&self, f: FaceId, v: VertexId, p: Point) -> Orientation {
         let ids = self.face(f);
         let rational = ids.iter().any(|&x| x != v && self.vdata(x).exact.is_some());
         if !rational {
@@ -258,7 +258,7 @@ impl TriMesh {
     }
 
     /// The vertex tag.
-    pub fn vertex_tag(&self, v: VertexId) -> VertexTag {
+    pub(crate) fn vertex_tag(&self, v: VertexId) -> VertexTag {
         self.vdata(v).tag
     }
 
@@ -269,7 +269,7 @@ impl TriMesh {
     }
 
     /// Some live face incident to `v`, if any.
-    pub fn vertex_face(&self, v: VertexId) -> Option<FaceId> {
+    pub(crate) fn vertex_face(&self, v: VertexId) -> Option<FaceId> {
         self.vdata(v).face
     }
 
@@ -337,12 +337,12 @@ impl TriMesh {
     }
 
     /// Whether `f` names a live face.
-    pub fn is_face_alive(&self, f: FaceId) -> bool {
+    pub(crate) fn is_face_alive(&self, f: FaceId) -> bool {
         matches!(self.faces.get(f.index()), Some(Some(_)))
     }
 
     /// The live faces.
-    pub fn faces(&self) -> impl Iterator<Item = FaceId> + '_ {
+    pub(crate) fn faces(&self) -> impl Iterator<Item = FaceId> + '_ {
         self.faces
             .iter()
             .enumerate()
@@ -351,22 +351,22 @@ impl TriMesh {
     }
 
     /// Number of live faces.
-    pub fn num_faces(&self) -> usize {
+    pub(crate) fn num_faces(&self) -> usize {
         self.live_faces
     }
 
     /// Upper bound (exclusive) of face indices ever used.
-    pub fn face_capacity(&self) -> usize {
+    pub(crate) fn face_capacity(&self) -> usize {
         self.faces.len()
     }
 
     /// The three vertices of a face, counter-clockwise.
-    pub fn face(&self, f: FaceId) -> [VertexId; 3] {
+    pub(crate) fn face(&self, f: FaceId) -> [VertexId; 3] {
         self.fdata(f).v
     }
 
     /// The faces across the three edges (`[i]` is across the edge opposite vertex `i`).
-    pub fn neighbours(&self, f: FaceId) -> [Option<FaceId>; 3] {
+    pub(crate) fn neighbours(&self, f: FaceId) -> [Option<FaceId>; 3] {
         self.fdata(f).adj
     }
 
@@ -376,13 +376,13 @@ impl TriMesh {
     }
 
     /// The exact orientation of a face (filtered; rationals only where needed).
-    pub fn orientation(&self, f: FaceId) -> Orientation {
+    pub(crate) fn orientation(&self, f: FaceId) -> Orientation {
         let [a, b, c] = self.face(f);
         self.orientation_of(a, b, c)
     }
 
     /// The exact orientation of three vertices.
-    pub fn orientation_of(&self, a: VertexId, b: VertexId, c: VertexId) -> Orientation {
+    pub(crate) fn orientation_of(&self, a: VertexId, b: VertexId, c: VertexId) -> Orientation {
         let (da, db, dc) = (self.vdata(a), self.vdata(b), self.vdata(c));
         if da.exact.is_none() && db.exact.is_none() && dc.exact.is_none() {
             orient2d(da.pos, db.pos, dc.pos)
@@ -398,7 +398,7 @@ impl TriMesh {
     // ---- edge tags ---------------------------------------------------------
 
     /// The features the edge `a b` lies on (empty when untagged).
-    pub fn edge_tags(&self, a: VertexId, b: VertexId) -> &[FeatureOn] {
+    pub(crate) fn edge_tags(&self, a: VertexId, b: VertexId) -> &[FeatureOn] {
         self.edge_tags
             .get(&EdgeKey::new(a, b))
             .map_or(&[][..], Vec::as_slice)
@@ -429,7 +429,7 @@ impl TriMesh {
     }
 
     /// Every tagged edge with its tags.
-    pub fn tagged_edges(&self) -> impl Iterator<Item = (EdgeKey, &[FeatureOn])> + '_ {
+    pub(crate) fn tagged_edges(&self) -> impl Iterator<Item = (EdgeKey, &[FeatureOn])> + '_ {
         self.edge_tags.iter().map(|(k, v)| (*k, v.as_slice()))
     }
 }

@@ -6,18 +6,18 @@ use std::collections::HashMap;
 
 impl TriMesh {
     /// The directed edge `i` of `f`: from `v[i+1]` to `v[i+2]` (opposite `v[i]`).
-    pub fn edge(&self, f: FaceId, i: usize) -> (VertexId, VertexId) {
+    pub(crate) fn edge(&self, f: FaceId, i: usize) -> (VertexId, VertexId) {
         let v = self.face(f);
         (v[(i + 1) % 3], v[(i + 2) % 3])
     }
 
     /// The local index (0..3) of vertex `v` in face `f`.
-    pub fn local_index(&self, f: FaceId, v: VertexId) -> Option<usize> {
+    pub(crate) fn local_index(&self, f: FaceId, v: VertexId) -> Option<usize> {
         self.face(f).iter().position(|&x| x == v)
     }
 
     /// The index of the edge of `f` joining `a` and `b` (either direction).
-    pub fn edge_index(&self, f: FaceId, a: VertexId, b: VertexId) -> Option<usize> {
+    pub(crate) fn edge_index(&self, f: FaceId, a: VertexId, b: VertexId) -> Option<usize> {
         (0..3).find(|&i| {
             let (p, q) = self.edge(f, i);
             (p == a && q == b) || (p == b && q == a)
@@ -63,7 +63,7 @@ impl TriMesh {
     /// The live faces around `v`, found by walking adjacency from
     /// [`TriMesh::vertex_face`] in both directions (a bounded walk): first
     /// counter-clockwise from it, then, if the fan is open, clockwise.
-    pub fn incident_faces(&self, v: VertexId) -> Vec<FaceId> {
+    pub(crate) fn incident_faces(&self, v: VertexId) -> Vec<FaceId> {
         let mut out = Vec::new();
         self.incident_faces_into(v, &mut out);
         out
@@ -71,7 +71,7 @@ impl TriMesh {
 
     /// [`TriMesh::incident_faces`] into `out` (cleared first), so a loop can
     /// reuse one buffer.
-    pub fn incident_faces_into(&self, v: VertexId, out: &mut Vec<FaceId>) {
+    pub(crate) fn incident_faces_into(&self, v: VertexId, out: &mut Vec<FaceId>) {
         out.clear();
         let Some(start) = self.vertex_face(v) else {
             return;
@@ -120,13 +120,13 @@ impl TriMesh {
     /// order [`TriMesh::incident_faces`] meets them around `a`: none when `a b`
     /// is not an edge, one on the boundary, two inside (more only where
     /// adjacency is broken).
-    pub fn faces_on_edge(&self, a: VertexId, b: VertexId, out: &mut Vec<FaceId>) {
+    pub(crate) fn faces_on_edge(&self, a: VertexId, b: VertexId, out: &mut Vec<FaceId>) {
         self.incident_faces_into(a, out);
         out.retain(|&f| self.face(f).contains(&b));
     }
 
     /// Whether some live face has the edge `a b` (found around `a`).
-    pub fn has_edge(&self, a: VertexId, b: VertexId) -> bool {
+    pub(crate) fn has_edge(&self, a: VertexId, b: VertexId) -> bool {
         self.incident_faces(a)
             .iter()
             .any(|&f| self.face(f).contains(&b))
@@ -134,14 +134,14 @@ impl TriMesh {
 
     /// The vertex of `f` that is neither `a` nor `b` (the first one, if `f`
     /// does not hold both).
-    pub fn opposite(&self, f: FaceId, a: VertexId, b: VertexId) -> Option<VertexId> {
+    pub(crate) fn opposite(&self, f: FaceId, a: VertexId, b: VertexId) -> Option<VertexId> {
         self.face(f).into_iter().find(|&x| x != a && x != b)
     }
 
     /// The quadrilateral of the two faces `[f, g]` on the edge `a b`, with the
     /// edge as `f` holds it counter-clockwise; `None` when `f` does not hold the
     /// edge or a face has no third vertex.
-    pub fn quad(&self, [f, g]: [FaceId; 2], a: VertexId, b: VertexId) -> Option<EdgeQuad> {
+    pub(crate) fn quad(&self, [f, g]: [FaceId; 2], a: VertexId, b: VertexId) -> Option<EdgeQuad> {
         let i = self.edge_index(f, a, b)?;
         let v = self.face(f);
         let (a, b, c) = (v[(i + 1) % 3], v[(i + 2) % 3], v[i]);
@@ -158,7 +158,12 @@ impl TriMesh {
     /// The quadrilateral around the interior edge `a b` ([`TriMesh::quad`] of
     /// [`TriMesh::faces_on_edge`], `buf` its scratch); `None` unless the edge
     /// has exactly two faces.
-    pub fn edge_quad(&self, a: VertexId, b: VertexId, buf: &mut Vec<FaceId>) -> Option<EdgeQuad> {
+    pub(crate) fn edge_quad(
+        &self,
+        a: VertexId,
+        b: VertexId,
+        buf: &mut Vec<FaceId>,
+    ) -> Option<EdgeQuad> {
         self.faces_on_edge(a, b, buf);
         let [f, g] = buf[..] else { return None };
         self.quad([f, g], a, b)
@@ -166,7 +171,7 @@ impl TriMesh {
 
     /// Every edge of the live faces once, face by face in id order, each edge
     /// at the first face that has it (boundary edges at their one face).
-    pub fn edges(&self) -> impl Iterator<Item = EdgeKey> + '_ {
+    pub(crate) fn edges(&self) -> impl Iterator<Item = EdgeKey> + '_ {
         self.faces().flat_map(move |f| {
             let v = self.face(f);
             let adj = self.neighbours(f);
@@ -178,7 +183,7 @@ impl TriMesh {
 
     /// The one-ring of `v`: its faces, its distinct neighbours and whether it
     /// is on the boundary.
-    pub fn vertex_ring(&self, v: VertexId) -> VertexRing {
+    pub(crate) fn vertex_ring(&self, v: VertexId) -> VertexRing {
         let mut ring = VertexRing {
             vertex: v,
             faces: Vec::new(),
@@ -190,7 +195,7 @@ impl TriMesh {
     }
 
     /// [`TriMesh::vertex_ring`] into `ring` (its buffers reused).
-    pub fn vertex_ring_into(&self, v: VertexId, ring: &mut VertexRing) {
+    pub(crate) fn vertex_ring_into(&self, v: VertexId, ring: &mut VertexRing) {
         self.incident_faces_into(v, &mut ring.faces);
         ring.vertex = v;
         ring.neighbours.clear();
@@ -215,7 +220,7 @@ impl TriMesh {
 
     /// Whether the edge from the ring's vertex to `w` is a boundary edge: one
     /// face of the ring has it, with no face across.
-    pub fn is_boundary_edge(&self, ring: &VertexRing, w: VertexId) -> bool {
+    pub(crate) fn is_boundary_edge(&self, ring: &VertexRing, w: VertexId) -> bool {
         let mut with = ring.faces.iter().filter(|&&f| self.face(f).contains(&w));
         match (with.next(), with.next()) {
             (Some(&f), None) => {
@@ -232,7 +237,7 @@ impl TriMesh {
 /// The two triangles on an interior edge and the quadrilateral they form:
 /// `f = (a, b, c)` and `g = (b, a, d)`, both counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EdgeQuad {
+pub(crate) struct EdgeQuad {
     /// `[f, g]`: `f` holds the edge as `a → b`, `g` as `b → a`.
     pub faces: [FaceId; 2],
     /// The edge's first vertex, as `f` holds it.
@@ -247,7 +252,7 @@ pub struct EdgeQuad {
 
 /// The one-ring of a vertex ([`TriMesh::vertex_ring`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct VertexRing {
+pub(crate) struct VertexRing {
     /// The vertex.
     pub vertex: VertexId,
     /// Its live faces, in [`TriMesh::incident_faces`] order.

@@ -24,7 +24,7 @@ enum FreeOp {
 /// A guard over a mesh: changes made through it are undone on drop unless
 /// [`Transaction::commit`] is called.
 #[derive(Debug)]
-pub struct Transaction<'a> {
+pub(crate) struct Transaction<'a> {
     mesh: &'a mut TriMesh,
     old_vertices: Vec<(VertexId, Option<VertexData>)>,
     old_faces: Vec<(FaceId, Option<FaceData>)>,
@@ -45,7 +45,7 @@ impl std::ops::Deref for Transaction<'_> {
 
 impl<'a> Transaction<'a> {
     /// Open a transaction on `mesh`.
-    pub fn new(mesh: &'a mut TriMesh) -> Self {
+    pub(crate) fn new(mesh: &'a mut TriMesh) -> Self {
         let (vertex_len, face_len) = (mesh.vertices.len(), mesh.faces.len());
         let live = (mesh.live_vertices, mesh.live_faces);
         Transaction {
@@ -62,7 +62,7 @@ impl<'a> Transaction<'a> {
     }
 
     /// Keep the changes.
-    pub fn commit(mut self) {
+    pub(crate) fn commit(mut self) {
         self.committed = true;
     }
 
@@ -97,21 +97,21 @@ impl<'a> Transaction<'a> {
     }
 
     /// Add a vertex at an `f64` position, journaled.
-    pub fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex(&mut self, pos: Point, tag: VertexTag) -> VertexId {
         self.before_vertex_insert();
         self.mesh.add_vertex(pos, tag)
     }
 
     /// Add a vertex at an exact position (kept rational unless it is an
     /// `f64` point), journaled.
-    pub fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
+    pub(crate) fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
         self.before_vertex_insert();
         self.mesh.add_vertex_q(p, tag)
     }
 
     /// Remove a vertex (its slot goes to the free list; faces using it must
     /// be removed first), journaled.
-    pub fn remove_vertex(&mut self, v: VertexId) {
+    pub(crate) fn remove_vertex(&mut self, v: VertexId) {
         if self.mesh.is_vertex_alive(v) {
             self.touch_v(v);
             self.free_log.push(FreeOp::PushV);
@@ -120,13 +120,13 @@ impl<'a> Transaction<'a> {
     }
 
     /// Move a vertex to an `f64` position (dropping its rational one), journaled.
-    pub fn set_position(&mut self, v: VertexId, pos: Point) {
+    pub(crate) fn set_position(&mut self, v: VertexId, pos: Point) {
         self.touch_v(v);
         self.mesh.set_position(v, pos);
     }
 
     /// Add a face (vertices counter-clockwise), with no adjacency yet, journaled.
-    pub fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
+    pub(crate) fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         if let Some(&f) = self.mesh.free_faces.last() {
             self.free_log.push(FreeOp::PopF(f));
             self.touch_f(f);
@@ -141,7 +141,7 @@ impl<'a> Transaction<'a> {
 
     /// Remove a face (its neighbours forget it, its vertices point to another
     /// live incident face when one is adjacent), journaled.
-    pub fn remove_face(&mut self, f: FaceId) {
+    pub(crate) fn remove_face(&mut self, f: FaceId) {
         if !self.mesh.is_face_alive(f) {
             return;
         }
@@ -157,20 +157,20 @@ impl<'a> Transaction<'a> {
     }
 
     /// Set the face across edge `i` of `f` (one side only), journaled.
-    pub fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
+    pub(crate) fn set_neighbour(&mut self, f: FaceId, i: usize, g: Option<FaceId>) {
         self.touch_f(f);
         self.mesh.set_neighbour(f, i, g);
     }
 
     /// Record that the edge `a b` lies on a feature (no duplicate entries; a
     /// primary's `t` is given at `a`, then `b`), journaled.
-    pub fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+    pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
         self.touch_tag(EdgeKey::new(a, b));
         self.mesh.add_edge_tag(a, b, tag);
     }
 
     /// Remove and return every tag of the edge `a b`, journaled.
-    pub fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
         self.touch_tag(EdgeKey::new(a, b));
         self.mesh.take_edge_tags(a, b)
     }
@@ -179,7 +179,7 @@ impl<'a> Transaction<'a> {
     /// vertices `new` (counter-clockwise), linking the new faces to each other
     /// and to the faces that were across the region's outer edges. Returns the
     /// new face ids, in the order of `new`. Purely topological.
-    pub fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
+    pub(crate) fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
         // The faces outside the region, by the edge they share with it.
         // Regions are a few faces: linear scans beat hashing here.
         let mut outside: Vec<(EdgeKey, FaceId)> = Vec::with_capacity(old.len() + 2);

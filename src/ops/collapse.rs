@@ -15,15 +15,14 @@
 
 use super::invariants::{self, Check};
 use super::{
-    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, ring, role,
-    t_at,
+    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
 
 /// Everything a collapse of `v` into `u` needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
-pub struct CollapsePlan {
+pub(crate) struct CollapsePlan {
     u: VertexId,
     v: VertexId,
     /// Faces around `v` (all removed).
@@ -46,16 +45,21 @@ impl CollapsePlan {
     /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
     /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
     /// `ctx.envelope.eps()` bounds how far a secondary junction may move.
-    pub fn new(mesh: &TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Result<Self, Reject> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        ctx: &Context,
+        u: VertexId,
+        v: VertexId,
+    ) -> Result<Self, Reject> {
         let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let rv = ring(mesh, v);
+        let rv = mesh.vertex_ring(v);
         if !rv.neighbours.contains(&u) {
             return Err(Reject::NotAnEdge);
         }
-        let ru = ring(mesh, u);
+        let ru = mesh.vertex_ring(u);
         let mut edge_faces = Vec::new();
         mesh.faces_on_edge(v, u, &mut edge_faces);
         let opposite: Vec<VertexId> = edge_faces
@@ -196,7 +200,7 @@ impl CollapsePlan {
 }
 
 /// Collapse `v` into `u` (see the module doc).
-pub fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
+pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
     let plan = match CollapsePlan::new(mesh, ctx, u, v) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),

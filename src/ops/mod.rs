@@ -27,7 +27,7 @@
 //! rejected one leaves the mesh equal (`PartialEq`) to before.
 //! DESIGN "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
 
-pub mod invariants;
+pub(crate) mod invariants;
 
 mod collapse;
 mod project;
@@ -39,12 +39,12 @@ mod swap;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub use collapse::{CollapsePlan, try_collapse};
-pub use project::try_project;
-pub use round::try_round;
-pub use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_with};
-pub use split::{SplitPlan, try_split};
-pub use swap::{ReroutePlan, SwapPlan, try_reroute, try_swap};
+pub(crate) use collapse::try_collapse;
+pub(crate) use project::try_project;
+pub(crate) use round::try_round;
+pub(crate) use smooth::{Objective, try_smooth, try_smooth_with};
+pub(crate) use split::try_split;
+pub(crate) use swap::{try_reroute, try_swap};
 
 use crate::features::{FeatureSet, Parent, PrimaryChains};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
@@ -53,7 +53,7 @@ use invariants::Envelope;
 /// Why an operation was refused: the rule or invariant that refused it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[non_exhaustive]
-pub enum Reject {
+pub(crate) enum Reject {
     /// The element is dead, or the two vertices are not an edge.
     NotAnEdge,
     /// The vertex may not move (feature endpoint, box corner, feature junction, boundary).
@@ -79,11 +79,15 @@ pub enum Reject {
     /// Curved mode: a curved element would not be certified valid, or a
     /// triangle would get more than one curved edge.
     Jacobian,
+    /// The schedule's length rule: a collapse would make an edge longer than the
+    /// split threshold (4/3 of its target), so the split pass would undo it. Decided
+    /// by the schedule before the operation is planned.
+    EdgeLength,
 }
 
 impl Reject {
     /// A short lower-case name (for statistics).
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Reject::NotAnEdge => "not_an_edge",
             Reject::FixedVertex => "fixed_vertex",
@@ -97,13 +101,14 @@ impl Reject {
             Reject::Envelope => "envelope",
             Reject::Energy => "energy",
             Reject::Jacobian => "jacobian",
+            Reject::EdgeLength => "edge_length",
         }
     }
 }
 
 /// What an applied operation changed.
 #[derive(Clone, Debug, PartialEq, Default)]
-pub struct LocalChange {
+pub(crate) struct LocalChange {
     /// Faces the operation created (ids may reuse removed ones). For
     /// smoothing and rounding: the faces around the moved vertex.
     pub created: Vec<FaceId>,
@@ -117,7 +122,7 @@ pub struct LocalChange {
 
 /// The result of a `try_*` operation.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Outcome {
+pub(crate) enum Outcome {
     /// The operation was applied and committed.
     Applied(LocalChange),
     /// The operation was refused; the mesh is unchanged.
@@ -126,15 +131,16 @@ pub enum Outcome {
 
 impl Outcome {
     /// Whether the operation was applied.
-    pub fn is_applied(&self) -> bool {
+    pub(crate) fn is_applied(&self) -> bool {
         matches!(self, Outcome::Applied(_))
     }
 }
 
 /// Which energy condition (beyond validity) an operation must meet.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EnergyRule {
-    /// Any valid change is accepted.
+pub(crate) enum EnergyRule {
+    /// Any valid change is accepted (the tests' random operations).
+    #[cfg(test)]
     Ignore,
     /// The largest AMIPS energy of the new triangles is no larger than that of
     /// the triangles they replace (collapse, swap, smoothing; never split).
@@ -150,7 +156,7 @@ pub enum EnergyRule {
 /// and a primary edge's piece need only turn less than [`CurvedRule::alpha`]
 /// instead of [`Context::alpha`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurvedRule {
+pub(crate) struct CurvedRule {
     /// Element order (quadratic or cubic).
     pub order: crate::element::Order,
     /// How elements are certified.
@@ -162,7 +168,7 @@ pub struct CurvedRule {
 impl CurvedRule {
     /// The rule for `order` with validity-only certification and a turn
     /// bound of 90° (Theorem 4.4 needs less than π; 90° keeps a margin).
-    pub fn new(order: crate::element::Order) -> CurvedRule {
+    pub(crate) fn new(order: crate::element::Order) -> CurvedRule {
         CurvedRule {
             order,
             certify: crate::element::CertifyOptions::VALIDITY,
@@ -173,7 +179,7 @@ impl CurvedRule {
 
 /// The curve a primary section's edges lie on: `parent` on `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurveSection {
+pub(crate) struct CurveSection {
     /// The parametric curve.
     pub parent: Parent,
     /// The parameter interval of the section on `parent`.
@@ -186,7 +192,7 @@ pub struct CurveSection {
 /// tags index (`FeatureOn::Primary::section`), the secondary envelope
 /// (`FeatureOn::Secondary::polyline` indexes its polylines) and tolerances.
 #[derive(Clone, Debug)]
-pub struct Context {
+pub(crate) struct Context {
     /// Curves of the primary sections, indexed by the tags' `section`.
     pub sections: Vec<CurveSection>,
     /// The ε-envelope of the input secondary polylines.
@@ -214,7 +220,7 @@ impl Context {
     /// `features.secondary`: a vertex inside a chain slides along the whole
     /// chain. `eps_abs` is the envelope ε, `sample_abs` the envelope sampling
     /// spacing (thesis: ε), both user units.
-    pub fn from_chains(
+    pub(crate) fn from_chains(
         features: &FeatureSet,
         chains: &PrimaryChains,
         eps_abs: f64,
@@ -246,18 +252,18 @@ impl Context {
     }
 
     /// The curve of a section tag, if the index is known.
-    pub fn section(&self, section: u32) -> Option<&CurveSection> {
+    pub(crate) fn section(&self, section: u32) -> Option<&CurveSection> {
         self.sections.get(section as usize)
     }
 
     /// The bound on the turn of a primary edge's curve piece, radians: the
     /// curved rule's when in curved mode, else α.
-    pub fn turn_bound(&self) -> f64 {
+    pub(crate) fn turn_bound(&self) -> f64 {
         self.curved.map_or(self.alpha, |r| r.alpha)
     }
 
     /// This context in curved mode with `rule`.
-    pub fn with_curved(&self, rule: CurvedRule) -> Context {
+    pub(crate) fn with_curved(&self, rule: CurvedRule) -> Context {
         Context {
             curved: Some(rule),
             ..self.clone()
@@ -268,14 +274,6 @@ impl Context {
 /// The parameter of a primary tag at vertex `v` of the edge `key`.
 pub(crate) fn t_at(key: EdgeKey, t: [f64; 2], v: VertexId) -> f64 {
     if key.lo == v { t[0] } else { t[1] }
-}
-
-/// The vertices and faces around one vertex ([`TriMesh::vertex_ring`]).
-pub(crate) type Ring = crate::mesh::VertexRing;
-
-/// The one-ring of `v` ([`TriMesh::vertex_ring`]).
-pub(crate) fn ring(mesh: &TriMesh, v: VertexId) -> Ring {
-    mesh.vertex_ring(v)
 }
 
 /// What a vertex may do, from its tag and its incident feature edges.
@@ -302,7 +300,7 @@ pub(crate) enum Role {
     },
 }
 
-pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &Ring) -> Role {
+pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) -> Role {
     let tag = mesh.vertex_tag(v);
     if tag.box_corner || tag.feature_point || tag.section_endpoint {
         return Role::Fixed;

@@ -7,7 +7,7 @@
 //! once the mesh around it has moved.
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, CurveBudget, LocalChange, Outcome, Reject, Role, ring, role};
+use super::{Context, CurveBudget, LocalChange, Outcome, Reject, Role, role};
 use crate::mesh::{Transaction, TriMesh, VertexId};
 
 /// Fractions of the way to the curve point tried, in order.
@@ -19,11 +19,11 @@ const FRACTIONS: [f64; 5] = [1.0, 0.5, 0.25, 0.125, 0.0625];
 /// `ctx.on_curve_abs`), [`Reject::FixedVertex`] for one that may not move, and
 /// with the last refusing invariant when no fraction of the move is allowed.
 /// The energy rule does not apply: the move restores an invariant.
-pub fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     if !mesh.is_vertex_alive(v) {
         return Outcome::Rejected(Reject::NotAnEdge);
     }
-    let r = ring(mesh, v);
+    let r = mesh.vertex_ring(v);
     let (section, t) = match role(mesh, v, &r) {
         Role::Primary { section, t, .. } => (section, t),
         Role::Fixed | Role::Boundary => return Outcome::Rejected(Reject::FixedVertex),

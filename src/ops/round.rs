@@ -2,19 +2,19 @@
 //! invariant breaks (thesis §2.3.4 "Hybrid Kernel"; DESIGN "Exactness").
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, LocalChange, Outcome, Reject, ring};
+use super::{Context, LocalChange, Outcome, Reject};
 use crate::mesh::{Transaction, TriMesh, VertexId};
 
 /// Round the rational vertex `v` to `f64`. [`Reject::NoChange`] when it
 /// already is `f64`.
-pub fn try_round(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_round(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     if !mesh.is_vertex_alive(v) {
         return Outcome::Rejected(Reject::NotAnEdge);
     }
     if !mesh.is_rational(v) {
         return Outcome::Rejected(Reject::NoChange);
     }
-    let faces = ring(mesh, v).faces;
+    let faces = mesh.vertex_ring(v).faces;
     let budget: Vec<_> = on_curve::budget_now(mesh, ctx, v).into_iter().collect();
     let mut tx = Transaction::new(mesh);
     let p = tx.position(v);

@@ -9,7 +9,7 @@
 //! kept only if it lowers the ring's energy.
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, ring, role};
+use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, role};
 use crate::element::energy::{Amips2, CurveJet, along_curve, amips_free};
 use crate::features::Parent;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -24,7 +24,7 @@ const LINE_SEARCH_STEPS: usize = 30;
 
 /// The planned move of one vertex.
 #[derive(Clone, Debug)]
-pub struct SmoothPlan {
+pub(crate) struct SmoothPlan {
     v: VertexId,
     faces: Vec<FaceId>,
     pos: Point,
@@ -35,7 +35,7 @@ pub struct SmoothPlan {
 
 /// What smoothing minimises over the one-ring.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Objective {
+pub(crate) enum Objective {
     /// The sum of the AMIPS energies (the schedule's smoothing).
     Sum,
     /// The sum of `(E / E_max)^8`, where `E_max` is the ring's largest energy
@@ -88,21 +88,13 @@ fn jet(parent: &Parent, t: f64) -> CurveJet {
 }
 
 impl SmoothPlan {
-    /// Find a better position for `v`.
+    /// Find a better position for `v` under `objective`.
     ///
     /// # Errors
     /// [`Reject::NotAnEdge`] for a dead vertex, [`Reject::FixedVertex`] for a
     /// fixed or boundary one, [`Reject::NoChange`] when no position with a
     /// lower ring energy was found.
-    pub fn new(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Result<Self, Reject> {
-        Self::with_objective(mesh, ctx, v, Objective::Sum)
-    }
-
-    /// [`SmoothPlan::new`] with the given objective.
-    ///
-    /// # Errors
-    /// As [`SmoothPlan::new`].
-    pub fn with_objective(
+    pub(crate) fn with_objective(
         mesh: &TriMesh,
         ctx: &Context,
         v: VertexId,
@@ -111,7 +103,7 @@ impl SmoothPlan {
         if !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let r = ring(mesh, v);
+        let r = mesh.vertex_ring(v);
         let faces = r.faces.clone();
         let scale = match objective {
             Objective::Sum => 1.0,
@@ -211,7 +203,7 @@ impl SmoothPlan {
 fn slide_on_boundary(
     mesh: &TriMesh,
     v: VertexId,
-    r: &super::Ring,
+    r: &crate::mesh::VertexRing,
     energy: &impl Fn(Point) -> Option<Amips2>,
 ) -> Result<Point, Reject> {
     let ends: Vec<VertexId> = r
@@ -321,13 +313,13 @@ fn line_search(
 }
 
 /// Smooth the vertex `v` (see the module doc).
-pub fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
+pub(crate) fn try_smooth(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outcome {
     try_smooth_with(mesh, ctx, v, Objective::Sum)
 }
 
 /// Smooth the vertex `v` minimising `objective` over its ring (same rules and
 /// invariants as [`try_smooth`]).
-pub fn try_smooth_with(
+pub(crate) fn try_smooth_with(
     mesh: &mut TriMesh,
     ctx: &Context,
     v: VertexId,
@@ -342,7 +334,7 @@ pub fn try_smooth_with(
     let mut tx = Transaction::new(mesh);
     tx.set_position(v, plan.pos);
     if let Some((section, tn)) = plan.t {
-        let r = ring(&tx, v);
+        let r = tx.vertex_ring(v);
         for &w in &r.neighbours {
             let tags = tx.edge_tags(v, w);
             if !tags

@@ -24,7 +24,7 @@ enum Candidate {
 
 /// Everything a split of one edge needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
-pub struct SplitPlan {
+pub(crate) struct SplitPlan {
     a: VertexId,
     b: VertexId,
     /// The faces on the edge, with the local index of the vertex opposite it.
@@ -38,7 +38,12 @@ impl SplitPlan {
     ///
     /// # Errors
     /// [`Reject::NotAnEdge`] when `a b` is not an edge of live faces.
-    pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        ctx: &Context,
+        a: VertexId,
+        b: VertexId,
+    ) -> Result<Self, Reject> {
         if a == b || !mesh.is_vertex_alive(a) || !mesh.is_vertex_alive(b) {
             return Err(Reject::NotAnEdge);
         }
@@ -164,7 +169,7 @@ impl SplitPlan {
 }
 
 /// Split the edge `a b` (see the module doc). Splits ignore the energy rule.
-pub fn try_split(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
+pub(crate) fn try_split(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
     let plan = match SplitPlan::new(mesh, ctx, a, b) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),

@@ -20,7 +20,7 @@ use kurbo::Line;
 
 /// Everything a swap needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
-pub struct SwapPlan {
+pub(crate) struct SwapPlan {
     faces: [FaceId; 2],
     new: [[VertexId; 3]; 2],
     c: VertexId,
@@ -34,7 +34,12 @@ impl SwapPlan {
     /// # Errors
     /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (a
     /// tagged edge), [`Reject::Topology`] (`c d` is already an edge).
-    pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        ctx: &Context,
+        a: VertexId,
+        b: VertexId,
+    ) -> Result<Self, Reject> {
         let q = quad(mesh, a, b)?;
         if !mesh.edge_tags(a, b).is_empty() {
             return Err(Reject::FeatureRule);
@@ -84,7 +89,7 @@ fn other_diagonal_free(mesh: &TriMesh, q: &EdgeQuad) -> Result<(), Reject> {
 }
 
 /// Swap the edge `a b` (see the module doc).
-pub fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
+pub(crate) fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
     let plan = match SwapPlan::new(mesh, ctx, a, b) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
@@ -120,7 +125,7 @@ fn validate_and_commit(
 
 /// Everything a reroute needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
-pub struct ReroutePlan {
+pub(crate) struct ReroutePlan {
     swap: SwapPlan,
     a: VertexId,
     b: VertexId,
@@ -136,7 +141,12 @@ impl ReroutePlan {
     /// [`Reject::NotAnEdge`], [`Reject::Boundary`], [`Reject::FeatureRule`] (not
     /// a secondary edge, a primary tag on it, or neither opposite vertex within
     /// ε of it), [`Reject::Topology`] (`c d` is already an edge).
-    pub fn new(mesh: &TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Result<Self, Reject> {
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        ctx: &Context,
+        a: VertexId,
+        b: VertexId,
+    ) -> Result<Self, Reject> {
         let q = quad(mesh, a, b)?;
         let tags = mesh.edge_tags(a, b);
         if tags.is_empty()
@@ -182,7 +192,7 @@ impl ReroutePlan {
 
 /// Reroute the secondary edge `a b` through the nearer opposite vertex (see the
 /// module doc).
-pub fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
+pub(crate) fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
     let plan = match ReroutePlan::new(mesh, ctx, a, b) {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),

@@ -414,9 +414,9 @@ fn feature_edges_are_never_swapped_and_endpoints_never_collapse() {
     // A primary vertex may not leave its curve through an off-curve edge.
     let v = mesh
         .vertices()
-        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .find(|&v| matches!(role(&mesh, v, &mesh.vertex_ring(v)), Role::Primary { .. }))
         .expect("an interior curve vertex");
-    let r = ring(&mesh, v);
+    let r = mesh.vertex_ring(v);
     let off_edge = r
         .neighbours
         .iter()
@@ -436,11 +436,11 @@ fn smoothing_moves_a_primary_vertex_along_its_curve() {
     let mut moved = 0;
     let verts: Vec<VertexId> = mesh.vertices().collect();
     for v in verts {
-        let Role::Primary { section, t, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+        let Role::Primary { section, t, .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
             continue;
         };
         if let Outcome::Applied(_) = try_smooth(&mut mesh, &ctx, v) {
-            let Role::Primary { t: t2, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+            let Role::Primary { t: t2, .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
                 panic!("still primary")
             };
             assert_ne!(t, t2);
@@ -460,9 +460,9 @@ fn smoothing_improves_a_bad_free_vertex() {
     let (mut mesh, ctx) = delaunay_mesh(4, EnergyRule::NoWorseMax);
     let v = mesh
         .vertices()
-        .find(|&v| role(&mesh, v, &ring(&mesh, v)) == Role::Free)
+        .find(|&v| role(&mesh, v, &mesh.vertex_ring(v)) == Role::Free)
         .expect("a free vertex");
-    let faces = ring(&mesh, v).faces;
+    let faces = mesh.vertex_ring(v).faces;
     let e0 = max_energy(&mesh, &ctx, &faces);
     let mut applied = 0;
     for _ in 0..3 {
@@ -635,9 +635,9 @@ fn smoothing_snaps_a_chord_vertex_onto_its_curve_and_never_away() {
     let (mut mesh, ctx) = delaunay_mesh(5, EnergyRule::Ignore);
     let v = mesh
         .vertices()
-        .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+        .find(|&v| matches!(role(&mesh, v, &mesh.vertex_ring(v)), Role::Primary { .. }))
         .expect("an interior curve vertex");
-    let Role::Primary { along, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+    let Role::Primary { along, .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
         unreachable!()
     };
     // Put v on the chord of its neighbours, as the BSP leaves such vertices.
@@ -674,11 +674,11 @@ fn projection_moves_a_chord_vertex_onto_its_curve_or_closer() {
         let (mut mesh, ctx) = delaunay_mesh(seed, EnergyRule::NoWorseMax);
         let Some(v) = mesh
             .vertices()
-            .find(|&v| matches!(role(&mesh, v, &ring(&mesh, v)), Role::Primary { .. }))
+            .find(|&v| matches!(role(&mesh, v, &mesh.vertex_ring(v)), Role::Primary { .. }))
         else {
             continue;
         };
-        let Role::Primary { along, .. } = role(&mesh, v, &ring(&mesh, v)) else {
+        let Role::Primary { along, .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
             unreachable!()
         };
         let chord = mesh
@@ -712,7 +712,7 @@ fn projection_moves_a_chord_vertex_onto_its_curve_or_closer() {
         // A vertex on its curve is left alone.
         let on = mesh.vertices().find(|&w| {
             w != v
-                && matches!(role(&mesh, w, &ring(&mesh, w)), Role::Primary { .. })
+                && matches!(role(&mesh, w, &mesh.vertex_ring(w)), Role::Primary { .. })
                 && on_curve::off_curve(&mesh, &ctx, w).is_some_and(|d| d <= ctx.on_curve_abs)
         });
         if let Some(w) = on {
@@ -747,7 +747,7 @@ fn boundary_vertices_slide_along_the_box_side_and_stay_on_it() {
         }
         let boundary: Vec<VertexId> = mesh
             .vertices()
-            .filter(|&v| role(&mesh, v, &ring(&mesh, v)) == Role::Boundary)
+            .filter(|&v| role(&mesh, v, &mesh.vertex_ring(v)) == Role::Boundary)
             .collect();
         for v in boundary {
             let p = mesh.position(v);

@@ -1,11 +1,14 @@
 //! Mesh optimization: the schedule of split / collapse / swap / smooth passes
 //! that drives the local operations (`ops`) over the whole mesh, with the sizing
 //! field and the stop rules. The energy it minimises is
-//! [`crate::element::energy`]. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
+//! [`crate::element::energy`]. The curved mesh optimization (`curve::optimize`,
+//! a layer up) drives the same collapse, swap and smoothing passes with a
+//! uniform target. Its tuning constants, with their provenance, head
+//! `schedule.rs`. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
 
-pub mod schedule;
+pub(crate) mod schedule;
 
-pub use schedule::{OptimizeOptions, OptimizeStats, optimize};
+pub(crate) use schedule::{OptimizeOptions, OptimizeStats, optimize};
 
 #[cfg(test)]
 mod tests;

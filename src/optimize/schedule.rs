@@ -49,24 +49,103 @@ use crate::ops::{
 };
 use std::collections::{BTreeMap, BinaryHeap};
 
+/// Edges longer than this multiple of their mean target are split, and a
+/// collapse may not create an edge longer than this multiple (else splits and
+/// collapses would undo each other). Thesis §2.3.2: "larger than 4/3 [Botsch
+/// and Kobbelt 2004; Dunyach et al. 2013] times the average of the target edge
+/// lengths".
+const SPLIT_ABOVE: f64 = 4.0 / 3.0;
 /// Edges shorter than this fraction of their target are collapsed in a pass
-/// (the collapse may not make an edge longer than 4/3 of its target, so
-/// splits never undo it).
+/// (the collapse may not make an edge longer than [`SPLIT_ABOVE`] of its
+/// target, so splits never undo it). The thesis (§2.3.2) collapses below 4/5;
+/// 1 measured better on the dev set (8f4bc8a: min-angle ratio 0.94 -> 1.02).
 const COLLAPSE_FACTOR: f64 = 1.0;
 /// Edges shorter than this multiple of `l` are collapsed by the final
 /// coarsening: every edge (the energy rule and [`COARSEN_STRETCH`] decide).
+/// Introduced in 8f4bc8a ("final coarsening over every edge").
 const COARSEN_FACTOR: f64 = f64::INFINITY;
 /// The final coarsening may create edges up to this multiple of `l` (no split
-/// pass follows it to undo them).
+/// pass follows it to undo them). Introduced in 8f4bc8a ("new edges up to 2l").
 const COARSEN_STRETCH: f64 = 2.0;
 /// At most this many min-max polishing passes (min-max smoothing and swaps).
+/// Empirical, introduced in 8f4bc8a.
 const MINMAX_PASSES: usize = 10;
+/// The min-max polish stops once a pass lowers the largest energy by less
+/// than this fraction of it. Empirical, introduced in 8f4bc8a.
+const MINMAX_MIN_GAIN: f64 = 1e-3;
 /// At most this many polishing passes (swaps and smoothing) end the schedule.
+/// Empirical, introduced in 8ea5c2c.
 const POLISH_PASSES: usize = 6;
+/// The polish stops once a pass lowers the mean energy by less than this
+/// fraction of it. Empirical, introduced in 8ea5c2c.
+const POLISH_MIN_GAIN: f64 = 1e-4;
+/// The sizing field is refined after a pass that lowered the largest energy by
+/// less than this (and the mean by less than [`SIZING_STALL_MEAN`]). The
+/// TriWild reference (`optimization.cpp`, `refine`) uses 5e-1 with its energy
+/// (2 for an equilateral triangle); halved for ours (1 for equilateral), as
+/// [`crate::Params::stop_energy`] halves the thesis's 10. Introduced in 020a590.
+const SIZING_STALL_MAX: f64 = 0.25;
+/// See [`SIZING_STALL_MAX`]: the reference's 5e-2 for the mean energy, halved.
+const SIZING_STALL_MEAN: f64 = 0.025;
+/// Once the sizing field has hit its floor, this many passes in a row without
+/// gain stop the schedule (TriWild reference, `optimization.cpp`, `refine`:
+/// `it > 10` and the last 10 passes). Introduced in 020a590.
+const STALL_PASSES: usize = 10;
+/// A pass "without gain" lowers neither the largest nor the mean energy by
+/// more than this (the TriWild reference's 1e-4). Introduced in 020a590.
+const STALL_TOLERANCE: f64 = 1e-4;
+/// The quality goal also needs every edge shorter than this multiple of `l`
+/// (smoothing may stretch a few edges past [`SPLIT_ABOVE`]). Introduced in
+/// 3ff3cbe.
+const STOP_STRETCH: f64 = 2.0;
+/// A triangle refines the sizing field when its energy exceeds the largest
+/// energy divided by this (and [`SIZING_STOP_FRACTION`] of the stop energy).
+/// TriWild reference (`update_scaling_field`: `max_energy / 100`).
+const SIZING_WORST_DIVISOR: f64 = 100.0;
+/// See [`SIZING_WORST_DIVISOR`]: the reference's `stop_energy * 0.9`.
+const SIZING_STOP_FRACTION: f64 = 0.9;
+/// A target near a bad triangle is multiplied by this (thesis §2.3.2: "divided
+/// by 2"; the reference's `refine_scale = 0.5`).
+const SIZING_REFINE: f64 = 0.5;
+/// Every other target is multiplied by this (thesis §2.3.2: "multiplied by
+/// 1.5"; the TriWild reference uses 1.1 when it preserves features).
+const SIZING_RELAX: f64 = 1.5;
+/// Targets within this multiple of a bad vertex's target are refined too,
+/// graded by distance (TriWild reference: `radius0 = ideal_edge_length * 1.8`,
+/// "increasing the radius would increase the #v in output"; ours scales with
+/// the bad vertex's target).
+const SIZING_RADIUS: f64 = 1.8;
+/// Rounds of a collapse pass (refused collapses retried once their
+/// neighbourhood changed). Empirical, introduced in 3ff3cbe.
+const COLLAPSE_ROUNDS: usize = 4;
+/// Pops of one collapse round: this many per queued edge, plus
+/// [`COLLAPSE_BUDGET_EXTRA`] (edges made short are queued again). Empirical,
+/// introduced in 020a590.
+const COLLAPSE_BUDGET_PER_EDGE: usize = 4;
+/// See [`COLLAPSE_BUDGET_PER_EDGE`].
+const COLLAPSE_BUDGET_EXTRA: usize = 16;
+/// A swap must lower the larger energy of its two triangles by more than this
+/// fraction, so equal configurations never flip back and forth. Empirical,
+/// introduced in 020a590.
+const SWAP_MIN_GAIN: f64 = 1e-9;
+/// The envelope stages for vertices left rational (after §2.3.4's, which
+/// sample denser and then widen ε): ε multiplied by each of these in turn,
+/// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, introduced
+/// in 020a590.
+const ENVELOPE_EPS: [f64; 3] = [1.0, 1.5, 2.0];
+/// See [`ENVELOPE_EPS`]: the sampling spacing of every stage, as a fraction
+/// of the original one.
+const ENVELOPE_SPACING: f64 = 0.5;
+/// Smoothing and rounding rounds in one envelope stage. Empirical, introduced
+/// in 020a590.
+const ENVELOPE_ROUNDS: usize = 3;
+/// Seed of the linear schedule's smoothing order: "triwild" in ASCII.
+/// Introduced in 3ff3cbe.
+const SEED: u64 = 0x0074_7269_7769_6c64;
 
 /// Parameters of the schedule, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OptimizeOptions {
+pub(crate) struct OptimizeOptions {
     /// Target edge length `l`: the sizing field's upper bound.
     pub l: f64,
     /// Lower bound of the sizing field (the thesis uses ε).
@@ -341,7 +420,7 @@ impl<'a> Schedule<'a> {
             stamp: Vec::new(),
             failed_collapse: rustc_hash::FxHashMap::default(),
             failed_smooth: Vec::new(),
-            max_stretch: 4.0 / 3.0,
+            max_stretch: SPLIT_ABOVE,
         }
     }
 
@@ -406,7 +485,7 @@ impl<'a> Schedule<'a> {
         let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
         for k in self.mesh.edges().collect::<Vec<_>>() {
             let (len, t) = (self.mesh.distance(k.lo, k.hi), self.mean_target(k));
-            if len > 4.0 / 3.0 * t {
+            if len > SPLIT_ABOVE * t {
                 cands.push((len, k, t));
             }
         }
@@ -441,7 +520,8 @@ impl<'a> Schedule<'a> {
     fn update_sizing(&mut self, worst: f64) -> bool {
         // Collapses refused under the old sizes may pass under the new ones.
         self.failed_collapse.clear();
-        let threshold = (worst / 100.0).max(0.9 * self.opts.stop_energy);
+        let threshold =
+            (worst / SIZING_WORST_DIVISOR).max(SIZING_STOP_FRACTION * self.opts.stop_energy);
         let mut seeds: Vec<VertexId> = Vec::new();
         for f in self.mesh.faces() {
             let v = self.mesh.face(f);
@@ -453,19 +533,19 @@ impl<'a> Schedule<'a> {
         seeds.sort_unstable();
         seeds.dedup();
         let cap = self.mesh.vertex_capacity();
-        let mut mult = vec![1.5f64; cap];
+        let mut mult = vec![SIZING_RELAX; cap];
         // Breadth-first from the bad vertices; `near[v]` = (seed, distance).
         let mut seen = vec![false; cap];
         let mut queue = std::collections::VecDeque::new();
         for &v in &seeds {
-            mult[v.index()] = 0.5;
+            mult[v.index()] = SIZING_REFINE;
             seen[v.index()] = true;
             queue.push_back((v, v));
         }
         while let Some((v, seed)) = queue.pop_front() {
-            let radius = 1.8 * self.target_of(seed);
+            let radius = SIZING_RADIUS * self.target_of(seed);
             let ps = self.mesh.position(seed);
-            for w in ops::ring(self.mesh, v).neighbours {
+            for w in self.mesh.vertex_ring(v).neighbours {
                 let i = w.index();
                 if seen[i] {
                     continue;
@@ -473,7 +553,7 @@ impl<'a> Schedule<'a> {
                 seen[i] = true;
                 let dist = self.mesh.position(w).distance(ps);
                 if dist < radius {
-                    let m = 0.5 + 0.5 * dist / radius;
+                    let m = SIZING_REFINE + (1.0 - SIZING_REFINE) * dist / radius;
                     mult[i] = mult[i].min(m);
                     queue.push_back((w, seed));
                 }
@@ -496,7 +576,7 @@ impl<'a> Schedule<'a> {
         // Refused collapses are retried (in a new round) once a collapse has
         // changed their neighbourhood, as long as rounds make progress.
         let mut total = 0;
-        for _ in 0..4 {
+        for _ in 0..COLLAPSE_ROUNDS {
             let n = self.collapse_round(factor);
             total += n;
             if n == 0 {
@@ -517,7 +597,7 @@ impl<'a> Schedule<'a> {
                 heap.push(std::cmp::Reverse((len.to_bits(), k)));
             }
         }
-        let mut budget = 4 * heap.len() + 16;
+        let mut budget = COLLAPSE_BUDGET_PER_EDGE * heap.len() + COLLAPSE_BUDGET_EXTRA;
         let mut applied = 0;
         while let Some(std::cmp::Reverse((bits, k))) = heap.pop() {
             if budget == 0 {
@@ -551,12 +631,9 @@ impl<'a> Schedule<'a> {
                 }
             }
             if !tried {
-                *self
-                    .stats
+                self.stats
                     .collapse
-                    .rejected
-                    .entry("edge_length")
-                    .or_default() += 1;
+                    .record(&Outcome::Rejected(Reject::EdgeLength));
             }
             if !applied_now {
                 self.failed_collapse.insert(k, self.clock);
@@ -568,7 +645,7 @@ impl<'a> Schedule<'a> {
                 } else {
                     k.hi
                 };
-                for w in ops::ring(self.mesh, u).neighbours {
+                for w in self.mesh.vertex_ring(u).neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
                     if len < factor * self.mean_target(e) {
@@ -586,7 +663,7 @@ impl<'a> Schedule<'a> {
     fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
         let pu = self.mesh.position(u);
         let tu = self.target_of(u);
-        for w in ops::ring(self.mesh, v).neighbours {
+        for w in self.mesh.vertex_ring(v).neighbours {
             if w == u {
                 continue;
             }
@@ -723,7 +800,7 @@ impl<'a> Schedule<'a> {
 }
 
 /// Primary vertices farther than `ctx.on_curve_abs` from their curve point.
-pub fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
+pub(crate) fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId> {
     let mut primary: Vec<VertexId> = mesh
         .tagged_edges()
         .filter(|(_, tags)| tags.iter().any(|t| matches!(t, FeatureOn::Primary { .. })))
@@ -750,161 +827,213 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
     let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
     let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.
-    (new.is_finite() && new < old * (1.0 - 1e-9)).then_some(old - new)
+    (new.is_finite() && new < old * (1.0 - SWAP_MIN_GAIN)).then_some(old - new)
 }
 
 /// Improve `mesh` in place (see the module doc). `ctx.envelope` may be
 /// restaged (denser sampling, larger ε) when rational vertices are left.
-pub fn optimize(mesh: &mut TriMesh, ctx: &mut Context, opts: &OptimizeOptions) -> OptimizeStats {
+pub(crate) fn optimize(
+    mesh: &mut TriMesh,
+    ctx: &mut Context,
+    opts: &OptimizeOptions,
+) -> OptimizeStats {
     let mut ever_off = Vec::new();
-    let mut s = Schedule::new(mesh, ctx, opts, 0x0074_7269_7769_6c64);
-    let mut rational = s.round_all();
-    let mut off = s.project_all(&mut ever_off);
-    let mut last = measure(s.mesh);
-    let mut just_updated = false;
-    let mut hit_floor = false;
-    let mut history: Vec<(f64, f64)> = Vec::new();
-    for pass in 0..opts.max_passes {
-        let good = last.min_angle > opts.alpha_deg || last.max_energy < opts.stop_energy;
-        if good && rational == 0 && off == 0 && last.longest <= 2.0 * opts.l {
-            s.stats.stop = StopReason::Quality;
-            break;
+    let mut s = Schedule::new(mesh, ctx, opts, SEED);
+    let rational = s.improve(&mut ever_off);
+    s.coarsen();
+    s.polish();
+    s.minmax_polish();
+    let rational = s.envelope_stages(rational);
+    s.finish(rational, &mut ever_off)
+}
+
+/// Whether the quality goal is met: every vertex in `f64` and on its curve, no
+/// edge longer than `2 l`, and the minimum angle above α or the maximum energy
+/// below the stop energy (over the triangles not locked).
+fn quality_reached(m: &Measure, opts: &OptimizeOptions, rational: usize, off: usize) -> bool {
+    let good = m.min_angle > opts.alpha_deg || m.max_energy < opts.stop_energy;
+    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * opts.l
+}
+
+/// Whether a pass from `last` to `now` paid off too little at the current
+/// sizes (then the sizing field is refined).
+fn paid_off_little(last: &Measure, now: &Measure) -> bool {
+    last.max_energy - now.max_energy < SIZING_STALL_MAX
+        && last.mean_energy - now.mean_energy < SIZING_STALL_MEAN
+}
+
+/// Whether the last ten passes of `history` (maximum and mean energy after
+/// each pass) improved neither.
+fn stalled(history: &[(f64, f64)]) -> bool {
+    let n = history.len();
+    n > STALL_PASSES
+        && (n - STALL_PASSES..n).all(|i| {
+            history[i].0 - history[i - 1].0 >= -STALL_TOLERANCE
+                && history[i].1 - history[i - 1].1 >= -STALL_TOLERANCE
+        })
+}
+
+impl Schedule<'_> {
+    /// The main passes (split, collapse, swap, smooth, round, project), the
+    /// sizing field refined when they stop paying off, until a stop rule holds
+    /// or the pass limit. Returns how many vertices stay rational.
+    fn improve(&mut self, ever_off: &mut Vec<VertexId>) -> usize {
+        let opts = self.opts;
+        let mut rational = self.round_all();
+        let mut off = self.project_all(ever_off);
+        let mut last = measure(self.mesh);
+        let mut just_updated = false;
+        let mut hit_floor = false;
+        let mut history: Vec<(f64, f64)> = Vec::new();
+        for pass in 0..opts.max_passes {
+            if quality_reached(&last, &opts, rational, off) {
+                self.stats.stop = StopReason::Quality;
+                break;
+            }
+            self.stats.passes = pass + 1;
+            let (long, splits) = self.split_pass();
+            let collapses = self.collapse_pass(COLLAPSE_FACTOR);
+            let swaps = self.swap_pass();
+            let smooths = self.smooth_pass();
+            rational = self.round_all();
+            off = self.project_all(ever_off);
+            let now = measure(self.mesh);
+            tracing::debug!(
+                pass,
+                long,
+                splits,
+                collapses,
+                swaps,
+                smooths,
+                rational,
+                off,
+                min_angle = now.min_angle,
+                max_energy = now.max_energy,
+                mean_energy = now.mean_energy,
+                faces = self.mesh.num_faces(),
+                "optimization pass"
+            );
+            // Refine the sizing field only when the operations stop paying off
+            // at the current sizes (then give them a pass to use the new sizes).
+            if !just_updated && paid_off_little(&last, &now) {
+                hit_floor |= self.update_sizing(now.max_energy);
+                just_updated = true;
+            } else {
+                just_updated = false;
+            }
+            last = now;
+            history.push((now.max_energy, now.mean_energy));
+            // Once the sizes are at their floor, ten passes without any gain end it.
+            if hit_floor && rational == 0 && off == 0 && stalled(&history) {
+                self.stats.stop = StopReason::Stalled;
+                break;
+            }
         }
-        s.stats.passes = pass + 1;
-        let (long, splits) = s.split_pass();
-        let collapses = s.collapse_pass(COLLAPSE_FACTOR);
-        let swaps = s.swap_pass();
-        let smooths = s.smooth_pass();
-        rational = s.round_all();
-        off = s.project_all(&mut ever_off);
-        let now = measure(s.mesh);
-        tracing::debug!(
-            pass,
-            long,
-            splits,
-            collapses,
-            swaps,
-            smooths,
-            rational,
-            off,
-            min_angle = now.min_angle,
-            max_energy = now.max_energy,
-            mean_energy = now.mean_energy,
-            faces = s.mesh.num_faces(),
-            "optimization pass"
-        );
-        // Refine the sizing field only when the operations stop paying off
-        // at the current sizes (then give them a pass to use the new sizes).
-        if !just_updated
-            && last.max_energy - now.max_energy < 0.25
-            && last.mean_energy - now.mean_energy < 0.025
-        {
-            hit_floor |= s.update_sizing(now.max_energy);
-            just_updated = true;
-        } else {
-            just_updated = false;
-        }
-        last = now;
-        history.push((now.max_energy, now.mean_energy));
-        // Once the sizes are at their floor, ten passes without any gain end it.
-        let n = history.len();
-        if hit_floor
-            && n > 10
-            && rational == 0
-            && off == 0
-            && (n - 10..n).all(|i| {
-                history[i].0 - history[i - 1].0 >= -1e-4 && history[i].1 - history[i - 1].1 >= -1e-4
-            })
-        {
-            s.stats.stop = StopReason::Stalled;
-            break;
-        }
+        rational
     }
-    // Coarsen where the sizing field was refined for nothing: targets back to
-    // `l`, one collapse pass of every edge shorter than `l` whose collapse
-    // makes no edge longer than 4/3 `l` (collapses never make the local worst
-    // triangle worse).
-    let all: Vec<VertexId> = s.mesh.vertices().collect();
-    for v in all {
-        s.set_target(v, opts.l);
-    }
-    s.failed_collapse.clear();
-    s.max_stretch = COARSEN_STRETCH;
-    // Coarsening may make a ring worse, up to the stop energy (the quality
-    // asked for) but never worse than the mesh's worst triangle (outside the
-    // locked ones): the quality the goal measured holds.
-    s.ctx.energy_floor = measure(s.mesh).max_energy.min(opts.stop_energy);
-    s.collapse_pass(COARSEN_FACTOR);
-    s.ctx.energy_floor = 0.0;
-    // Polish: swaps and smoothing only (no change of size), each never making
-    // a local worst triangle worse, while they still improve the mesh.
-    let mut before = measure(s.mesh);
-    for _ in 0..POLISH_PASSES {
-        let changed = s.swap_pass() + s.smooth_pass();
-        let now = measure(s.mesh);
-        let gain = before.mean_energy - now.mean_energy;
-        before = now;
-        if changed == 0 || gain < 1e-4 * now.mean_energy {
-            break;
+
+    /// Coarsen where the sizing field was refined for nothing: targets back to
+    /// `l`, one collapse pass of every edge whose collapse makes no edge longer
+    /// than [`COARSEN_STRETCH`] `l` (collapses never make the local worst
+    /// triangle worse).
+    fn coarsen(&mut self) {
+        let all: Vec<VertexId> = self.mesh.vertices().collect();
+        for v in all {
+            self.set_target(v, self.opts.l);
         }
+        self.failed_collapse.clear();
+        self.max_stretch = COARSEN_STRETCH;
+        // Coarsening may make a ring worse, up to the stop energy (the quality
+        // asked for) but never worse than the mesh's worst triangle (outside the
+        // locked ones): the quality the goal measured holds.
+        self.ctx.energy_floor = measure(self.mesh).max_energy.min(self.opts.stop_energy);
+        self.collapse_pass(COARSEN_FACTOR);
+        self.ctx.energy_floor = 0.0;
     }
-    // Min-max polish: smoothing that lowers each ring's largest energy (and
-    // swaps), while the worst triangle still improves.
-    s.failed_smooth.clear();
-    let mut worst = measure(s.mesh).max_energy;
-    for _ in 0..MINMAX_PASSES {
-        let changed = s.smooth_pass_with(Objective::MinMax) + s.swap_pass();
-        let now = measure(s.mesh).max_energy;
-        let gain = worst - now;
-        worst = now;
-        if changed == 0 || gain < 1e-3 * now {
-            break;
-        }
-    }
-    // Envelope stages (§2.3.4): rational vertices left get more room.
-    let base = s.ctx.envelope.eps();
-    let spacing = s.ctx.envelope.spacing();
-    let stages = [
-        (base, 0.5 * spacing),
-        (1.5 * base, 0.5 * spacing),
-        (2.0 * base, 0.5 * spacing),
-    ];
-    for (eps, sp) in stages {
-        if rational == 0 {
-            break;
-        }
-        s.stats.envelope_stages += 1;
-        s.ctx.envelope = s.ctx.envelope.restaged(eps, sp);
-        for _ in 0..3 {
-            s.smooth_pass();
-            rational = s.round_all();
-            if rational == 0 {
+
+    /// Polish: swaps and smoothing only (no change of size), each never making
+    /// a local worst triangle worse, while they still improve the mean energy.
+    fn polish(&mut self) {
+        let mut before = measure(self.mesh);
+        for _ in 0..POLISH_PASSES {
+            let changed = self.swap_pass() + self.smooth_pass();
+            let now = measure(self.mesh);
+            let gain = before.mean_energy - now.mean_energy;
+            before = now;
+            if changed == 0 || gain < POLISH_MIN_GAIN * now.mean_energy {
                 break;
             }
         }
     }
-    off = s.project_all(&mut ever_off);
-    let (min_angle, max_e) = measure(s.mesh).all;
-    s.stats.rational_left = rational;
-    s.stats.off_curve_left = off;
-    if off > 0 {
-        for v in off_curve_vertices(s.mesh, s.ctx) {
-            tracing::debug!(
-                vertex = ?s.mesh.position(v),
-                off = ?on_curve::off_curve(s.mesh, s.ctx, v),
-                tag = ?s.mesh.vertex_tag(v),
-                "primary vertex left off its curve"
-            );
+
+    /// Min-max polish: smoothing that lowers each ring's largest energy (and
+    /// swaps), while the worst triangle still improves.
+    fn minmax_polish(&mut self) {
+        self.failed_smooth.clear();
+        let mut worst = measure(self.mesh).max_energy;
+        for _ in 0..MINMAX_PASSES {
+            let changed = self.smooth_pass_with(Objective::MinMax) + self.swap_pass();
+            let now = measure(self.mesh).max_energy;
+            let gain = worst - now;
+            worst = now;
+            if changed == 0 || gain < MINMAX_MIN_GAIN * now {
+                break;
+            }
         }
     }
-    s.stats.projected_vertices = ever_off
-        .iter()
-        .filter(|&&v| {
-            s.mesh.is_vertex_alive(v)
-                && on_curve::off_curve(s.mesh, s.ctx, v).unwrap_or(0.0) <= s.ctx.on_curve_abs
-        })
-        .count();
-    s.stats.min_angle_deg = min_angle;
-    s.stats.max_amips = max_e;
-    s.stats
+
+    /// Envelope stages (§2.3.4) while `rational` vertices are left: each gives
+    /// them more room (denser sampling, then a larger ε) and smooths and
+    /// rounds again. Returns how many stay rational.
+    fn envelope_stages(&mut self, mut rational: usize) -> usize {
+        let base = self.ctx.envelope.eps();
+        let spacing = self.ctx.envelope.spacing();
+        for scale in ENVELOPE_EPS {
+            let (eps, sp) = (scale * base, ENVELOPE_SPACING * spacing);
+            if rational == 0 {
+                break;
+            }
+            self.stats.envelope_stages += 1;
+            self.ctx.envelope = self.ctx.envelope.restaged(eps, sp);
+            for _ in 0..ENVELOPE_ROUNDS {
+                self.smooth_pass();
+                rational = self.round_all();
+                if rational == 0 {
+                    break;
+                }
+            }
+        }
+        rational
+    }
+
+    /// The last projection of off-curve primary vertices, and the final
+    /// statistics (`rational` vertices left; `ever_off`: the primary vertices
+    /// that were ever off their curve).
+    fn finish(mut self, rational: usize, ever_off: &mut Vec<VertexId>) -> OptimizeStats {
+        let off = self.project_all(ever_off);
+        let (min_angle, max_e) = measure(self.mesh).all;
+        self.stats.rational_left = rational;
+        self.stats.off_curve_left = off;
+        if off > 0 {
+            for v in off_curve_vertices(self.mesh, self.ctx) {
+                tracing::debug!(
+                    vertex = ?self.mesh.position(v),
+                    off = ?on_curve::off_curve(self.mesh, self.ctx, v),
+                    tag = ?self.mesh.vertex_tag(v),
+                    "primary vertex left off its curve"
+                );
+            }
+        }
+        self.stats.projected_vertices = ever_off
+            .iter()
+            .filter(|&&v| {
+                self.mesh.is_vertex_alive(v)
+                    && on_curve::off_curve(self.mesh, self.ctx, v).unwrap_or(0.0)
+                        <= self.ctx.on_curve_abs
+            })
+            .count();
+        self.stats.min_angle_deg = min_angle;
+        self.stats.max_amips = max_e;
+        self.stats
+    }
 }

@@ -775,7 +775,7 @@ mod tests {
             for binary in [false, true] {
                 let p = dir.path().join("m.msh");
                 write_msh(&m, &p, MshOptions { version, binary }).expect("write");
-                let r = crate::input::read_msh_file(&p).expect("read");
+                let r = crate::read_msh_file(&p).expect("read");
                 assert_eq!(r.format.binary, binary);
                 assert_eq!(r.nodes, m.nodes);
                 assert_eq!(r.triangle_blocks.len(), 1);
@@ -806,14 +806,14 @@ mod tests {
         };
         // every truncation is an error, never a panic
         for n in 0..good.len() {
-            let _ = crate::input::read_msh(&good[..n]);
+            let _ = crate::read_msh(&good[..n]);
         }
-        assert!(crate::input::read_msh(&good[..good.len() / 2]).is_err());
+        assert!(crate::read_msh(&good[..good.len() / 2]).is_err());
         // flipping bytes never panics
         for i in 0..good.len() {
             let mut b = good.clone();
             b[i] ^= 0x5a;
-            let _ = crate::input::read_msh(&b);
+            let _ = crate::read_msh(&b);
         }
         for bad in [
             &b""[..],
@@ -823,7 +823,7 @@ mod tests {
             b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 nan 0 0\n$EndNodes\n",
             b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n99999999999\n$EndNodes\n",
         ] {
-            assert!(matches!(crate::input::read_msh(bad), Err(crate::Error::BadMesh(_))), "{:?}", String::from_utf8_lossy(bad));
+            assert!(matches!(crate::read_msh(bad), Err(crate::Error::BadMesh(_))), "{:?}", String::from_utf8_lossy(bad));
         }
     }
 }

@@ -1,15 +1,17 @@
-//! The pipeline: load → mesh → (regions, curving) → output, with per-stage timings
-//! gathered into a [`Report`].
+//! The pipeline: load → mesh (and curve) → regions → output, with per-stage
+//! timings gathered into a [`Report`].
 //!
-//! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild's
-//! linear path, features → exact BSP (`bsp`) → rounded [`LinearMesh`]
-//! (`linear`) → AMIPS optimization (`optimize`); a vertex that stays rational
-//! is an error, never written (DESIGN "Exactness"). `--stop-after bsp` delivers
-//! the raw BSP mesh, `--linear` the optimized one.
+//! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild:
+//! features → exact BSP (`bsp`) → AMIPS optimization (`optimize`) → curving
+//! (`curve`); a vertex that stays rational is an error, never written (DESIGN
+//! "Exactness"). `--stop-after bsp` delivers the BSP mesh, `--linear` the
+//! optimized one, each as a [`LinearMesh`] (`linear`); the curved mesh is
+//! delivered as a [`CurvedMesh`]. Both become a [`FemMesh`] whose vertices are
+//! numbered and feature lines written the same way
+//! ([`crate::fem::VertexNumbers`], [`crate::fem::feature_lines`]).
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
-use crate::element::Order;
 use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
@@ -154,9 +156,9 @@ pub struct Report {
     pub quality: Quality,
     /// Physical surfaces (triangles and area of each) and classification counts.
     pub regions: RegionReport,
-    /// Feature preprocessing counts (TriWild meshers only).
+    /// Feature preprocessing counts (TriWild mesher only).
     pub features: Option<FeatureCounts>,
-    /// Counts and timings of the BSP stage (`--mesher bsp` only); its
+    /// Counts and timings of the BSP stage (TriWild mesher only); its
     /// `rational_before_rounding` and `rational_vertices` say how many vertices
     /// were still rational before and after rounding.
     pub bsp: Option<BspStats>,
@@ -191,6 +193,43 @@ pub struct Meshed {
     pub mesh: FemMesh,
     /// Report (output counts and quality filled in).
     pub report: Report,
+}
+
+/// The feature analysis of a drawing (what `triwild features` writes): the
+/// primary and secondary features of thesis §4.3.1 and §4.4, before any meshing.
+#[derive(Clone, Debug)]
+pub struct FeatureAnalysis {
+    set: FeatureSet,
+}
+
+impl FeatureAnalysis {
+    /// Analyse `drawing` with `params`' lengths.
+    pub fn new(drawing: &Drawing, params: &Params) -> FeatureAnalysis {
+        FeatureAnalysis {
+            set: FeatureSet::build(drawing, &params.resolve(drawing.diagonal())),
+        }
+    }
+
+    /// The feature set as JSON (docs/features-json.md describes the format).
+    pub fn json(&self) -> serde_json::Value {
+        crate::features::to_json(&self.set)
+    }
+
+    /// An SVG picture of the features over `drawing` (the drawing analysed).
+    pub fn svg(&self, drawing: &Drawing) -> String {
+        crate::features::to_svg(&self.set, drawing)
+    }
+
+    /// The counts of the analysis (input curves, primary sections, secondary
+    /// polylines, ...), as in `--stats`.
+    pub fn counts(&self) -> serde_json::Value {
+        serde_json::to_value(self.set.counts).expect("internal: counts serialize")
+    }
+
+    /// Milliseconds per step of the analysis.
+    pub fn timing(&self) -> serde_json::Value {
+        serde_json::to_value(self.set.timing).expect("internal: timings serialize")
+    }
 }
 
 /// Load an SVG document from memory ([`crate::load_bytes`]) and mesh it with the
@@ -243,7 +282,7 @@ pub fn mesh_drawing_with(
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
             if params.stop_after == Some(Stage::Bsp) {
-                Delivered::Linear(to_linear(&mesh, &fs, &ctx, "bsp", &mut times)?)
+                Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
                 let stats = times.time("optimize", || {
                     crate::optimize::optimize(
@@ -253,7 +292,7 @@ pub fn mesh_drawing_with(
                     )
                 });
                 if params.paranoid {
-                    check_trimesh(&mesh, "optimize")?;
+                    check_trimesh(&mesh, Stage::Optimize)?;
                 }
                 if stats.off_curve_left > 0 {
                     warnings.push(format!(
@@ -263,15 +302,10 @@ pub fn mesh_drawing_with(
                 }
                 optimize = Some(stats);
                 if params.stop_after == Some(Stage::Optimize) {
-                    Delivered::Linear(to_linear(&mesh, &fs, &ctx, "optimize", &mut times)?)
+                    Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Optimize, &mut times)?)
                 } else {
                     let (cm, cs) = times.time("curve", || {
-                        let order = match params.order {
-                            1 => Order::Linear,
-                            2 => Order::Quadratic,
-                            _ => Order::Cubic,
-                        };
-                        let opts = CurveOptions::new(order, resolved.d)
+                        let opts = CurveOptions::new(params.order, resolved.d)
                             .with_l_min_abs(resolved.l_min)
                             .with_l_abs(resolved.l)
                             .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
@@ -364,7 +398,11 @@ fn bsp_input(fs: &FeatureSet, chains: &PrimaryChains) -> BspInput {
 /// # Errors
 /// [`Error::Meshing`] if the BSP fails, or (with `params.paranoid`) if its mesh
 /// has a defect.
-pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, FeatureSet, Context)> {
+#[cfg(test)]
+pub(crate) fn bsp_stage(
+    drawing: &Drawing,
+    params: &Params,
+) -> Result<(TriMesh, FeatureSet, Context)> {
     params.validate()?;
     let resolved = params.resolve(drawing.diagonal());
     let mut times = Times::default();
@@ -382,7 +420,8 @@ pub fn bsp_stage(drawing: &Drawing, params: &Params) -> Result<(TriMesh, Feature
 ///
 /// # Errors
 /// As [`bsp_stage`].
-pub fn optimize_stage(
+#[cfg(test)]
+pub(crate) fn optimize_stage(
     drawing: &Drawing,
     params: &Params,
 ) -> Result<(TriMesh, FeatureSet, Context, OptimizeStats)> {
@@ -405,13 +444,13 @@ fn bsp_trimesh(
     let bbox = padded_box(drawing, resolved.padding);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
     if params.paranoid {
-        times.time("check", || check_trimesh(&mesh, "bsp"))?;
+        times.time("check", || check_trimesh(&mesh, Stage::Bsp))?;
     }
     Ok((mesh, stats))
 }
 
 /// `--paranoid`: the full validator on a stage's mesh.
-fn check_trimesh(mesh: &TriMesh, stage: &'static str) -> Result<()> {
+fn check_trimesh(mesh: &TriMesh, stage: Stage) -> Result<()> {
     let defects = mesh.check();
     match defects.first() {
         Some(d) => Err(Error::meshing(
@@ -424,7 +463,7 @@ fn check_trimesh(mesh: &TriMesh, stage: &'static str) -> Result<()> {
 
 /// The optimizer's options from the parameters (thesis §2.3.2: target `l`,
 /// sizing floor ε).
-pub fn optimize_options(params: &Params, resolved: &Resolved) -> OptimizeOptions {
+pub(crate) fn optimize_options(params: &Params, resolved: &Resolved) -> OptimizeOptions {
     OptimizeOptions {
         l: resolved.l,
         l_floor: resolved.eps.min(resolved.l),
@@ -440,7 +479,7 @@ fn to_linear(
     mesh: &TriMesh,
     fs: &FeatureSet,
     ctx: &Context,
-    stage: &'static str,
+    stage: Stage,
     times: &mut Times,
 ) -> Result<LinearMesh> {
     times.time("linear", || {
@@ -450,7 +489,7 @@ fn to_linear(
 
 /// The source shape and kind of the feature a tag stands for (primary tags
 /// index `ctx.sections`, secondary ones `fs.secondary`).
-pub fn feature_of(
+pub(crate) fn feature_of(
     fs: &FeatureSet,
     ctx: &Context,
     tag: &FeatureOn,

@@ -118,7 +118,7 @@ impl TriangleQuality {
 /// The 2D conformal AMIPS energy `tr(JᵀJ) / (2 det J)` of the affine map `J` taking the
 /// equilateral reference triangle `(0,0), (1,0), (1/2, √3/2)` onto `corners`;
 /// `+∞` when `det J ≤ 0` (degenerate or clockwise) or not finite.
-pub fn amips(corners: [Point; 3]) -> f64 {
+pub(crate) fn amips(corners: [Point; 3]) -> f64 {
     // One definition of the energy for measuring and for optimizing.
     let [a, b, c] = corners;
     crate::element::energy::amips(a, b, c)

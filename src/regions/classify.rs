@@ -12,7 +12,7 @@ use std::collections::HashMap;
 /// Options of [`classify`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
-pub struct ClassifyOptions {
+pub(crate) struct ClassifyOptions {
     /// Distance to an input curve (user units) below which a sample point's
     /// winding number is not trusted and another interior point is tried. The
     /// pipeline uses the numerical tolerance ε_m (default 1e-8·d).
@@ -25,14 +25,15 @@ pub struct ClassifyOptions {
 
 impl ClassifyOptions {
     /// Options with tolerance `eps_abs` (user units) and per-face voting.
-    pub fn new(eps_abs: f64) -> Self {
+    pub(crate) fn new(eps_abs: f64) -> Self {
         ClassifyOptions {
             eps_abs,
             vote_per_face: true,
         }
     }
     /// Turn per-face voting on or off.
-    pub fn with_vote_per_face(mut self, vote: bool) -> Self {
+    #[cfg(test)]
+    pub(crate) fn with_vote_per_face(mut self, vote: bool) -> Self {
         self.vote_per_face = vote;
         self
     }
@@ -40,7 +41,7 @@ impl ClassifyOptions {
 
 /// The classification of a mesh's triangles.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct RegionAssignment {
+pub(crate) struct RegionAssignment {
     /// For each triangle, the topmost filled shape covering it; `None` is the background.
     pub owner: Vec<Option<ShapeId>>,
     /// Triangles none of whose sample points was clear of the outlines (their
@@ -120,7 +121,11 @@ impl Painting {
 /// ([`super::winding`]). With [`ClassifyOptions::vote_per_face`], each face of
 /// the mesh (triangles connected across edges that are not line elements) then
 /// takes the label that covers most of its area.
-pub fn classify(drawing: &Drawing, mesh: &FemMesh, opts: &ClassifyOptions) -> RegionAssignment {
+pub(crate) fn classify(
+    drawing: &Drawing,
+    mesh: &FemMesh,
+    opts: &ClassifyOptions,
+) -> RegionAssignment {
     let painting = Painting::new(drawing);
     let order = mesh.order();
     let n = mesh.triangle_count();

@@ -42,11 +42,11 @@
 
 mod classify;
 mod element;
-mod select;
-pub mod winding;
+pub(crate) mod select;
+pub(crate) mod winding;
 
-pub use classify::{ClassifyOptions, RegionAssignment, classify};
-pub use select::{BACKGROUND, DOMAIN, RegionMode, RegionOptions, RegionStat, apply, stats_of};
+pub(crate) use classify::{ClassifyOptions, classify};
+pub(crate) use select::{DOMAIN, RegionOptions, RegionStat, apply, stats_of};
 
 use crate::Result;
 use crate::fem::FemMesh;
@@ -73,7 +73,7 @@ pub struct RegionReport {
 /// # Errors
 /// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
 /// mesh, or nothing left.
-pub fn tag(
+pub(crate) fn tag(
     drawing: &Drawing,
     mesh: &FemMesh,
     opts: &RegionOptions,

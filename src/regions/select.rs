@@ -94,9 +94,9 @@ pub struct RegionStat {
 }
 
 /// Name of the surface of triangles no filled shape covers.
-pub const BACKGROUND: &str = "background";
+pub(crate) const BACKGROUND: &str = "background";
 /// Name of the single surface of [`RegionMode::None`].
-pub const DOMAIN: &str = "domain";
+pub(crate) const DOMAIN: &str = "domain";
 
 /// Per-triangle region labels and the label names (background is label 0).
 fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u32>, Vec<String>) {
@@ -156,7 +156,7 @@ fn locate(mesh: &FemMesh, p: Point) -> Option<usize> {
 /// # Errors
 /// [`Error::InvalidParams`] when `--keep` names a region that does not exist,
 /// a `--hole` point lies outside the mesh, or nothing is left.
-pub fn apply(
+pub(crate) fn apply(
     drawing: &Drawing,
     mesh: &FemMesh,
     asg: &RegionAssignment,
@@ -318,7 +318,7 @@ pub fn apply(
 }
 
 /// The surfaces of `mesh` as they are, with their triangle counts and areas.
-pub fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
+pub(crate) fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
     let mut stats: Vec<RegionStat> = mesh
         .surfaces
         .iter()

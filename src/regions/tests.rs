@@ -4,6 +4,7 @@
 use super::*;
 use crate::element::Order;
 use crate::fem::LineKind;
+use crate::regions::select::RegionMode;
 use crate::svg::{Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath};
 use kurbo::{Line, Point, Rect};
 

@@ -34,7 +34,7 @@ const MAX_PIECES: u32 = 4096;
 
 /// The winding number of a point, and whether it is certain.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Winding {
+pub(crate) enum Winding {
     /// The point is clear of the outline (at least `eps_abs / 4` from every
     /// curve, and on no straight piece): the number is exact.
     Clear(i32),
@@ -45,17 +45,17 @@ pub enum Winding {
 
 impl Winding {
     /// The winding number (exact for [`Winding::Clear`]).
-    pub fn number(self) -> i32 {
+    pub(crate) fn number(self) -> i32 {
         match self {
             Winding::Clear(w) | Winding::Near(w) => w,
         }
     }
     /// Whether the number is certain.
-    pub fn is_clear(self) -> bool {
+    pub(crate) fn is_clear(self) -> bool {
         matches!(self, Winding::Clear(_))
     }
     /// Whether a winding number means "inside" under `rule`.
-    pub fn inside(self, rule: FillRule) -> bool {
+    pub(crate) fn inside(self, rule: FillRule) -> bool {
         let w = self.number();
         match rule {
             FillRule::NonZero => w != 0,
@@ -88,7 +88,7 @@ fn control_bbox(c: &CubicBez) -> Rect {
 /// bucketed into horizontal bands, so a query only looks at the pieces whose
 /// vertical extent holds the query point.
 #[derive(Clone, Debug)]
-pub struct Outline {
+pub(crate) struct Outline {
     pieces: Vec<Piece>,
     bbox: Option<Rect>,
     band_y0: f64,
@@ -100,7 +100,7 @@ impl Outline {
     /// The outline of `subpaths`, each closed by a straight segment if open.
     /// Consecutive segments that do not meet exactly are joined by a straight
     /// segment (the loader never produces such gaps; this keeps the chain closed).
-    pub fn new(subpaths: &[Subpath]) -> Outline {
+    pub(crate) fn new(subpaths: &[Subpath]) -> Outline {
         let mut pieces = Vec::new();
         for sp in subpaths {
             if sp.segments.is_empty() {
@@ -134,12 +134,12 @@ impl Outline {
     }
 
     /// The outline of a shape's subpaths.
-    pub fn of_shape(shape: &Shape) -> Outline {
+    pub(crate) fn of_shape(shape: &Shape) -> Outline {
         Outline::new(&shape.subpaths)
     }
 
     /// Bounding box of the control points, `None` for an empty outline.
-    pub fn bbox(&self) -> Option<Rect> {
+    pub(crate) fn bbox(&self) -> Option<Rect> {
         self.bbox
     }
 
@@ -202,7 +202,7 @@ impl Outline {
 
     /// The winding number of `p` around the outline. `eps_abs` (user units, > 0)
     /// is the distance to a curve below which the answer is only a best guess.
-    pub fn winding(&self, p: Point, eps_abs: f64) -> Winding {
+    pub(crate) fn winding(&self, p: Point, eps_abs: f64) -> Winding {
         let margin = eps_abs * 0.25;
         let Some(bb) = self.bbox else {
             return Winding::Clear(0);
@@ -233,7 +233,8 @@ impl Outline {
 
 /// The winding number of `p` around `subpaths` (each closed as SVG fills it).
 /// Builds an [`Outline`] each call; prepare one for repeated queries.
-pub fn winding(subpaths: &[Subpath], p: Point, eps_abs: f64) -> Winding {
+#[cfg(test)]
+pub(crate) fn winding(subpaths: &[Subpath], p: Point, eps_abs: f64) -> Winding {
     Outline::new(subpaths).winding(p, eps_abs)
 }
 

@@ -26,12 +26,12 @@
 //! whose diagonal is not negligible (< 1e-12) relative to its distance from the
 //! origin unless the drawing is a single point.
 
-mod drawing;
+pub(crate) mod drawing;
 mod load;
 mod outline;
 mod soup;
 
-pub use drawing::{
+pub(crate) use drawing::{
     Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
 

@@ -31,3 +31,17 @@ pub(crate) fn svg_files(dir: &Path, out: &mut Vec<PathBuf>) {
         }
     }
 }
+
+/// The dev set's directory and its `.svg` files; `None` (said on stdout) when it holds
+/// none, so a corpus test that needs it can skip.
+#[allow(clippy::print_stdout, reason = "a skipped corpus test says why")]
+pub(crate) fn devset_files() -> Option<(PathBuf, Vec<PathBuf>)> {
+    let dir = devset_dir();
+    let mut files = Vec::new();
+    svg_files(&dir, &mut files);
+    if files.is_empty() {
+        println!("no .svg under {}: skipped", dir.display());
+        return None;
+    }
+    Some((dir, files))
+}

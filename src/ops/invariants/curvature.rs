@@ -11,7 +11,7 @@ use kurbo::CubicBez;
 
 /// Angle (radians, in `[0, π]`) between the end tangents of a cubic; π when a
 /// tangent cannot be found.
-pub fn turn(c: &CubicBez) -> f64 {
+pub(crate) fn turn(c: &CubicBez) -> f64 {
     let tangent = |a: kurbo::Point, b: kurbo::Point, d: kurbo::Point| {
         let t = b - a;
         if t.hypot2() > 0.0 { t } else { d - a }
@@ -30,7 +30,7 @@ pub fn turn(c: &CubicBez) -> f64 {
 /// Whether the piece `[t0, t1]` (either order) of `section` turns less than
 /// `ctx.turn_bound()` (α, or the curved rule's bound in curved mode) and lies
 /// inside the section's interval. An unknown section fails.
-pub fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
+pub(crate) fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
     let Some(s) = ctx.section(section) else {
         return false;
     };

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 
 /// The ε-envelope of a set of polylines (by index), with its search grid.
 #[derive(Clone, Debug)]
-pub struct Envelope {
+pub(crate) struct Envelope {
     eps: f64,
     spacing: f64,
     cell: f64,
@@ -29,7 +29,7 @@ impl Envelope {
     /// The envelope of `polylines` (polyline `i` is the tags' `polyline: i`)
     /// with radius `eps_abs` and sampling spacing `sample_abs` (clamped to
     /// `(0, 2 eps_abs)`), both in user units.
-    pub fn new(polylines: &[Vec<Point>], eps_abs: f64, sample_abs: f64) -> Envelope {
+    pub(crate) fn new(polylines: &[Vec<Point>], eps_abs: f64, sample_abs: f64) -> Envelope {
         let mut segments = Vec::new();
         for (i, pl) in polylines.iter().enumerate() {
             let id = u32::try_from(i).expect("internal: polyline count fits u32");
@@ -42,12 +42,12 @@ impl Envelope {
 
     /// The same input polylines with another radius and sampling spacing (the
     /// envelope stages of thesis §2.3.4: denser sampling, then a larger ε).
-    pub fn restaged(&self, eps_abs: f64, sample_abs: f64) -> Envelope {
+    pub(crate) fn restaged(&self, eps_abs: f64, sample_abs: f64) -> Envelope {
         Envelope::from_segments(self.segments.clone(), eps_abs, sample_abs)
     }
 
     /// The sampling spacing (user units).
-    pub fn spacing(&self) -> f64 {
+    pub(crate) fn spacing(&self) -> f64 {
         self.spacing
     }
 
@@ -109,7 +109,7 @@ impl Envelope {
     }
 
     /// The envelope radius ε (user units).
-    pub fn eps(&self) -> f64 {
+    pub(crate) fn eps(&self) -> f64 {
         self.eps
     }
 
@@ -123,7 +123,7 @@ impl Envelope {
 
     /// The distance from `p` to polyline `polyline` when it is at most `ε`,
     /// else `None`.
-    pub fn distance_within(&self, p: Point, polyline: u32) -> Option<f64> {
+    pub(crate) fn distance_within(&self, p: Point, polyline: u32) -> Option<f64> {
         let (x0, y0) = self.key(Point::new(p.x - self.eps, p.y - self.eps));
         let (x1, y1) = self.key(Point::new(p.x + self.eps, p.y + self.eps));
         let mut best: Option<f64> = None;
@@ -145,7 +145,7 @@ impl Envelope {
 
     /// Whether the segment `a b` lies within ε of polyline `polyline`,
     /// decided conservatively (see the module doc). Rejects when unsure.
-    pub fn contains_segment(&self, a: Point, b: Point, polyline: u32) -> bool {
+    pub(crate) fn contains_segment(&self, a: Point, b: Point, polyline: u32) -> bool {
         let len = a.distance(b);
         let margin = 0.5 * self.spacing;
         if !(len.is_finite() && margin > 0.0) {

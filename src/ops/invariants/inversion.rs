@@ -7,7 +7,7 @@ use crate::exact::Orientation;
 use crate::mesh::{FaceId, TriMesh};
 
 /// Whether every face is exactly counter-clockwise.
-pub fn holds(mesh: &TriMesh, faces: &[FaceId]) -> bool {
+pub(crate) fn holds(mesh: &TriMesh, faces: &[FaceId]) -> bool {
     faces
         .iter()
         .all(|&f| mesh.orientation(f) == Orientation::CounterClockwise)

@@ -9,13 +9,13 @@
 //! - [`curved`]: in curved mode only, every face has at most one curved edge and
 //!   is a certified curved element; the energy rule then compares curved energies.
 
-pub mod curvature;
-pub mod curved;
-pub mod envelope;
-pub mod inversion;
-pub mod on_curve;
+pub(crate) mod curvature;
+pub(crate) mod curved;
+pub(crate) mod envelope;
+pub(crate) mod inversion;
+pub(crate) mod on_curve;
 
-pub use envelope::Envelope;
+pub(crate) use envelope::Envelope;
 
 use super::{Context, CurveBudget, EnergyRule, Reject, max_energy};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};

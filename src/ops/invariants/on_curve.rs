@@ -12,7 +12,7 @@ use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId};
 /// over the sections and parameters its edges give it; a curve that passes
 /// through the vertex twice gives two), or `None` for a vertex on no primary
 /// edge. `Some(∞)` when an edge names an unknown section.
-pub fn off_curve(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Option<f64> {
+pub(crate) fn off_curve(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Option<f64> {
     let mut seen: Vec<(u32, f64)> = Vec::new();
     for f in mesh.incident_faces(v) {
         let i = mesh

@@ -11,7 +11,7 @@
 //! `cargo test --release --lib pipeline::tests::bsp_pipeline -- --ignored --nocapture`.
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
-use super::support::devset::{devset_dir, svg_files};
+use super::support::devset::{devset_files, svg_files};
 
 use super::support::{Msh, check, out_dir, read_msh};
 use crate::features::{FeatureSet, SegmentTag};
@@ -241,13 +241,9 @@ fn median(v: &mut [f64]) -> f64 {
 #[test]
 #[ignore = "slow corpus run over ../shared/data/svg-dev (or TRIWILD_DEVSET)"]
 fn devset_meshes_valid_and_conforming() {
-    let dir = devset_dir();
-    let mut files = Vec::new();
-    svg_files(&dir, &mut files);
-    if files.is_empty() {
-        println!("no .svg under {}: skipped", dir.display());
+    let Some((dir, files)) = devset_files() else {
         return;
-    }
+    };
     let out = out_dir("bsp-devset");
     let (mut ok, mut unloadable, mut failed) = (0usize, 0usize, Vec::new());
     let (mut rational_before, mut rational_after, mut collapsed) = (0usize, 0usize, 0usize);

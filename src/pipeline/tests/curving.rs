@@ -13,7 +13,8 @@
 
 use super::support::devset::{devset_dir, svg_files};
 use super::support::{check_msh, out_dir};
-use crate::curve::{CurveOptions, CurveStats, certify_fem, curve_mesh};
+use crate::certify_fem;
+use crate::curve::{CurveOptions, CurveStats, curve_mesh};
 use crate::element::Order;
 use crate::output::{self, MshOptions};
 use crate::pipeline;
@@ -82,7 +83,7 @@ fn green_area(drawing: &Drawing) -> f64 {
 
 /// Write, certify with the library and with the independent checker.
 fn write_and_check(mesh: &FemMesh, dir: &Path, name: &str) {
-    let c = certify_fem(mesh, &crate::curve::CertifyOptions::DEFAULT);
+    let c = certify_fem(mesh, &crate::CertifyOptions::DEFAULT);
     assert!(c.is_valid(), "{name}: {c:?}");
     let path = dir.join(format!("{name}.msh"));
     output::write_msh(mesh, &path, MshOptions::DEFAULT).expect("write");
@@ -155,7 +156,7 @@ fn no_curved_passes_skip_the_curved_optimization() {
     let (mesh, stats) = curved(&drawing, &params, Order::Cubic);
     assert_eq!(
         stats.optimization,
-        crate::curve::CurvedOptimizeStats::default()
+        crate::curve::optimize::CurvedOptimizeStats::default()
     );
     let skipped = mesh.triangle_count();
     let (mesh, stats) = curved(&drawing, &params.with_stop_curved(10.0, 10), Order::Cubic);
@@ -184,7 +185,7 @@ fn order_1_is_the_linear_mesh() {
     let (mesh, stats) = curved(&drawing, &Params::DEFAULT, Order::Linear);
     assert_eq!(mesh.order(), Order::Linear);
     assert_eq!(stats.curved_triangles, 0);
-    let c = certify_fem(&mesh, &crate::curve::CertifyOptions::DEFAULT);
+    let c = certify_fem(&mesh, &crate::CertifyOptions::DEFAULT);
     assert!(c.is_valid());
     assert!(
         stats.max_curve_distance_rel > 0.0,
@@ -232,7 +233,7 @@ fn devset_curving() {
             Ok((cm, s)) => {
                 let fem =
                     FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.0 as usize].name());
-                let c = certify_fem(&fem, &crate::curve::CertifyOptions::VALIDITY);
+                let c = certify_fem(&fem, &crate::CertifyOptions::VALIDITY);
                 let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
                 let _ =
                     output::write_msh(&fem, &dir.join(format!("{name}.msh")), MshOptions::DEFAULT);

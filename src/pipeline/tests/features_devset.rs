@@ -10,20 +10,16 @@ use crate::features::FeatureSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::support::devset::{devset_dir, svg_files};
+use super::support::devset::{devset_dir, devset_files, svg_files};
 use crate::features::tests::features_check;
 
 /// CI's sample: every 15th file of the dev set under 40 KB (about 15 drawings from
 /// every collection), so the invariants are checked on real drawings in every run.
 #[test]
 fn devset_sample_feature_sets_keep_every_invariant() {
-    let dir = devset_dir();
-    let mut files = Vec::new();
-    svg_files(&dir, &mut files);
-    if files.is_empty() {
-        println!("no dev set at {}: skipped", dir.display());
+    let Some((dir, files)) = devset_files() else {
         return;
-    }
+    };
     let sample: Vec<PathBuf> = files
         .iter()
         .step_by(15)

@@ -15,7 +15,7 @@
 //! `cargo test --release --lib pipeline::tests::optimize_pipeline -- --ignored --nocapture`.
 #![allow(clippy::print_stdout, reason = "the dev-set run reports per file")]
 
-use super::support::devset::{devset_dir, svg_files};
+use super::support::devset::{devset_dir, devset_files, svg_files};
 use super::support::{check_msh, out_dir};
 use crate::features::Parent;
 use crate::mesh::FeatureOn;
@@ -183,13 +183,9 @@ fn optimized_meshes_keep_primary_vertices_on_curves_and_secondary_edges_in_the_e
 #[test]
 #[ignore = "slow corpus run over ../shared/data/svg-dev (or TRIWILD_DEVSET)"]
 fn devset_optimized_meshes_meet_the_invariants() {
-    let dir = devset_dir();
-    let mut files = Vec::new();
-    svg_files(&dir, &mut files);
-    if files.is_empty() {
-        println!("no .svg under {}: skipped", dir.display());
+    let Some((_, files)) = devset_files() else {
         return;
-    }
+    };
     let (mut ok, mut bad_input, mut failed) = (0, 0, Vec::new());
     let (mut worst_p, mut worst_s, mut total) = (0f64, 0f64, 0f64);
     for f in &files {

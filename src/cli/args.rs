@@ -1,0 +1,275 @@
+//! The argument groups several commands share, and their conversion to the
+//! library's options: meshing parameters ([`Params`]), the .msh format
+//! ([`MshOptions`]) and regions ([`RegionOptions`]).
+//!
+//! Every default shown by `--help` is the library's own: [`defaults`],
+//! [`MshOptions::DEFAULT`] and [`RegionOptions::DEFAULT`].
+
+use clap::{Args, ValueEnum};
+use triwild::Order;
+use triwild::defaults;
+use triwild::{Length, Mesher, Params, Stage};
+use triwild::{MshOptions, MshVersion};
+use triwild::{RegionMode, RegionOptions};
+
+/// What becomes a physical surface, and what is dropped.
+#[derive(Args, Debug, Clone)]
+pub(crate) struct RegionArgs {
+    /// Physical surfaces: one per filled shape (SVG id, else shape-N), one per fill
+    /// colour (fill-#rrggbb), or a single `domain`; plus `background`.
+    #[arg(long, value_enum, default_value_t = RegionOptions::DEFAULT.mode.into())]
+    regions: RegionsArg,
+    /// Drop the background (what no filled shape covers).
+    #[arg(long)]
+    cut_outside: bool,
+    /// Keep only the named regions.
+    #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
+    keep: Vec<String>,
+    /// Remove the region containing the point X,Y (output coordinates: SVG user
+    /// units after transforms, y pointing up, i.e. y = -y_svg). Repeatable.
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
+    hole: Vec<(f64, f64)>,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum RegionsArg {
+    /// One surface per filled shape.
+    Shape,
+    /// One surface per fill colour.
+    Colour,
+    /// One surface `domain`.
+    None,
+}
+
+impl From<RegionsArg> for RegionMode {
+    fn from(arg: RegionsArg) -> Self {
+        match arg {
+            RegionsArg::Shape => RegionMode::Shape,
+            RegionsArg::Colour => RegionMode::Colour,
+            RegionsArg::None => RegionMode::None,
+        }
+    }
+}
+
+impl From<RegionMode> for RegionsArg {
+    fn from(mode: RegionMode) -> Self {
+        match mode {
+            RegionMode::Shape => RegionsArg::Shape,
+            RegionMode::Colour => RegionsArg::Colour,
+            RegionMode::None => RegionsArg::None,
+        }
+    }
+}
+
+fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("not a finite number: `{v}`"))
+    };
+    Ok((num(x)?, num(y)?))
+}
+
+impl RegionArgs {
+    /// The region options these flags ask for.
+    pub(crate) fn to_options(&self) -> RegionOptions {
+        RegionOptions::DEFAULT
+            .with_mode(self.regions.into())
+            .with_cut_outside(self.cut_outside)
+            .with_keep(self.keep.clone())
+            .with_holes(
+                self.hole
+                    .iter()
+                    .map(|&(x, y)| kurbo::Point::new(x, y))
+                    .collect(),
+            )
+    }
+}
+
+/// The output format of a mesh.
+#[derive(Args, Debug, Clone)]
+pub(crate) struct FormatArgs {
+    /// gmsh file format version.
+    #[arg(long, value_enum, default_value_t = MshOptions::DEFAULT.version.into())]
+    msh_version: MshVersionArg,
+    /// Write binary .msh instead of ASCII.
+    #[arg(long)]
+    binary: bool,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum MshVersionArg {
+    #[value(name = "4.1")]
+    V41,
+    #[value(name = "2.2")]
+    V22,
+}
+
+impl From<MshVersion> for MshVersionArg {
+    fn from(version: MshVersion) -> Self {
+        match version {
+            MshVersion::V41 => MshVersionArg::V41,
+            MshVersion::V22 => MshVersionArg::V22,
+        }
+    }
+}
+
+impl FormatArgs {
+    /// The .msh options these flags ask for.
+    pub(crate) fn to_options(&self) -> MshOptions {
+        MshOptions {
+            version: match self.msh_version {
+                MshVersionArg::V41 => MshVersion::V41,
+                MshVersionArg::V22 => MshVersion::V22,
+            },
+            binary: self.binary,
+        }
+    }
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum MesherArg {
+    /// spade constrained Delaunay triangulation with refinement (linear baseline).
+    Cdt,
+    /// TriWild: feature analysis, exact BSP mesh, AMIPS optimization under the
+    /// feature invariants (and curving).
+    #[value(name = "triwild", alias = "bsp")]
+    TriWild,
+}
+
+impl From<Mesher> for MesherArg {
+    fn from(mesher: Mesher) -> Self {
+        match mesher {
+            Mesher::Cdt => MesherArg::Cdt,
+            Mesher::TriWild => MesherArg::TriWild,
+        }
+    }
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum StageArg {
+    /// The exact BSP mesh, rounded to f64, feature edges as physical curves.
+    Bsp,
+    /// The optimized linear mesh (same as --linear).
+    Optimize,
+}
+
+/// Meshing parameters (DESIGN "Coordinates and parameters").
+#[derive(Args, Debug, Clone)]
+pub(crate) struct ParamArgs {
+    /// Mesher.
+    #[arg(long, value_enum, default_value_t = defaults::MESHER.into())]
+    mesher: MesherArg,
+    /// Stop after this stage and write its mesh (needs --mesher triwild).
+    #[arg(long, value_enum, value_name = "STAGE")]
+    stop_after: Option<StageArg>,
+    /// Element order: 3 = cubic triangles (gmsh type 21) whose edges are the
+    /// drawing's Béziers, 2 = quadratic (type 9), 1 = straight.
+    #[arg(long, default_value_t = defaults::ORDER as u8, value_parser = clap::value_parser!(u8).range(1..=3))]
+    order: u8,
+    /// Write the optimized linear mesh (straight triangles, feature edges as
+    /// physical curves), without curving: --stop-after optimize.
+    #[arg(long, conflicts_with = "stop_after")]
+    linear: bool,
+    /// Target edge length l, relative to d.
+    #[arg(short = 'l', long, default_value_t = defaults::EDGE_LENGTH_REL, value_name = "REL")]
+    edge_length: f64,
+    /// Target edge length l in user units (overrides --edge-length).
+    #[arg(long, value_name = "UNITS")]
+    edge_length_abs: Option<f64>,
+    /// Minimal edge length l_m, relative to d.
+    #[arg(long, default_value_t = defaults::MIN_EDGE_LENGTH_REL, value_name = "REL")]
+    min_edge_length: f64,
+    /// Minimal edge length l_m in user units.
+    #[arg(long, value_name = "UNITS")]
+    min_edge_length_abs: Option<f64>,
+    /// Feature envelope μ, relative to d.
+    #[arg(long, default_value_t = defaults::MU_REL, value_name = "REL")]
+    mu: f64,
+    /// Feature envelope μ in user units.
+    #[arg(long, value_name = "UNITS")]
+    mu_abs: Option<f64>,
+    /// Envelope ε of secondary features, relative to d.
+    #[arg(short = 'e', long, default_value_t = defaults::EPS_REL, value_name = "REL")]
+    eps: f64,
+    /// Envelope ε in user units.
+    #[arg(long, value_name = "UNITS")]
+    eps_abs: Option<f64>,
+    /// Numerical tolerance ε_m, relative to d.
+    #[arg(long, default_value_t = defaults::EPS_M_REL, value_name = "REL")]
+    eps_m: f64,
+    /// Numerical tolerance ε_m in user units.
+    #[arg(long, value_name = "UNITS")]
+    eps_m_abs: Option<f64>,
+    /// Padding of the meshed box around the drawing, relative to d.
+    #[arg(long, default_value_t = defaults::PADDING_REL, value_name = "REL")]
+    padding: f64,
+    /// Padding in user units.
+    #[arg(long, value_name = "UNITS")]
+    padding_abs: Option<f64>,
+    /// Minimal angle α (degrees) for optimization and curve sections.
+    #[arg(long, default_value_t = defaults::ALPHA_DEG, value_name = "DEG")]
+    alpha: f64,
+    /// AMIPS energy (1 = equilateral) at which linear optimization stops; 5 is the
+    /// thesis's 10 in its normalization (2 = equilateral).
+    #[arg(long, default_value_t = defaults::STOP_ENERGY)]
+    stop_energy: f64,
+    /// Maximum linear optimization passes.
+    #[arg(long, default_value_t = defaults::MAX_PASSES)]
+    max_passes: u32,
+    /// AMIPS energy (1 = equilateral) at which curved optimization stops (the thesis's 20).
+    #[arg(long, default_value_t = defaults::STOP_ENERGY_CURVED)]
+    stop_energy_curved: f64,
+    /// Maximum curved optimization passes.
+    #[arg(long, default_value_t = defaults::MAX_PASSES_CURVED)]
+    max_passes_curved: u32,
+    /// Minimum angle (degrees) the CDT baseline refines to.
+    #[arg(long, default_value_t = defaults::CDT_MIN_ANGLE_DEG, value_name = "DEG")]
+    cdt_min_angle: f64,
+    /// Vertex budget of the CDT baseline's refinement.
+    #[arg(long, default_value_t = defaults::MAX_VERTICES)]
+    max_vertices: u32,
+    /// Validate the mesh after every stage (slow; for debugging).
+    #[arg(long)]
+    paranoid: bool,
+}
+
+fn len(rel: f64, abs: Option<f64>) -> Length {
+    abs.map_or(Length::Rel(rel), Length::Abs)
+}
+
+impl ParamArgs {
+    /// The meshing parameters these flags ask for (not validated).
+    pub(crate) fn to_params(&self) -> Params {
+        Params::DEFAULT
+            .with_mesher(match self.mesher {
+                MesherArg::Cdt => Mesher::Cdt,
+                MesherArg::TriWild => Mesher::TriWild,
+            })
+            .with_stop_after(match (self.stop_after, self.linear) {
+                (Some(StageArg::Bsp), _) => Some(Stage::Bsp),
+                (Some(StageArg::Optimize), _) | (None, true) => Some(Stage::Optimize),
+                (None, false) => None,
+            })
+            .with_order(match self.order {
+                1 => Order::Linear,
+                2 => Order::Quadratic,
+                _ => Order::Cubic,
+            })
+            .with_l(len(self.edge_length, self.edge_length_abs))
+            .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
+            .with_mu(len(self.mu, self.mu_abs))
+            .with_eps(len(self.eps, self.eps_abs))
+            .with_eps_m(len(self.eps_m, self.eps_m_abs))
+            .with_padding(len(self.padding, self.padding_abs))
+            .with_alpha_deg(self.alpha)
+            .with_stop(self.stop_energy, self.max_passes)
+            .with_stop_curved(self.stop_energy_curved, self.max_passes_curved)
+            .with_cdt_min_angle_deg(self.cdt_min_angle)
+            .with_max_vertices(self.max_vertices)
+            .with_paranoid(self.paranoid)
+    }
+}

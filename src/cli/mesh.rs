@@ -1,0 +1,88 @@
+//! The single-file command: `triwild IN.svg [-o OUT.msh] [--preview OUT.svg]
+//! [--stats]`.
+
+use super::args::{FormatArgs, ParamArgs, RegionArgs};
+use crate::exit_code;
+use clap::Args;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use triwild::Error;
+use triwild::RunOptions;
+
+/// The single-file command's arguments.
+#[derive(Args, Debug, Clone)]
+pub(crate) struct MeshArgs {
+    /// Input SVG file.
+    input: Option<PathBuf>,
+    /// Output .msh file [default: the input's path with extension .msh].
+    #[arg(short, long, value_name = "OUT.msh")]
+    output: Option<PathBuf>,
+    /// Also write an SVG drawing of the mesh.
+    #[arg(long, value_name = "OUT.svg")]
+    preview: Option<PathBuf>,
+    /// Print one JSON object of statistics on stdout.
+    #[arg(long)]
+    stats: bool,
+    #[command(flatten)]
+    format: FormatArgs,
+    #[command(flatten)]
+    params: ParamArgs,
+    #[command(flatten)]
+    regions: RegionArgs,
+}
+
+/// The default output path: the input with extension `.msh`.
+fn default_output(input: &Path) -> PathBuf {
+    input.with_extension("msh")
+}
+
+/// Mesh one file, print its warnings (unless `quiet`) and statistics; exit 0,
+/// or 2, 3, 4 by the error's kind.
+pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
+    let Some(input) = &args.input else {
+        eprintln!("error: no input file given (try `triwild --help`)");
+        return ExitCode::from(2);
+    };
+    #[cfg(feature = "test-hooks")]
+    super::hooks::trigger(input);
+    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    let opts = RunOptions::new(args.params.to_params())
+        .with_msh(args.format.to_options())
+        .with_preview(args.preview.clone())
+        .with_regions(args.regions.to_options());
+    // The library's write errors do not say which file; an unwritable preview
+    // is reported here, naming the preview, before anything is meshed.
+    if let Some(preview) = &args.preview {
+        if let Err(err) = triwild::check_writable(preview) {
+            eprintln!("error: {}: {err}", preview.display());
+            return exit_code(err.kind());
+        }
+    }
+    match triwild::run_file(input, &output, &opts) {
+        Ok(report) => {
+            if !quiet {
+                for w in &report.warnings {
+                    eprintln!("warning: {}: {w}", input.display());
+                }
+            }
+            if args.stats {
+                match serde_json::to_string(&report) {
+                    Ok(s) => println!("{s}"),
+                    Err(e) => {
+                        eprintln!("error: {}: cannot format statistics: {e}", input.display());
+                        return ExitCode::from(4);
+                    }
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        Err(err) => {
+            let file = match &err {
+                Error::Write(_) => &output,
+                _ => input,
+            };
+            eprintln!("error: {}: {err}", file.display());
+            exit_code(err.kind())
+        }
+    }
+}
