@@ -19,7 +19,7 @@ mod support;
 
 use kurbo::{CubicBez, ParamCurveArea};
 use support::fem::{Problem, Solution, solve};
-use triwild::{Drawing, FemMesh, Length, MshOptions, Params, RegionMode, RegionOptions};
+use triwild::{Drawing, FemMesh, Length, MshOptions, Order, Params, RegionMode, RegionOptions};
 
 /// A G1 blob of four cubic arcs (control points in a 2 × 2 view box), closed exactly on
 /// its start. Every coordinate is a multiple of 1/256, so the SVG loader's `f32` holds
@@ -82,7 +82,14 @@ fn problem() -> Problem<'static> {
 /// The blob meshed at `level` and `order`, the background cut away, written to
 /// `target/test-out/fem/`.
 fn mesh(drawing: &Drawing, level: f64, order: u8) -> FemMesh {
-    let params = Params::DEFAULT.with_l(Length::Rel(level)).with_order(order);
+    let element_order = match order {
+        1 => Order::Linear,
+        2 => Order::Quadratic,
+        _ => Order::Cubic,
+    };
+    let params = Params::DEFAULT
+        .with_l(Length::Rel(level))
+        .with_order(element_order);
     let regions = RegionOptions::DEFAULT
         .with_mode(RegionMode::Shape)
         .with_cut_outside(true);
