@@ -29,7 +29,7 @@ pub(super) fn curved_inner(
 pub(super) struct Bend {
     /// Inner nodes of curved edges, from `lo` to `hi`.
     pub(super) edges: HashMap<EdgeKey, Vec<Point>>,
-    /// Offset of a cubic centre node from the mean of the other nine.
+    /// Offset of a cubic centre node from its quadratic-exact base (`lagrange::cubic_centre`).
     pub(super) centre: HashMap<FaceId, Vec2>,
 }
 

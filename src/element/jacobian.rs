@@ -543,7 +543,17 @@ mod tests {
 
     #[test]
     fn near_invalid_needs_subdivision() {
-        // an edge bulging into the element: a negative coefficient, det J still positive
+        // an edge bulging into the element, centre node displaced (to the mean of the
+        // other nine, the thesis's rule): a negative coefficient, det J still positive
+        let curved_element = |bulge| {
+            let mut n = curved_element(bulge);
+            n[9] = (n[..9]
+                .iter()
+                .fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2())
+                / 9.0)
+                .to_point();
+            n
+        };
         let n = curved_element(-0.3);
         let det = det_cubic(&n);
         assert!(det.min_coeff() < 0.0);

@@ -13,8 +13,14 @@
 //! linearly is still a cubic, and four samples determine it). Quadratic elements
 //! take `c` at the parameter midpoint: the edge is the quadratic interpolating the
 //! piece at `t0`, `(t0 + t1)/2`, `t1`, an approximation whose error is the caller's
-//! to judge. Straight edges take their linear points, and the cubic centre node is
-//! the mean of the other nine, as the thesis prescribes.
+//! to judge. Straight edges take their linear points.
+//!
+//! The cubic centre node is [`cubic_centre`]: `Σ(edge nodes)/4 − Σ(corners)/6`. It is
+//! exact for quadratic maps (when the other nine nodes sample a quadratic map, it is
+//! that map's value at the centroid), so the interior of a cubic element with a curved
+//! edge is `O(h³)` from the smooth map the edge comes from. The thesis's mean of the
+//! nine reproduces only affine maps: its centre is `O(h²)` off, which capped P3 finite
+//! elements on our meshes at the H1 rate 2 (issue 14).
 //!
 //! The control net of a degree-`n` triangle lists the control points in the
 //! lattice order of `curve::bernstein` (`(n − j − k, j, k)` ↔ weights of corners
@@ -66,18 +72,32 @@ pub fn cubic_nodes(corners: [Point; 3], curved: Option<&CurvedEdge>) -> [Point; 
         n[3 + 2 * e] = p;
         n[4 + 2 * e] = q;
     }
-    n[9] = centre(&n);
+    n[9] = cubic_centre(&n[..9]);
     n
 }
 
-/// The mean of the first nine nodes: the centre node the thesis assigns.
-fn centre(n: &[Point; 10]) -> Point {
-    let (mut x, mut y) = (0.0, 0.0);
-    for p in &n[..9] {
-        x += p.x;
-        y += p.y;
-    }
-    Point::new(x / 9.0, y / 9.0)
+/// The cubic centre node (gmsh node 9, reference point `(1/3, 1/3)`) from the other
+/// nine nodes `n` (gmsh order: corners 0–2, edge nodes 3–8):
+/// `Σ(edge nodes)/4 − Σ(corners)/6`.
+///
+/// The rule is exact for quadratic maps: if the nine nodes are any quadratic map
+/// `x(ξ, η)` sampled at the cubic Lagrange points, the result is `x(1/3, 1/3)`.
+/// Proof: both sides are linear in `x`, so checking the six monomials suffices;
+/// for `1`: `6/4 − 3/6 = 1`; for `ξ` (corners sum 1, edge nodes sum 2):
+/// `2/4 − 1/6 = 1/3`; for `ξ²` (corners 1, edge nodes `10/9`): `10/36 − 1/6 = 1/9`;
+/// for `ξη` (corners 0, edge nodes `4/9`): `1/9`; `η`, `η²` by symmetry. The
+/// coefficients sum to 1, so the rule is evaluated relative to corner 0 (no
+/// cancellation far from the origin). Straight elements get their centroid.
+///
+/// # Panics
+/// If `n` has fewer than nine points.
+pub fn cubic_centre(n: &[Point]) -> Point {
+    let o = n[0].to_vec2();
+    let corners = (n[1] - n[0]) + (n[2] - n[0]);
+    let edges = n[3..9]
+        .iter()
+        .fold(kurbo::Vec2::ZERO, |s, p| s + (p.to_vec2() - o));
+    (o + edges / 4.0 - corners / 6.0).to_point()
 }
 
 /// The six quadratic nodes (gmsh type 9) of the triangle `corners`, with at most
@@ -258,6 +278,8 @@ pub fn eval_cubic_lagrange(nodes: &[Point; 10], xi: f64, eta: f64) -> Point {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngAlgorithm, RngSeed};
 
     fn tri() -> [Point; 3] {
         [
@@ -337,12 +359,11 @@ mod tests {
             let p = eval_cubic_lagrange(&n, s, 0.0);
             assert!(close(p, e.at(s), 1e-12), "s {s}: {p:?} vs {:?}", e.at(s));
         }
-        // centre is the mean of the other nine
-        let m = n[..9]
-            .iter()
-            .fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2())
-            / 9.0;
-        assert!(close(n[9], m.to_point(), 1e-15));
+        // centre: Σ(edge nodes)/4 − Σ(corners)/6
+        let sum =
+            |r: std::ops::Range<usize>| n[r].iter().fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2());
+        let m = sum(3..9) / 4.0 - sum(0..3) / 6.0;
+        assert!(close(n[9], m.to_point(), 1e-14));
     }
 
     #[test]
@@ -396,5 +417,188 @@ mod tests {
         for i in 0..6 {
             assert!(close(q[i], qback[i], 1e-12), "node {i}");
         }
+    }
+
+    /// A quadratic map `x(ξ, η) = a + b ξ + c η + d ξ² + e ξη + f η²` (coefficients as
+    /// points).
+    fn quadratic_map(k: &[Point; 6], xi: f64, eta: f64) -> Point {
+        let m = [1.0, xi, eta, xi * xi, xi * eta, eta * eta];
+        let v = k
+            .iter()
+            .zip(m)
+            .fold(kurbo::Vec2::ZERO, |s, (p, w)| s + w * p.to_vec2());
+        v.to_point()
+    }
+
+    /// The thesis's rule, the mean of the nine other nodes (kept to show the difference).
+    fn mean_of_nine(n: &[Point; 10]) -> Point {
+        (n[..9]
+            .iter()
+            .fold(kurbo::Vec2::ZERO, |s, p| s + p.to_vec2())
+            / 9.0)
+            .to_point()
+    }
+
+    fn config() -> Config {
+        Config {
+            cases: 256,
+            failure_persistence: None,
+            rng_algorithm: RngAlgorithm::ChaCha,
+            rng_seed: RngSeed::Fixed(0x5eed_c0de),
+            ..Config::default()
+        }
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        /// For any quadratic map sampled at the nine boundary nodes, the centre rule
+        /// returns the map at the centroid, and the cubic element is that map everywhere.
+        #[test]
+        fn centre_rule_reproduces_quadratic_maps(
+            k in prop::array::uniform6(
+                (-100.0f64..100.0, -100.0f64..100.0).prop_map(|(x, y)| Point::new(x, y))),
+            shift in (-1e4f64..1e4, -1e4f64..1e4),
+        ) {
+            let mut k = k;
+            k[0] += kurbo::Vec2::new(shift.0, shift.1);
+            let mut n = CUBIC_REF.map(|r| quadratic_map(&k, r[0], r[1]));
+            let want = n[9];
+            n[9] = Point::ZERO;
+            let got = cubic_centre(&n[..9]);
+            let scale = k.iter().map(|p| p.to_vec2().hypot()).sum::<f64>();
+            prop_assert!((got - want).hypot() <= 1e-14 * scale, "{:?} vs {:?}", got, want);
+            n[9] = got;
+            for (xi, eta) in [(0.1, 0.2), (0.5, 0.25), (0.3, 0.6), (0.05, 0.9)] {
+                let p = eval_cubic_lagrange(&n, xi, eta);
+                let q = quadratic_map(&k, xi, eta);
+                prop_assert!((p - q).hypot() <= 1e-13 * scale);
+            }
+        }
+    }
+
+    #[test]
+    fn parabola_edge_element_is_its_quadratic_map() {
+        // The edge 0→1 on the parabola y = x² (a degree-elevated quadratic, so an exact
+        // cubic piece), edges 1→2 and 2→0 straight: the element is the quadratic
+        // element on the same six points, and the centre is that map's centroid.
+        for h in [0.4, 0.1, 0.01] {
+            let q0 = Point::new(-h, h * h);
+            let q2 = Point::new(h, h * h);
+            let q1 = Point::new(0.0, -h * h); // control point: the parabola's tangents meet here
+            let curve = CubicBez::new(q0, q0.lerp(q1, 2.0 / 3.0), q2.lerp(q1, 2.0 / 3.0), q2);
+            let e = CurvedEdge {
+                edge: 0,
+                curve,
+                t0: 0.0,
+                t1: 1.0,
+            };
+            let corners = [q0, q2, Point::new(0.2 * h, 1.5 * h)];
+            let n = cubic_nodes(corners, Some(&e));
+            let quad = quadratic_nodes(corners, Some(&e));
+            let centroid = bezier_to_quadratic_value(&quad, [1.0 / 3.0; 3]);
+            assert!(close(n[9], centroid, 1e-15), "h {h}");
+            // the old mean is off by a multiple of the sagitta h²
+            assert!(
+                (mean_of_nine(&n) - centroid).hypot() > 0.05 * h * h,
+                "h {h}"
+            );
+        }
+    }
+
+    /// The quadratic Lagrange element `nodes` at barycentric coordinates `l`.
+    fn bezier_to_quadratic_value(nodes: &[Point; 6], l: [f64; 3]) -> Point {
+        eval_net(&quadratic_to_bezier(nodes), 2, l)
+    }
+
+    /// Third derivatives of the cubic map `n` (along ξξξ, ξξη, ξηη, ηηη): the third
+    /// differences of its Bézier net (times 6); the largest length.
+    fn third_derivative(n: &[Point; 10]) -> f64 {
+        let net = cubic_to_bezier(n);
+        let idx = super::super::bernstein::index;
+        let b = |j, k| net[idx(3, j, k)].to_vec2();
+        let d3 = [
+            b(3, 0) - 3.0 * b(2, 0) + 3.0 * b(1, 0) - b(0, 0),
+            b(2, 1) - 2.0 * b(1, 1) + b(0, 1) - (b(2, 0) - 2.0 * b(1, 0) + b(0, 0)),
+            b(1, 2) - 2.0 * b(1, 1) + b(1, 0) - (b(0, 2) - 2.0 * b(0, 1) + b(0, 0)),
+            b(0, 3) - 3.0 * b(0, 2) + 3.0 * b(0, 1) - b(0, 0),
+        ];
+        6.0 * d3.iter().map(|v| v.hypot()).fold(0.0, f64::max)
+    }
+
+    /// The image of the small triangle of size `h` near `(0.3, 0.2)` under the smooth
+    /// map `F(u, v) = exp(u + iv)` (curvature O(1) everywhere, all three edges curved):
+    /// the distance of the centre node from `F` at the centroid, by the new rule and by
+    /// the mean of nine.
+    fn smooth_map_centre_errors(h: f64) -> (f64, f64) {
+        let f = |u: f64, v: f64| Point::new(u.exp() * v.cos(), u.exp() * v.sin());
+        let (u0, v0) = (0.3, 0.2);
+        // a reference triangle scaled by h and sheared, in (u, v)
+        let map = |xi: f64, eta: f64| f(u0 + h * (xi + 0.3 * eta), v0 + h * (0.2 * xi + eta));
+        let mut n = CUBIC_REF.map(|r| map(r[0], r[1]));
+        let want = n[9];
+        n[9] = cubic_centre(&n[..9]);
+        ((n[9] - want).hypot(), (mean_of_nine(&n) - want).hypot())
+    }
+
+    #[test]
+    fn centre_is_third_order_on_a_smooth_map() {
+        let (new_a, old_a) = smooth_map_centre_errors(0.1);
+        let (new_b, old_b) = smooth_map_centre_errors(0.05);
+        // halving the size divides an O(h³) error by 8, an O(h²) one by 4
+        let (r_new, r_old) = (new_a / new_b, old_a / old_b);
+        assert!(r_new > 7.0, "new rule ratio {r_new} ({new_a:e}, {new_b:e})");
+        assert!(
+            r_old < 4.5,
+            "mean-of-nine ratio {r_old} ({old_a:e}, {old_b:e})"
+        );
+        assert!(new_b < 0.25 * old_b, "{new_b:e} vs {old_b:e}");
+    }
+
+    /// The cubic element with its edge 0→1 on an arc of the unit circle of angle
+    /// `theta` (a cubic Bézier arc, radial error ~ 1e-6 θ⁶) and its third corner inside
+    /// at distance ~ θ: the distance of its centre node from the centroid of the
+    /// quadratic element on the same arc (a map with the right derivative scaling), and
+    /// the largest third derivative of the cubic map with the new centre and with the
+    /// mean of nine.
+    fn arc_element(theta: f64) -> (f64, f64, f64) {
+        let k = 4.0 / 3.0 * (theta / 4.0).tan();
+        let (s, c) = theta.sin_cos();
+        let curve = CubicBez::new((1.0, 0.0), (1.0, k), (c + k * s, s - k * c), (c, s));
+        let e = CurvedEdge {
+            edge: 0,
+            curve,
+            t0: 0.0,
+            t1: 1.0,
+        };
+        let r = 1.0 - 0.9 * theta;
+        let apex = Point::new(r * (theta / 2.0).cos(), r * (theta / 2.0).sin());
+        let corners = [curve.p0, curve.p3, apex];
+        let mut n = cubic_nodes(corners, Some(&e));
+        let quad = quadratic_nodes(corners, Some(&e));
+        let centroid = bezier_to_quadratic_value(&quad, [1.0 / 3.0; 3]);
+        let dist = (n[9] - centroid).hypot();
+        let d3_new = third_derivative(&n);
+        n[9] = mean_of_nine(&n);
+        (dist, d3_new, third_derivative(&n))
+    }
+
+    #[test]
+    fn arc_element_is_third_order() {
+        let (dist_a, new_a, old_a) = arc_element(0.2);
+        let (dist_b, new_b, old_b) = arc_element(0.1);
+        // With one cubic edge (others straight) the rule puts the centre exactly at the
+        // quadratic element's centroid: for an edge deviation d(s) = s(1−s)(α + βs),
+        // (d(1/3) + d(2/3))/4 = (2α + β)/18 = (4/9) d(1/2).
+        assert!(dist_a < 1e-15 && dist_b < 1e-15, "{dist_a:e} {dist_b:e}");
+        // The element map's third derivatives (which P3 error estimates need to be
+        // O(h³)) scale as θ³ with the new centre, as θ² with the mean of nine.
+        let (r_new, r_old) = (new_a / new_b, old_a / old_b);
+        assert!(r_new > 7.0, "new rule ratio {r_new} ({new_a:e}, {new_b:e})");
+        assert!(
+            r_old < 4.5,
+            "mean-of-nine ratio {r_old} ({old_a:e}, {old_b:e})"
+        );
+        assert!(new_b < 0.1 * old_b, "{new_b:e} vs {old_b:e}");
     }
 }

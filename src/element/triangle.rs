@@ -11,8 +11,9 @@
 //! at the parameter thirds (cubic elements: the piece exactly) or at the
 //! parameter midpoint (quadratic); when a corner is off its curve, the piece is
 //! moved by the linear blend of the two corner offsets so the edge still ends
-//! at its corners. Other edges are straight; the cubic centre node is the mean
-//! of the other nine plus an optional offset (the fit's).
+//! at its corners. Other edges are straight; the cubic centre node is
+//! [`lagrange::cubic_centre`] of the other nine (exact for quadratic maps) plus an
+//! optional offset (the fit's).
 //!
 //! Energy ([`amips`]): the conformal AMIPS `tr(JᵀJ) / (2 det J)` of the map
 //! from the equilateral reference triangle, in the normalisation of
@@ -67,7 +68,7 @@ pub(crate) fn piece_inner(
 /// The Lagrange nodes (gmsh order) of the triangle with `corners`, where
 /// `inner[e]` gives the inner nodes of edge `e` (in the edge's direction,
 /// `EDGES[e][0]` to `EDGES[e][1]`; `None` = straight) and `centre` offsets the
-/// cubic centre node from the mean of the other nine.
+/// cubic centre node from [`lagrange::cubic_centre`] of the other nine.
 pub(crate) fn nodes(
     order: Order,
     corners: [Point; 3],
@@ -85,8 +86,7 @@ pub(crate) fn nodes(
         }
     }
     if order == Order::Cubic {
-        let sum = n.iter().fold(Vec2::ZERO, |s, p| s + p.to_vec2());
-        n.push((sum / 9.0).to_point() + centre);
+        n.push(lagrange::cubic_centre(&n) + centre);
     }
     n
 }
@@ -250,5 +250,42 @@ mod tests {
         let off = piece_inner(p, [0.2, 0.8], a + shift, b + shift, Order::Cubic);
         assert!((off[1] - (p(0.6) + shift)).hypot() < 1e-15);
         assert_eq!(piece_inner(p, [0.2, 0.8], a, b, Order::Quadratic).len(), 1);
+    }
+
+    #[test]
+    fn nodes_agree_with_lagrange_and_offset_the_quadratic_exact_centre() {
+        // The same curved element through `nodes` (any edge, either direction) and
+        // through `lagrange::cubic_nodes`; the offset moves the centre from that base.
+        let curve = CubicBez::new((0.0, 0.0), (0.4, -0.5), (1.4, -0.3), (2.0, 0.3));
+        let (t0, t1) = (0.1, 0.8);
+        let p = |t| curve.eval(t);
+        let apex = Point::new(0.9, 1.3);
+        for edge in 0..3 {
+            let [i, j] = EDGES[edge];
+            let mut corners = [apex; 3];
+            corners[i] = p(t0);
+            corners[j] = p(t1);
+            let inner = piece_inner(p, [t0, t1], corners[i], corners[j], Order::Cubic);
+            let mut pieces: [Option<&[Point]>; 3] = [None; 3];
+            pieces[edge] = Some(&inner);
+            let e = lagrange::CurvedEdge {
+                edge,
+                curve,
+                t0,
+                t1,
+            };
+            let want = lagrange::cubic_nodes(corners, Some(&e));
+            let got = nodes(Order::Cubic, corners, pieces, Vec2::ZERO);
+            for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert!((*g - *w).hypot() < 1e-14, "edge {edge} node {k}");
+            }
+            let off = Vec2::new(0.01, -0.02);
+            let moved = nodes(Order::Cubic, corners, pieces, off);
+            assert!((moved[9] - (want[9] + off)).hypot() < 1e-14);
+            assert_eq!(moved[..9], got[..9]);
+            // quadratic: the edge node is the piece's parameter midpoint exactly
+            let inner2 = piece_inner(p, [t0, t1], corners[i], corners[j], Order::Quadratic);
+            assert!((inner2[0] - p(0.5 * (t0 + t1))).hypot() < 1e-15);
+        }
     }
 }

@@ -10,6 +10,7 @@
 
 pub(crate) mod check;
 pub(crate) mod devset;
+pub(crate) mod fem;
 pub(crate) mod reader;
 
 pub(crate) use check::{DefectKind, Report, check, check_msh};
