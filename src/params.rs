@@ -442,9 +442,15 @@ mod tests {
     fn units_and_scale_serialize_by_name_and_value() {
         let p = Params::DEFAULT.with_units(Units::Px).with_scale(2.5);
         let json = serde_json::to_value(&p).unwrap();
-        assert_eq!((json["units"].clone(), json["scale"].clone()), ("px".into(), 2.5.into()));
+        assert_eq!(
+            (json["units"].clone(), json["scale"].clone()),
+            ("px".into(), 2.5.into())
+        );
         let r = serde_json::to_value(Params::DEFAULT.resolve(1.0)).unwrap();
-        assert_eq!((r["units"].clone(), r["scale"].clone()), ("user".into(), 1.0.into()));
+        assert_eq!(
+            (r["units"].clone(), r["scale"].clone()),
+            ("user".into(), 1.0.into())
+        );
     }
 
     #[test]

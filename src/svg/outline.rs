@@ -61,7 +61,8 @@ pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts, frame: &Frame) -> Res
             }
             Step::Visit(usvg::Node::Path(p), inherited) => {
                 let id = non_empty(p.id()).or(inherited);
-                out.shapes.push(convert_path(p, out.shapes.len(), id, frame)?);
+                out.shapes
+                    .push(convert_path(p, out.shapes.len(), id, frame)?);
             }
             Step::Visit(usvg::Node::Text(t), inherited) => {
                 let id = non_empty(t.id()).or(inherited);

@@ -727,10 +727,19 @@ fn root_viewbox_gives_user_units_by_default_and_px_on_request() {
         r#"<rect width="10" height="10"/>"#,
     );
     // the document's numbers, exactly (y flipped)
-    assert_eq!(corners(&load_bytes(doc.as_bytes()).unwrap()), [0.0, -10.0, 10.0, 0.0]);
-    assert_eq!(corners(&load_in(&doc, Units::User, 1.0)), [0.0, -10.0, 10.0, 0.0]);
+    assert_eq!(
+        corners(&load_bytes(doc.as_bytes()).unwrap()),
+        [0.0, -10.0, 10.0, 0.0]
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::User, 1.0)),
+        [0.0, -10.0, 10.0, 0.0]
+    );
     // the root viewport's px: the viewBox is shown twice as large
-    assert_eq!(corners(&load_in(&doc, Units::Px, 1.0)), [0.0, -20.0, 20.0, 0.0]);
+    assert_eq!(
+        corners(&load_in(&doc, Units::Px, 1.0)),
+        [0.0, -20.0, 20.0, 0.0]
+    );
 }
 
 #[test]
@@ -740,7 +749,10 @@ fn a_drawing_in_millimetres_keeps_its_numbers() {
         r#"<rect x="10" y="20" width="100" height="50"/><circle cx="105" cy="148.5" r="30"/>"#,
     );
     let mm = load_in(&doc, Units::User, 1.0);
-    assert_eq!(bbox_of(&mm.shapes[0]), kurbo::Rect::new(10.0, -70.0, 110.0, -20.0));
+    assert_eq!(
+        bbox_of(&mm.shapes[0]),
+        kurbo::Rect::new(10.0, -70.0, 110.0, -20.0)
+    );
     let c = bbox_of(&mm.shapes[1]);
     assert!(close(c.center(), Point::new(105.0, -148.5)) && (c.width() - 60.0).abs() < 1e-5);
     // px: 96 px per inch, 25.4 mm per inch (usvg maps in f32)
@@ -755,7 +767,13 @@ fn a_drawing_in_millimetres_keeps_its_numbers() {
 fn viewbox_origin_and_aspect_are_undone() {
     let body = r#"<rect x="-40" y="30" width="60" height="100"/>"#;
     // the viewBox's numbers, whatever its origin, aspect and alignment
-    for aspect in ["none", "xMidYMid meet", "xMinYMax slice", "xMaxYMin", "xMidYMid slice"] {
+    for aspect in [
+        "none",
+        "xMidYMid meet",
+        "xMinYMax slice",
+        "xMaxYMin",
+        "xMidYMid slice",
+    ] {
         let doc = doc(
             &format!(
                 r#"width="300" height="100" viewBox="-50 20 100 200" preserveAspectRatio="{aspect}""#
@@ -784,7 +802,11 @@ fn viewbox_origin_and_aspect_are_undone() {
 
 #[test]
 fn without_a_viewbox_user_units_are_px() {
-    for attrs in [r#"width="100mm" height="50mm""#, r#"width="300" height="100""#, ""] {
+    for attrs in [
+        r#"width="100mm" height="50mm""#,
+        r#"width="300" height="100""#,
+        "",
+    ] {
         let doc = doc(attrs, r#"<rect x="5" y="5" width="10" height="20"/>"#);
         let user = load_in(&doc, Units::User, 1.0);
         assert_eq!(user, load_in(&doc, Units::Px, 1.0), "{attrs}");
@@ -794,9 +816,18 @@ fn without_a_viewbox_user_units_are_px() {
 
 #[test]
 fn viewbox_without_size_only_loses_its_translation() {
-    let doc = doc(r#"viewBox="100 200 50 50""#, r#"<rect x="110" y="210" width="10" height="10"/>"#);
-    assert_eq!(corners(&load_in(&doc, Units::User, 1.0)), [110.0, -220.0, 120.0, -210.0]);
-    assert_eq!(corners(&load_in(&doc, Units::Px, 1.0)), [10.0, -20.0, 20.0, -10.0]);
+    let doc = doc(
+        r#"viewBox="100 200 50 50""#,
+        r#"<rect x="110" y="210" width="10" height="10"/>"#,
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::User, 1.0)),
+        [110.0, -220.0, 120.0, -210.0]
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::Px, 1.0)),
+        [10.0, -20.0, 20.0, -10.0]
+    );
 }
 
 #[test]
@@ -808,14 +839,30 @@ fn nested_svg_use_and_root_transform_keep_their_own_transforms() {
             <use xlink:href="#r" x="50" y="60" transform="scale(0.5)"/>"##,
     );
     let d = load_in(&doc, Units::User, 1.0);
-    assert_eq!(bbox_of(&d.shapes[0]), kurbo::Rect::new(10.0, -30.0, 30.0, -10.0));
-    assert_eq!(bbox_of(&d.shapes[1]), kurbo::Rect::new(25.0, -32.5, 27.5, -30.0));
+    assert_eq!(
+        bbox_of(&d.shapes[0]),
+        kurbo::Rect::new(10.0, -30.0, 30.0, -10.0)
+    );
+    assert_eq!(
+        bbox_of(&d.shapes[1]),
+        kurbo::Rect::new(25.0, -32.5, 27.5, -30.0)
+    );
     let px = load_in(&doc, Units::Px, 1.0);
-    assert_eq!(bbox_of(&px.shapes[0]), kurbo::Rect::new(20.0, -60.0, 60.0, -20.0));
+    assert_eq!(
+        bbox_of(&px.shapes[0]),
+        kurbo::Rect::new(20.0, -60.0, 60.0, -20.0)
+    );
     // a transform on the root <svg> acts on the viewport (SVG 2): 10 px are 5 user units
-    let moved = doc.replacen("width=\"200\"", "transform=\"translate(10 0)\" width=\"200\"", 1);
+    let moved = doc.replacen(
+        "width=\"200\"",
+        "transform=\"translate(10 0)\" width=\"200\"",
+        1,
+    );
     let d = load_in(&moved, Units::User, 1.0);
-    assert_eq!(bbox_of(&d.shapes[0]), kurbo::Rect::new(15.0, -30.0, 35.0, -10.0));
+    assert_eq!(
+        bbox_of(&d.shapes[0]),
+        kurbo::Rect::new(15.0, -30.0, 35.0, -10.0)
+    );
 }
 
 #[test]
@@ -859,7 +906,10 @@ fn coordinates_are_checked_after_units_and_scale() {
     // a viewport mapping that underflows f32 cannot be undone: a clear error in
     // user units, px as before
     let tiny = doc.replace(r#"viewBox="0 0 1e12 1e12""#, r#"viewBox="0 0 3e38 3e38""#);
-    let tiny = tiny.replace(r#"width="1e12" height="1e12""#, r#"width="1e38" height="1e38""#);
+    let tiny = tiny.replace(
+        r#"width="1e12" height="1e12""#,
+        r#"width="1e38" height="1e38""#,
+    );
     let tiny = tiny.replace(r#"width="1" height="1""#, r#"width="1e-9" height="1e-9""#);
     let e = load_bytes_with(tiny.as_bytes(), Units::User, 1.0).unwrap_err();
     assert!(e.to_string().contains("root viewBox"), "{e}");
