@@ -140,9 +140,9 @@ impl Frame {
         Ok(Frame { undo, scale })
     }
 
-    /// The affine map `[sx, ky, kx, sy, tx, ty]` (usvg's order: `x' = sx·x + kx·y
-    /// + tx`, `y' = ky·x + sy·y + ty`) from a path's own coordinates to output
-    /// coordinates before the y flip, given the path's absolute transform.
+    /// The affine map `[sx, ky, kx, sy, tx, ty]` from a path's own coordinates to
+    /// output coordinates before the y flip, given the path's absolute transform
+    /// (usvg's order: `x' = sx·x + kx·y + tx`, `y' = ky·x + sy·y + ty`).
     pub(super) fn map(&self, abs: usvg::Transform) -> [f64; 6] {
         let [mut sx, mut ky, mut kx, mut sy, mut tx, mut ty] =
             [abs.sx, abs.ky, abs.kx, abs.sy, abs.tx, abs.ty].map(f64::from);
