@@ -60,6 +60,7 @@ mod quality;
 mod regions;
 mod stage;
 mod svg;
+mod units;
 
 pub use curve::certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use element::{CertifyOptions, Order};
@@ -79,7 +80,8 @@ pub use stage::Stage;
 pub use svg::drawing::{
     Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
-pub use svg::{load_bytes, load_file};
+pub use svg::{load_bytes, load_bytes_with, load_file, load_file_with};
+pub use units::Units;
 
 /// Not part of the API (hidden, no stability promise): the internals that the
 /// criterion benchmarks in `benches/` time directly, the exact kernel and the BSP.

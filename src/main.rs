@@ -37,8 +37,10 @@ Exit codes:
 
 /// Robust curved triangle meshing of SVG drawings (TriWild, in Rust).
 ///
-/// Lengths are relative to d, the diagonal of the drawing's bounding box, unless
-/// given with the matching `-abs` flag in user units.
+/// Coordinates are the drawing's own numbers (the user units of the root viewBox,
+/// y up; --units px for CSS px, --scale to convert). Lengths are relative to d, the
+/// diagonal of the drawing's bounding box, unless given with the matching `-abs`
+/// flag in output units.
 #[derive(Parser, Debug)]
 #[command(version, about, long_about = None, after_help = EXIT_HELP, args_conflicts_with_subcommands = true)]
 struct Cli {

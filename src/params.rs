@@ -1,11 +1,13 @@
 //! Meshing parameters (DESIGN "Coordinates and parameters").
 //!
 //! Every length is given either relative to `d`, the diagonal of the input's
-//! bounding box, or in absolute user units; [`Params::resolve`] turns them into
-//! absolute [`Resolved`] values once `d` is known.
+//! bounding box, or in absolute output units ([`Params::units`] times
+//! [`Params::scale`]); [`Params::resolve`] turns them into absolute [`Resolved`]
+//! values once `d` is known.
 
 use crate::element::Order;
 pub(crate) use crate::stage::Stage;
+pub(crate) use crate::units::Units;
 use crate::{Error, Result};
 
 /// The default value of every parameter, named once: [`Params::DEFAULT`] and
@@ -21,7 +23,7 @@ use crate::{Error, Result};
 /// (`--msh-version 4.1`, ASCII) and `batch::BatchOptions::DEFAULT_TIMEOUT`
 /// (`batch --timeout 600`), in the modules above this one.
 pub mod defaults {
-    use super::{Mesher, Order};
+    use super::{Mesher, Order, Units};
 
     /// Feature envelope μ = 1e-3·d: the distance that separates primary
     /// features (thesis §4.4).
@@ -64,6 +66,11 @@ pub mod defaults {
     /// Element order: cubic, whose edges reproduce the drawing's Béziers
     /// exactly (the thesis's cubic Lagrange map, §4.4.2).
     pub const ORDER: Order = Order::Cubic;
+    /// Output units: the user units of the root `viewBox`, the numbers written
+    /// in the document (ours: a FEM model is in the drawing's units).
+    pub const UNITS: Units = Units::User;
+    /// Output scale: 1, the coordinates as [`UNITS`] gives them.
+    pub const SCALE: f64 = 1.0;
 }
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
@@ -72,7 +79,8 @@ pub mod defaults {
 pub enum Length {
     /// A fraction of `d`.
     Rel(f64),
-    /// User units (after all SVG transforms).
+    /// Output units: after all SVG transforms, in [`Params::units`] times
+    /// [`Params::scale`].
     Abs(f64),
 }
 
@@ -153,6 +161,15 @@ pub struct Params {
     /// Default [`defaults::ORDER`]. Serialized as its number (3, 2 or 1).
     #[serde(serialize_with = "serialize_order")]
     pub order: Order,
+    /// Units of the output coordinates (and of every absolute length): the
+    /// user units of the root `viewBox` or CSS px. Default [`defaults::UNITS`].
+    /// Applied when an SVG is loaded (`mesh_svg`, `run_file`, `load_bytes_with`):
+    /// an already loaded `Drawing` is in the units it was loaded in.
+    pub units: Units,
+    /// Multiplies every output coordinate (e.g. 0.001 for a drawing in mm and a
+    /// mesh in m); absolute lengths are in the scaled units. Default
+    /// [`defaults::SCALE`]. Applied when an SVG is loaded, like [`Params::units`].
+    pub scale: f64,
 }
 
 impl Params {
@@ -187,6 +204,8 @@ impl Params {
         stop_after: None,
         paranoid: false,
         order: defaults::ORDER,
+        units: defaults::UNITS,
+        scale: defaults::SCALE,
     };
 
     /// Set the feature envelope μ.
@@ -240,6 +259,17 @@ impl Params {
         self
     }
 
+    /// Set the units of the output coordinates.
+    pub fn with_units(mut self, units: Units) -> Self {
+        self.units = units;
+        self
+    }
+    /// Set the factor applied to every output coordinate.
+    pub fn with_scale(mut self, scale: f64) -> Self {
+        self.scale = scale;
+        self
+    }
+
     /// Choose the mesher.
     pub fn with_mesher(mut self, mesher: Mesher) -> Self {
         self.mesher = mesher;
@@ -288,6 +318,12 @@ impl Params {
                     "--{name} must be a positive finite number, got {v}"
                 )));
             }
+        }
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            return Err(Error::InvalidParams(format!(
+                "--scale must be a positive finite number, got {}",
+                self.scale
+            )));
         }
         if !(self.alpha_deg > 0.0 && self.alpha_deg < 60.0) {
             return Err(Error::InvalidParams(format!(
@@ -343,6 +379,8 @@ impl Params {
             l_min: self.l_min.resolve(d),
             padding: self.padding.resolve(d),
             alpha: self.alpha_deg.to_radians(),
+            units: self.units,
+            scale: self.scale,
         }
     }
 }
@@ -361,7 +399,8 @@ impl Default for Params {
     }
 }
 
-/// Absolute parameter values for one drawing (user units, radians).
+/// Absolute parameter values for one drawing (output units, radians), and the
+/// output units themselves.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Resolved {
     /// Diagonal of the input's bounding box.
@@ -380,6 +419,10 @@ pub struct Resolved {
     pub padding: f64,
     /// α in radians.
     pub alpha: f64,
+    /// The units of the output coordinates ([`Params::units`]).
+    pub units: Units,
+    /// The factor applied to the output coordinates ([`Params::scale`]).
+    pub scale: f64,
 }
 
 #[cfg(test)]
@@ -393,6 +436,21 @@ mod tests {
         assert_eq!(r.l, 10.0);
         assert_eq!(r.mu, 0.2);
         assert_eq!(r.eps, 0.4);
+    }
+
+    #[test]
+    fn units_and_scale_serialize_by_name_and_value() {
+        let p = Params::DEFAULT.with_units(Units::Px).with_scale(2.5);
+        let json = serde_json::to_value(&p).unwrap();
+        assert_eq!(
+            (json["units"].clone(), json["scale"].clone()),
+            ("px".into(), 2.5.into())
+        );
+        let r = serde_json::to_value(Params::DEFAULT.resolve(1.0)).unwrap();
+        assert_eq!(
+            (r["units"].clone(), r["scale"].clone()),
+            ("user".into(), 1.0.into())
+        );
     }
 
     #[test]
@@ -424,6 +482,14 @@ mod tests {
                 .is_err()
         );
         assert!(Params::DEFAULT.with_alpha_deg(-1.0).validate().is_err());
+        for scale in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(Params::DEFAULT.with_scale(scale).validate().is_err());
+        }
+        Params::DEFAULT
+            .with_units(Units::Px)
+            .with_scale(1e-3)
+            .validate()
+            .unwrap();
         assert!(
             Params::DEFAULT
                 .with_mesher(Mesher::Cdt)

@@ -210,3 +210,95 @@ fn named_shapes_give_named_physical_curves() {
         m.physical_names
     );
 }
+
+#[test]
+fn units_and_scale_flags_reach_the_mesh_and_the_stats() {
+    // an A4 page in millimetres with a 100 × 50 mm rectangle
+    let out = support::out_dir("cli_units");
+    let svg = out.join("a4.svg");
+    std::fs::write(
+        &svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="210mm" height="297mm" viewBox="0 0 210 297"><rect id="plate" x="10" y="20" width="100" height="50" fill="grey"/></svg>"#,
+    )
+    .unwrap();
+    let px_per_mm = 96.0 / 25.4;
+    let cases: [(&[&str], &str, f64, f64); 3] = [
+        (&[], "user", 1.0, 5000.0),
+        (
+            &["--units", "px"],
+            "px",
+            1.0,
+            5000.0 * px_per_mm * px_per_mm,
+        ),
+        (&["--units=user", "--scale", "2"], "user", 2.0, 4.0 * 5000.0),
+    ];
+    for (i, (flags, units, scale, area)) in cases.into_iter().enumerate() {
+        let msh = out.join(format!("a4-{i}.msh"));
+        let run = bin()
+            .arg(&svg)
+            .arg("-o")
+            .arg(&msh)
+            .args(["--linear", "--cut-outside", "--stats"])
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{flags:?}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        assert_eq!(stats["params"]["units"], units, "{flags:?}");
+        assert_eq!(stats["params"]["scale"], scale, "{flags:?}");
+        let got = stats["regions"]["surfaces"][0]["area"].as_f64().unwrap();
+        assert!(
+            ((got - area) / area).abs() < 1e-6,
+            "{flags:?}: area {got}, expected {area}"
+        );
+        let report = support::check_msh(&msh);
+        report.assert_valid(&format!("{flags:?}"));
+        assert!(
+            ((report.area - area) / area).abs() < 1e-6,
+            "{flags:?}: .msh area {}",
+            report.area
+        );
+    }
+    // `features` shares the flags: its d is in the output units
+    let features = |flags: &[&str]| {
+        let json = out.join("a4.features.json");
+        let run = bin()
+            .args(["features"])
+            .arg(&svg)
+            .arg("-o")
+            .arg(&json)
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        v["d"].as_f64().unwrap()
+    };
+    let d = features(&[]);
+    assert!((d - 12_500f64.sqrt()).abs() < 1e-9, "d = {d}");
+    assert_eq!(features(&["--scale", "0.5"]), d / 2.0);
+    // a bad scale is a usage error, and --help says what the flags do
+    for bad in ["0", "-1", "nan"] {
+        let run = bin()
+            .arg(&svg)
+            .arg(format!("--scale={bad}"))
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(2), "--scale {bad}");
+        assert!(
+            String::from_utf8_lossy(&run.stderr).contains("scale"),
+            "--scale {bad}"
+        );
+    }
+    let help = bin().arg("--help").output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("--units") && help.contains("viewBox") && help.contains("--scale"));
+}

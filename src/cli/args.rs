@@ -8,7 +8,7 @@
 use clap::{Args, ValueEnum};
 use triwild::Order;
 use triwild::defaults;
-use triwild::{Length, Mesher, Params, Stage};
+use triwild::{Length, Mesher, Params, Stage, Units};
 use triwild::{MshOptions, MshVersion};
 use triwild::{RegionMode, RegionOptions};
 
@@ -25,8 +25,8 @@ pub(crate) struct RegionArgs {
     /// Keep only the named regions.
     #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
     keep: Vec<String>,
-    /// Remove the region containing the point X,Y (output coordinates: SVG user
-    /// units after transforms, y pointing up, i.e. y = -y_svg). Repeatable.
+    /// Remove the region containing the point X,Y (output coordinates: --units
+    /// times --scale, y pointing up, i.e. y = -y_svg). Repeatable.
     #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
     hole: Vec<(f64, f64)>,
 }
@@ -150,6 +150,25 @@ impl From<Mesher> for MesherArg {
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy)]
+enum UnitsArg {
+    /// The user units of the root viewBox: the numbers written in the document
+    /// (px when there is no viewBox).
+    User,
+    /// CSS px of the root viewport (96 per inch, after the viewBox -> width/height
+    /// mapping), as browsers size the drawing.
+    Px,
+}
+
+impl From<Units> for UnitsArg {
+    fn from(units: Units) -> Self {
+        match units {
+            Units::User => UnitsArg::User,
+            Units::Px => UnitsArg::Px,
+        }
+    }
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
 enum StageArg {
     /// The exact BSP mesh, rounded to f64, feature edges as physical curves.
     Bsp,
@@ -160,6 +179,15 @@ enum StageArg {
 /// Meshing parameters (DESIGN "Coordinates and parameters").
 #[derive(Args, Debug, Clone)]
 pub(crate) struct ParamArgs {
+    /// Units of the output coordinates and of every -abs length: the drawing's
+    /// own numbers (the root viewBox's user units; y flipped, origin kept), or
+    /// CSS px.
+    #[arg(long, value_enum, default_value_t = defaults::UNITS.into())]
+    units: UnitsArg,
+    /// Multiply every output coordinate by S (e.g. 0.001: a drawing in mm, a mesh
+    /// in m); -abs lengths are in the scaled units.
+    #[arg(long, default_value_t = defaults::SCALE, value_name = "S")]
+    scale: f64,
     /// Mesher.
     #[arg(long, value_enum, default_value_t = defaults::MESHER.into())]
     mesher: MesherArg,
@@ -177,37 +205,37 @@ pub(crate) struct ParamArgs {
     /// Target edge length l, relative to d.
     #[arg(short = 'l', long, default_value_t = defaults::EDGE_LENGTH_REL, value_name = "REL")]
     edge_length: f64,
-    /// Target edge length l in user units (overrides --edge-length).
+    /// Target edge length l in output units (overrides --edge-length).
     #[arg(long, value_name = "UNITS")]
     edge_length_abs: Option<f64>,
     /// Minimal edge length l_m, relative to d.
     #[arg(long, default_value_t = defaults::MIN_EDGE_LENGTH_REL, value_name = "REL")]
     min_edge_length: f64,
-    /// Minimal edge length l_m in user units.
+    /// Minimal edge length l_m in output units.
     #[arg(long, value_name = "UNITS")]
     min_edge_length_abs: Option<f64>,
     /// Feature envelope μ, relative to d.
     #[arg(long, default_value_t = defaults::MU_REL, value_name = "REL")]
     mu: f64,
-    /// Feature envelope μ in user units.
+    /// Feature envelope μ in output units.
     #[arg(long, value_name = "UNITS")]
     mu_abs: Option<f64>,
     /// Envelope ε of secondary features, relative to d.
     #[arg(short = 'e', long, default_value_t = defaults::EPS_REL, value_name = "REL")]
     eps: f64,
-    /// Envelope ε in user units.
+    /// Envelope ε in output units.
     #[arg(long, value_name = "UNITS")]
     eps_abs: Option<f64>,
     /// Numerical tolerance ε_m, relative to d.
     #[arg(long, default_value_t = defaults::EPS_M_REL, value_name = "REL")]
     eps_m: f64,
-    /// Numerical tolerance ε_m in user units.
+    /// Numerical tolerance ε_m in output units.
     #[arg(long, value_name = "UNITS")]
     eps_m_abs: Option<f64>,
     /// Padding of the meshed box around the drawing, relative to d.
     #[arg(long, default_value_t = defaults::PADDING_REL, value_name = "REL")]
     padding: f64,
-    /// Padding in user units.
+    /// Padding in output units.
     #[arg(long, value_name = "UNITS")]
     padding_abs: Option<f64>,
     /// Minimal angle α (degrees) for optimization and curve sections.
@@ -245,6 +273,11 @@ impl ParamArgs {
     /// The meshing parameters these flags ask for (not validated).
     pub(crate) fn to_params(&self) -> Params {
         Params::DEFAULT
+            .with_units(match self.units {
+                UnitsArg::User => Units::User,
+                UnitsArg::Px => Units::Px,
+            })
+            .with_scale(self.scale)
             .with_mesher(match self.mesher {
                 MesherArg::Cdt => Mesher::Cdt,
                 MesherArg::TriWild => Mesher::TriWild,

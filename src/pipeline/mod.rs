@@ -232,18 +232,22 @@ impl FeatureAnalysis {
     }
 }
 
-/// Load an SVG document from memory ([`crate::load_bytes`]) and mesh it with the
-/// default regions ([`mesh_drawing`]).
+/// Load an SVG document from memory in `params`' units and scale
+/// ([`crate::load_bytes_with`]) and mesh it with the default regions
+/// ([`mesh_drawing`]).
 ///
 /// # Errors
-/// [`crate::ErrorKind::BadInput`] for a document that is not a drawing (as
-/// [`crate::load_bytes`]), then as [`mesh_drawing`].
+/// Invalid parameters; [`crate::ErrorKind::BadInput`] for a document that is not
+/// a drawing (as [`crate::load_bytes_with`]), then as [`mesh_drawing`].
 pub fn mesh_svg(svg: &[u8], params: &Params) -> Result<Meshed> {
-    mesh_drawing(&crate::svg::load_bytes(svg)?, params)
+    params.validate()?;
+    let drawing = svg::load_bytes_with(svg, params.units, params.scale)?;
+    mesh_drawing(&drawing, params)
 }
 
 /// Mesh an already loaded drawing, with the default regions (one surface per
-/// filled shape, plus `background`).
+/// filled shape, plus `background`). The drawing is in the units it was loaded
+/// in: `params.units` and `params.scale` only say so in the report.
 ///
 /// # Errors
 /// Invalid parameters or a failed meshing stage.
@@ -251,7 +255,8 @@ pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
     mesh_drawing_with(drawing, params, &RegionOptions::DEFAULT)
 }
 
-/// Mesh an already loaded drawing and tag (or drop) its regions.
+/// Mesh an already loaded drawing and tag (or drop) its regions. The drawing is
+/// in the units it was loaded in (see [`mesh_drawing`]).
 ///
 /// # Errors
 /// Invalid parameters, a failed meshing stage, or region options that select
@@ -530,7 +535,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
         output::check_writable(p)?;
     }
     let t = Instant::now();
-    let drawing = svg::load_file(input)?;
+    let drawing = svg::load_file_with(input, opts.params.units, opts.params.scale)?;
     let t_load = t.elapsed().as_secs_f64();
     let Meshed { mesh, mut report } = mesh_drawing_with(&drawing, &opts.params, &opts.regions)?;
     let t = Instant::now();

@@ -174,7 +174,9 @@ pub struct Feature {
     pub source: FeatureSource,
 }
 
-/// A loaded drawing: the shapes and the feature soup that the meshers consume.
+/// A loaded drawing: the shapes and the feature soup that the meshers consume,
+/// in output coordinates (the units and scale it was loaded with: by default
+/// the user units of the root `viewBox`, the document's own numbers).
 ///
 /// Guarantees (what later stages may assume): every coordinate is finite and
 /// its magnitude is at most [`Drawing::MAX_COORD`]; y is flipped (y = −y_svg);
@@ -193,7 +195,8 @@ pub struct Drawing {
 }
 
 impl Drawing {
-    /// Largest accepted coordinate magnitude (user units). Far beyond any drawing,
+    /// Largest accepted coordinate magnitude (output units, after `--units` and
+    /// `--scale`). Far beyond any drawing,
     /// and small enough that squares and products stay finite in f64.
     pub const MAX_COORD: f64 = 1e15;
 

@@ -9,6 +9,7 @@
 //! stack; a panic inside usvg becomes a [`Error::NotSvg`] instead of unwinding
 //! into the caller.
 
+use super::viewport::RootViewBox;
 use crate::{Error, Result};
 use std::collections::HashSet;
 use std::sync::{Arc, OnceLock};
@@ -27,6 +28,9 @@ pub(super) struct XmlFacts {
     pub(super) use_ids: HashSet<String>,
     /// Text elements that should render: (index among all `<text>` elements, id, text snippet).
     pub(super) texts: Vec<TextElement>,
+    /// The root element's `viewBox` and `preserveAspectRatio` (the root viewport
+    /// mapping that usvg folds into every absolute transform).
+    pub(super) root_view_box: Option<RootViewBox>,
 }
 
 /// A `<text>` element outside `<defs>`, clip paths, masks and the like.
@@ -323,12 +327,16 @@ fn numbers(s: &str) -> impl Iterator<Item = (&str, f64)> {
     })
 }
 
-/// What the usvg tree forgets: which groups are `<use>` elements, and which text elements exist.
+/// What the usvg tree forgets: which groups are `<use>` elements, which text
+/// elements exist, and the root viewBox.
 fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
     const NOT_RENDERED: &[&str] = &[
         "defs", "clipPath", "mask", "pattern", "marker", "symbol", "title", "desc", "metadata",
     ];
-    let mut facts = XmlFacts::default();
+    let mut facts = XmlFacts {
+        root_view_box: RootViewBox::of(doc.root_element()),
+        ..XmlFacts::default()
+    };
     let mut text_index = 0;
     for node in doc.descendants().filter(roxmltree::Node::is_element) {
         let name = node.tag_name().name();

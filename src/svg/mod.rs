@@ -6,11 +6,17 @@
 //! - every drawable element (paths, basic shapes, `<use>`, nested `<svg>`, CSS
 //!   styling, text when a font is found) becomes one [`Shape`] per usvg path, made
 //!   of straight segments and cubic Béziers (quadratics are elevated exactly,
-//!   arcs arrive from usvg as cubics), in user units after all transforms
-//!   (each path's absolute transform applied in f64 to usvg's f32 data), y flipped;
-//!   the root `viewBox` → `width`/`height` mapping is one of those transforms, so
-//!   coordinates are in the root viewport's units (px at 96 dpi), as usvg and the
-//!   reference's nanosvg give them;
+//!   arcs arrive from usvg as cubics), after all transforms (each path's absolute
+//!   transform applied in f64 to usvg's f32 data), y flipped (y = −y_svg);
+//! - coordinates are in [`Units`]: by default the user units of the root
+//!   `viewBox`, the numbers written in the document (an Inkscape drawing in mm
+//!   comes out in mm): usvg folds the root `viewBox` → `width`/`height` mapping
+//!   into every absolute transform, and `viewport.rs` undoes it once, in f64
+//!   (nested `<svg>` and `<use>` keep their own transforms; a `transform` on the
+//!   root `<svg>` stays, expressed in user units). [`Units::Px`] keeps the root
+//!   viewport's CSS px (96 per inch), as usvg and the reference's nanosvg give
+//!   them. Without a root `viewBox` both are the same. A `scale` then multiplies
+//!   every coordinate;
 //! - zero-length segments are dropped; a subpath with no segment left is an
 //!   isolated point (a path that is only `M x y` is dropped by usvg, as by
 //!   browsers and nanosvg; a trailing `M` after drawing commands is kept);
@@ -30,20 +36,31 @@ pub(crate) mod drawing;
 mod load;
 mod outline;
 mod soup;
+mod viewport;
 
 pub(crate) use drawing::{
     Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
 
+use crate::units::Units;
 use crate::{Error, Result};
 use std::path::Path;
 
-/// Load and normalise an SVG file.
+/// Load and normalise an SVG file, in the user units of its root `viewBox`
+/// (as [`load_file_with`] with [`Units::User`] and scale 1).
+///
+/// # Errors
+/// As [`load_file_with`].
+pub fn load_file(path: &Path) -> Result<Drawing> {
+    load_file_with(path, Units::User, 1.0)
+}
+
+/// Load and normalise an SVG file, its coordinates in `units` multiplied by `scale`.
 ///
 /// # Errors
 /// [`Error::Read`] if the file cannot be read (the message names the cause),
-/// [`Error::IsDirectory`] for a directory, otherwise as [`load_bytes`].
-pub fn load_file(path: &Path) -> Result<Drawing> {
+/// [`Error::IsDirectory`] for a directory, otherwise as [`load_bytes_with`].
+pub fn load_file_with(path: &Path, units: Units, scale: f64) -> Result<Drawing> {
     let meta = std::fs::metadata(path).map_err(Error::Read)?;
     if meta.is_dir() {
         return Err(Error::IsDirectory);
@@ -52,10 +69,12 @@ pub fn load_file(path: &Path) -> Result<Drawing> {
     if data.is_empty() {
         return Err(Error::EmptyFile);
     }
-    load_bytes(&data)
+    load_bytes_with(&data, units, scale)
 }
 
-/// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a BOM).
+/// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a
+/// BOM), in the user units of its root `viewBox` (as [`load_bytes_with`] with
+/// [`Units::User`] and scale 1).
 ///
 /// ```
 /// use triwild::{ErrorKind, load_bytes};
@@ -70,17 +89,46 @@ pub fn load_file(path: &Path) -> Result<Drawing> {
 /// ```
 ///
 /// # Errors
+/// As [`load_bytes_with`].
+pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
+    load_bytes_with(data, Units::User, 1.0)
+}
+
+/// Load and normalise an SVG document from its bytes, its coordinates in
+/// `units` multiplied by `scale`.
+///
+/// ```
+/// use triwild::{Units, load_bytes_with};
+/// // an A4 page drawn in millimetres (Inkscape's default)
+/// let doc = br#"<svg xmlns="http://www.w3.org/2000/svg" width="210mm" height="297mm"
+///     viewBox="0 0 210 297"><rect x="10" y="20" width="100" height="50"/></svg>"#;
+/// let mm = load_bytes_with(doc, Units::User, 1.0)?;
+/// assert_eq!((mm.bbox.x0, mm.bbox.y1), (10.0, -20.0)); // the document's numbers, y up
+/// assert_eq!(mm.bbox.width(), 100.0);
+/// let px = load_bytes_with(doc, Units::Px, 1.0)?; // CSS px: 96 per inch
+/// assert!((px.bbox.width() - 100.0 * 96.0 / 25.4).abs() < 1e-4);
+/// let metres = load_bytes_with(doc, Units::User, 1e-3)?;
+/// assert!((metres.bbox.width() - 0.1).abs() < 1e-15);
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
+/// # Errors
+/// - [`Error::InvalidParams`]: `scale` is not finite and positive;
 /// - [`Error::EmptyFile`]: no bytes, or only whitespace;
 /// - [`Error::NotSvg`]: binary data (PNG, gzip/.svgz, ...), broken XML, an HTML
 ///   page, a root element other than `<svg>`, or input beyond usvg's safety
 ///   limits (entity bombs, more than 1,000,000 elements after `<use>` expansion);
 /// - [`Error::NoGeometry`]: nothing drawable;
 /// - [`Error::BadCoordinate`]: a coordinate that is not finite or exceeds
-///   [`Drawing::MAX_COORD`] after transforms, or a drawing too small for its
-///   distance from the origin.
-pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
+///   [`Drawing::MAX_COORD`] after transforms (the units and the scale
+///   included), a drawing too small for its distance from the origin, or (in
+///   user units) a root `viewBox` whose mapping to the viewport cannot be undone.
+pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing> {
+    // checked before parsing, so a bad scale is reported whatever the input
+    viewport::check_scale(scale)?;
     let (tree, facts) = load::parse(data)?;
-    let outlines = outline::collect(&tree, &facts)?;
+    let frame = viewport::Frame::new(units, scale, facts.root_view_box, tree.size())?;
+    let outlines = outline::collect(&tree, &facts, &frame)?;
     let drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
     tracing::debug!(
         shapes = drawing.shapes.len(),

@@ -1,9 +1,10 @@
 //! usvg tree → [`Shape`]s: one shape per usvg path (text glyphs included), its
-//! absolute transform applied in f64, y flipped, quadratics elevated to cubics,
-//! zero-length segments dropped.
+//! absolute transform and the output [`Frame`] applied in f64, y flipped,
+//! quadratics elevated to cubics, zero-length segments dropped.
 
 use super::drawing::{FillRule, Segment, Shape, Subpath};
 use super::load::XmlFacts;
+use super::viewport::Frame;
 use crate::{Error, Result};
 use kurbo::{CubicBez, Line, Point};
 use std::collections::HashSet;
@@ -31,7 +32,7 @@ enum Step<'a> {
 /// # Errors
 /// [`Error::BadCoordinate`] when a coordinate is not finite or exceeds
 /// [`super::Drawing::MAX_COORD`] after transforms.
-pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts) -> Result<Outlines> {
+pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts, frame: &Frame) -> Result<Outlines> {
     let mut out = Outlines::default();
     let mut images = 0usize;
     let mut filters = 0usize;
@@ -60,7 +61,8 @@ pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts) -> Result<Outlines> {
             }
             Step::Visit(usvg::Node::Path(p), inherited) => {
                 let id = non_empty(p.id()).or(inherited);
-                out.shapes.push(convert_path(p, out.shapes.len(), id)?);
+                out.shapes
+                    .push(convert_path(p, out.shapes.len(), id, frame)?);
             }
             Step::Visit(usvg::Node::Text(t), inherited) => {
                 let id = non_empty(t.id()).or(inherited);
@@ -135,10 +137,9 @@ fn non_empty(s: &str) -> Option<&str> {
 }
 
 /// One usvg path → one [`Shape`], in output coordinates.
-fn convert_path(path: &usvg::Path, index: usize, id: Option<&str>) -> Result<Shape> {
+fn convert_path(path: &usvg::Path, index: usize, id: Option<&str>, frame: &Frame) -> Result<Shape> {
     let element_index = u32::try_from(index).unwrap_or(u32::MAX);
-    let t = path.abs_transform();
-    let [sx, ky, kx, sy, tx, ty] = [t.sx, t.ky, t.kx, t.sy, t.tx, t.ty].map(f64::from);
+    let [sx, ky, kx, sy, tx, ty] = frame.map(path.abs_transform());
     let map = |p: usvg::tiny_skia_path::Point| {
         let (x, y) = (f64::from(p.x), f64::from(p.y));
         Point::new(sx * x + kx * y + tx, -(ky * x + sy * y + ty))

@@ -706,14 +706,215 @@ mod fuzz {
     }
 }
 
+/// A root `<svg>` with `attrs`, holding `body`.
+fn doc(attrs: &str, body: &str) -> String {
+    format!(r#"<svg xmlns="http://www.w3.org/2000/svg" {attrs}>{body}</svg>"#)
+}
+
+fn load_in(doc: &str, units: Units, scale: f64) -> Drawing {
+    load_bytes_with(doc.as_bytes(), units, scale).expect("test SVG loads")
+}
+
+/// The bbox as (x0, y0, x1, y1), output coordinates (y up).
+fn corners(d: &Drawing) -> [f64; 4] {
+    [d.bbox.x0, d.bbox.y0, d.bbox.x1, d.bbox.y1]
+}
+
 #[test]
-fn root_viewbox_maps_to_the_viewport() {
-    let doc = r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="200" viewBox="0 0 100 100"><rect width="10" height="10"/></svg>"#;
-    let d = load_bytes(doc.as_bytes()).expect("loads");
-    assert!(
-        close(d.bbox.origin(), Point::new(0.0, -20.0)),
-        "{:?}",
-        d.bbox
+fn root_viewbox_gives_user_units_by_default_and_px_on_request() {
+    let doc = doc(
+        r#"width="200" height="200" viewBox="0 0 100 100""#,
+        r#"<rect width="10" height="10"/>"#,
     );
-    assert!((d.bbox.width() - 20.0).abs() < 1e-9);
+    // the document's numbers, exactly (y flipped)
+    assert_eq!(
+        corners(&load_bytes(doc.as_bytes()).unwrap()),
+        [0.0, -10.0, 10.0, 0.0]
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::User, 1.0)),
+        [0.0, -10.0, 10.0, 0.0]
+    );
+    // the root viewport's px: the viewBox is shown twice as large
+    assert_eq!(
+        corners(&load_in(&doc, Units::Px, 1.0)),
+        [0.0, -20.0, 20.0, 0.0]
+    );
+}
+
+#[test]
+fn a_drawing_in_millimetres_keeps_its_numbers() {
+    let doc = doc(
+        r#"width="210mm" height="297mm" viewBox="0 0 210 297""#,
+        r#"<rect x="10" y="20" width="100" height="50"/><circle cx="105" cy="148.5" r="30"/>"#,
+    );
+    let mm = load_in(&doc, Units::User, 1.0);
+    assert_eq!(
+        bbox_of(&mm.shapes[0]),
+        kurbo::Rect::new(10.0, -70.0, 110.0, -20.0)
+    );
+    let c = bbox_of(&mm.shapes[1]);
+    assert!(close(c.center(), Point::new(105.0, -148.5)) && (c.width() - 60.0).abs() < 1e-5);
+    // px: 96 px per inch, 25.4 mm per inch (usvg maps in f32)
+    let px = load_in(&doc, Units::Px, 1.0);
+    let px_per_mm = 96.0 / 25.4;
+    let r = bbox_of(&px.shapes[0]);
+    assert!((r.width() / 100.0 / px_per_mm - 1.0).abs() < 1e-6, "{r:?}");
+    assert!((r.x0 / 10.0 / px_per_mm - 1.0).abs() < 1e-6, "{r:?}");
+}
+
+#[test]
+fn viewbox_origin_and_aspect_are_undone() {
+    let body = r#"<rect x="-40" y="30" width="60" height="100"/>"#;
+    // the viewBox's numbers, whatever its origin, aspect and alignment
+    for aspect in [
+        "none",
+        "xMidYMid meet",
+        "xMinYMax slice",
+        "xMaxYMin",
+        "xMidYMid slice",
+    ] {
+        let doc = doc(
+            &format!(
+                r#"width="300" height="100" viewBox="-50 20 100 200" preserveAspectRatio="{aspect}""#
+            ),
+            body,
+        );
+        let d = load_in(&doc, Units::User, 1.0);
+        assert_eq!(corners(&d), [-40.0, -130.0, 20.0, -30.0], "{aspect}");
+    }
+    // `none` stretches x by 3 and y by 1/2
+    let stretched = doc(
+        r#"width="300" height="100" viewBox="-50 20 100 200" preserveAspectRatio="none""#,
+        body,
+    );
+    assert_eq!(
+        corners(&load_in(&stretched, Units::Px, 1.0)),
+        [30.0, -55.0, 210.0, -5.0]
+    );
+    // the default xMidYMid meet: factor 1/2, the 50 px wide box centred in 300 px
+    let meet = doc(r#"width="300" height="100" viewBox="-50 20 100 200""#, body);
+    assert_eq!(
+        corners(&load_in(&meet, Units::Px, 1.0)),
+        [130.0, -55.0, 160.0, -5.0]
+    );
+}
+
+#[test]
+fn without_a_viewbox_user_units_are_px() {
+    for attrs in [
+        r#"width="100mm" height="50mm""#,
+        r#"width="300" height="100""#,
+        "",
+    ] {
+        let doc = doc(attrs, r#"<rect x="5" y="5" width="10" height="20"/>"#);
+        let user = load_in(&doc, Units::User, 1.0);
+        assert_eq!(user, load_in(&doc, Units::Px, 1.0), "{attrs}");
+        assert_eq!(corners(&user), [5.0, -25.0, 15.0, -5.0], "{attrs}");
+    }
+}
+
+#[test]
+fn viewbox_without_size_only_loses_its_translation() {
+    let doc = doc(
+        r#"viewBox="100 200 50 50""#,
+        r#"<rect x="110" y="210" width="10" height="10"/>"#,
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::User, 1.0)),
+        [110.0, -220.0, 120.0, -210.0]
+    );
+    assert_eq!(
+        corners(&load_in(&doc, Units::Px, 1.0)),
+        [10.0, -20.0, 20.0, -10.0]
+    );
+}
+
+#[test]
+fn nested_svg_use_and_root_transform_keep_their_own_transforms() {
+    let doc = doc(
+        r##"xmlns:xlink="http://www.w3.org/1999/xlink" width="200" height="200" viewBox="0 0 100 100""##,
+        r##"<svg x="10" y="10" width="20" height="20" viewBox="0 0 10 10"><rect width="10" height="10"/></svg>
+            <defs><rect id="r" width="5" height="5"/></defs>
+            <use xlink:href="#r" x="50" y="60" transform="scale(0.5)"/>"##,
+    );
+    let d = load_in(&doc, Units::User, 1.0);
+    assert_eq!(
+        bbox_of(&d.shapes[0]),
+        kurbo::Rect::new(10.0, -30.0, 30.0, -10.0)
+    );
+    assert_eq!(
+        bbox_of(&d.shapes[1]),
+        kurbo::Rect::new(25.0, -32.5, 27.5, -30.0)
+    );
+    let px = load_in(&doc, Units::Px, 1.0);
+    assert_eq!(
+        bbox_of(&px.shapes[0]),
+        kurbo::Rect::new(20.0, -60.0, 60.0, -20.0)
+    );
+    // a transform on the root <svg> acts on the viewport (SVG 2): 10 px are 5 user units
+    let moved = doc.replacen(
+        "width=\"200\"",
+        "transform=\"translate(10 0)\" width=\"200\"",
+        1,
+    );
+    let d = load_in(&moved, Units::User, 1.0);
+    assert_eq!(
+        bbox_of(&d.shapes[0]),
+        kurbo::Rect::new(15.0, -30.0, 35.0, -10.0)
+    );
+}
+
+#[test]
+fn scale_multiplies_every_coordinate() {
+    let doc = doc(
+        r#"width="210mm" height="297mm" viewBox="0 0 210 297""#,
+        r#"<path d="M 10 20 C 30 0 60 90 110 20 Z"/>"#,
+    );
+    let one = load_in(&doc, Units::User, 1.0);
+    let two = load_in(&doc, Units::User, 2.0);
+    assert_eq!(corners(&two), corners(&one).map(|v| 2.0 * v));
+    for (a, b) in one.features.iter().zip(&two.features) {
+        match (a.geom, b.geom) {
+            (FeatureGeom::Cubic(a), FeatureGeom::Cubic(b)) => {
+                assert_eq!(b.p1, Point::new(2.0 * a.p1.x, 2.0 * a.p1.y));
+            }
+            (FeatureGeom::Line(a), FeatureGeom::Line(b)) => {
+                assert_eq!(b.p0, Point::new(2.0 * a.p0.x, 2.0 * a.p0.y));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    let px = load_in(&doc, Units::Px, 0.5);
+    assert!((px.bbox.width() * 2.0 * 25.4 / 96.0 - one.bbox.width()).abs() < 1e-4);
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e = load_bytes_with(doc.as_bytes(), Units::User, bad).unwrap_err();
+        assert!(matches!(e, Error::InvalidParams(_)), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn coordinates_are_checked_after_units_and_scale() {
+    // 1e12 user units fit, 1e4 times that does not
+    let doc = doc(
+        r#"width="1" height="1" viewBox="0 0 1e12 1e12""#,
+        r#"<rect width="1e12" height="1e12"/>"#,
+    );
+    load_in(&doc, Units::User, 1.0);
+    let e = load_bytes_with(doc.as_bytes(), Units::User, 1e4).unwrap_err();
+    assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
+    // a viewport mapping that underflows f32 cannot be undone: a clear error in
+    // user units, px as before
+    let tiny = doc.replace(r#"viewBox="0 0 1e12 1e12""#, r#"viewBox="0 0 3e38 3e38""#);
+    let tiny = tiny.replace(
+        r#"width="1e12" height="1e12""#,
+        r#"width="1e38" height="1e38""#,
+    );
+    let tiny = tiny.replace(r#"width="1" height="1""#, r#"width="1e-9" height="1e-9""#);
+    let e = load_bytes_with(tiny.as_bytes(), Units::User, 1.0).unwrap_err();
+    assert!(e.to_string().contains("root viewBox"), "{e}");
+    assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
+    // in px the drawing collapses to a point, as before
+    let px = load_in(&tiny, Units::Px, 1.0);
+    assert_eq!(px.bbox.area(), 0.0);
 }

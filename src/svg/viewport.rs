@@ -1,0 +1,166 @@
+//! The output frame: from usvg's absolute coordinates (CSS px of the root
+//! viewport, y down) to output coordinates ([`Units`], `scale`, y up).
+//!
+//! usvg folds the root `viewBox` → `width`/`height` mapping into the root group,
+//! so every path's absolute transform starts with it. In [`Units::User`] that
+//! mapping is recomputed here exactly as usvg 0.49 computes it (`ViewBox::
+//! to_transform` on the tree's size, in f32 from the same parsed attributes),
+//! and undone in f64: for a path directly under the root, the absolute
+//! transform's factors divided by the mapping's are exactly the document's.
+
+use crate::units::Units;
+use crate::{Error, Result};
+use usvg::roxmltree;
+
+/// The root `viewBox` and `preserveAspectRatio` attributes, parsed as usvg parses them.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RootViewBox {
+    /// The `viewBox` rectangle (f32, as usvg keeps it).
+    rect: usvg::NonZeroRect,
+    /// `preserveAspectRatio` (default `xMidYMid meet`).
+    aspect: svgtypes::AspectRatio,
+}
+
+impl RootViewBox {
+    /// The root element's `viewBox`, if it has a valid one (positive, finite
+    /// size); usvg ignores any other and so do we.
+    pub(super) fn of(root: roxmltree::Node<'_, '_>) -> Option<RootViewBox> {
+        let vb: svgtypes::ViewBox = root.attribute("viewBox")?.parse().ok()?;
+        #[allow(
+            clippy::cast_possible_truncation,
+            reason = "usvg keeps the viewBox in f32; the mapping must be usvg's"
+        )]
+        let rect =
+            usvg::NonZeroRect::from_xywh(vb.x as f32, vb.y as f32, vb.w as f32, vb.h as f32)?;
+        let aspect = root
+            .attribute("preserveAspectRatio")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_default();
+        Some(RootViewBox { rect, aspect })
+    }
+
+    /// The viewBox → viewport mapping for a viewport of `size` px, as
+    /// `(sx, sy, tx, ty)`: `x_px = sx·x_user + tx` (usvg's `ViewBox::to_transform`,
+    /// the same f32 operations in the same order, so the result is bit-identical).
+    fn mapping(&self, size: usvg::Size) -> (f32, f32, f32, f32) {
+        use svgtypes::Align;
+        let vr = self.rect;
+        let sx = size.width() / vr.width();
+        let sy = size.height() / vr.height();
+        let (sx, sy) = if self.aspect.align == Align::None {
+            (sx, sy)
+        } else {
+            // meet: the whole viewBox is visible (smaller factor); slice: it covers
+            // the viewport (larger factor)
+            let s = if self.aspect.slice {
+                sx.max(sy)
+            } else {
+                sx.min(sy)
+            };
+            (s, s)
+        };
+        let x = -vr.x() * sx;
+        let y = -vr.y() * sy;
+        let w = size.width() - vr.width() * sx;
+        let h = size.height() - vr.height() * sy;
+        let (tx, ty) = match self.aspect.align {
+            Align::None | Align::XMinYMin => (x, y),
+            Align::XMidYMin => (x + w / 2.0, y),
+            Align::XMaxYMin => (x + w, y),
+            Align::XMinYMid => (x, y + h / 2.0),
+            Align::XMidYMid => (x + w / 2.0, y + h / 2.0),
+            Align::XMaxYMid => (x + w, y + h / 2.0),
+            Align::XMinYMax => (x, y + h),
+            Align::XMidYMax => (x + w / 2.0, y + h),
+            Align::XMaxYMax => (x + w, y + h),
+        };
+        (sx, sy, tx, ty)
+    }
+}
+
+/// A scale must be finite and positive.
+///
+/// # Errors
+/// [`Error::InvalidParams`] otherwise.
+pub(super) fn check_scale(scale: f64) -> Result<()> {
+    if scale.is_finite() && scale > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidParams(format!(
+            "--scale must be a positive finite number, got {scale}"
+        )))
+    }
+}
+
+/// What happens to usvg's absolute coordinates on the way out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Frame {
+    /// The root viewport mapping to undo, `(sx, sy, tx, ty)` in f64; `None` in
+    /// px, or when it is the identity (no `viewBox`, or one equal to the size).
+    undo: Option<[f64; 4]>,
+    /// Multiplies every output coordinate (1 leaves them untouched).
+    scale: f64,
+}
+
+impl Frame {
+    /// The frame for `units` and `scale`, for a tree of `size` px whose root
+    /// element had `view_box`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParams`] for a `scale` that is not finite and positive;
+    /// [`Error::BadCoordinate`] in user units when the root viewport mapping cannot
+    /// be undone (a factor that is zero or not finite in f32).
+    pub(super) fn new(
+        units: Units,
+        scale: f64,
+        view_box: Option<RootViewBox>,
+        size: usvg::Size,
+    ) -> Result<Frame> {
+        check_scale(scale)?;
+        let undo = match (units, view_box) {
+            (Units::Px, _) | (Units::User, None) => None,
+            (Units::User, Some(vb)) => {
+                let (sx, sy, tx, ty) = vb.mapping(size);
+                let m = [sx, sy, tx, ty].map(f64::from);
+                if !(m.iter().all(|v| v.is_finite()) && m[0] > 0.0 && m[1] > 0.0) {
+                    return Err(Error::BadCoordinate(format!(
+                        "the root viewBox {} {} {} {} cannot be mapped to the {} × {} px \
+                         viewport and back (try --units px)",
+                        vb.rect.x(),
+                        vb.rect.y(),
+                        vb.rect.width(),
+                        vb.rect.height(),
+                        size.width(),
+                        size.height()
+                    )));
+                }
+                (m != [1.0, 1.0, 0.0, 0.0]).then_some(m)
+            }
+        };
+        Ok(Frame { undo, scale })
+    }
+
+    /// The affine map `[sx, ky, kx, sy, tx, ty]` from a path's own coordinates to
+    /// output coordinates before the y flip, given the path's absolute transform
+    /// (usvg's order: `x' = sx·x + kx·y + tx`, `y' = ky·x + sy·y + ty`).
+    pub(super) fn map(&self, abs: usvg::Transform) -> [f64; 6] {
+        let [mut sx, mut ky, mut kx, mut sy, mut tx, mut ty] =
+            [abs.sx, abs.ky, abs.kx, abs.sy, abs.tx, abs.ty].map(f64::from);
+        if let Some([vsx, vsy, vtx, vty]) = self.undo {
+            // (x_px − vtx) / vsx, row by row: divisions, so that a factor equal
+            // to the mapping's gives exactly 1
+            sx /= vsx;
+            kx /= vsx;
+            tx = (tx - vtx) / vsx;
+            ky /= vsy;
+            sy /= vsy;
+            ty = (ty - vty) / vsy;
+        }
+        let m = [sx, ky, kx, sy, tx, ty];
+        if self.scale == 1.0 {
+            m
+        } else {
+            m.map(|v| v * self.scale)
+        }
+    }
+}
