@@ -25,7 +25,6 @@
 use super::grid::Grid;
 use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
-use crate::exact::orient2d;
 use crate::mesh::{angle_between, point_segment_distance};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
@@ -50,10 +49,16 @@ fn ctrl_box(c: &CubicBez) -> Rect {
 }
 
 /// Distance between two segments (0 if they cross or touch).
+///
+/// A measurement, not a decision: the crossing test only short-cuts to 0, and where
+/// float rounding could get it wrong the segments nearly cross, so the endpoint
+/// distances below are within rounding of 0 too. Plain products keep this hot loop
+/// of the μ-separation cheap (the exact predicate doubled the stage's time).
 pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
-    let (d1, d2) = (orient2d(a.p0, a.p1, b.p0), orient2d(a.p0, a.p1, b.p1));
-    let (d3, d4) = (orient2d(b.p0, b.p1, a.p0), orient2d(b.p0, b.p1, a.p1));
-    if d1.sign() * d2.sign() < 0 && d3.sign() * d4.sign() < 0 {
+    let side = |p: Point, q: Point, r: Point| (q - p).cross(r - p);
+    let (d1, d2) = (side(a.p0, a.p1, b.p0), side(a.p0, a.p1, b.p1));
+    let (d3, d4) = (side(b.p0, b.p1, a.p0), side(b.p0, b.p1, a.p1));
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
         return 0.0;
     }
     point_segment_distance(a.p0, b)
@@ -62,14 +67,18 @@ pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
         .min(point_segment_distance(b.p1, a))
 }
 
+/// Whether `p` is in the triangle `a b c` (a control-hull proximity test of the
+/// μ-separation, like [`segment_distance`] a measurement with float products: a
+/// wrong answer within rounding of the hull's boundary changes nothing the separation
+/// guarantees, and the exact predicate made this hot loop several times slower).
 fn in_triangle(p: Point, a: Point, b: Point, c: Point) -> bool {
-    let s = orient2d(a, b, c).sign();
-    if s == 0 {
+    let side = |p: Point, q: Point, r: Point| (q - p).cross(r - p);
+    let area = side(a, b, c);
+    if area == 0.0 {
         return false;
     }
-    s * orient2d(a, b, p).sign() >= 0
-        && s * orient2d(b, c, p).sign() >= 0
-        && s * orient2d(c, a, p).sign() >= 0
+    let s = area.signum();
+    s * side(a, b, p) >= 0.0 && s * side(b, c, p) >= 0.0 && s * side(c, a, p) >= 0.0
 }
 
 fn in_hull(p: Point, q: &[Point; 4]) -> bool {
