@@ -56,26 +56,11 @@ fn in_shewchuk_range(v: f64) -> bool {
 ///
 /// Points must be finite. Within the exponent range 2^-142..2^201 this is
 /// Shewchuk's adaptive predicate; outside it, exact rationals.
-#[inline]
 pub fn orient2d(a: Point, b: Point, c: Point) -> Orientation {
     let all_in = [a.x, a.y, b.x, b.y, c.x, c.y]
         .iter()
         .all(|&v| in_shewchuk_range(v));
     if all_in {
-        // Shewchuk's static filter (stage A of orient2d, error bound (3 + 16ε)ε of the
-        // sum of the two products' magnitudes), inline: most calls end here, the same
-        // sign the adaptive predicate would give. Valid in the exponent range above.
-        const ERRBOUND_A: f64 = (3.0 + 16.0 * f64::EPSILON / 2.0) * (f64::EPSILON / 2.0);
-        let left = (a.x - c.x) * (b.y - c.y);
-        let right = (a.y - c.y) * (b.x - c.x);
-        let det = left - right;
-        let bound = ERRBOUND_A * (left.abs() + right.abs());
-        if det > bound {
-            return Orientation::CounterClockwise;
-        }
-        if -det > bound {
-            return Orientation::Clockwise;
-        }
         let d = robust::orient2d(
             robust::Coord { x: a.x, y: a.y },
             robust::Coord { x: b.x, y: b.y },

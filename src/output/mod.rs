@@ -61,10 +61,7 @@ impl Default for MshOptions {
 pub fn write_msh(mesh: &FemMesh, path: &Path, opts: MshOptions) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
     let _span = tracing::debug_span!("write_msh", path = %path.display()).entered();
-    atomic::write_atomic(path, |w| match opts.version {
-        MshVersion::V41 => msh::write_v41(w, mesh, opts.binary),
-        MshVersion::V22 => msh::write_v22(w, mesh, opts.binary),
-    })
+    atomic::write_atomic(path, |w| write_format(w, mesh, opts))
 }
 
 /// Write `mesh` in gmsh format to any writer (a buffer, a socket): the bytes
@@ -97,12 +94,21 @@ pub fn write_msh(mesh: &FemMesh, path: &Path, opts: MshOptions) -> Result<()> {
 pub fn write_msh_to(mesh: &FemMesh, w: &mut impl std::io::Write, opts: MshOptions) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
     let mut w = std::io::BufWriter::new(w);
+    write_format(&mut w, mesh, opts)
+        .and_then(|()| std::io::Write::flush(&mut w))
+        .map_err(Error::Write)
+}
+
+/// The gmsh bytes of a validated `mesh` in `opts`' format.
+fn write_format(
+    w: &mut impl std::io::Write,
+    mesh: &FemMesh,
+    opts: MshOptions,
+) -> std::io::Result<()> {
     match opts.version {
-        MshVersion::V41 => msh::write_v41(&mut w, mesh, opts.binary),
-        MshVersion::V22 => msh::write_v22(&mut w, mesh, opts.binary),
+        MshVersion::V41 => msh::write_v41(w, mesh, opts.binary),
+        MshVersion::V22 => msh::write_v22(w, mesh, opts.binary),
     }
-    .and_then(|()| std::io::Write::flush(&mut w))
-    .map_err(Error::Write)
 }
 
 /// Write an SVG preview of `mesh` at `path` (atomically): grey triangle outlines
