@@ -42,6 +42,7 @@ fn curve_area(d: &Drawing, shape: usize) -> f64 {
             a += match s {
                 Segment::Line(l) => l.signed_area(),
                 Segment::Cubic(c) => c.signed_area(),
+                Segment::Conic(c) => c.signed_area(),
             };
         }
         if let Some(l) = sp.implicit_closing_segment() {
@@ -70,6 +71,11 @@ fn fine_polygon(d: &Drawing, shape: usize) -> Vec<Point> {
             match s {
                 Segment::Line(l) => path.line_to(l.p1),
                 Segment::Cubic(c) => path.curve_to(c.p1, c.p2, c.p3),
+                Segment::Conic(c) => {
+                    for i in 1..=1024 {
+                        path.line_to(c.eval(f64::from(i) / 1024.0));
+                    }
+                }
             }
         }
         path.close_path();

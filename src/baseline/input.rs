@@ -128,6 +128,13 @@ impl PlanarInput {
                         CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
                     flatten_cubic(c, accuracy, &mut polyline);
                 }
+                // CONIC-PLACEHOLDER: approximated until the baseline takes conics
+                FeatureGeom::Conic(k) => {
+                    let c = k.approx_cubic();
+                    let c =
+                        CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
+                    flatten_cubic(c, accuracy, &mut polyline);
+                }
             }
             let mut prev: Option<u32> = None;
             for &p in &polyline {
@@ -266,10 +273,15 @@ impl Merger {
 pub(super) fn padded_box(drawing: &Drawing, padding: f64) -> Rect {
     let mut bbox = drawing.bbox;
     for f in &drawing.features {
+        let conic;
         let pts: &[Point] = match &f.geom {
             FeatureGeom::Point(p) => std::slice::from_ref(p),
             FeatureGeom::Line(l) => &[l.p0, l.p1],
             FeatureGeom::Cubic(c) => &[c.p0, c.p1, c.p2, c.p3],
+            FeatureGeom::Conic(c) => {
+                conic = c.control_points();
+                &conic
+            }
         };
         for &p in pts {
             bbox = bbox.union_pt(p);

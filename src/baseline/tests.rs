@@ -31,6 +31,7 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
             FeatureGeom::Point(p) => add(p),
             FeatureGeom::Line(l) => [l.p0, l.p1].into_iter().for_each(&mut add),
             FeatureGeom::Cubic(c) => [c.p0, c.p1, c.p2, c.p3].into_iter().for_each(&mut add),
+            FeatureGeom::Conic(c) => c.control_points().into_iter().for_each(&mut add),
         }
     }
     Drawing {
@@ -126,6 +127,7 @@ fn check(d: &Drawing, params: &Params, mesh: &LinearMesh) -> Quality {
             FeatureGeom::Point(p) => vec![p],
             FeatureGeom::Line(l) => vec![l.p0, l.p1],
             FeatureGeom::Cubic(c) => vec![c.p0, c.p3],
+            FeatureGeom::Conic(c) => vec![c.p0, c.p2],
         };
         for p in ends {
             assert!(near_vertex(p), "input point {p:?} is not a mesh vertex");
@@ -391,6 +393,9 @@ fn soup() -> impl Strategy<Value = Vec<(u32, FeatureGeom)>> {
                             map(c.p2),
                             map(c.p3),
                         )),
+                        FeatureGeom::Conic(c) => FeatureGeom::Conic(
+                            crate::svg::drawing::Conic::new(map(c.p0), map(c.p1), map(c.p2), c.w),
+                        ),
                     };
                     (shape, g)
                 })

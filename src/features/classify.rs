@@ -38,6 +38,8 @@ pub(super) fn classify(geom: &FeatureGeom, eps_m: f64) -> Class {
             }
         }
         FeatureGeom::Cubic(c) => classify_cubic(&c, eps_m),
+        // CONIC-PLACEHOLDER: the features stage converts conics before classifying
+        FeatureGeom::Conic(c) => classify_cubic(&c.approx_cubic(), eps_m),
     }
 }
 

@@ -192,6 +192,8 @@ pub struct FeatureCounts {
     pub input_lines: usize,
     /// Input cubics.
     pub input_cubics: usize,
+    /// Input conic pieces (arcs, circles, ellipses, rounded corners).
+    pub input_conics: usize,
     /// Curve ends (and points) moved onto another end closer than l_m (step 0).
     pub snapped_ends: usize,
     /// Curves shorter than l_m that collapsed onto their snapped ends (step 0).
@@ -296,7 +298,20 @@ impl FeatureSet {
 
         // 0. Ends closer than l_m meet.
         let t = Instant::now();
-        let snapped = snap::snap(&drawing.features, params.l_min);
+        // CONIC-PLACEHOLDER: conics enter as their cubic approximation until the
+        // features stage takes them exactly
+        let approx: Vec<crate::svg::Feature> = drawing
+            .features
+            .iter()
+            .map(|f| match f.geom {
+                FeatureGeom::Conic(c) => crate::svg::Feature {
+                    geom: FeatureGeom::Cubic(c.approx_cubic()),
+                    source: f.source,
+                },
+                _ => *f,
+            })
+            .collect();
+        let snapped = snap::snap(&approx, params.l_min);
         counts.snapped_ends = snapped.moved;
         counts.snap_collapsed = snapped.collapsed;
 
@@ -307,6 +322,7 @@ impl FeatureSet {
                 FeatureGeom::Point(_) => counts.input_points += 1,
                 FeatureGeom::Line(_) => counts.input_lines += 1,
                 FeatureGeom::Cubic(_) => counts.input_cubics += 1,
+                FeatureGeom::Conic(_) => counts.input_conics += 1,
             }
         }
         for (i, f) in snapped.features {

@@ -43,6 +43,11 @@ pub(crate) fn to_svg(fs: &FeatureSet, drawing: &Drawing) -> String {
             FeatureGeom::Cubic(c) => {
                 let _ = write!(input, "M{}C{} {} {}", p(c.p0), p(c.p1), p(c.p2), p(c.p3));
             }
+            // CONIC-PLACEHOLDER: drawn as its cubic approximation
+            FeatureGeom::Conic(k) => {
+                let c = k.approx_cubic();
+                let _ = write!(input, "M{}C{} {} {}", p(c.p0), p(c.p1), p(c.p2), p(c.p3));
+            }
         }
     }
     let _ = writeln!(s, r#"<path d="{input}" {}/>"#, style("#c8c8c8", 3.0));

@@ -109,6 +109,7 @@ pub(super) fn snap(features: &[Feature], tol: f64) -> Snapped {
             }
             FeatureGeom::Line(l) => [clusters.snap(l.p0), clusters.snap(l.p1)],
             FeatureGeom::Cubic(c) => [clusters.snap(c.p0), clusters.snap(c.p3)],
+            FeatureGeom::Conic(c) => [clusters.snap(c.p0), clusters.snap(c.p2)],
         })
         .collect();
     let mut out = Snapped::default();
@@ -142,6 +143,16 @@ pub(super) fn snap(features: &[Feature], tol: f64) -> Snapped {
                 c.p3 = cb;
                 let tiny = a == b && [c.p1, c.p2].iter().all(|p| p.distance(ca) <= tol);
                 (FeatureGeom::Cubic(c), tiny)
+            }
+            // CONIC-PLACEHOLDER: the features stage converts conics before snapping
+            FeatureGeom::Conic(mut c) => {
+                let d0: Vec2 = moved(c.p0, ca);
+                let d2: Vec2 = moved(c.p2, cb);
+                c.p0 = ca;
+                c.p1 += (d0 + d2) * 0.5;
+                c.p2 = cb;
+                let tiny = a == b && c.p1.distance(ca) <= tol;
+                (FeatureGeom::Conic(c), tiny)
             }
         };
         snapped.push((
@@ -204,6 +215,7 @@ mod tests {
             FeatureGeom::Point(p) => vec![p],
             FeatureGeom::Line(l) => vec![l.p0, l.p1],
             FeatureGeom::Cubic(c) => vec![c.p0, c.p3],
+            FeatureGeom::Conic(c) => vec![c.p0, c.p2],
         }
     }
 

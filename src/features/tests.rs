@@ -21,6 +21,7 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
             FeatureGeom::Point(p) => vec![p],
             FeatureGeom::Line(l) => vec![l.p0, l.p1],
             FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+            FeatureGeom::Conic(c) => c.control_points().to_vec(),
         };
         for p in ps {
             bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));

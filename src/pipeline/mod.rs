@@ -82,6 +82,8 @@ pub struct InputCounts {
     pub lines: usize,
     /// Cubic Béziers.
     pub cubics: usize,
+    /// Conic pieces (arcs, circles, ellipses, rounded corners).
+    pub conics: usize,
     /// Bounding-box diagonal d.
     pub d: f64,
 }
@@ -100,6 +102,7 @@ impl InputCounts {
                 FeatureGeom::Point(_) => c.points += 1,
                 FeatureGeom::Line(_) => c.lines += 1,
                 FeatureGeom::Cubic(_) => c.cubics += 1,
+                FeatureGeom::Conic(_) => c.conics += 1,
             }
         }
         c

@@ -55,6 +55,7 @@ pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
                 let geom = match *seg {
                     Segment::Line(l) => FeatureGeom::Line(l),
                     Segment::Cubic(c) => FeatureGeom::Cubic(c),
+                    Segment::Conic(c) => FeatureGeom::Conic(c),
                 };
                 features.push(Feature {
                     geom,

@@ -114,6 +114,8 @@ impl Outline {
                 pieces.push(match *seg {
                     Segment::Line(l) => Piece::Line(l.p0, l.p1),
                     Segment::Cubic(c) => Piece::Cubic(c),
+                    // CONIC-PLACEHOLDER: approximated until winding takes conics
+                    Segment::Conic(c) => Piece::Cubic(c.approx_cubic()),
                 });
                 cursor = seg.end();
             }

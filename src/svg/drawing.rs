@@ -1,5 +1,6 @@
 //! The loader's product: shapes and their feature soup, in f64 output coordinates.
 
+pub use super::conic::Conic;
 use kurbo::{CubicBez, Line, Point, Rect};
 
 /// Index of a [`Shape`] in [`Drawing::shapes`].
@@ -61,13 +62,16 @@ impl Shape {
     }
 }
 
-/// One piece of a subpath: a straight segment or a cubic Bézier (quadratics are elevated).
+/// One piece of a subpath: a straight segment, a cubic Bézier (quadratics are
+/// elevated) or an exact conic piece (arcs, circles, ellipses, rounded corners).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Segment {
     /// A straight segment.
     Line(Line),
     /// A cubic Bézier curve.
     Cubic(CubicBez),
+    /// A piece of an ellipse, as a rational quadratic Bézier (at most 90°).
+    Conic(Conic),
 }
 
 impl Segment {
@@ -76,6 +80,7 @@ impl Segment {
         match self {
             Segment::Line(l) => l.p0,
             Segment::Cubic(c) => c.p0,
+            Segment::Conic(c) => c.p0,
         }
     }
     /// End point.
@@ -83,16 +88,19 @@ impl Segment {
         match self {
             Segment::Line(l) => l.p1,
             Segment::Cubic(c) => c.p3,
+            Segment::Conic(c) => c.p2,
         }
     }
-    /// The control points (2 for a line, 4 for a cubic).
+    /// The control points (2 for a line, 4 for a cubic, 3 for a conic).
     pub fn control_points(&self) -> Vec<Point> {
         match self {
             Segment::Line(l) => vec![l.p0, l.p1],
             Segment::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+            Segment::Conic(c) => c.control_points().to_vec(),
         }
     }
-    /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3).
+    /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3;
+    /// a conic is approximated, see [`Conic::approx_cubic`]).
     pub fn to_cubic(&self) -> CubicBez {
         match self {
             Segment::Line(l) => CubicBez::new(
@@ -102,6 +110,7 @@ impl Segment {
                 l.p1,
             ),
             Segment::Cubic(c) => *c,
+            Segment::Conic(c) => c.approx_cubic(),
         }
     }
 }
@@ -147,6 +156,8 @@ pub enum FeatureGeom {
     Line(Line),
     /// A cubic Bézier.
     Cubic(CubicBez),
+    /// An exact conic piece (a piece of an ellipse, at most 90°).
+    Conic(Conic),
 }
 
 /// Where a feature came from.
@@ -165,7 +176,7 @@ impl FeatureSource {
     pub const IMPLICIT_CLOSE: u32 = u32::MAX;
 }
 
-/// One input feature: a point, segment or cubic, tagged with its source.
+/// One input feature: a point, segment, cubic or conic, tagged with its source.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Feature {
     /// The geometry, in output coordinates.

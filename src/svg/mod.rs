@@ -32,6 +32,7 @@
 //! whose diagonal is not negligible (< 1e-12) relative to its distance from the
 //! origin unless the drawing is a single point.
 
+mod conic;
 pub(crate) mod drawing;
 mod load;
 mod outline;

@@ -23,6 +23,7 @@ pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Draw
         FeatureGeom::Point(p) => p,
         FeatureGeom::Line(l) => l.p0,
         FeatureGeom::Cubic(c) => c.p0,
+        FeatureGeom::Conic(c) => c.p0,
     };
     let mut bbox = Rect::from_points(start, start);
     for f in &features {
@@ -55,6 +56,7 @@ fn control_points(g: &FeatureGeom) -> impl Iterator<Item = kurbo::Point> {
         FeatureGeom::Point(p) => ([p; 4], 1),
         FeatureGeom::Line(l) => ([l.p0, l.p1, l.p1, l.p1], 2),
         FeatureGeom::Cubic(c) => ([c.p0, c.p1, c.p2, c.p3], 4),
+        FeatureGeom::Conic(c) => ([c.p0, c.p1, c.p2, c.p2], 3),
     };
     pts.into_iter().take(n)
 }
@@ -82,6 +84,7 @@ pub(super) fn features(shapes: &[Shape]) -> Vec<Feature> {
                 let geom = match *seg {
                     Segment::Line(l) => FeatureGeom::Line(l),
                     Segment::Cubic(c) => FeatureGeom::Cubic(c),
+                    Segment::Conic(c) => FeatureGeom::Conic(c),
                 };
                 out.push(Feature {
                     geom,

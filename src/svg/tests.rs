@@ -439,6 +439,7 @@ fn nan_and_overflow_never_give_garbage() {
                         FeatureGeom::Point(p) => vec![p],
                         FeatureGeom::Line(l) => vec![l.p0, l.p1],
                         FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+                        FeatureGeom::Conic(c) => c.control_points().to_vec(),
                     };
                     for p in pts {
                         assert!(
@@ -567,6 +568,7 @@ fn assert_sane(d: &Drawing, what: &str) {
             FeatureGeom::Point(p) => vec![p],
             FeatureGeom::Line(l) => vec![l.p0, l.p1],
             FeatureGeom::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
+            FeatureGeom::Conic(c) => c.control_points().to_vec(),
         };
         for p in pts {
             assert!(
