@@ -247,3 +247,55 @@ fn order_3_disk_area_is_pi_at_a_fine_l() {
     assert!(disk <= 1e-12, "a node {disk} off the circle");
     assert!(rel.abs() <= 1e-10, "area error {rel:e} (relative)");
 }
+
+/// Conics the loader never makes (weights not in (0, 1], tiny or huge, collinear or
+/// coincident controls) mesh without a panic: a valid mesh or an error.
+#[test]
+fn odd_conics_never_panic() {
+    let odd = [
+        (
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 1.0),
+            Point::new(2.0, 0.0),
+        ),
+        (
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(2.0, 0.0),
+        ),
+        (
+            Point::new(0.0, 0.0),
+            Point::new(3.0, 0.0),
+            Point::new(2.0, 0.0),
+        ),
+        (
+            Point::new(0.0, 0.0),
+            Point::new(0.0, 0.0),
+            Point::new(2.0, 0.0),
+        ),
+    ];
+    for (k, &(a, b, c)) in odd.iter().enumerate() {
+        for w in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e300, 1e-300, 5.0, 1.0] {
+            let closing = kurbo::Line::new(c, Point::new(1.0, -1.0));
+            let back = kurbo::Line::new(Point::new(1.0, -1.0), a);
+            let sp = crate::svg::Subpath {
+                segments: vec![
+                    Segment::Conic(Conic::new(a, b, c, w)),
+                    Segment::Line(closing),
+                    Segment::Line(back),
+                ],
+                start: a,
+                closed: true,
+            };
+            let drawing = drawing_of(vec![shape("odd", 0, sp)]);
+            for order in [Order::Linear, Order::Cubic] {
+                let params = Params::DEFAULT.with_order(order);
+                if let Ok(m) = crate::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
+                {
+                    let c = certify_fem(&m.mesh, &crate::CertifyOptions::DEFAULT);
+                    assert!(c.is_valid(), "case {k} w {w}: {c:?}");
+                }
+            }
+        }
+    }
+}
