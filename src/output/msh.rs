@@ -850,6 +850,10 @@ mod tests {
         }
     }
 
+    /// The model of `square()`: the bottom line's ends are points 1 and 2,
+    /// the line is curve 1 from point 1 to point 2, and the surface has it on
+    /// its boundary (running with the surface on its left); nodes 1 and 2 are
+    /// listed under the points, 3 and 4 under the surface.
     #[test]
     fn v41_ascii_text() {
         let mut buf = Vec::new();
@@ -857,12 +861,98 @@ mod tests {
         let text = String::from_utf8(buf).expect("utf8");
         let expected = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
             $PhysicalNames\n2\n2 1 \"inside\"\n1 1 \"bottom\"\n$EndPhysicalNames\n\
-            $Entities\n0 1 1 0\n1 0.0 0.0 0.0 1.0 0.0 0.0 1 1 0\n\
-            1 0.0 0.0 0.0 1.0 1.0 0.0 1 1 0\n$EndEntities\n\
-            $Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0.0 0.0 0.0\n1.0 0.0 0.0\n\
-            1.0 1.0 0.0\n0.0 1.0 0.0\n$EndNodes\n\
+            $Entities\n2 1 1 0\n1 0.0 0.0 0.0 0\n2 1.0 0.0 0.0 0\n\
+            1 0.0 0.0 0.0 1.0 0.0 0.0 1 1 2 1 -2\n\
+            1 0.0 0.0 0.0 1.0 1.0 0.0 1 1 1 1\n$EndEntities\n\
+            $Nodes\n3 4 1 4\n0 1 0 1\n1\n0.0 0.0 0.0\n0 2 0 1\n2\n1.0 0.0 0.0\n\
+            2 1 0 2\n3\n4\n1.0 1.0 0.0\n0.0 1.0 0.0\n$EndNodes\n\
             $Elements\n2 3 1 3\n2 1 2 2\n1 1 2 3\n2 1 3 4\n1 1 1 1\n3 1 2\n$EndElements\n";
         assert_eq!(text, expected);
+    }
+
+    /// A unit square fanned from its centre (node 4), with its outline twice
+    /// (the domain's boundary and a shape's outline, both counter-clockwise),
+    /// and a shape named `boundary` whose curve runs from corner 0 to the centre.
+    fn fan() -> FemMesh {
+        use crate::fem::LineKind::{Boundary, Primary};
+        FemMesh {
+            order: Some(Order::Linear),
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(1.0, 1.0),
+                Point::new(0.0, 1.0),
+                Point::new(0.5, 0.5),
+            ],
+            triangles: vec![0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4],
+            triangle_group: vec![0; 4],
+            surfaces: vec!["plate".into()],
+            lines: vec![0, 1, 1, 2, 2, 3, 3, 0, 0, 1, 1, 2, 2, 3, 3, 0, 0, 4],
+            line_group: vec![0, 0, 0, 0, 1, 1, 1, 1, 2],
+            line_kind: vec![Primary, Primary, Primary, Primary, Boundary, Boundary, Boundary, Boundary, Primary],
+            curves: vec!["outline".into(), "boundary".into(), "boundary".into()],
+        }
+    }
+
+    #[test]
+    fn the_model_reads_back_in_every_format() {
+        let m = fan();
+        for version in [MshVersion::V41, MshVersion::V22] {
+            for binary in [false, true] {
+                let mut bytes = Vec::new();
+                crate::write_msh_to(&m, &mut bytes, MshOptions { version, binary }).expect("write");
+                let r = crate::read_msh(&bytes).expect("read");
+                assert_eq!(r.nodes, m.nodes);
+                // The domain's boundary keeps its name; the shape's curve is renamed.
+                let mut names = r.physical_names.clone();
+                names.sort();
+                assert_eq!(
+                    names,
+                    [
+                        (1, 1, "outline".to_owned()),
+                        (1, 2, "boundary".to_owned()),
+                        (1, 3, "boundary-curve".to_owned()),
+                        (2, 1, "plate".to_owned()),
+                    ]
+                );
+                // Lines as written, with their physical tags and directions.
+                let lines: Vec<(Option<i32>, Vec<u32>)> = r
+                    .line_blocks
+                    .iter()
+                    .flat_map(|b| b.lines().map(move |l| (b.physical, l.to_vec())))
+                    .collect();
+                assert_eq!(lines.len(), 9);
+                for (i, l) in (0..m.line_count()).map(|i| m.line(i)).enumerate() {
+                    let g = Some(m.line_group[i] as i32 + 1);
+                    assert!(lines.contains(&(g, l.to_vec())), "{l:?}");
+                }
+                if version == MshVersion::V22 {
+                    assert!(r.entities.is_empty() && r.node_entities.is_empty());
+                    continue;
+                }
+                // Points at node 0 (three edges meet) and at the centre (an end).
+                let points: Vec<&crate::MshEntity> = r.entities.iter().filter(|e| e.dim == 0).collect();
+                assert_eq!(points.len(), 2);
+                assert_eq!(r.node_entities[0], (0, 1));
+                assert_eq!(r.node_entities[4], (0, 2));
+                // Curves: the two loops from and to point 1, the spoke from 1 to 2.
+                let curves: Vec<&crate::MshEntity> = r.entities.iter().filter(|e| e.dim == 1).collect();
+                assert_eq!(curves.len(), 3);
+                assert_eq!(curves[0].bounding, [1, -1]);
+                assert_eq!(curves[1].bounding, [1, -1]);
+                assert_eq!(curves[2].bounding, [1, -2]);
+                assert_eq!(curves[2].physicals, [3]);
+                // Nodes 1-3 lie on the first loop; the surface is bounded by both loops.
+                assert!(r.node_entities[1..4].iter().all(|&e| e == (1, 1)));
+                let surface = r.entities.iter().find(|e| e.dim == 2).expect("a surface");
+                assert_eq!((surface.physicals.as_slice(), surface.bounding.as_slice()), (&[1][..], &[1, 2][..]));
+                // Every element sits on an entity that exists.
+                for b in &r.line_blocks {
+                    let e = b.entity.expect("entity");
+                    assert!(curves.iter().any(|c| c.tag == e && c.physicals == [b.physical.unwrap_or(0)]));
+                }
+            }
+        }
     }
 
     #[test]

@@ -238,7 +238,7 @@ mod tests {
     #[test]
     fn preview_flips_y_and_colours_kinds() {
         let mesh = FemMesh {
-            order: Some(Order::Linear),
+            order: Some(crate::element::Order::Linear),
             nodes: vec![
                 Point::new(0.0, 0.0),
                 Point::new(1.0, 0.0),
