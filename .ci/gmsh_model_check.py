@@ -13,7 +13,9 @@ format has no entities of its own):
   (x_a y_b - x_b y_a) / 2) equals the area of the straight triangles on the
   elements' corners, which is positive;
 - within each physical curve no two line elements start at the same node and
-  no two end at the same node.
+  no two end at the same node, except where the curve meets itself (a
+  self-crossing outline, a branch): there as many start as end (one more of
+  either when an odd number meet).
 
 Prints one line per failing mesh and ends with "gmsh model: N passed, M failed".
 Exit status 0 iff nothing failed and at least one mesh was found.
@@ -89,10 +91,18 @@ def check(path: Path) -> list[str]:
             starts.update(rows[:, 0].tolist())
             ends.update(rows[:, 1].tolist())
         name = gmsh.model.getPhysicalName(dim, tag)
-        twice = [v for v, k in starts.items() if k > 1] + [v for v, k in ends.items() if k > 1]
-        if twice:
+        # Where the curve meets itself (a crossing, a branch) `degree` > 2
+        # elements meet: as many start as end there (one more for odd degree).
+        bad = []
+        for v in set(starts) | set(ends):
+            s, e = starts[v], ends[v]
+            degree = s + e
+            if (degree <= 2 and (s > 1 or e > 1)) or abs(s - e) > degree % 2:
+                bad.append(v)
+        if bad:
             problems.append(
-                f"physical curve {name!r}: {len(twice)} nodes start or end two line elements"
+                f"physical curve {name!r}: {len(bad)} nodes where line elements do not "
+                f"run one way (two start or two end there)"
             )
 
     if "boundary" not in names:
