@@ -55,14 +55,18 @@ fn num(v: &serde_json::Value, path: &[&str]) -> f64 {
     for k in path {
         v = &v[k];
     }
-    v.as_f64().unwrap_or_else(|| panic!("{path:?} is not a number: {v}"))
+    v.as_f64()
+        .unwrap_or_else(|| panic!("{path:?} is not a number: {v}"))
 }
 
 /// Every line element of the file: (physical tag, entity, nodes).
 fn lines(m: &MshMesh) -> Vec<(i32, Option<i32>, &[u32])> {
     m.line_blocks
         .iter()
-        .flat_map(|b| b.lines().map(move |l| (b.physical.unwrap_or(0), b.entity, l)))
+        .flat_map(|b| {
+            b.lines()
+                .map(move |l| (b.physical.unwrap_or(0), b.entity, l))
+        })
         .collect()
 }
 
@@ -84,7 +88,11 @@ fn check_model(m: &MshMesh, what: &str) {
             starts.insert((g, l[0])) && ends.insert((g, l[1])),
             "{what}: physical curve {:?} has two lines starting or ending at node {}",
             names.get(&(1, g)),
-            if starts.contains(&(g, l[0])) { l[0] } else { l[1] }
+            if starts.contains(&(g, l[0])) {
+                l[0]
+            } else {
+                l[1]
+            }
         );
     }
 
@@ -122,16 +130,32 @@ fn check_model(m: &MshMesh, what: &str) {
             "{what}: surface {} has no node",
             s.tag
         );
-        assert!(!s.bounding.is_empty(), "{what}: surface {} has no bounding curve", s.tag);
+        assert!(
+            !s.bounding.is_empty(),
+            "{what}: surface {} has no bounding curve",
+            s.tag
+        );
         for b in &s.bounding {
-            assert!(entity(1, b.abs()).is_some(), "{what}: surface {} bounded by missing curve {b}", s.tag);
+            assert!(
+                entity(1, b.abs()).is_some(),
+                "{what}: surface {} bounded by missing curve {b}",
+                s.tag
+            );
         }
         assert_eq!(s.physicals.len(), 1, "{what}: surface {}", s.tag);
     }
     for c in m.entities.iter().filter(|e| e.dim == 1) {
-        assert!(!c.bounding.is_empty(), "{what}: curve {} has no point", c.tag);
+        assert!(
+            !c.bounding.is_empty(),
+            "{what}: curve {} has no point",
+            c.tag
+        );
         for b in &c.bounding {
-            assert!(entity(0, b.abs()).is_some(), "{what}: curve {} bounded by missing point {b}", c.tag);
+            assert!(
+                entity(0, b.abs()).is_some(),
+                "{what}: curve {} bounded by missing point {b}",
+                c.tag
+            );
         }
     }
     // Each line's entity is a curve of its physical group; its nodes lie on a
@@ -141,14 +165,21 @@ fn check_model(m: &MshMesh, what: &str) {
         let c = entity(1, e).unwrap_or_else(|| panic!("{what}: line on missing curve {e}"));
         assert_eq!(c.physicals, [g], "{what}: curve {e}");
         for &v in l {
-            assert!(m.node_entities[v as usize].0 <= 1, "{what}: node {v} of a line is on {:?}", m.node_entities[v as usize]);
+            assert!(
+                m.node_entities[v as usize].0 <= 1,
+                "{what}: node {v} of a line is on {:?}",
+                m.node_entities[v as usize]
+            );
         }
     }
     // Point nodes end lines.
     let line_ends: HashSet<u32> = lines.iter().flat_map(|l| [l.2[0], l.2[1]]).collect();
     for (v, &(d, _)) in m.node_entities.iter().enumerate() {
         if d == 0 {
-            assert!(line_ends.contains(&(v as u32)), "{what}: point node {v} ends no line");
+            assert!(
+                line_ends.contains(&(v as u32)),
+                "{what}: point node {v} ends no line"
+            );
         }
     }
 }
@@ -159,7 +190,11 @@ fn the_model_a_solver_gets() {
     let cases: [(&str, &str, &[&str]); 3] = [
         ("box", "model-box.svg", &[]),
         ("box-cut", "model-box.svg", &["--cut-outside"]),
-        ("circle-cut", "model-circle.svg", &["-l", "0.2", "--cut-outside"]),
+        (
+            "circle-cut",
+            "model-circle.svg",
+            &["-l", "0.2", "--cut-outside"],
+        ),
     ];
     let formats: [(&str, &[&str]); 4] = [
         ("v41", &[]),
@@ -183,16 +218,28 @@ fn the_model_a_solver_gets() {
 
             let ratio = num(&check, &["min_detj_ratio"]);
             let area = num(&check, &["total_area"]);
-            assert!((num(&stats, &["quality", "min_jacobian_ratio"]) - ratio).abs() <= 1e-6, "{what}");
-            assert!((num(&stats, &["curve", "min_jacobian_ratio"]) - ratio).abs() <= 1e-6, "{what}");
-            assert!((num(&stats, &["quality", "area"]) - area).abs() <= 1e-9, "{what}");
+            assert!(
+                (num(&stats, &["quality", "min_jacobian_ratio"]) - ratio).abs() <= 1e-6,
+                "{what}"
+            );
+            assert!(
+                (num(&stats, &["curve", "min_jacobian_ratio"]) - ratio).abs() <= 1e-6,
+                "{what}"
+            );
+            assert!(
+                (num(&stats, &["quality", "area"]) - area).abs() <= 1e-9,
+                "{what}"
+            );
             let regions: f64 = stats["regions"]["surfaces"]
                 .as_array()
                 .expect("surfaces")
                 .iter()
                 .map(|s| s["area"].as_f64().expect("area"))
                 .sum();
-            assert!((regions - area).abs() <= 1e-9, "{what}: regions {regions}, check {area}");
+            assert!(
+                (regions - area).abs() <= 1e-9,
+                "{what}: regions {regions}, check {area}"
+            );
 
             let m = read_msh_file(&out).expect("read back");
             check_model(&m, &what);

@@ -19,8 +19,8 @@
 use kurbo::{Point, Rect};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use triwild::{FemMesh, LineKind};
 use triwild::Params;
+use triwild::{FemMesh, LineKind};
 use triwild::{Meshed, mesh_drawing};
 use triwild::{MshOptions, MshVersion};
 
@@ -239,8 +239,9 @@ fn expected_groups(mesh: &FemMesh) -> serde_json::Value {
     let mut taken = std::collections::HashSet::new();
     let boundary: Vec<bool> = (0..mesh.curves.len())
         .map(|g| {
-            (0..mesh.line_count())
-                .any(|i| mesh.line_group[i] as usize == g && mesh.line_kind[i] == LineKind::Boundary)
+            (0..mesh.line_count()).any(|i| {
+                mesh.line_group[i] as usize == g && mesh.line_kind[i] == LineKind::Boundary
+            })
         })
         .collect();
     let mut all = Vec::new();

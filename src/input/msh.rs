@@ -273,14 +273,17 @@ impl Nodes {
     }
 }
 
+/// The physical tag and the entity of a block of elements.
+type Owner = (Option<i32>, Option<i32>);
+
 /// Elements as read, before node tags are resolved (nodes may come after elements
 /// in principle; gmsh writes them first, but we do not rely on it).
 #[derive(Default)]
 struct Elements {
-    /// (order, physical, entity, node tags) per block.
-    blocks: Vec<(Order, Option<i32>, Option<i32>, Vec<u64>)>,
-    /// (nodes per line, physical, entity, node tags) per block.
-    line_blocks: Vec<(usize, Option<i32>, Option<i32>, Vec<u64>)>,
+    /// (order, owner, node tags) per block.
+    blocks: Vec<(Order, Owner, Vec<u64>)>,
+    /// (nodes per line, owner, node tags) per block.
+    line_blocks: Vec<(usize, Owner, Vec<u64>)>,
     lines: usize,
     unsupported_2d: usize,
     other: usize,
@@ -290,21 +293,30 @@ impl Elements {
     /// The block to append triangles of `order` / `physical` / `entity` to (the
     /// last one if it matches).
     fn block(&mut self, order: Order, physical: Option<i32>, entity: Option<i32>) -> &mut Vec<u64> {
-        let same = matches!(self.blocks.last(), Some((o, p, e, _)) if *o == order && *p == physical && *e == entity);
+        let same = matches!(self.blocks.last(), Some((o, w, _)) if *o == order && *w == (physical, entity));
         if !same {
-            self.blocks.push((order, physical, entity, Vec::new()));
+            self.blocks.push((order, (physical, entity), Vec::new()));
         }
-        &mut self.blocks.last_mut().expect("internal: just pushed").3
+        &mut self.blocks.last_mut().expect("internal: just pushed").2
     }
     /// The block to append lines of `nn` nodes / `physical` / `entity` to (the
     /// last one if it matches); the line is counted.
-    fn line_block(&mut self, nn: usize, physical: Option<i32>, entity: Option<i32>) -> &mut Vec<u64> {
+    fn line_block(
+        &mut self,
+        nn: usize,
+        physical: Option<i32>,
+        entity: Option<i32>,
+    ) -> &mut Vec<u64> {
         self.lines += 1;
-        let same = matches!(self.line_blocks.last(), Some((n, p, e, _)) if *n == nn && *p == physical && *e == entity);
+        let same = matches!(self.line_blocks.last(), Some((n, w, _)) if *n == nn && *w == (physical, entity));
         if !same {
-            self.line_blocks.push((nn, physical, entity, Vec::new()));
+            self.line_blocks.push((nn, (physical, entity), Vec::new()));
         }
-        &mut self.line_blocks.last_mut().expect("internal: just pushed").3
+        &mut self
+            .line_blocks
+            .last_mut()
+            .expect("internal: just pushed")
+            .2
     }
     fn count(&mut self, dim: i32, etype: i32) {
         match dim {
@@ -581,7 +593,7 @@ impl<'a> Reader<'a> {
         }
         nodes.sort_by_tag();
         let mut triangle_blocks = Vec::with_capacity(elems.blocks.len());
-        for (order, physical, entity, tags) in elems.blocks {
+        for (order, (physical, entity), tags) in elems.blocks {
             let idx = tags
                 .iter()
                 .map(|&t| nodes.get(t))
@@ -594,7 +606,7 @@ impl<'a> Reader<'a> {
             });
         }
         let mut line_blocks = Vec::with_capacity(elems.line_blocks.len());
-        for (nodes_per_line, physical, entity, tags) in elems.line_blocks {
+        for (nodes_per_line, (physical, entity), tags) in elems.line_blocks {
             let idx = tags
                 .iter()
                 .map(|&t| nodes.get(t))
@@ -641,11 +653,7 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    fn entities(
-        &mut self,
-        phys: &mut HashMap<(i32, i32), i32>,
-        out: &mut Vec<MshEntity>,
-    ) -> R<()> {
+    fn entities(&mut self, phys: &mut HashMap<(i32, i32), i32>, out: &mut Vec<MshEntity>) -> R<()> {
         let counts = [self.size()?, self.size()?, self.size()?, self.size()?];
         for (dim, &n) in counts.iter().enumerate() {
             let dim = dim as i32;

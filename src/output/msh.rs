@@ -5,12 +5,17 @@
 //!   one physical curve per used `FemMesh::curves` entry (physical tag = index + 1);
 //!   groups without elements are not written;
 //! - physical names are unique within a file, across dimensions (meshio keys its
-//!   `field_data` by name alone): a surface keeps its name, a curve whose name is
-//!   taken is written as `<name>-curve` (then `-curve-2`, …); see `physical_names_of`;
-//! - one elementary entity per physical group, with the same tag, holding elements
-//!   of one type only (gmsh's API shows one element type per entity);
+//!   `field_data` by name alone): the domain's boundary keeps `boundary`, a surface
+//!   keeps its name, a curve whose name is taken is written as `<name>-curve` (then
+//!   `-curve-2`, …); see `physical_names_of`;
+//! - the entities of a discrete gmsh model ([`Layout`]): points where curves meet,
+//!   curve entities per connected piece of a physical curve, one surface entity per
+//!   physical surface (tag = its physical tag) bounded by its curves, each entity
+//!   holding elements of one type only (gmsh's API shows one element type per
+//!   entity); 4.1 writes `$Entities` and lists each node under the entity of lowest
+//!   dimension it lies on, 2.2 writes the same elementary tags;
 //! - node tags 1..=N in `FemMesh::nodes` order; element tags 1..=M, triangles
-//!   first (by surface), then lines (by curve);
+//!   first (by surface), then lines (by curve entity);
 //! - coordinates in ASCII are shortest round-trip decimal (`{:?}`), so they read
 //!   back bit-exactly; binary uses native byte order with gmsh's endianness marker.
 
@@ -404,10 +409,7 @@ impl Layout {
                 }
             }
         }
-        let fallback = entities
-            .first()
-            .map(|e| (e.dim, e.tag))
-            .unwrap_or((2, 1));
+        let fallback = entities.first().map(|e| (e.dim, e.tag)).unwrap_or((2, 1));
         if entities.is_empty() && !mesh.nodes.is_empty() {
             // Nodes but no elements: a bare surface entity keeps them readable.
             entities.push(Entity {
@@ -889,7 +891,9 @@ mod tests {
             surfaces: vec!["plate".into()],
             lines: vec![0, 1, 1, 2, 2, 3, 3, 0, 0, 1, 1, 2, 2, 3, 3, 0, 0, 4],
             line_group: vec![0, 0, 0, 0, 1, 1, 1, 1, 2],
-            line_kind: vec![Primary, Primary, Primary, Primary, Boundary, Boundary, Boundary, Boundary, Primary],
+            line_kind: vec![
+                Primary, Primary, Primary, Primary, Boundary, Boundary, Boundary, Boundary, Primary,
+            ],
             curves: vec!["outline".into(), "boundary".into(), "boundary".into()],
         }
     }
@@ -931,12 +935,14 @@ mod tests {
                     continue;
                 }
                 // Points at node 0 (three edges meet) and at the centre (an end).
-                let points: Vec<&crate::MshEntity> = r.entities.iter().filter(|e| e.dim == 0).collect();
+                let points: Vec<&crate::MshEntity> =
+                    r.entities.iter().filter(|e| e.dim == 0).collect();
                 assert_eq!(points.len(), 2);
                 assert_eq!(r.node_entities[0], (0, 1));
                 assert_eq!(r.node_entities[4], (0, 2));
                 // Curves: the two loops from and to point 1, the spoke from 1 to 2.
-                let curves: Vec<&crate::MshEntity> = r.entities.iter().filter(|e| e.dim == 1).collect();
+                let curves: Vec<&crate::MshEntity> =
+                    r.entities.iter().filter(|e| e.dim == 1).collect();
                 assert_eq!(curves.len(), 3);
                 assert_eq!(curves[0].bounding, [1, -1]);
                 assert_eq!(curves[1].bounding, [1, -1]);
@@ -945,11 +951,18 @@ mod tests {
                 // Nodes 1-3 lie on the first loop; the surface is bounded by both loops.
                 assert!(r.node_entities[1..4].iter().all(|&e| e == (1, 1)));
                 let surface = r.entities.iter().find(|e| e.dim == 2).expect("a surface");
-                assert_eq!((surface.physicals.as_slice(), surface.bounding.as_slice()), (&[1][..], &[1, 2][..]));
+                assert_eq!(
+                    (surface.physicals.as_slice(), surface.bounding.as_slice()),
+                    (&[1][..], &[1, 2][..])
+                );
                 // Every element sits on an entity that exists.
                 for b in &r.line_blocks {
                     let e = b.entity.expect("entity");
-                    assert!(curves.iter().any(|c| c.tag == e && c.physicals == [b.physical.unwrap_or(0)]));
+                    assert!(
+                        curves
+                            .iter()
+                            .any(|c| c.tag == e && c.physicals == [b.physical.unwrap_or(0)])
+                    );
                 }
             }
         }

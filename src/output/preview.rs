@@ -138,7 +138,11 @@ pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
                 continue;
             }
             inner.clear();
-            inner.extend(crate::fem::triangle_edge_inner(order, k).iter().map(|&j| node(tri[j])));
+            inner.extend(
+                crate::fem::triangle_edge_inner(order, k)
+                    .iter()
+                    .map(|&j| node(tri[j])),
+            );
             path.push(&edge_curve(node(a), node(b), &inner));
         }
         if path.d.len() > 1 << 16 {

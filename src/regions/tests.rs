@@ -291,7 +291,10 @@ fn boundary_enclosed(m: &FemMesh) -> (usize, f64) {
         .iter()
         .position(|c| c == crate::fem::BOUNDARY)
         .expect("a boundary curve") as u32;
-    let (mut starts, mut ends) = (std::collections::HashSet::new(), std::collections::HashSet::new());
+    let (mut starts, mut ends) = (
+        std::collections::HashSet::new(),
+        std::collections::HashSet::new(),
+    );
     let mut n = 0;
     let mut area = 0.0;
     for i in (0..m.line_count()).filter(|&i| m.line_group[i] == g) {
@@ -463,7 +466,13 @@ fn feature_lines_run_one_way() {
         start: Point::new(7.0, 6.0),
         closed: false,
     };
-    let mut stroke = shape(Some("st"), 1, FillRule::NonZero, [0, 0, 0], vec![stroke_path]);
+    let mut stroke = shape(
+        Some("st"),
+        1,
+        FillRule::NonZero,
+        [0, 0, 0],
+        vec![stroke_path],
+    );
     stroke.filled = false;
     let d = drawing(vec![square, stroke]);
     let mut mesh = grid(
@@ -478,7 +487,10 @@ fn feature_lines_run_one_way() {
         .filter(|&i| mesh.line_group[i] == 0 || mesh.line(i)[0] < mesh.line(i)[1])
         .collect();
     let (lines, group) = (mesh.lines.clone(), mesh.line_group.clone());
-    mesh.lines = keep.iter().flat_map(|&i| lines[2 * i..2 * i + 2].to_vec()).collect();
+    mesh.lines = keep
+        .iter()
+        .flat_map(|&i| lines[2 * i..2 * i + 2].to_vec())
+        .collect();
     mesh.line_group = keep.iter().map(|&i| group[i]).collect();
     mesh.line_kind = vec![LineKind::Constraint; keep.len()];
     for i in (0..mesh.line_count()).step_by(3) {
@@ -490,12 +502,20 @@ fn feature_lines_run_one_way() {
         let lines = lines_of(&mesh, g);
         let starts: std::collections::HashSet<u32> = lines.iter().map(|l| l.0).collect();
         let ends: std::collections::HashSet<u32> = lines.iter().map(|l| l.1).collect();
-        assert_eq!((starts.len(), ends.len()), (lines.len(), lines.len()), "{g}");
+        assert_eq!(
+            (starts.len(), ends.len()),
+            (lines.len(), lines.len()),
+            "{g}"
+        );
     }
     // The square runs counter-clockwise whatever its source's direction.
     let area: f64 = lines_of(&mesh, 0)
         .iter()
-        .map(|&(a, b)| 0.5 * mesh.nodes[a as usize].to_vec2().cross(mesh.nodes[b as usize].to_vec2()))
+        .map(|&(a, b)| {
+            0.5 * mesh.nodes[a as usize]
+                .to_vec2()
+                .cross(mesh.nodes[b as usize].to_vec2())
+        })
         .sum();
     assert_eq!(area, 16.0);
     // The stroke runs as drawn: from x = 7 to x = 2.
