@@ -171,7 +171,7 @@ pub struct Report {
     pub optimize: Option<OptimizeStats>,
     /// What curving did (`--mesher triwild` without `--linear` / `--stop-after`);
     /// its `min_jacobian_ratio` is that of the mesh as written (after regions
-    /// dropped any elements), equal to [`Quality::min_jacobian_ratio`].
+    /// dropped any elements), equal to `quality.min_jacobian_ratio`.
     pub curve: Option<CurveStats>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
