@@ -7,9 +7,8 @@
 //!   into chains at the nodes where the shape's own lines do not simply pass
 //!   through (ends, branches); a chain that closes on itself runs
 //!   counter-clockwise (positive enclosed area), an open chain runs along its
-//!   source subpath's direction (the order of the shape's segments and their
-//!   parameter), found by projecting one of its elements' ends onto the
-//!   shape's features.
+//!   source's direction: the parameter of the source feature its elements lie
+//!   on grows along them (a few elements near the chain's middle vote).
 //! - The boundary ([`add_boundary`]): every triangle edge that no other
 //!   triangle shares becomes a line element of the physical curve
 //!   [`BOUNDARY`], oriented as its (counter-clockwise) triangle lists it, so
@@ -156,48 +155,52 @@ fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, shape: ShapeId, chain: &C
     }
 }
 
-/// Where on `shape`'s source a point is: (subpath, segment, parameter) of the
-/// nearest feature of the shape, ordered as the source runs; `None` if the
-/// shape has no curve feature.
-fn source_position(drawing: &Drawing, shape: ShapeId, p: Point) -> Option<(u32, u32, f64)> {
+/// Elements of an open chain whose direction is looked up on the source (the
+/// ones nearest its middle); the chain follows their majority.
+const DIRECTION_VOTES: usize = 5;
+
+/// Whether the element `a → b` runs along `shape`'s source: on the feature
+/// of the shape nearest the element's midpoint (the branch the element lies
+/// on, even next to a place where the source crosses itself), the parameter
+/// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
+/// feature or the projections coincide.
+fn runs_along(drawing: &Drawing, shape: ShapeId, a: Point, b: Point) -> Option<bool> {
     let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
-    let mut best: Option<(f64, (u32, u32, f64))> = None;
-    for f in drawing.features.iter().filter(|f| f.source.shape == shape) {
-        let nearest = match f.geom {
-            FeatureGeom::Point(_) => continue,
-            FeatureGeom::Line(l) => l.nearest(p, accuracy),
-            FeatureGeom::Cubic(c) => c.nearest(p, accuracy),
-            FeatureGeom::Conic(c) => c.approx_cubic().nearest(p, accuracy),
-        };
-        let key = (f.source.subpath, f.source.segment, nearest.t);
-        if best.is_none_or(|(d, _)| nearest.distance_sq < d) {
-            best = Some((nearest.distance_sq, key));
-        }
-    }
-    best.map(|(_, k)| k)
+    let mid = a.midpoint(b);
+    let t = |f: &FeatureGeom, p: Point| match *f {
+        FeatureGeom::Point(_) => None,
+        FeatureGeom::Line(l) => Some(l.nearest(p, accuracy)),
+        FeatureGeom::Cubic(c) => Some(c.nearest(p, accuracy)),
+        FeatureGeom::Conic(c) => Some(c.approx_cubic().nearest(p, accuracy)),
+    };
+    let (_, f) = drawing
+        .features
+        .iter()
+        .filter(|f| f.source.shape == shape)
+        .filter_map(|f| Some((t(&f.geom, mid)?.distance_sq, f)))
+        .min_by(|x, y| x.0.total_cmp(&y.0))?;
+    let (ta, tb) = (t(&f.geom, a)?.t, t(&f.geom, b)?.t);
+    (ta != tb).then_some(ta < tb)
 }
 
 /// Whether the consecutive open chain `lines` runs against its source's
-/// direction: judged on the middle element whose two ends project onto the
-/// same source segment (else the middle element), whose start must come first.
+/// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
+/// elements nearest the chain's middle (no verdict: as it is).
 fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, shape: ShapeId, lines: &[usize]) -> bool {
     let mid = lines.len() / 2;
     let mut order: Vec<usize> = (0..lines.len()).collect();
     order.sort_by_key(|&k| k.abs_diff(mid));
-    let mut fallback = None;
-    for k in order {
+    let (mut along, mut against) = (0usize, 0usize);
+    for k in order.into_iter().take(DIRECTION_VOTES) {
         let v = mesh.line(lines[k]);
-        let a = source_position(drawing, shape, mesh.nodes[v[0] as usize]);
-        let b = source_position(drawing, shape, mesh.nodes[v[1] as usize]);
-        let (Some(a), Some(b)) = (a, b) else {
-            return false;
-        };
-        if (a.0, a.1) == (b.0, b.1) && a.2 != b.2 {
-            return a.2 > b.2;
+        let (a, b) = (mesh.nodes[v[0] as usize], mesh.nodes[v[1] as usize]);
+        match runs_along(drawing, shape, a, b) {
+            Some(true) => along += 1,
+            Some(false) => against += 1,
+            None => {}
         }
-        fallback.get_or_insert((a.0, a.1) > (b.0, b.1));
     }
-    fallback.unwrap_or(false)
+    against > along
 }
 
 /// Add the physical curve [`BOUNDARY`] (see the module docs): one line element
