@@ -255,6 +255,45 @@ mod tests {
     }
 
     #[test]
+    fn curved_elements_count_with_their_exact_area_and_ratio() {
+        // A quadratic triangle whose edge 0→1 bulges down to (0.5, -0.25): the
+        // parabola adds 2/3 · 1 · 0.25 to the straight area 1/2 (issue 15:
+        // `--stats` reported the straight-sided area).
+        let mesh = FemMesh {
+            order: Some(Order::Quadratic),
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.5, 1.0),
+                Point::new(0.5, -0.25),
+                Point::new(0.75, 0.5),
+                Point::new(0.25, 0.5),
+            ],
+            triangles: (0..6).collect(),
+            triangle_group: vec![0],
+            surfaces: vec!["s".into()],
+            ..FemMesh::default()
+        };
+        let q = Quality::of(&mesh);
+        assert!(close(q.area, 0.5 + 1.0 / 6.0), "{q:?}");
+        let check = crate::element::jacobian::certify_element(
+            Order::Quadratic,
+            &mesh.nodes,
+            &CertifyOptions::DEFAULT,
+        )
+        .expect("six nodes");
+        assert_eq!(q.min_jacobian_ratio, check.ratio());
+        assert!(
+            q.min_jacobian_ratio > 0.0 && q.min_jacobian_ratio < 1.0,
+            "{q:?}"
+        );
+        // Straight: ratio 1.
+        let mut straight = mesh.clone();
+        straight.nodes[3] = Point::new(0.5, 0.0);
+        assert_eq!(Quality::of(&straight).min_jacobian_ratio, 1.0);
+    }
+
+    #[test]
     fn empty_mesh_is_all_zero() {
         assert_eq!(Quality::of(&FemMesh::default()), Quality::EMPTY);
         assert!(Quality::per_triangle(&FemMesh::default()).is_empty());
