@@ -24,7 +24,16 @@ pub enum LineKind {
     Secondary,
     /// A constrained edge of the CDT baseline (flattened input).
     Constraint,
+    /// An edge of the meshed domain's boundary (the padded box, the outline
+    /// left by `--cut-outside`, the rim of a dropped region), in the physical
+    /// curve [`BOUNDARY`].
+    Boundary,
 }
+
+/// Name of the physical curve that holds every edge of the meshed domain's
+/// boundary, oriented with the domain on its left (the writers give it this
+/// name before any other, so a drawing element with this id is renamed).
+pub const BOUNDARY: &str = "boundary";
 
 /// A mesh ready for output.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -72,6 +81,15 @@ impl FemMesh {
         let n = self.order().line_nodes();
         &self.lines[i * n..(i + 1) * n]
     }
+    /// Reverse the direction of line `i`: its two ends swap and its inner
+    /// nodes run the other way (gmsh order: end, end, then inner nodes along
+    /// the line).
+    pub fn reverse_line(&mut self, i: usize) {
+        let n = self.order().line_nodes();
+        let line = &mut self.lines[i * n..(i + 1) * n];
+        line.swap(0, 1);
+        line[2..].reverse();
+    }
     /// The three corner positions of triangle `i`.
     pub fn corners(&self, i: usize) -> [Point; 3] {
         let t = self.triangle(i);
@@ -80,6 +98,20 @@ impl FemMesh {
             self.nodes[t[1] as usize],
             self.nodes[t[2] as usize],
         ]
+    }
+}
+
+/// Positions, within a triangle's node list, of the inner nodes of its edge `k`
+/// (0: corner 0→1, 1: 1→2, 2: 2→0), in order from the edge's start.
+pub(crate) fn triangle_edge_inner(order: Order, k: usize) -> &'static [usize] {
+    match (order, k) {
+        (Order::Linear, _) => &[],
+        (Order::Quadratic, 0) => &[3],
+        (Order::Quadratic, 1) => &[4],
+        (Order::Quadratic, _) => &[5],
+        (Order::Cubic, 0) => &[3, 4],
+        (Order::Cubic, 1) => &[5, 6],
+        (Order::Cubic, _) => &[7, 8],
     }
 }
 

@@ -65,8 +65,10 @@ mod units;
 pub use curve::certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use element::{CertifyOptions, Order};
 pub use error::{Error, ErrorKind, Result};
-pub use fem::{FeatureEdge, FemMesh, LineKind, LinearMesh};
-pub use input::msh::{MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file};
+pub use fem::{BOUNDARY, FeatureEdge, FemMesh, LineKind, LinearMesh};
+pub use input::msh::{
+    LineBlock, MshEntity, MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file,
+};
 pub use output::{
     MshOptions, MshVersion, check_writable, write_file, write_msh, write_msh_to, write_preview,
 };

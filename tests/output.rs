@@ -209,9 +209,12 @@ fn roundtrip(test: &str, mesh: &FemMesh, area: f64) {
                 "2.2"
             }
         );
-        // Nodes: tags 1..=N, coordinates bit-exact (ASCII uses shortest round-trip decimals).
+        // Nodes: tags 1..=N, coordinates bit-exact (ASCII uses shortest round-trip
+        // decimals); 4.1 lists them by the entity they lie on, so in tag order here.
         assert_eq!(msh.nodes.len(), mesh.nodes.len(), "{tag}");
-        for (i, (t, xyz)) in msh.nodes.iter().enumerate() {
+        let mut nodes = msh.nodes.clone();
+        nodes.sort_by_key(|n| n.0);
+        for (i, (t, xyz)) in nodes.iter().enumerate() {
             assert_eq!(*t, i as u64 + 1, "{tag}");
             let p = mesh.nodes[i];
             assert_eq!(

@@ -19,8 +19,8 @@
 use kurbo::{Point, Rect};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use triwild::FemMesh;
 use triwild::Params;
+use triwild::{FemMesh, LineKind};
 use triwild::{Meshed, mesh_drawing};
 use triwild::{MshOptions, MshVersion};
 
@@ -230,12 +230,21 @@ fn region_defects(m: &Meshed, drawing_box: Rect) -> Vec<String> {
 
 /// The physical groups `mesh` must show once written: surfaces (dim 2) then
 /// curves (dim 1), tag = index + 1, with their element counts, named as the
-/// writer documents (`src/output/msh.rs`): names are unique in a file, a surface
-/// keeps its name, a curve whose name is taken gets `-curve`, then `-curve-N`
-/// (N = 2, 3, …). The sample's names are short and plain, so no cleaning applies.
+/// writer documents (`src/output/msh.rs`): names are unique in a file; the
+/// domain's boundary (the curve of `LineKind::Boundary` lines) is named first,
+/// then surfaces, then the other curves; a name already taken gets `-surface`
+/// / `-curve`, then `-…-N` (N = 2, 3, …). The sample's names are short and
+/// plain, so no cleaning applies.
 fn expected_groups(mesh: &FemMesh) -> serde_json::Value {
     let mut taken = std::collections::HashSet::new();
-    let mut groups = Vec::new();
+    let boundary: Vec<bool> = (0..mesh.curves.len())
+        .map(|g| {
+            (0..mesh.line_count()).any(|i| {
+                mesh.line_group[i] as usize == g && mesh.line_kind[i] == LineKind::Boundary
+            })
+        })
+        .collect();
+    let mut all = Vec::new();
     for (dim, names, members, kind) in [
         (2, &mesh.surfaces, &mesh.triangle_group, "-surface"),
         (1, &mesh.curves, &mesh.line_group, "-curve"),
@@ -245,22 +254,38 @@ fn expected_groups(mesh: &FemMesh) -> serde_json::Value {
                 name.len() < 100 && !name.contains('"') && !name.contains(char::is_control),
                 "sample names are plain: {name:?}"
             );
-            let mut written = name.clone();
-            if taken.contains(&written) {
-                written = format!("{name}{kind}");
-            }
-            let mut n = 2;
-            while taken.contains(&written) {
-                written = format!("{name}{kind}-{n}");
-                n += 1;
-            }
-            taken.insert(written.clone());
-            let count = members.iter().filter(|&&g| g as usize == i).count();
-            groups.push(serde_json::json!({
-                "name": written, "mesh_name": name, "dim": dim, "tag": i + 1, "elements": count,
-            }));
+            let first = dim == 1 && boundary[i];
+            all.push((first, dim, i, name, members, kind));
         }
     }
+    // Naming order: the boundary, then the rest as listed (stable sort).
+    let mut naming: Vec<usize> = (0..all.len()).collect();
+    naming.sort_by_key(|&k| !all[k].0);
+    let mut written_names = vec![String::new(); all.len()];
+    for k in naming {
+        let (_, _, _, name, _, kind) = all[k];
+        let mut written = name.clone();
+        if taken.contains(&written) {
+            written = format!("{name}{kind}");
+        }
+        let mut n = 2;
+        while taken.contains(&written) {
+            written = format!("{name}{kind}-{n}");
+            n += 1;
+        }
+        taken.insert(written.clone());
+        written_names[k] = written;
+    }
+    let groups: Vec<serde_json::Value> = all
+        .iter()
+        .zip(written_names)
+        .map(|(&(_, dim, i, name, members, _), written)| {
+            let count = members.iter().filter(|&&g| g as usize == i).count();
+            serde_json::json!({
+                "name": written, "mesh_name": name, "dim": dim, "tag": i + 1, "elements": count,
+            })
+        })
+        .collect();
     serde_json::Value::Array(groups)
 }
 

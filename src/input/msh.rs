@@ -1,10 +1,13 @@
 //! gmsh MSH reader: versions 2.x and 4.1, ASCII and binary (gmsh reference
 //! manual, "MSH file format").
 //!
-//! Reads nodes (x, y; z is only measured), triangles of order 1-3 (gmsh types 2,
-//! 9, 21) with their physical tag, and counts every other element. Sections it does
-//! not need (`$NodeData`, `$Periodic`, ...) are skipped. Never panics and never
-//! over-allocates on a malformed file: counts are checked against the bytes left.
+//! Reads nodes (x, y; z is only measured) in node-tag order, triangles of order
+//! 1-3 (gmsh types 2, 9, 21) and line elements (types 1, 8, 26) with their
+//! entity and physical tag, the model of a 4.1 file (its `$Entities` with
+//! physical and bounding tags, and the entity each node is listed under), and
+//! counts every other element. Sections it does not need (`$NodeData`,
+//! `$Periodic`, ...) are skipped. Never panics and never over-allocates on a
+//! malformed file: counts are checked against the bytes left.
 
 use crate::element::Order;
 use crate::{Error, Result};
@@ -28,8 +31,44 @@ pub struct TriangleBlock {
     pub order: Order,
     /// First physical tag of the elements (2.x) or of their entity (4.1), if any.
     pub physical: Option<i32>,
+    /// Elementary entity tag (2.x: the elements' second tag), if any.
+    pub entity: Option<i32>,
     /// Flat node indices (into [`MshMesh::nodes`]), `order.triangle_nodes()` per triangle.
     pub nodes: Vec<u32>,
+}
+
+/// Line elements of one order from one element block (4.1) or run of elements (2.x).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineBlock {
+    /// Nodes per line: 2 (type 1), 3 (type 8) or 4 (type 26); ends first, then
+    /// the inner nodes along the line.
+    pub nodes_per_line: usize,
+    /// First physical tag of the elements (2.x) or of their entity (4.1), if any.
+    pub physical: Option<i32>,
+    /// Elementary entity tag (2.x: the elements' second tag), if any.
+    pub entity: Option<i32>,
+    /// Flat node indices (into [`MshMesh::nodes`]), `nodes_per_line` per line.
+    pub nodes: Vec<u32>,
+}
+
+impl LineBlock {
+    /// The node indices of each line.
+    pub fn lines(&self) -> impl Iterator<Item = &[u32]> {
+        self.nodes.chunks_exact(self.nodes_per_line.max(1))
+    }
+}
+
+/// An elementary entity of a 4.1 file's `$Entities`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MshEntity {
+    /// Dimension: 0 (point), 1 (curve), 2 (surface), 3 (volume).
+    pub dim: i32,
+    /// Tag (unique within its dimension).
+    pub tag: i32,
+    /// Physical tags.
+    pub physicals: Vec<i32>,
+    /// Signed tags of the bounding entities of dimension `dim - 1` (none for points).
+    pub bounding: Vec<i32>,
 }
 
 /// A gmsh mesh as read.
@@ -45,6 +84,13 @@ pub struct MshMesh {
     pub triangle_blocks: Vec<TriangleBlock>,
     /// Number of line elements (any order).
     pub lines: usize,
+    /// Line elements of types 1, 8 and 26 by block (other line types are only counted).
+    pub line_blocks: Vec<LineBlock>,
+    /// The entities of a 4.1 file, in file order (empty for 2.x).
+    pub entities: Vec<MshEntity>,
+    /// (dimension, entity tag) of the node block each node is listed in (4.1;
+    /// empty for 2.x), in [`MshMesh::nodes`] order.
+    pub node_entities: Vec<(i32, i32)>,
     /// Number of 2D elements that are not triangles of order 1-3 (quadrangles,
     /// incomplete or higher-order triangles).
     pub unsupported_2d: usize,
@@ -153,6 +199,16 @@ fn triangle_order(t: i32) -> Option<Order> {
     Order::from_gmsh_triangle_type(t)
 }
 
+/// Node count of the line types whose elements are kept (1, 8, 26).
+fn line_nodes(t: i32) -> Option<usize> {
+    match t {
+        1 => Some(2),
+        8 => Some(3),
+        26 => Some(4),
+        _ => None,
+    }
+}
+
 type R<T> = std::result::Result<T, String>;
 
 #[derive(Clone, Copy, PartialEq)]
@@ -173,6 +229,8 @@ struct Reader<'a> {
 /// Node tags → positions, then tags → indices.
 struct Nodes {
     points: Vec<Point>,
+    tags: Vec<u64>,
+    entities: Vec<(i32, i32)>,
     index: HashMap<u64, u32>,
     max_abs_z: f64,
 }
@@ -187,8 +245,25 @@ impl Nodes {
             return Err(format!("node tag {tag} appears twice"));
         }
         self.points.push(Point::new(x, y));
+        self.tags.push(tag);
         self.max_abs_z = self.max_abs_z.max(z.abs());
         Ok(())
+    }
+    /// Put the nodes in tag order (gmsh lists them by entity, not by tag).
+    fn sort_by_tag(&mut self) {
+        if self.tags.is_sorted() {
+            return;
+        }
+        let mut order: Vec<usize> = (0..self.tags.len()).collect();
+        order.sort_unstable_by_key(|&i| self.tags[i]);
+        self.points = order.iter().map(|&i| self.points[i]).collect();
+        if self.entities.len() == order.len() {
+            self.entities = order.iter().map(|&i| self.entities[i]).collect();
+        }
+        self.tags = order.iter().map(|&i| self.tags[i]).collect();
+        for (i, &t) in self.tags.iter().enumerate() {
+            self.index.insert(t, i as u32);
+        }
     }
     fn get(&self, tag: u64) -> R<u32> {
         self.index
@@ -198,25 +273,50 @@ impl Nodes {
     }
 }
 
+/// The physical tag and the entity of a block of elements.
+type Owner = (Option<i32>, Option<i32>);
+
 /// Elements as read, before node tags are resolved (nodes may come after elements
 /// in principle; gmsh writes them first, but we do not rely on it).
 #[derive(Default)]
 struct Elements {
-    /// (order, physical, node tags) per block.
-    blocks: Vec<(Order, Option<i32>, Vec<u64>)>,
+    /// (order, owner, node tags) per block.
+    blocks: Vec<(Order, Owner, Vec<u64>)>,
+    /// (nodes per line, owner, node tags) per block.
+    line_blocks: Vec<(usize, Owner, Vec<u64>)>,
     lines: usize,
     unsupported_2d: usize,
     other: usize,
 }
 
 impl Elements {
-    /// The block to append triangles of `order` / `physical` to (the last one if it matches).
-    fn block(&mut self, order: Order, physical: Option<i32>) -> &mut Vec<u64> {
-        let same = matches!(self.blocks.last(), Some((o, p, _)) if *o == order && *p == physical);
+    /// The block to append triangles of `order` / `physical` / `entity` to (the
+    /// last one if it matches).
+    fn block(&mut self, order: Order, physical: Option<i32>, entity: Option<i32>) -> &mut Vec<u64> {
+        let same = matches!(self.blocks.last(), Some((o, w, _)) if *o == order && *w == (physical, entity));
         if !same {
-            self.blocks.push((order, physical, Vec::new()));
+            self.blocks.push((order, (physical, entity), Vec::new()));
         }
         &mut self.blocks.last_mut().expect("internal: just pushed").2
+    }
+    /// The block to append lines of `nn` nodes / `physical` / `entity` to (the
+    /// last one if it matches); the line is counted.
+    fn line_block(
+        &mut self,
+        nn: usize,
+        physical: Option<i32>,
+        entity: Option<i32>,
+    ) -> &mut Vec<u64> {
+        self.lines += 1;
+        let same = matches!(self.line_blocks.last(), Some((n, w, _)) if *n == nn && *w == (physical, entity));
+        if !same {
+            self.line_blocks.push((nn, (physical, entity), Vec::new()));
+        }
+        &mut self
+            .line_blocks
+            .last_mut()
+            .expect("internal: just pushed")
+            .2
     }
     fn count(&mut self, dim: i32, etype: i32) {
         match dim {
@@ -424,12 +524,15 @@ impl<'a> Reader<'a> {
 
         let mut nodes = Nodes {
             points: Vec::new(),
+            tags: Vec::new(),
+            entities: Vec::new(),
             index: HashMap::new(),
             max_abs_z: 0.0,
         };
         let mut elems = Elements::default();
         let mut names = Vec::new();
         let mut entity_physical: HashMap<(i32, i32), i32> = HashMap::new();
+        let mut entities = Vec::new();
         let (mut saw_nodes, mut saw_elements) = (false, false);
         while let Some(l) = self.line() {
             let Some(name) = l.strip_prefix('$') else {
@@ -444,7 +547,7 @@ impl<'a> Reader<'a> {
                 }
                 "Entities" if self.major == 4 => {
                     self.section = "$Entities";
-                    self.entities(&mut entity_physical)?;
+                    self.entities(&mut entity_physical, &mut entities)?;
                     self.end(name)?;
                 }
                 "Nodes" => {
@@ -488,8 +591,9 @@ impl<'a> Reader<'a> {
         if !saw_elements {
             return self.err("no $Elements section");
         }
+        nodes.sort_by_tag();
         let mut triangle_blocks = Vec::with_capacity(elems.blocks.len());
-        for (order, physical, tags) in elems.blocks {
+        for (order, (physical, entity), tags) in elems.blocks {
             let idx = tags
                 .iter()
                 .map(|&t| nodes.get(t))
@@ -497,6 +601,20 @@ impl<'a> Reader<'a> {
             triangle_blocks.push(TriangleBlock {
                 order,
                 physical,
+                entity,
+                nodes: idx,
+            });
+        }
+        let mut line_blocks = Vec::with_capacity(elems.line_blocks.len());
+        for (nodes_per_line, (physical, entity), tags) in elems.line_blocks {
+            let idx = tags
+                .iter()
+                .map(|&t| nodes.get(t))
+                .collect::<R<Vec<u32>>>()?;
+            line_blocks.push(LineBlock {
+                nodes_per_line,
+                physical,
+                entity,
                 nodes: idx,
             });
         }
@@ -506,6 +624,9 @@ impl<'a> Reader<'a> {
             max_abs_z: nodes.max_abs_z,
             triangle_blocks,
             lines: elems.lines,
+            line_blocks,
+            entities,
+            node_entities: nodes.entities,
             unsupported_2d: elems.unsupported_2d,
             other_elements: elems.other,
             physical_names: names,
@@ -532,9 +653,10 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    fn entities(&mut self, phys: &mut HashMap<(i32, i32), i32>) -> R<()> {
+    fn entities(&mut self, phys: &mut HashMap<(i32, i32), i32>, out: &mut Vec<MshEntity>) -> R<()> {
         let counts = [self.size()?, self.size()?, self.size()?, self.size()?];
         for (dim, &n) in counts.iter().enumerate() {
+            let dim = dim as i32;
             for _ in 0..n {
                 let tag = self.int()?;
                 let nb = if dim == 0 { 3 } else { 6 };
@@ -542,18 +664,27 @@ impl<'a> Reader<'a> {
                     self.float()?;
                 }
                 let np = self.size()?;
-                for k in 0..np {
-                    let p = self.int()?;
-                    if k == 0 {
-                        phys.insert((dim as i32, tag), p);
-                    }
+                let mut physicals = Vec::with_capacity(self.cap(np, 4));
+                for _ in 0..np {
+                    physicals.push(self.int()?);
                 }
+                if let Some(&p) = physicals.first() {
+                    phys.insert((dim, tag), p);
+                }
+                let mut bounding = Vec::new();
                 if dim > 0 {
                     let nbound = self.size()?;
+                    bounding.reserve(self.cap(nbound, 4));
                     for _ in 0..nbound {
-                        self.int()?;
+                        bounding.push(self.int()?);
                     }
                 }
+                out.push(MshEntity {
+                    dim,
+                    tag,
+                    physicals,
+                    bounding,
+                });
             }
         }
         Ok(())
@@ -567,7 +698,7 @@ impl<'a> Reader<'a> {
         nodes.points.reserve(self.cap(total, 24));
         for _ in 0..blocks {
             let dim = self.int()?;
-            self.int()?;
+            let entity = self.int()?;
             let parametric = self.int()? != 0;
             let n = self.size()?;
             let mut tags = Vec::with_capacity(self.cap(n, 8));
@@ -585,6 +716,7 @@ impl<'a> Reader<'a> {
                     self.float()?;
                 }
                 nodes.push(tag, x, y, z).or_else(|e| self.err(e))?;
+                nodes.entities.push((dim, entity));
             }
         }
         Ok(())
@@ -627,6 +759,7 @@ impl<'a> Reader<'a> {
             };
             let order = triangle_order(etype);
             let physical = phys.get(&(dim, entity)).copied();
+            let is_line = dim == 1 && line_nodes(etype).is_some();
             for _ in 0..n {
                 self.size()?; // element tag
                 match order {
@@ -635,7 +768,18 @@ impl<'a> Reader<'a> {
                         for t in v.iter_mut().take(nn) {
                             *t = self.size()?;
                         }
-                        elems.block(o, physical).extend_from_slice(&v[..nn]);
+                        elems
+                            .block(o, physical, Some(entity))
+                            .extend_from_slice(&v[..nn]);
+                    }
+                    _ if is_line => {
+                        let mut v = [0u64; 4];
+                        for t in v.iter_mut().take(nn) {
+                            *t = self.size()?;
+                        }
+                        elems
+                            .line_block(nn, physical, Some(entity))
+                            .extend_from_slice(&v[..nn]);
                     }
                     _ => {
                         for _ in 0..nn {
@@ -681,11 +825,13 @@ impl<'a> Reader<'a> {
                 let Some((dim, nn)) = element_shape(etype) else {
                     return self.err(format!("unknown element type {etype}"));
                 };
-                let mut physical = None;
+                let (mut physical, mut entity) = (None, None);
                 for k in 0..ntags {
                     let t = self.int()?;
-                    if k == 0 {
-                        physical = Some(t);
+                    match k {
+                        0 => physical = Some(t),
+                        1 => entity = Some(t),
+                        _ => {}
                     }
                 }
                 match triangle_order(etype) {
@@ -694,7 +840,16 @@ impl<'a> Reader<'a> {
                         for t in v.iter_mut().take(nn) {
                             *t = self.int_count("node tag")?;
                         }
-                        elems.block(o, physical).extend_from_slice(&v[..nn]);
+                        elems.block(o, physical, entity).extend_from_slice(&v[..nn]);
+                    }
+                    None if line_nodes(etype).is_some() => {
+                        let mut v = [0u64; 4];
+                        for t in v.iter_mut().take(nn) {
+                            *t = self.int_count("node tag")?;
+                        }
+                        elems
+                            .line_block(nn, physical, entity)
+                            .extend_from_slice(&v[..nn]);
                     }
                     None => {
                         for _ in 0..nn {

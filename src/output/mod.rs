@@ -8,8 +8,11 @@
 //!   non-finite coordinates) is an [`crate::Error::Write`], never a panic;
 //! - coordinates read back bit-exactly (binary) or to the last bit (ASCII, shortest
 //!   round-trip decimal);
-//! - one physical group per used surface / curve name, one elementary entity per
-//!   physical group, one element type per entity (see `msh.rs` for the layout).
+//! - one physical group per used surface / curve name; in 4.1 a discrete gmsh model
+//!   (point entities where curves meet, curve entities per piece of a physical curve,
+//!   one surface entity per physical surface with its bounding curves, each node on
+//!   the entity of lowest dimension it lies on), one element type per entity; 2.2
+//!   carries the same elementary tags (see `msh.rs` for the layout).
 
 mod atomic;
 mod msh;
@@ -113,7 +116,8 @@ fn write_format(
 
 /// Write an SVG preview of `mesh` at `path` (atomically): grey triangle outlines
 /// (curved edges drawn as the Bézier curves they are), feature lines coloured by
-/// [`crate::fem::LineKind`] (primary red, secondary green, constraint blue), y
+/// [`crate::fem::LineKind`] (primary red, secondary green, constraint blue,
+/// boundary black), y
 /// flipped back so it looks like the input.
 ///
 /// # Errors

@@ -5,17 +5,24 @@
 //!   one physical curve per used `FemMesh::curves` entry (physical tag = index + 1);
 //!   groups without elements are not written;
 //! - physical names are unique within a file, across dimensions (meshio keys its
-//!   `field_data` by name alone): a surface keeps its name, a curve whose name is
-//!   taken is written as `<name>-curve` (then `-curve-2`, …); see `physical_names_of`;
-//! - one elementary entity per physical group, with the same tag, holding elements
-//!   of one type only (gmsh's API shows one element type per entity);
+//!   `field_data` by name alone): the domain's boundary keeps `boundary`, a surface
+//!   keeps its name, a curve whose name is taken is written as `<name>-curve` (then
+//!   `-curve-2`, …); see `physical_names_of`;
+//! - the entities of a discrete gmsh model ([`Layout`]): points where curves meet,
+//!   curve entities per connected piece of a physical curve, one surface entity per
+//!   physical surface (tag = its physical tag) bounded by its curves, each entity
+//!   holding elements of one type only (gmsh's API shows one element type per
+//!   entity); 4.1 writes `$Entities` and lists each node under the entity of lowest
+//!   dimension it lies on, 2.2 writes the same elementary tags;
 //! - node tags 1..=N in `FemMesh::nodes` order; element tags 1..=M, triangles
-//!   first (by surface), then lines (by curve);
+//!   first (by surface), then lines (by curve entity);
 //! - coordinates in ASCII are shortest round-trip decimal (`{:?}`), so they read
 //!   back bit-exactly; binary uses native byte order with gmsh's endianness marker.
 
 use crate::FemMesh;
 use crate::element::Order;
+use crate::fem::LineKind;
+use std::collections::{HashMap, HashSet};
 use std::io::{self, Write};
 
 /// gmsh element type numbers of (triangle, line) for an element order.
@@ -131,26 +138,50 @@ impl BBox {
     }
 }
 
-/// One elementary entity = one physical group = one element block.
+/// One elementary entity of dimension 1 or 2: one element block.
 struct Entity {
     /// 1 (curve) or 2 (surface).
     dim: i32,
-    /// Entity tag and physical tag (group index + 1); `None` physical for the
-    /// fallback entity that only carries nodes.
+    /// Entity tag: a surface's is its physical tag (group index + 1); curves
+    /// are numbered 1.. in order (pieces of physical curves).
     tag: i32,
+    /// Physical tag (group index + 1); `None` for the fallback entity that
+    /// only carries nodes.
     physical: Option<i32>,
     /// gmsh element type.
     etype: i32,
     /// Element indices (into triangles or lines) in this entity.
     elems: Vec<u32>,
     bbox: BBox,
+    /// Signed tags of the bounding entities (one dimension lower): a curve's
+    /// points (positive where it starts, negative where it ends), a surface's
+    /// curves (positive when the curve runs with the surface on its left).
+    bounding: Vec<i32>,
 }
 
-/// The entities of a mesh and its element numbering.
+/// The discrete gmsh model of a mesh: its entities and where each node lies.
+///
+/// - Points: one at every corner where curves meet (a node where the line
+///   elements' distinct edges are not exactly two of the same physical
+///   curves: ends, branches, crossings, a change of curves), and one on each
+///   closed curve that has none (its smallest node).
+/// - Curves: each physical curve's line elements cut at the points into
+///   connected pieces, one entity each (coincident pieces of two physical
+///   curves, such as an outline that is also the domain's boundary, are two
+///   entities with their own elements, so each physical curve keeps its own
+///   elements and direction and meshio sees one physical tag per element).
+/// - Surfaces: one per physical surface, bounded by the curve entities along
+///   which it meets another surface or nothing.
+/// - Each node is classified on the entity of lowest dimension it lies on
+///   (the first such curve when pieces coincide); a node no element uses goes
+///   to the first surface (or curve).
 struct Layout {
+    /// Point entities: (tag, node index); tags 1.. in node order.
+    points: Vec<(i32, u32)>,
+    /// Surfaces (tag order), then curves (tag order).
     entities: Vec<Entity>,
-    /// Index of the entity that holds all nodes.
-    node_entity: Option<usize>,
+    /// (dimension, entity tag) of each node; empty for a mesh without nodes.
+    node_entity: Vec<(i32, i32)>,
 }
 
 /// Group element indices by group (stable counting sort); only non-empty groups.
@@ -173,6 +204,44 @@ fn bucket(groups: &[u32], count: usize) -> Vec<(u32, Vec<u32>)> {
     out
 }
 
+/// An undirected edge between two corner nodes.
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// Union-find root with path halving.
+fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        parent[i as usize] = parent[parent[i as usize] as usize];
+        i = parent[i as usize];
+    }
+    i
+}
+
+/// The corner nodes where curves meet (see [`Layout`]).
+fn corner_nodes(mesh: &FemMesh) -> HashSet<u32> {
+    // Distinct edges and the physical curves on each.
+    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for i in 0..mesh.line_count() {
+        let l = mesh.line(i);
+        let groups = edges.entry(edge_key(l[0], l[1])).or_default();
+        let g = mesh.line_group[i];
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
+    let mut at: HashMap<u32, Vec<(u32, u32)>> = HashMap::new();
+    for (k, groups) in edges.iter_mut() {
+        groups.sort_unstable();
+        at.entry(k.0).or_default().push(*k);
+        at.entry(k.1).or_default().push(*k);
+    }
+    at.into_iter()
+        .filter(|(_, ks)| ks.len() != 2 || edges[&ks[0]] != edges[&ks[1]])
+        .map(|(v, _)| v)
+        .collect()
+}
+
 impl Layout {
     fn new(mesh: &FemMesh) -> Layout {
         let (ttype, ltype) = element_types(mesh.order());
@@ -192,28 +261,156 @@ impl Layout {
                 etype: ttype,
                 elems,
                 bbox,
+                bounding: Vec::new(),
             });
         }
+        let surface_count = entities.len();
+
+        // Curves: each physical curve's lines, cut at the corners into pieces.
+        let corners = corner_nodes(mesh);
+        let mut point_of: HashMap<u32, i32> = HashMap::new();
+        let mut loop_points: Vec<u32> = Vec::new();
+        let mut pieces: Vec<(u32, Vec<u32>)> = Vec::new();
+        let mut parent: Vec<u32> = (0..mesh.line_count() as u32).collect();
         for (g, elems) in bucket(&mesh.line_group, mesh.curves.len()) {
+            let mut through: HashMap<u32, u32> = HashMap::new();
+            for &l in &elems {
+                for &v in &mesh.line(l as usize)[..2] {
+                    if corners.contains(&v) {
+                        continue;
+                    }
+                    match through.get(&v) {
+                        Some(&other) => {
+                            let (a, b) = (find(&mut parent, l), find(&mut parent, other));
+                            parent[a.max(b) as usize] = a.min(b);
+                        }
+                        None => {
+                            through.insert(v, l);
+                        }
+                    }
+                }
+            }
+            let mut piece_of: HashMap<u32, usize> = HashMap::new();
+            for &l in &elems {
+                let root = find(&mut parent, l);
+                let k = *piece_of.entry(root).or_insert_with(|| {
+                    pieces.push((g, Vec::new()));
+                    pieces.len() - 1
+                });
+                pieces[k].1.push(l);
+            }
+        }
+        // A closed piece without a corner gets a point at its smallest node.
+        for (_, elems) in &pieces {
+            let ends = elems.iter().flat_map(|&l| &mesh.line(l as usize)[..2]);
+            if !ends.clone().any(|v| corners.contains(v)) {
+                if let Some(&v) = ends.min() {
+                    loop_points.push(v);
+                }
+            }
+        }
+        let mut point_nodes: Vec<u32> = corners.iter().copied().chain(loop_points).collect();
+        point_nodes.sort_unstable();
+        point_nodes.dedup();
+        let points: Vec<(i32, u32)> = point_nodes
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (i as i32 + 1, v))
+            .collect();
+        for &(tag, v) in &points {
+            point_of.insert(v, tag);
+        }
+        for (k, (g, elems)) in pieces.into_iter().enumerate() {
             let bbox = BBox::of(
                 mesh,
                 elems
                     .iter()
                     .flat_map(|&l| mesh.line(l as usize).iter().copied()),
             );
-            let tag = g as i32 + 1;
+            // Bounding points: where the piece starts (+) and ends (-).
+            let mut bounding = Vec::new();
+            for (slot, sign) in [(0usize, 1i32), (1, -1)] {
+                let mut seen: Vec<i32> = Vec::new();
+                for &l in &elems {
+                    if let Some(&p) = point_of.get(&mesh.line(l as usize)[slot]) {
+                        if !seen.contains(&p) {
+                            seen.push(p);
+                            bounding.push(sign * p);
+                        }
+                    }
+                }
+            }
             entities.push(Entity {
                 dim: 1,
-                tag,
-                physical: Some(tag),
+                tag: k as i32 + 1,
+                physical: Some(g as i32 + 1),
                 etype: ltype,
                 elems,
                 bbox,
+                bounding,
             });
         }
-        let node_entity = if !entities.is_empty() {
-            Some(0)
-        } else if !mesh.nodes.is_empty() {
+
+        // Surfaces' bounding curves: the pieces along which a surface meets
+        // another surface or nothing, signed by which side it is on.
+        let mut sides: HashMap<(u32, u32), Vec<(u32, u32)>> = HashMap::new();
+        for t in 0..mesh.triangle_count() {
+            let c = mesh.triangle(t);
+            for e in 0..3 {
+                let (a, b) = (c[e], c[(e + 1) % 3]);
+                sides
+                    .entry(edge_key(a, b))
+                    .or_default()
+                    .push((mesh.triangle_group[t], a));
+            }
+        }
+        let surface_index: HashMap<i32, usize> = entities[..surface_count]
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (e.tag, i))
+            .collect();
+        for ci in surface_count..entities.len() {
+            let mut bounds: Vec<(usize, i32)> = Vec::new();
+            for &l in &entities[ci].elems {
+                let line = mesh.line(l as usize);
+                let Some(adjacent) = sides.get(&edge_key(line[0], line[1])) else {
+                    continue;
+                };
+                for &(g, start) in adjacent {
+                    let on_boundary = adjacent.len() == 1 || adjacent.iter().any(|s| s.0 != g);
+                    let Some(&si) = surface_index.get(&(g as i32 + 1)) else {
+                        continue;
+                    };
+                    if on_boundary && !bounds.iter().any(|b| b.0 == si) {
+                        let sign = if start == line[0] { 1 } else { -1 };
+                        bounds.push((si, sign * entities[ci].tag));
+                    }
+                }
+            }
+            for (si, signed) in bounds {
+                entities[si].bounding.push(signed);
+            }
+        }
+
+        // Nodes on the entity of lowest dimension they lie on.
+        let mut node_entity = vec![(0i32, 0i32); mesh.nodes.len()];
+        for &(tag, v) in &points {
+            node_entity[v as usize] = (0, tag);
+        }
+        for e in entities[surface_count..]
+            .iter()
+            .chain(&entities[..surface_count])
+        {
+            for &i in &e.elems {
+                for &v in element_nodes(mesh, e, i) {
+                    if node_entity[v as usize].1 == 0 {
+                        node_entity[v as usize] = (e.dim, e.tag);
+                    }
+                }
+            }
+        }
+        let fallback = entities.first().map(|e| (e.dim, e.tag)).unwrap_or((2, 1));
+        if entities.is_empty() && !mesh.nodes.is_empty() {
             // Nodes but no elements: a bare surface entity keeps them readable.
             entities.push(Entity {
                 dim: 2,
@@ -222,12 +419,16 @@ impl Layout {
                 etype: ttype,
                 elems: Vec::new(),
                 bbox: BBox::of(mesh, 0..mesh.nodes.len() as u32),
+                bounding: Vec::new(),
             });
-            Some(0)
-        } else {
-            None
-        };
+        }
+        for ne in &mut node_entity {
+            if ne.1 == 0 {
+                *ne = fallback;
+            }
+        }
         Layout {
+            points,
             entities,
             node_entity,
         }
@@ -239,6 +440,18 @@ impl Layout {
 
     fn blocks(&self) -> impl Iterator<Item = &Entity> {
         self.entities.iter().filter(|e| !e.elems.is_empty())
+    }
+
+    /// The node blocks of MSH 4.1: (dim, tag, node indices in order), points,
+    /// then curves, then surfaces, each in tag order.
+    fn node_blocks(&self) -> Vec<((i32, i32), Vec<u32>)> {
+        let mut blocks: HashMap<(i32, i32), Vec<u32>> = HashMap::new();
+        for (v, &e) in self.node_entity.iter().enumerate() {
+            blocks.entry(e).or_default().push(v as u32);
+        }
+        let mut out: Vec<((i32, i32), Vec<u32>)> = blocks.into_iter().collect();
+        out.sort_unstable_by_key(|(e, _)| *e);
+        out
     }
 }
 
@@ -361,27 +574,46 @@ fn with_suffix(base: &str, suffix: &str) -> String {
     s
 }
 
-/// The name written for each physical entity of `layout` (`None` for an entity
-/// without a physical group): the group's cleaned name, made unique within the
-/// file. meshio (and any reader that maps names to groups) keeps one group per
-/// name, so a surface and a curve of the same name (in `--regions shape`, a
-/// shape's surface and its feature edges) would lose one. Surfaces are named
-/// first and keep their names; a name already taken gets `-surface` / `-curve`,
-/// then `-2`, `-3`, … until it is free.
-fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<Option<String>> {
-    let mut taken = std::collections::HashSet::new();
-    let mut out = vec![None; layout.entities.len()];
-    let mut order: Vec<usize> = (0..layout.entities.len()).collect();
-    order.sort_by_key(|&i| std::cmp::Reverse(layout.entities[i].dim));
-    for i in order {
-        let e = &layout.entities[i];
-        let Some(tag) = e.physical else { continue };
-        let (names, kind) = if e.dim == 2 {
+/// The physical groups of `layout`, as (dimension, tag, name written): the
+/// group's cleaned name, made unique within the file. meshio (and any reader
+/// that maps names to groups) keeps one group per name, so a surface and a
+/// curve of the same name (in `--regions shape`, a shape's surface and its
+/// feature edges) would lose one. The domain's boundary (the curves of
+/// [`LineKind::Boundary`] lines, named [`crate::fem::BOUNDARY`]) is named
+/// first, then surfaces, then the other curves; a name already taken gets
+/// `-surface` / `-curve`, then `-2`, `-3`, … until it is free. Listed surfaces
+/// first, then curves, each in tag order.
+fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<(i32, i32, String)> {
+    let mut groups: Vec<(i32, i32)> = layout
+        .entities
+        .iter()
+        .filter_map(|e| Some((e.dim, e.physical?)))
+        .collect();
+    groups.sort_unstable_by_key(|&(dim, tag)| (std::cmp::Reverse(dim), tag));
+    groups.dedup();
+    let mut is_boundary = vec![false; mesh.curves.len()];
+    for (i, &g) in mesh.line_group.iter().enumerate() {
+        if mesh.line_kind.get(i) == Some(&LineKind::Boundary) {
+            is_boundary[g as usize] = true;
+        }
+    }
+    let priority = |&(dim, tag): &(i32, i32)| match dim {
+        1 if is_boundary[(tag - 1) as usize] => 0,
+        2 => 1,
+        _ => 2,
+    };
+    let mut naming: Vec<usize> = (0..groups.len()).collect();
+    naming.sort_by_key(|&i| priority(&groups[i]));
+    let mut taken = HashSet::new();
+    let mut names = vec![String::new(); groups.len()];
+    for i in naming {
+        let (dim, tag) = groups[i];
+        let (all, kind) = if dim == 2 {
             (&mesh.surfaces, "-surface")
         } else {
             (&mesh.curves, "-curve")
         };
-        let base = clean_name(&names[(tag - 1) as usize]);
+        let base = clean_name(&all[(tag - 1) as usize]);
         let mut name = base.clone();
         if taken.contains(&name) {
             name = with_suffix(&base, kind);
@@ -392,26 +624,23 @@ fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<Option<String>> {
             n += 1;
         }
         taken.insert(name.clone());
-        out[i] = Some(name);
+        names[i] = name;
     }
-    out
+    groups
+        .into_iter()
+        .zip(names)
+        .map(|((dim, tag), name)| (dim, tag, name))
+        .collect()
 }
 
 fn physical_names<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout) -> io::Result<()> {
-    let names = physical_names_of(mesh, layout);
-    let named: Vec<(&Entity, String)> = layout
-        .entities
-        .iter()
-        .zip(names)
-        .filter_map(|(e, n)| Some((e, n?)))
-        .collect();
+    let named = physical_names_of(mesh, layout);
     if named.is_empty() {
         return Ok(());
     }
     writeln!(w, "$PhysicalNames\n{}", named.len())?;
-    for (e, name) in named {
-        let tag = e.physical.expect("internal: named entities are physical");
-        writeln!(w, "{} {tag} \"{name}\"", e.dim)?;
+    for (dim, tag, name) in named {
+        writeln!(w, "{dim} {tag} \"{name}\"")?;
     }
     w.write_all(b"$EndPhysicalNames\n")
 }
@@ -422,7 +651,7 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
     header(w, "4.1", binary)?;
     physical_names(w, mesh, &layout)?;
 
-    // $Entities: curves then surfaces (gmsh's order: points, curves, surfaces, volumes).
+    // $Entities: points, curves, surfaces (gmsh's order; no volumes).
     w.write_all(b"$Entities\n")?;
     let count = |d: i32| layout.entities.iter().filter(|e| e.dim == d).count() as u64;
     let mut o = Out {
@@ -430,11 +659,20 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
         binary,
         sep: false,
     };
-    o.size(0)?;
+    o.size(layout.points.len() as u64)?;
     o.size(count(1))?;
     o.size(count(2))?;
     o.size(0)?;
     o.eol()?;
+    for &(tag, v) in &layout.points {
+        let p = mesh.nodes[v as usize];
+        o.int(tag)?;
+        o.float(p.x)?;
+        o.float(p.y)?;
+        o.float(0.0)?;
+        o.size(0)?; // no physical points
+        o.eol()?;
+    }
     for dim in [1, 2] {
         for e in layout.entities.iter().filter(|e| e.dim == dim) {
             o.int(e.tag)?;
@@ -455,48 +693,45 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
                 }
                 None => o.size(0)?,
             }
-            o.size(0)?; // no bounding points / curves
+            o.size(e.bounding.len() as u64)?;
+            for &b in &e.bounding {
+                o.int(b)?;
+            }
             o.eol()?;
         }
     }
     o.end_data()?;
     w.write_all(b"$EndEntities\n")?;
 
-    // $Nodes: one block with every node, on the first entity.
+    // $Nodes: one block per entity that holds nodes, in node order within it.
     w.write_all(b"$Nodes\n")?;
     let n = mesh.nodes.len() as u64;
+    let blocks = layout.node_blocks();
     let mut o = Out {
         w: &mut *w,
         binary,
         sep: false,
     };
-    match layout.node_entity {
-        Some(ei) => {
-            let e = &layout.entities[ei];
-            for v in [1, n, 1, n] {
-                o.size(v)?;
-            }
+    o.size(blocks.len() as u64)?;
+    o.size(n)?;
+    o.size(u64::from(n > 0))?;
+    o.size(n)?;
+    o.eol()?;
+    for ((dim, tag), nodes) in &blocks {
+        o.int(*dim)?;
+        o.int(*tag)?;
+        o.int(0)?;
+        o.size(nodes.len() as u64)?;
+        o.eol()?;
+        for &v in nodes {
+            o.size(u64::from(v) + 1)?;
             o.eol()?;
-            o.int(e.dim)?;
-            o.int(e.tag)?;
-            o.int(0)?;
-            o.size(n)?;
-            o.eol()?;
-            for t in 1..=n {
-                o.size(t)?;
-                o.eol()?;
-            }
-            for p in &mesh.nodes {
-                o.float(p.x)?;
-                o.float(p.y)?;
-                o.float(0.0)?;
-                o.eol()?;
-            }
         }
-        None => {
-            for _ in 0..4 {
-                o.size(0)?;
-            }
+        for &v in nodes {
+            let p = mesh.nodes[v as usize];
+            o.float(p.x)?;
+            o.float(p.y)?;
+            o.float(0.0)?;
             o.eol()?;
         }
     }
@@ -617,6 +852,10 @@ mod tests {
         }
     }
 
+    /// The model of `square()`: the bottom line's ends are points 1 and 2,
+    /// the line is curve 1 from point 1 to point 2, and the surface has it on
+    /// its boundary (running with the surface on its left); nodes 1 and 2 are
+    /// listed under the points, 3 and 4 under the surface.
     #[test]
     fn v41_ascii_text() {
         let mut buf = Vec::new();
@@ -624,12 +863,109 @@ mod tests {
         let text = String::from_utf8(buf).expect("utf8");
         let expected = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
             $PhysicalNames\n2\n2 1 \"inside\"\n1 1 \"bottom\"\n$EndPhysicalNames\n\
-            $Entities\n0 1 1 0\n1 0.0 0.0 0.0 1.0 0.0 0.0 1 1 0\n\
-            1 0.0 0.0 0.0 1.0 1.0 0.0 1 1 0\n$EndEntities\n\
-            $Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0.0 0.0 0.0\n1.0 0.0 0.0\n\
-            1.0 1.0 0.0\n0.0 1.0 0.0\n$EndNodes\n\
+            $Entities\n2 1 1 0\n1 0.0 0.0 0.0 0\n2 1.0 0.0 0.0 0\n\
+            1 0.0 0.0 0.0 1.0 0.0 0.0 1 1 2 1 -2\n\
+            1 0.0 0.0 0.0 1.0 1.0 0.0 1 1 1 1\n$EndEntities\n\
+            $Nodes\n3 4 1 4\n0 1 0 1\n1\n0.0 0.0 0.0\n0 2 0 1\n2\n1.0 0.0 0.0\n\
+            2 1 0 2\n3\n4\n1.0 1.0 0.0\n0.0 1.0 0.0\n$EndNodes\n\
             $Elements\n2 3 1 3\n2 1 2 2\n1 1 2 3\n2 1 3 4\n1 1 1 1\n3 1 2\n$EndElements\n";
         assert_eq!(text, expected);
+    }
+
+    /// A unit square fanned from its centre (node 4), with its outline twice
+    /// (the domain's boundary and a shape's outline, both counter-clockwise),
+    /// and a shape named `boundary` whose curve runs from corner 0 to the centre.
+    fn fan() -> FemMesh {
+        use crate::fem::LineKind::{Boundary, Primary};
+        FemMesh {
+            order: Some(Order::Linear),
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(1.0, 1.0),
+                Point::new(0.0, 1.0),
+                Point::new(0.5, 0.5),
+            ],
+            triangles: vec![0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4],
+            triangle_group: vec![0; 4],
+            surfaces: vec!["plate".into()],
+            lines: vec![0, 1, 1, 2, 2, 3, 3, 0, 0, 1, 1, 2, 2, 3, 3, 0, 0, 4],
+            line_group: vec![0, 0, 0, 0, 1, 1, 1, 1, 2],
+            line_kind: vec![
+                Primary, Primary, Primary, Primary, Boundary, Boundary, Boundary, Boundary, Primary,
+            ],
+            curves: vec!["outline".into(), "boundary".into(), "boundary".into()],
+        }
+    }
+
+    #[test]
+    fn the_model_reads_back_in_every_format() {
+        let m = fan();
+        for version in [MshVersion::V41, MshVersion::V22] {
+            for binary in [false, true] {
+                let mut bytes = Vec::new();
+                crate::write_msh_to(&m, &mut bytes, MshOptions { version, binary }).expect("write");
+                let r = crate::read_msh(&bytes).expect("read");
+                assert_eq!(r.nodes, m.nodes);
+                // The domain's boundary keeps its name; the shape's curve is renamed.
+                let mut names = r.physical_names.clone();
+                names.sort();
+                assert_eq!(
+                    names,
+                    [
+                        (1, 1, "outline".to_owned()),
+                        (1, 2, "boundary".to_owned()),
+                        (1, 3, "boundary-curve".to_owned()),
+                        (2, 1, "plate".to_owned()),
+                    ]
+                );
+                // Lines as written, with their physical tags and directions.
+                let lines: Vec<(Option<i32>, Vec<u32>)> = r
+                    .line_blocks
+                    .iter()
+                    .flat_map(|b| b.lines().map(move |l| (b.physical, l.to_vec())))
+                    .collect();
+                assert_eq!(lines.len(), 9);
+                for (i, l) in (0..m.line_count()).map(|i| m.line(i)).enumerate() {
+                    let g = Some(m.line_group[i] as i32 + 1);
+                    assert!(lines.contains(&(g, l.to_vec())), "{l:?}");
+                }
+                if version == MshVersion::V22 {
+                    assert!(r.entities.is_empty() && r.node_entities.is_empty());
+                    continue;
+                }
+                // Points at node 0 (three edges meet) and at the centre (an end).
+                let points: Vec<&crate::MshEntity> =
+                    r.entities.iter().filter(|e| e.dim == 0).collect();
+                assert_eq!(points.len(), 2);
+                assert_eq!(r.node_entities[0], (0, 1));
+                assert_eq!(r.node_entities[4], (0, 2));
+                // Curves: the two loops from and to point 1, the spoke from 1 to 2.
+                let curves: Vec<&crate::MshEntity> =
+                    r.entities.iter().filter(|e| e.dim == 1).collect();
+                assert_eq!(curves.len(), 3);
+                assert_eq!(curves[0].bounding, [1, -1]);
+                assert_eq!(curves[1].bounding, [1, -1]);
+                assert_eq!(curves[2].bounding, [1, -2]);
+                assert_eq!(curves[2].physicals, [3]);
+                // Nodes 1-3 lie on the first loop; the surface is bounded by both loops.
+                assert!(r.node_entities[1..4].iter().all(|&e| e == (1, 1)));
+                let surface = r.entities.iter().find(|e| e.dim == 2).expect("a surface");
+                assert_eq!(
+                    (surface.physicals.as_slice(), surface.bounding.as_slice()),
+                    (&[1][..], &[1, 2][..])
+                );
+                // Every element sits on an entity that exists.
+                for b in &r.line_blocks {
+                    let e = b.entity.expect("entity");
+                    assert!(
+                        curves
+                            .iter()
+                            .any(|c| c.tag == e && c.physicals == [b.physical.unwrap_or(0)])
+                    );
+                }
+            }
+        }
     }
 
     #[test]

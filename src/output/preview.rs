@@ -6,7 +6,6 @@
 //! y is flipped back (SVG y = −y), so the preview looks like the input drawing.
 
 use crate::FemMesh;
-use crate::element::Order;
 use crate::fem::LineKind;
 use kurbo::Point;
 use std::collections::HashSet;
@@ -89,20 +88,6 @@ impl PathData {
     }
 }
 
-/// Local node positions (in the element's node list) of the inner nodes of
-/// triangle edge `k` (0→1, 1→2, 2→0), in order from the edge's first corner.
-fn triangle_edge_inner(order: Order, k: usize) -> &'static [usize] {
-    match (order, k) {
-        (Order::Linear, _) => &[],
-        (Order::Quadratic, 0) => &[3],
-        (Order::Quadratic, 1) => &[4],
-        (Order::Quadratic, _) => &[5],
-        (Order::Cubic, 0) => &[3, 4],
-        (Order::Cubic, 1) => &[5, 6],
-        (Order::Cubic, _) => &[7, 8],
-    }
-}
-
 /// Write the preview. The mesh must have passed `msh::validate`.
 pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
     let order = mesh.order();
@@ -153,7 +138,11 @@ pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
                 continue;
             }
             inner.clear();
-            inner.extend(triangle_edge_inner(order, k).iter().map(|&j| node(tri[j])));
+            inner.extend(
+                crate::fem::triangle_edge_inner(order, k)
+                    .iter()
+                    .map(|&j| node(tri[j])),
+            );
             path.push(&edge_curve(node(a), node(b), &inner));
         }
         if path.d.len() > 1 << 16 {
@@ -167,6 +156,7 @@ pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
     for (kind, colour) in [
         (LineKind::Secondary, "#2ca02c"),
         (LineKind::Constraint, "#1f77b4"),
+        (LineKind::Boundary, "#000000"),
         (LineKind::Primary, "#d62728"),
     ] {
         let mut path = PathData { d: String::new() };
@@ -252,7 +242,7 @@ mod tests {
     #[test]
     fn preview_flips_y_and_colours_kinds() {
         let mesh = FemMesh {
-            order: Some(Order::Linear),
+            order: Some(crate::element::Order::Linear),
             nodes: vec![
                 Point::new(0.0, 0.0),
                 Point::new(1.0, 0.0),

@@ -169,7 +169,9 @@ pub struct Report {
     pub stopped_after: Option<Stage>,
     /// What the optimizer did (`--mesher triwild` unless stopped after `bsp`).
     pub optimize: Option<OptimizeStats>,
-    /// What curving did (`--mesher triwild` without `--linear` / `--stop-after`).
+    /// What curving did (`--mesher triwild` without `--linear` / `--stop-after`);
+    /// its `min_jacobian_ratio` is that of the mesh as written (after regions
+    /// dropped any elements), equal to `quality.min_jacobian_ratio`.
     pub curve: Option<CurveStats>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
@@ -326,14 +328,26 @@ pub fn mesh_drawing_with(
         }
     };
     let name = |s: crate::svg::ShapeId| drawing.shapes[s.index()].name();
-    let mesh = match &delivered {
-        Delivered::Linear(linear) => FemMesh::from_linear(linear, "domain", name),
-        Delivered::Curved(cm) => FemMesh::from_curved(cm, "domain", name),
+    let (mut mesh, line_shape): (FemMesh, Vec<crate::svg::ShapeId>) = match &delivered {
+        Delivered::Linear(linear) => (
+            FemMesh::from_linear(linear, "domain", name),
+            linear.edges.iter().map(|e| e.shape).collect(),
+        ),
+        Delivered::Curved(cm) => (
+            FemMesh::from_curved(cm, "domain", name),
+            cm.line_feature.iter().map(|f| f.0).collect(),
+        ),
     };
     let (mesh, region_report) = times.time("regions", || {
+        crate::regions::orient_lines(drawing, &mut mesh, &line_shape);
         crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
     })?;
+    // The quality of the elements as written (what `triwild check` reads back):
+    // the curving stage's own ratio also saw the elements regions dropped.
     let quality = times.time("quality", || Quality::of(&mesh));
+    if let Some(c) = &mut curve {
+        c.min_jacobian_ratio = quality.min_jacobian_ratio;
+    }
     let t_core = times.0.values().sum();
     let report = Report {
         input: InputCounts::of(drawing),

@@ -1,8 +1,10 @@
 //! Mesh quality metrics: corner angles, the 2D conformal AMIPS energy, areas.
 //!
 //! Owns the numbers every mesher is judged by (the `--stats` report, DESIGN
-//! "Outputs a user can check"). All metrics are measured on the straight triangle
-//! spanned by each element's three corners, whatever the element order.
+//! "Outputs a user can check"). Angles and energies are measured on the straight
+//! triangle spanned by each element's three corners, whatever the element order;
+//! the area and the Jacobian ratio are those of the elements as written (curved
+//! or not), the numbers `triwild check` reads back from the file.
 //!
 //! The AMIPS energy is the 2D conformal one the optimizer minimises (thesis §2.3.2,
 //! §4.4.1): with `J` the affine map from the equilateral reference triangle onto the
@@ -11,6 +13,8 @@
 //! inverted (clockwise) triangles.
 
 use crate::FemMesh;
+use crate::element::CertifyOptions;
+use crate::element::jacobian;
 use crate::mesh::corner_angles;
 use kurbo::Point;
 
@@ -28,8 +32,13 @@ pub struct Quality {
     pub max_amips: f64,
     /// Mean 2D AMIPS energy (`+∞` if any triangle is degenerate or clockwise).
     pub mean_amips: f64,
-    /// Total signed area of the triangles (straight-sided; clockwise ones count negative).
+    /// Total signed area of the elements as written, the exact integral of
+    /// `det J` (curved edges included; clockwise elements count negative).
     pub area: f64,
+    /// Smallest certified lower bound of `min det J / max det J` over the
+    /// elements as written (1 when all are straight; ≤ 0 if one is invalid):
+    /// `triwild check`'s `min_detj_ratio` of the written file.
+    pub min_jacobian_ratio: f64,
 }
 
 impl Quality {
@@ -40,14 +49,38 @@ impl Quality {
         max_amips: 0.0,
         mean_amips: 0.0,
         area: 0.0,
+        min_jacobian_ratio: 0.0,
     };
 
-    /// Measure the straight triangles spanned by the corners of `mesh`'s elements.
+    /// Measure `mesh`'s elements: angles and energies of the straight triangles
+    /// spanned by their corners, area and certified Jacobian ratio of the
+    /// elements themselves (curved or not).
     pub fn of(mesh: &FemMesh) -> Quality {
-        Quality::of_triangles((0..mesh.triangle_count()).map(|i| mesh.corners(i)))
+        let mut q = Quality::of_triangles((0..mesh.triangle_count()).map(|i| mesh.corners(i)));
+        if mesh.triangle_count() == 0 {
+            return q;
+        }
+        let order = mesh.order();
+        let opts = CertifyOptions::DEFAULT;
+        let mut pts = Vec::with_capacity(order.triangle_nodes());
+        q.area = 0.0;
+        q.min_jacobian_ratio = f64::INFINITY;
+        for i in 0..mesh.triangle_count() {
+            pts.clear();
+            pts.extend(mesh.triangle(i).iter().map(|&v| mesh.nodes[v as usize]));
+            let Some(det) = jacobian::det_lagrange(order, &pts) else {
+                q.min_jacobian_ratio = f64::NEG_INFINITY;
+                continue;
+            };
+            q.area += jacobian::area(&det);
+            let cert = jacobian::certify(&det, jacobian::zero_abs(&pts, opts.zero_rel), &opts);
+            q.min_jacobian_ratio = q.min_jacobian_ratio.min(cert.ratio());
+        }
+        q
     }
 
-    /// Measure a set of straight triangles given by their corners (counter-clockwise).
+    /// Measure a set of straight triangles given by their corners
+    /// (counter-clockwise); a straight triangle's Jacobian ratio is 1.
     pub fn of_triangles(triangles: impl IntoIterator<Item = [Point; 3]>) -> Quality {
         let mut n = 0usize;
         let mut q = Quality {
@@ -56,6 +89,7 @@ impl Quality {
             max_amips: f64::NEG_INFINITY,
             mean_amips: 0.0,
             area: 0.0,
+            min_jacobian_ratio: 1.0,
         };
         let mut amips_sum = 0.0;
         for corners in triangles {
@@ -66,6 +100,15 @@ impl Quality {
             q.max_amips = q.max_amips.max(t.amips);
             amips_sum += t.amips;
             q.area += t.area;
+            // A straight triangle's det J is constant: its ratio is its sign.
+            let ratio = if t.area > 0.0 {
+                1.0
+            } else if t.area < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            q.min_jacobian_ratio = q.min_jacobian_ratio.min(ratio);
         }
         if n == 0 {
             return Quality::EMPTY;
@@ -209,6 +252,45 @@ mod tests {
         );
         assert!(close(q.area, 1.0), "{q:?}");
         assert_eq!(Quality::per_triangle(&mesh).len(), 2);
+    }
+
+    #[test]
+    fn curved_elements_count_with_their_exact_area_and_ratio() {
+        // A quadratic triangle whose edge 0→1 bulges down to (0.5, -0.25): the
+        // parabola adds 2/3 · 1 · 0.25 to the straight area 1/2 (issue 15:
+        // `--stats` reported the straight-sided area).
+        let mesh = FemMesh {
+            order: Some(Order::Quadratic),
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.5, 1.0),
+                Point::new(0.5, -0.25),
+                Point::new(0.75, 0.5),
+                Point::new(0.25, 0.5),
+            ],
+            triangles: (0..6).collect(),
+            triangle_group: vec![0],
+            surfaces: vec!["s".into()],
+            ..FemMesh::default()
+        };
+        let q = Quality::of(&mesh);
+        assert!(close(q.area, 0.5 + 1.0 / 6.0), "{q:?}");
+        let check = crate::element::jacobian::certify_element(
+            Order::Quadratic,
+            &mesh.nodes,
+            &CertifyOptions::DEFAULT,
+        )
+        .expect("six nodes");
+        assert_eq!(q.min_jacobian_ratio, check.ratio());
+        assert!(
+            q.min_jacobian_ratio > 0.0 && q.min_jacobian_ratio < 1.0,
+            "{q:?}"
+        );
+        // Straight: ratio 1.
+        let mut straight = mesh.clone();
+        straight.nodes[3] = Point::new(0.5, 0.0);
+        assert_eq!(Quality::of(&straight).min_jacobian_ratio, 1.0);
     }
 
     #[test]

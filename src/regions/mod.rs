@@ -17,6 +17,10 @@
 //! - Every triangle and every line element of the result is in a physical group;
 //!   empty groups are removed; nodes no element uses are removed and the
 //!   numbering stays contiguous, in the old order.
+//! - Every edge of the kept domain's boundary (the padded box, the outline left
+//!   by `--cut-outside`, the rims of dropped regions) is a line element of the
+//!   physical curve [`crate::fem::BOUNDARY`], with the domain on its left
+//!   (`orient`); feature lines run one way per chain ([`orient_lines`]).
 //! - Each face of the mesh (triangles connected across edges that are not line
 //!   elements) gets one label, so a region boundary is always a chain of line
 //!   elements.
@@ -42,10 +46,12 @@
 
 mod classify;
 mod element;
+mod orient;
 pub(crate) mod select;
 pub(crate) mod winding;
 
 pub(crate) use classify::{ClassifyOptions, classify};
+pub(crate) use orient::orient_lines;
 pub(crate) use select::{DOMAIN, RegionOptions, RegionStat, apply, stats_of};
 
 use crate::Result;
@@ -69,6 +75,8 @@ pub struct RegionReport {
 /// for. `eps_abs` is the tolerance of [`ClassifyOptions::eps_abs`] (the pipeline
 /// passes ε_m). With [`RegionMode::None`] and nothing to drop, no
 /// classification is done: every triangle goes to one surface `domain`.
+/// Either way the kept domain's boundary is added as the physical curve
+/// [`crate::fem::BOUNDARY`] (the module's guarantees).
 ///
 /// # Errors
 /// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
@@ -83,6 +91,7 @@ pub(crate) fn tag(
         let mut out = mesh.clone();
         out.surfaces = vec![DOMAIN.to_owned()];
         out.triangle_group = vec![0; mesh.triangle_count()];
+        orient::add_boundary(&mut out);
         let report = RegionReport {
             surfaces: stats_of(&out),
             ..RegionReport::default()
@@ -90,7 +99,8 @@ pub(crate) fn tag(
         return Ok((out, report));
     }
     let asg = classify(drawing, mesh, &ClassifyOptions::new(eps_abs));
-    let (out, surfaces) = apply(drawing, mesh, &asg, opts)?;
+    let (mut out, surfaces) = apply(drawing, mesh, &asg, opts)?;
+    orient::add_boundary(&mut out);
     Ok((
         out,
         RegionReport {

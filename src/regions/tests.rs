@@ -268,8 +268,44 @@ fn cut_outside_drops_background_nodes_and_keeps_boundary_lines() {
     // Nodes of the two squares' union: 5×5 + 5×5 − 3×3.
     assert_eq!(out.nodes.len(), 41);
     // Every boundary line of both squares borders a kept triangle.
-    assert_eq!(out.line_count(), mesh.line_count());
-    assert_eq!(out.curves, ["a", "b"]);
+    assert_eq!(feature_lines(&out), mesh.line_count());
+    assert_eq!(out.curves, ["a", "b", "boundary"]);
+    // The union's outline: 16 + 16 − 2 × 4 unit edges, counter-clockwise.
+    assert_eq!(boundary_enclosed(&out), (24, 28.0));
+}
+
+/// Number of lines that are not on the domain's boundary.
+fn feature_lines(m: &FemMesh) -> usize {
+    m.line_kind
+        .iter()
+        .filter(|&&k| k != LineKind::Boundary)
+        .count()
+}
+
+/// The number of lines of the physical curve `boundary` and the area they
+/// enclose (positive: the domain is on their left), after checking that no
+/// two of them start or end at the same node.
+fn boundary_enclosed(m: &FemMesh) -> (usize, f64) {
+    let g = m
+        .curves
+        .iter()
+        .position(|c| c == crate::fem::BOUNDARY)
+        .expect("a boundary curve") as u32;
+    let (mut starts, mut ends) = (
+        std::collections::HashSet::new(),
+        std::collections::HashSet::new(),
+    );
+    let mut n = 0;
+    let mut area = 0.0;
+    for i in (0..m.line_count()).filter(|&i| m.line_group[i] == g) {
+        assert_eq!(m.line_kind[i], LineKind::Boundary);
+        let l = m.line(i);
+        assert!(starts.insert(l[0]) && ends.insert(l[1]), "line {i}: {l:?}");
+        let (a, b) = (m.nodes[l[0] as usize], m.nodes[l[1] as usize]);
+        area += 0.5 * a.to_vec2().cross(b.to_vec2());
+        n += 1;
+    }
+    (n, area)
 }
 
 #[test]
@@ -287,13 +323,16 @@ fn keep_and_hole_select_regions() {
     assert_eq!(report.surfaces[0].area, 12.0);
     // Region a is the L-shape [1,5]² \ [3,5]²: a's outline without its 4 lines
     // inside b (12), and b's outline along the L's inner corner (2 + 2).
-    assert_eq!(out.line_count(), 16);
-    assert_eq!(out.curves, ["a", "b"]);
+    assert_eq!(feature_lines(&out), 16);
+    assert_eq!(out.curves, ["a", "b", "boundary"]);
+    // Its boundary is the L's outline (16 unit edges), counter-clockwise.
+    assert_eq!(boundary_enclosed(&out), (16, 12.0));
     // Removing b by a point inside it, and the background by a point in the padding.
     let holes = vec![Point::new(6.5, 6.5), Point::new(0.5, 7.5)];
     let (out, report) = tag(&d, &mesh, &RegionOptions::DEFAULT.with_holes(holes), 1e-9).unwrap();
     assert_eq!(out.surfaces, ["a"]);
     assert_eq!(report.surfaces[0].area, 12.0);
+    assert_eq!(boundary_enclosed(&out), (16, 12.0));
     // Errors a user can act on.
     let bad = tag(
         &d,
@@ -363,4 +402,124 @@ fn a_shape_named_background_does_not_merge_with_it() {
     d.shapes[1].svg_id = Some("background".into());
     let (out, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9).unwrap();
     assert_eq!(out.surfaces, ["background", "a", "shape-1"]);
+}
+
+#[test]
+fn the_rim_of_a_hole_runs_clockwise() {
+    // An outer square [1,7]² around an inner one [3,5]², cut outside and with
+    // the inner one dropped: the boundary is the outer outline (24 unit edges,
+    // counter-clockwise) and the hole's rim (8, clockwise).
+    let outer = shape(
+        Some("outer"),
+        0,
+        FillRule::NonZero,
+        [255, 0, 0],
+        vec![polygon(&[(1.0, 1.0), (7.0, 1.0), (7.0, 7.0), (1.0, 7.0)])],
+    );
+    let inner = shape(
+        Some("inner"),
+        1,
+        FillRule::NonZero,
+        [0, 0, 255],
+        vec![polygon(&[(3.0, 3.0), (5.0, 3.0), (5.0, 5.0), (3.0, 5.0)])],
+    );
+    let mesh = grid(
+        8,
+        &[
+            ("outer", &[(1, 1), (7, 1), (7, 7), (1, 7)]),
+            ("inner", &[(3, 3), (5, 3), (5, 5), (3, 5)]),
+        ],
+    );
+    let d = drawing(vec![outer, inner]);
+    let opts = RegionOptions::DEFAULT
+        .with_cut_outside(true)
+        .with_holes(vec![Point::new(4.2, 4.5)]);
+    let (out, _) = tag(&d, &mesh, &opts, 1e-9).unwrap();
+    assert_eq!(out.surfaces, ["outer"]);
+    assert_eq!(boundary_enclosed(&out), (32, 36.0 - 4.0));
+}
+
+/// Lines `(a, b)` of `m` in group `g`, as node pairs.
+fn lines_of(m: &FemMesh, g: u32) -> Vec<(u32, u32)> {
+    (0..m.line_count())
+        .filter(|&i| m.line_group[i] == g)
+        .map(|i| (m.line(i)[0], m.line(i)[1]))
+        .collect()
+}
+
+#[test]
+fn feature_lines_run_one_way() {
+    // A closed square written clockwise, and an open polyline from right to
+    // left; their lines are written in scrambled directions.
+    let square = shape(
+        Some("sq"),
+        0,
+        FillRule::NonZero,
+        [255, 0, 0],
+        vec![polygon(&[(1.0, 1.0), (1.0, 5.0), (5.0, 5.0), (5.0, 1.0)])],
+    );
+    let stroke_path = Subpath {
+        segments: vec![
+            Segment::Line(Line::new(Point::new(7.0, 6.0), Point::new(4.0, 6.0))),
+            Segment::Line(Line::new(Point::new(4.0, 6.0), Point::new(2.0, 6.0))),
+        ],
+        start: Point::new(7.0, 6.0),
+        closed: false,
+    };
+    let mut stroke = shape(
+        Some("st"),
+        1,
+        FillRule::NonZero,
+        [0, 0, 0],
+        vec![stroke_path],
+    );
+    stroke.filled = false;
+    let d = drawing(vec![square, stroke]);
+    let mut mesh = grid(
+        8,
+        &[
+            ("sq", &[(1, 1), (5, 1), (5, 5), (1, 5)]),
+            ("st", &[(2, 6), (7, 6)]),
+        ],
+    );
+    // `grid` closes every outline: drop the stroke's way back.
+    let keep: Vec<usize> = (0..mesh.line_count())
+        .filter(|&i| mesh.line_group[i] == 0 || mesh.line(i)[0] < mesh.line(i)[1])
+        .collect();
+    let (lines, group) = (mesh.lines.clone(), mesh.line_group.clone());
+    mesh.lines = keep
+        .iter()
+        .flat_map(|&i| lines[2 * i..2 * i + 2].to_vec())
+        .collect();
+    mesh.line_group = keep.iter().map(|&i| group[i]).collect();
+    mesh.line_kind = vec![LineKind::Constraint; keep.len()];
+    for i in (0..mesh.line_count()).step_by(3) {
+        mesh.reverse_line(i);
+    }
+    let shapes: Vec<ShapeId> = mesh.line_group.iter().map(|&g| ShapeId(g)).collect();
+    orient_lines(&d, &mut mesh, &shapes);
+    for g in [0, 1] {
+        let lines = lines_of(&mesh, g);
+        let starts: std::collections::HashSet<u32> = lines.iter().map(|l| l.0).collect();
+        let ends: std::collections::HashSet<u32> = lines.iter().map(|l| l.1).collect();
+        assert_eq!(
+            (starts.len(), ends.len()),
+            (lines.len(), lines.len()),
+            "{g}"
+        );
+    }
+    // The square runs counter-clockwise whatever its source's direction.
+    let area: f64 = lines_of(&mesh, 0)
+        .iter()
+        .map(|&(a, b)| {
+            0.5 * mesh.nodes[a as usize]
+                .to_vec2()
+                .cross(mesh.nodes[b as usize].to_vec2())
+        })
+        .sum();
+    assert_eq!(area, 16.0);
+    // The stroke runs as drawn: from x = 7 to x = 2.
+    for (a, b) in lines_of(&mesh, 1) {
+        assert!(mesh.nodes[a as usize].x > mesh.nodes[b as usize].x);
+    }
 }

@@ -58,7 +58,10 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
         pipeline::feature_of(&fs, &ctx, t)
     })
     .expect("curving");
-    let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
+    let mut fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
+    // As the pipeline does: lines run one way per chain, then regions.
+    let shapes: Vec<crate::svg::ShapeId> = cm.line_feature.iter().map(|f| f.0).collect();
+    regions::orient_lines(drawing, &mut fem, &shapes);
     let (fem, _) = regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d).expect("regions");
     (fem, stats)
 }

@@ -1,0 +1,244 @@
+//! Directions of line elements (issue 15): every physical curve's line
+//! elements run one way, so a normal taken from an element's direction is the
+//! same side of the curve all along it, and the domain's boundary is a physical
+//! curve of its own.
+//!
+//! - Feature lines ([`orient_lines`]): the lines of one source shape are cut
+//!   into chains at the nodes where the shape's own lines do not simply pass
+//!   through (ends, branches); a chain that closes on itself runs
+//!   counter-clockwise (positive enclosed area), an open chain runs along its
+//!   source's direction: the parameter of the source feature its elements lie
+//!   on grows along them (a few elements near the chain's middle vote).
+//! - The boundary ([`add_boundary`]): every triangle edge that no other
+//!   triangle shares becomes a line element of the physical curve
+//!   [`BOUNDARY`], oriented as its (counter-clockwise) triangle lists it, so
+//!   the domain is on its left: outer boundaries run counter-clockwise, the
+//!   rims of holes clockwise.
+
+use super::classify::edge_key;
+use crate::fem::{BOUNDARY, FemMesh, LineKind};
+use crate::svg::{Drawing, FeatureGeom, ShapeId};
+use kurbo::{ParamCurveNearest, Point};
+use std::collections::HashMap;
+
+/// Accuracy of the projections onto source curves, relative to the drawing's
+/// diagonal: far below any edge length, only the order of the two ends matters.
+const NEAREST_ACCURACY_REL: f64 = 1e-9;
+
+/// Orient the feature lines of `mesh` (see the module docs). `line_shape[i]`
+/// is the source shape of line `i`; lines beyond it are left as they are.
+pub(crate) fn orient_lines(drawing: &Drawing, mesh: &mut FemMesh, line_shape: &[ShapeId]) {
+    let count = mesh.line_count().min(line_shape.len());
+    let mut by_shape: HashMap<ShapeId, Vec<usize>> = HashMap::new();
+    for (i, &s) in line_shape.iter().enumerate().take(count) {
+        by_shape.entry(s).or_default().push(i);
+    }
+    let mut shapes: Vec<ShapeId> = by_shape.keys().copied().collect();
+    shapes.sort_unstable_by_key(|s| s.index());
+    for s in shapes {
+        for chain in chains(mesh, &by_shape[&s]) {
+            orient_chain(drawing, mesh, s, &chain);
+        }
+    }
+}
+
+/// A chain of line elements in walking order, and whether it closes.
+struct Chain {
+    lines: Vec<usize>,
+    closed: bool,
+}
+
+/// The chains of `lines`: maximal runs through nodes where exactly two of
+/// `lines` meet, in walking order (each element's start is the previous one's
+/// end once [`orient_chain`] has made them consistent).
+fn chains(mesh: &FemMesh, lines: &[usize]) -> Vec<Chain> {
+    let mut at: HashMap<u32, Vec<usize>> = HashMap::new();
+    for &l in lines {
+        let v = mesh.line(l);
+        at.entry(v[0]).or_default().push(l);
+        at.entry(v[1]).or_default().push(l);
+    }
+    let passes = |v: u32| at.get(&v).is_some_and(|ls| ls.len() == 2);
+    let other_end = |l: usize, v: u32| {
+        let e = mesh.line(l);
+        if e[0] == v { e[1] } else { e[0] }
+    };
+    let mut done: std::collections::HashSet<usize> = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    // Open chains first: start at every end that is not a pass-through node.
+    let mut starts: Vec<(u32, usize)> = Vec::new();
+    for &l in lines {
+        let v = mesh.line(l);
+        for &end in &v[..2] {
+            if !passes(end) {
+                starts.push((end, l));
+            }
+        }
+    }
+    let walk = |start: u32, first: usize, done: &mut std::collections::HashSet<usize>| {
+        let mut chain = vec![first];
+        done.insert(first);
+        let mut v = other_end(first, start);
+        let mut last = first;
+        while passes(v) && v != start {
+            let Some(&next) = at[&v].iter().find(|&&l| l != last) else {
+                break;
+            };
+            if !done.insert(next) {
+                break;
+            }
+            chain.push(next);
+            v = other_end(next, v);
+            last = next;
+        }
+        (chain, v == start)
+    };
+    for (end, l) in starts {
+        if !done.contains(&l) {
+            let (lines, _) = walk(end, l, &mut done);
+            out.push(Chain {
+                lines,
+                closed: false,
+            });
+        }
+    }
+    // What is left runs through pass-through nodes only: closed loops.
+    for &l in lines {
+        if !done.contains(&l) {
+            let start = mesh.line(l)[0];
+            let (lines, closed) = walk(start, l, &mut done);
+            out.push(Chain { lines, closed });
+        }
+    }
+    out
+}
+
+/// Make the elements of `chain` run one way, in the direction the module docs
+/// give.
+fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, shape: ShapeId, chain: &Chain) {
+    let lines = &chain.lines;
+    // Consecutive: each element starts where the previous one ends.
+    for k in 0..lines.len() {
+        let l = lines[k];
+        let forward = if k + 1 < lines.len() {
+            let next = mesh.line(lines[k + 1]);
+            let end = mesh.line(l)[1];
+            end == next[0] || end == next[1]
+        } else if k > 0 {
+            let prev_end = mesh.line(lines[k - 1])[1];
+            mesh.line(l)[0] == prev_end
+        } else {
+            true
+        };
+        if !forward {
+            mesh.reverse_line(l);
+        }
+    }
+    let reverse = if chain.closed {
+        // Twice the signed area of the polygon of the chain's corner nodes.
+        let area2: f64 = lines
+            .iter()
+            .map(|&l| {
+                let v = mesh.line(l);
+                let (a, b) = (mesh.nodes[v[0] as usize], mesh.nodes[v[1] as usize]);
+                a.to_vec2().cross(b.to_vec2())
+            })
+            .sum();
+        area2 < 0.0
+    } else {
+        runs_backwards(drawing, mesh, shape, lines)
+    };
+    if reverse {
+        for &l in lines {
+            mesh.reverse_line(l);
+        }
+    }
+}
+
+/// Elements of an open chain whose direction is looked up on the source (the
+/// ones nearest its middle); the chain follows their majority.
+const DIRECTION_VOTES: usize = 5;
+
+/// Whether the element `a → b` runs along `shape`'s source: on the feature
+/// of the shape nearest the element's midpoint (the branch the element lies
+/// on, even next to a place where the source crosses itself), the parameter
+/// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
+/// feature or the projections coincide.
+fn runs_along(drawing: &Drawing, shape: ShapeId, a: Point, b: Point) -> Option<bool> {
+    let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
+    let mid = a.midpoint(b);
+    let t = |f: &FeatureGeom, p: Point| match *f {
+        FeatureGeom::Point(_) => None,
+        FeatureGeom::Line(l) => Some(l.nearest(p, accuracy)),
+        FeatureGeom::Cubic(c) => Some(c.nearest(p, accuracy)),
+        FeatureGeom::Conic(c) => Some(c.approx_cubic().nearest(p, accuracy)),
+    };
+    let (_, f) = drawing
+        .features
+        .iter()
+        .filter(|f| f.source.shape == shape)
+        .filter_map(|f| Some((t(&f.geom, mid)?.distance_sq, f)))
+        .min_by(|x, y| x.0.total_cmp(&y.0))?;
+    let (ta, tb) = (t(&f.geom, a)?.t, t(&f.geom, b)?.t);
+    (ta != tb).then_some(ta < tb)
+}
+
+/// Whether the consecutive open chain `lines` runs against its source's
+/// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
+/// elements nearest the chain's middle (no verdict: as it is).
+fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, shape: ShapeId, lines: &[usize]) -> bool {
+    let mid = lines.len() / 2;
+    let mut order: Vec<usize> = (0..lines.len()).collect();
+    order.sort_by_key(|&k| k.abs_diff(mid));
+    let (mut along, mut against) = (0usize, 0usize);
+    for k in order.into_iter().take(DIRECTION_VOTES) {
+        let v = mesh.line(lines[k]);
+        let (a, b) = (mesh.nodes[v[0] as usize], mesh.nodes[v[1] as usize]);
+        match runs_along(drawing, shape, a, b) {
+            Some(true) => along += 1,
+            Some(false) => against += 1,
+            None => {}
+        }
+    }
+    against > along
+}
+
+/// Add the physical curve [`BOUNDARY`] (see the module docs): one line element
+/// per triangle edge no other triangle shares, with the triangle's nodes on
+/// that edge. Nothing is added to a mesh without triangles.
+pub(crate) fn add_boundary(mesh: &mut FemMesh) {
+    let order = mesh.order();
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in 0..mesh.triangle_count() {
+        let c = mesh.triangle(t);
+        for e in 0..3 {
+            *count.entry(edge_key(c[e], c[(e + 1) % 3])).or_default() += 1;
+        }
+    }
+    let mut lines = Vec::new();
+    for t in 0..mesh.triangle_count() {
+        let c = mesh.triangle(t);
+        for e in 0..3 {
+            let (a, b) = (c[e], c[(e + 1) % 3]);
+            if count[&edge_key(a, b)] == 1 {
+                lines.push(a);
+                lines.push(b);
+                lines.extend(
+                    crate::fem::triangle_edge_inner(order, e)
+                        .iter()
+                        .map(|&j| c[j]),
+                );
+            }
+        }
+    }
+    if lines.is_empty() {
+        return;
+    }
+    let group = u32::try_from(mesh.curves.len()).expect("internal: curve count fits u32");
+    mesh.curves.push(BOUNDARY.to_owned());
+    let n = lines.len() / order.line_nodes();
+    mesh.lines.extend(lines);
+    mesh.line_group.extend(std::iter::repeat_n(group, n));
+    mesh.line_kind
+        .extend(std::iter::repeat_n(LineKind::Boundary, n));
+}
