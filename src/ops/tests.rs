@@ -157,6 +157,7 @@ pub(crate) fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context)
         on_curve_abs: 1e-12,
         energy,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx)
@@ -210,6 +211,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
         on_curve_abs: 1e-12,
         energy,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx)
@@ -521,6 +523,7 @@ fn sliver_of_three_features(h: f64) -> (TriMesh, Context, [VertexId; 3]) {
         on_curve_abs: 1e-12,
         energy: EnergyRule::NoWorseMax,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx, [a, b, k])

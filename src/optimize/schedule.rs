@@ -22,9 +22,11 @@
 //! triangles and relaxed (×1.5, up to `l`) elsewhere (see `update_sizing`).
 //! After the last pass the targets go back to `l` and one more collapse pass
 //! over every edge coarsens what was refined for nothing (new edges up to
-//! `2 l`); swaps and smoothing polish it, then min-max smoothing (each ring's
-//! largest energy, through a high power of the energies) and swaps lift the
-//! worst triangles while that still pays.
+//! `2 l`, triangles up to the mesh's worst energy or 2, whichever is larger,
+//! capped by the stop energy); swaps and smoothing polish it, then min-max
+//! smoothing (each ring's largest energy, through a high power of the energies)
+//! and swaps lift the worst triangles while that still pays. From the
+//! coarsening on, smoothing and swaps stretch no edge past `2 l`.
 //!
 //! Every operation goes through `crate::ops`, so every invariant holds after
 //! each one and refused operations leave the mesh as it was. Collapse, swap and
@@ -832,6 +834,11 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
         c,
         d,
     } = mesh.edge_quad(k.lo, k.hi, &mut Vec::new())?;
+    // No edge longer than the context's bound (unless the old one was).
+    let new_len = mesh.distance(c, d);
+    if new_len > ctx.max_new_edge && new_len > mesh.distance(a, b) {
+        return None;
+    }
     let old = ops::max_energy_of(mesh, ctx, [mesh.face(f), mesh.face(g)]);
     let new = ops::max_energy_of(mesh, ctx, [[a, d, c], [d, b, c]]);
     // A clear improvement only, so equal configurations never flip back and forth.
@@ -848,10 +855,14 @@ pub(crate) fn optimize(
     let mut ever_off = Vec::new();
     let mut s = Schedule::new(mesh, ctx, opts, SEED);
     let rational = s.improve(&mut ever_off);
+    // From here on no operation stretches an edge past 2 l: the coarsening's
+    // collapses by their length rule, smoothing and swaps by the context's bound.
+    s.ctx.max_new_edge = STOP_STRETCH * opts.l;
     s.coarsen();
     s.polish();
     s.minmax_polish();
     let rational = s.envelope_stages(rational);
+    s.ctx.max_new_edge = f64::INFINITY;
     s.finish(rational, &mut ever_off)
 }
 
