@@ -112,7 +112,8 @@ pub(super) fn join_conics(a: &Conic, b: &Conic, tol: f64) -> Option<Conic> {
     }
     // Same turning direction.
     let turn = |c: &Conic| (c.p1 - c.p0).cross(c.p2 - c.p1);
-    if !(turn(a) * turn(b) > 0.0) {
+    let same_turn = turn(a) * turn(b);
+    if same_turn.is_nan() || same_turn <= 0.0 {
         return None;
     }
     // G1 at the joint (a filter; the samples decide).
@@ -125,7 +126,7 @@ pub(super) fn join_conics(a: &Conic, b: &Conic, tol: f64) -> Option<Conic> {
     // image of a circle keeps the weights).
     let sin = |w: f64| (1.0 - w * w).max(0.0).sqrt();
     let w = a.w * b.w - sin(a.w) * sin(b.w);
-    if !(w >= MIN_WEIGHT && w < 1.0) {
+    if !(MIN_WEIGHT..1.0).contains(&w) {
         return None;
     }
     // The control point: where the end tangents meet.
@@ -211,7 +212,7 @@ impl EndGrid {
 
     /// Whether exactly two ends (the joint's own two pieces) lie within `l_min` of `p`.
     fn lone_joint(&self, p: Point) -> bool {
-        if !(self.cell > 0.0) {
+        if self.cell.is_nan() || self.cell <= 0.0 {
             return false;
         }
         let (cx, cy) = self.key(p);
