@@ -860,9 +860,10 @@ pub(crate) fn optimize(
     s.ctx.max_new_edge = STOP_STRETCH * opts.l;
     s.coarsen();
     s.polish();
+    // The min-max polish lifts the worst triangles: quality first.
+    s.ctx.max_new_edge = f64::INFINITY;
     s.minmax_polish();
     let rational = s.envelope_stages(rational);
-    s.ctx.max_new_edge = f64::INFINITY;
     s.finish(rational, &mut ever_off)
 }
 
