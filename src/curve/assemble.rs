@@ -21,7 +21,7 @@ use std::collections::HashMap;
 
 /// Accuracy of the distance statistics ([`edge_distance`]) relative to `d`.
 /// Introduced in ac447f1.
-const DISTANCE_ACCURACY_REL: f64 = 1e-12;
+const DISTANCE_ACCURACY_REL: f64 = 1e-14;
 
 /// Number the nodes (the vertices as every mesh delivered from a `TriMesh`
 /// numbers them, [`VertexNumbers`]; then edge and centre nodes) and write the

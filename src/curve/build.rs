@@ -293,6 +293,7 @@ mod tests {
             on_curve_abs: 1e-12,
             energy: EnergyRule::NoWorseMax,
             energy_floor: 0.0,
+            max_new_edge: f64::INFINITY,
             curved: None,
         }
     }

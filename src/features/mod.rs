@@ -10,8 +10,11 @@
 //! sections (kept exactly, to be curved later) and *secondary* polylines (approximated
 //! within ε), plus isolated points. The stages, in order:
 //!
-//! 0. `snap`: curve ends (and points) closer than l_m meet at one point; curves that
-//!    collapse with it go (the drawing moves by at most l_m).
+//! 0. `continuation`: consecutive pieces of one subpath that are pieces of one curve
+//!    (collinear segments, arcs of one ellipse up to 90°) join into one curve, so their
+//!    joints are no fixed vertices (issue 14); then `snap`: curve ends (and points)
+//!    closer than l_m meet at one point; curves that collapse with it go (the drawing
+//!    moves by at most l_m).
 //! 1. `classify`: degenerate curves (control points within ε_m of their mean) become
 //!    points, straight curves (control points within ε_m of their least-squares line) become
 //!    segments.
@@ -39,6 +42,7 @@
 
 mod chains;
 mod classify;
+mod continuation;
 mod crossings;
 mod grid;
 mod json;
@@ -57,6 +61,11 @@ use crate::svg::drawing::Conic;
 use crate::svg::{Drawing, FeatureGeom, FeatureSource};
 use kurbo::{CubicBez, Line, ParamCurve, ParamCurveDeriv, ParamCurveNearest, Point, Vec2};
 use std::time::Instant;
+
+/// Tolerance (relative to d) within which two conic pieces must lie on the one conic
+/// that joins them (`continuation`): far below the 1e-9·d to which nodes must lie on the
+/// drawing's curves, far above the rounding of the pieces' own evaluation.
+const JOIN_TOL_REL: f64 = 1e-11;
 
 /// Index of a primary section in [`FeatureSet::primary`].
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -297,6 +306,9 @@ pub struct FeatureCounts {
     pub input_cubics: usize,
     /// Input conic pieces (arcs, circles, ellipses, rounded corners).
     pub input_conics: usize,
+    /// Joints removed between consecutive pieces of one curve (collinear segments, arcs
+    /// of one ellipse), which become one input curve (step 0).
+    pub joined_pieces: usize,
     /// Curve ends (and points) moved onto another end closer than l_m (step 0).
     pub snapped_ends: usize,
     /// Curves shorter than l_m that collapsed onto their snapped ends (step 0).
@@ -399,9 +411,12 @@ impl FeatureSet {
         let mut timing = FeatureTiming::default();
         let mut points = Vec::new();
 
-        // 0. Ends closer than l_m meet.
+        // 0. Pieces of one curve join; ends closer than l_m meet.
         let t = Instant::now();
-        let snapped = snap::snap(&drawing.features, params.l_min);
+        let joined = continuation::join(&drawing.features, JOIN_TOL_REL * params.d, params.l_min);
+        counts.joined_pieces = joined.joints;
+        let pieces: Vec<crate::svg::Feature> = joined.features.iter().map(|(_, f)| *f).collect();
+        let snapped = snap::snap(&pieces, params.l_min);
         counts.snapped_ends = snapped.moved;
         counts.snap_collapsed = snapped.collapsed;
 
@@ -416,6 +431,8 @@ impl FeatureSet {
             }
         }
         for (i, f) in snapped.features {
+            // Back to the index of the (first) input piece.
+            let i = joined.features[i as usize].0;
             let class = classify::classify(&f.geom, params.eps_m);
             match &class {
                 classify::Class::Point(p) => {

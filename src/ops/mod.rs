@@ -80,8 +80,10 @@ pub(crate) enum Reject {
     /// triangle would get more than one curved edge.
     Jacobian,
     /// The schedule's length rule: a collapse would make an edge longer than the
-    /// split threshold (4/3 of its target), so the split pass would undo it. Decided
-    /// by the schedule before the operation is planned.
+    /// split threshold (4/3 of its target), so the split pass would undo it (decided
+    /// by the schedule before the operation is planned); or a smoothing would make an
+    /// edge longer than [`Context::max_new_edge`] (a swap too, but the schedule
+    /// skips those).
     EdgeLength,
 }
 
@@ -209,6 +211,11 @@ pub(crate) struct Context {
     /// min(stop energy, the mesh's worst energy), so coarsening never makes the
     /// mesh's worst triangle worse.
     pub energy_floor: f64,
+    /// Smoothing (here) and the schedule's swaps may not make an edge longer than
+    /// this (user units) unless it was longer before ([`Reject::EdgeLength`]); `+∞`:
+    /// no bound. The schedule's final phases set it to 2 l, so the sizes the final
+    /// coarsening leaves hold.
+    pub max_new_edge: f64,
     /// The curved mode of the invariants (`None`: the linear stage).
     pub curved: Option<CurvedRule>,
 }
@@ -247,6 +254,7 @@ impl Context {
             on_curve_abs: 1e-9 * features.params.d,
             energy: EnergyRule::NoWorseMax,
             energy_floor: 0.0,
+            max_new_edge: f64::INFINITY,
             curved: None,
         }
     }

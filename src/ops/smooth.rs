@@ -338,6 +338,17 @@ pub(crate) fn try_smooth_with(
         Err(r) => return Outcome::Rejected(r),
     };
     let v = plan.v;
+    if ctx.max_new_edge < f64::INFINITY {
+        let old = mesh.position(v);
+        let stretches = mesh.vertex_ring(v).neighbours.iter().any(|&w| {
+            let q = mesh.position(w);
+            let len = plan.pos.distance(q);
+            len > ctx.max_new_edge && len > old.distance(q)
+        });
+        if stretches {
+            return Outcome::Rejected(Reject::EdgeLength);
+        }
+    }
     let budget: Vec<_> = on_curve::budget_now(mesh, ctx, v).into_iter().collect();
     let mut tx = Transaction::new(mesh);
     tx.set_position(v, plan.pos);

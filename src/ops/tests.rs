@@ -165,6 +165,7 @@ fn delaunay_mesh_on(seed: u64, energy: EnergyRule, parent: Parent) -> (TriMesh, 
         on_curve_abs: 1e-12,
         energy,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx)
@@ -218,6 +219,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
         on_curve_abs: 1e-12,
         energy,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx)
@@ -580,6 +582,7 @@ fn sliver_of_three_features(h: f64) -> (TriMesh, Context, [VertexId; 3]) {
         on_curve_abs: 1e-12,
         energy: EnergyRule::NoWorseMax,
         energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
         curved: None,
     };
     (mesh, ctx, [a, b, k])
