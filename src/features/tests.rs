@@ -548,3 +548,18 @@ proptest! {
         prop_assert!(defects.is_empty(), "{:#?}", defects);
     }
 }
+
+#[test]
+fn area_matching_angles_stay_near_equal_spacing_and_join_the_series() {
+    use super::area_matching_coefficient as a;
+    for h in [1e-6, 1e-3, 1e-2, 0.1, 0.3, 0.5, std::f64::consts::FRAC_PI_4] {
+        let c = a(h);
+        assert!((c - 1.0).abs() < 0.03 && c <= 1.0, "h = {h}: A = {c}");
+    }
+    // the series branch and the solved branch agree where they meet
+    assert!((a(0.01 - 1e-12) - a(0.01)).abs() < 1e-9);
+    // out of range: equal angles
+    assert_eq!(a(f64::NAN), 1.0);
+    assert_eq!(a(-1.0), 1.0);
+    assert_eq!(a(2.0), 1.0);
+}
