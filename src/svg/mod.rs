@@ -34,14 +34,19 @@
 
 mod conic;
 pub(crate) mod drawing;
+mod geometry;
 mod load;
 mod outline;
+mod reconstruct;
 mod soup;
+mod source;
 mod viewport;
 
 pub(crate) use drawing::{
     Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
+
+pub(crate) use reconstruct::Precision;
 
 use crate::units::Units;
 use crate::{Error, Result};
@@ -125,19 +130,42 @@ pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
 ///   included), a drawing too small for its distance from the origin, or (in
 ///   user units) a root `viewBox` whose mapping to the viewport cannot be undone.
 pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing> {
+    load_with_precision(data, units, scale).map(|(drawing, _)| drawing)
+}
+
+/// [`load_bytes_with`], and how the paths came out (f64 from the document's
+/// text, or usvg's single precision and why).
+///
+/// # Errors
+/// As [`load_bytes_with`].
+pub(crate) fn load_with_precision(
+    data: &[u8],
+    units: Units,
+    scale: f64,
+) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
-    let (tree, facts) = load::parse(data)?;
-    let frame = viewport::Frame::new(units, scale, facts.root_view_box, tree.size())?;
-    let outlines = outline::collect(&tree, &facts, &frame)?;
+    let outlines = load::parse(data, |parsed| {
+        let frame = viewport::Frame::new(
+            units,
+            scale,
+            parsed.facts.root_view_box,
+            parsed.tree.size(),
+        )?;
+        let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
+        outline::collect(parsed, &frame, map)
+    })?;
     let drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
     tracing::debug!(
         shapes = drawing.shapes.len(),
         features = drawing.features.len(),
         warnings = drawing.warnings.len(),
+        exact_paths = outlines.precision.exact,
+        single_precision_paths = outlines.precision.fallbacks(),
+        glyph_paths = outlines.precision.glyphs,
         "svg loaded"
     );
-    Ok(drawing)
+    Ok((drawing, outlines.precision))
 }
 
 #[cfg(test)]
