@@ -101,24 +101,35 @@ pub(super) fn reconstruct(
     map: OutputMap,
     reference: &[Subpath],
 ) -> Result<Vec<Subpath>, Unsupported> {
-    let to_root = source.transform(candidate)?;
-    let m = map.0? * to_root;
+    let mut steps = source.transform_steps(candidate)?;
+    steps.push(map.0?);
+    let m = steps.iter().rev().fold(Affine::IDENTITY, |m, s| m * *s);
     let local = geometry::outline(candidate.node)?;
     let local_size = local
         .iter()
         .flat_map(Verb::points)
         .fold(0.0_f64, |a, p| a.max(p.x.abs()).max(p.y.abs()));
     let mine = subpaths(local.iter().map(|v| v.transform(m)));
-    let [a, b, c, d, e, f] = m.as_coeffs();
-    let magnitude = (local_size * (a.abs() + b.abs() + c.abs() + d.abs()))
-        .max(e.abs())
-        .max(f.abs())
+    // usvg rounds coordinates and composes transforms in f32: its errors scale with
+    // the magnitudes in every intermediate frame (large translations that cancel
+    // included), bounded here in output units
+    let (mut outer_norm, mut magnitude) = (1.0_f64, 0.0_f64);
+    for s in steps.iter().rev() {
+        let [a, b, c, d, e, f] = s.as_coeffs();
+        magnitude += outer_norm * e.abs().max(f.abs());
+        outer_norm *= (a.abs() + c.abs()).max(b.abs() + d.abs());
+    }
+    let magnitude = (magnitude + outer_norm * local_size)
         .max(max_abs(reference))
         .max(max_abs(&mine));
     let tol = F32_REL * magnitude;
     if agrees(&mine, reference, tol) {
         Ok(mine)
     } else {
+        if std::env::var_os("TW_DEBUG").is_some() {
+            let d: Vec<_> = mine.iter().zip(reference).map(|(a, b)| (a.closed, b.closed, a.start - b.start, a.segments.len(), b.segments.len())).filter(|x| x.0 != x.1 || x.2.hypot() > tol).take(3).collect();
+            eprintln!("MISMATCH {:?} {:?} n {} vs {} tol {tol:e} bbox {:?} vs {:?} {:?}", candidate.node.tag_name().name(), candidate.node.attribute("id"), mine.len(), reference.len(), bbox(&mine), bbox(reference), d);
+        }
         Err(MISMATCH)
     }
 }

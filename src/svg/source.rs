@@ -132,8 +132,8 @@ pub(super) struct Source<'a, 'input> {
     private_prefix: Option<String>,
     /// Every id → its elements, in document order (duplicates kept).
     by_id: HashMap<&'a str, Vec<Node<'a, 'input>>>,
-    /// A style sheet or `style` attribute sets `transform` somewhere (CSS transforms
-    /// are presentation properties that usvg applies): transforms are then not read.
+    /// A style sheet declares `transform` (CSS transforms are presentation
+    /// properties that usvg applies): transforms are then not read at all.
     css_transform: bool,
     /// Shape instances expanded so far (bounded by [`MAX_EXPANDED`]).
     expanded: Cell<usize>,
@@ -148,13 +148,9 @@ impl<'a, 'input> Source<'a, 'input> {
             if let Some(id) = node.attribute("id") {
                 by_id.entry(id).or_default().push(node);
             }
-            let sets_transform = if node.tag_name().name() == "style" {
-                node.text().is_some_and(|t| t.contains("transform"))
-            } else {
-                node.attribute("style")
-                    .is_some_and(|s| s.contains("transform"))
-            };
-            css_transform |= sets_transform;
+            if node.tag_name().name() == "style" {
+                css_transform |= node.text().is_some_and(declares_transform);
+            }
         }
         Self {
             doc,
@@ -272,33 +268,42 @@ impl<'a, 'input> Source<'a, 'input> {
     }
 
     /// The transform from `c.node`'s coordinates to the user units of the root
-    /// `<svg>` (its own `viewBox` mapping not included).
+    /// `<svg>` (its own `viewBox` mapping not included), as the steps that make it,
+    /// innermost first (the element's own transform, then its ancestors').
     ///
     /// # Errors
     /// The reason when the chain needs context this reader does not have, or when
     /// the candidate is not where usvg's tree says it is.
-    pub(super) fn transform(&self, c: &Candidate<'a, 'input>) -> Result<Affine, Unsupported> {
-        let mut m = Affine::IDENTITY;
+    pub(super) fn transform_steps(
+        &self,
+        c: &Candidate<'a, 'input>,
+    ) -> Result<Vec<Affine>, Unsupported> {
+        let mut steps = Vec::new();
         let mut current = c.node;
         for &u in c.uses.iter().rev() {
             let target = self.target(u).ok_or("a <use> without target")?;
-            m = self.ascend(current, Some((target, u)))? * m;
+            self.ascend(current, Some((target, u)), &mut steps)?;
             let x = length(u, "x", 0.0)?;
             let y = length(u, "y", 0.0)?;
-            m = self.own_transform(u)? * Affine::translate((x, y)) * m;
-            current = u.parent_element().ok_or("a <use> without parent")?;
+            steps.push(self.own_transform(u)? * Affine::translate((x, y)));
+            // its ancestors next (or the use itself, when an outer use refers to it)
+            current = u;
         }
-        Ok(self.ascend(current, None)? * m)
+        self.ascend(current, None, &mut steps)?;
+        Ok(steps)
     }
 
     /// The transforms of `from` and its ancestors, up to and including the target
-    /// of `via` (a `(target, use)` pair), or up to the root `<svg>` (excluded).
+    /// of `via` (a `(target, use)` pair), or up to the root `<svg>` (excluded),
+    /// appended to `steps`. `from` may be a `<use>` whose own transform is applied
+    /// already.
     fn ascend(
         &self,
         from: Node<'a, 'input>,
         via: Option<(Node<'a, 'input>, Node<'a, 'input>)>,
-    ) -> Result<Affine, Unsupported> {
-        let mut m = Affine::IDENTITY;
+        steps: &mut Vec<Affine>,
+    ) -> Result<(), Unsupported> {
+        let unexpected = "an element where usvg's tree does not expect it";
         let mut node = Some(from);
         while let Some(e) = node {
             if !e.is_element() {
@@ -308,33 +313,32 @@ impl<'a, 'input> Source<'a, 'input> {
             let use_node = via.filter(|_| is_target).map(|(_, u)| u);
             let name = e.tag_name().name();
             if e.parent_element().is_none() {
-                if via.is_some() {
-                    return Err("a <use> target outside its expected place");
-                }
-                if name != "svg" {
-                    return Err("not inside the root <svg>");
-                }
-                return Ok(m);
+                return match (via, name) {
+                    (None, "svg") => Ok(()),
+                    (None, _) => Err("not inside the root <svg>"),
+                    (Some(_), _) => Err("a <use> target outside its expected place"),
+                };
             }
             let step = match name {
-                "svg" => self.nested_svg(e, use_node)?,
-                "symbol" if is_target => self.symbol(e, use_node)?,
-                "g" | "a" | "switch" => self.own_transform(e)?,
-                n if SHAPES.contains(&n) && e == from => self.own_transform(e)?,
-                _ => return Err("an element where usvg's tree does not expect it"),
+                "svg" => Some(self.nested_svg(e, use_node)?),
+                "symbol" if is_target => Some(self.symbol(e, use_node)?),
+                "g" | "a" | "switch" => Some(self.own_transform(e)?),
+                n if SHAPES.contains(&n) && e == from => Some(self.own_transform(e)?),
+                "use" if e == from => None,
+                _ => return Err(unexpected),
             };
-            m = step * m;
+            steps.extend(step);
             if is_target {
-                return Ok(m);
+                return Ok(());
             }
             node = e.parent_element();
         }
-        Err("an element where usvg's tree does not expect it")
+        Err(unexpected)
     }
 
     /// An element's own `transform` (about its `transform-origin`).
     fn own_transform(&self, e: Node<'a, 'input>) -> Result<Affine, Unsupported> {
-        if self.css_transform {
+        if self.css_transform || e.attribute("style").is_some_and(declares_transform) {
             return Err("a transform set by CSS");
         }
         // usvg ignores a transform it cannot parse (an invalid one hides the element)
@@ -433,8 +437,21 @@ impl<'a, 'input> Source<'a, 'input> {
     /// Whether the root `<svg>` has a transform (its own, or one CSS may set).
     pub(super) fn root_transform(&self) -> bool {
         let root = self.doc.root_element();
-        self.css_transform || root.has_attribute("transform")
+        self.css_transform
+            || root.has_attribute("transform")
+            || root.attribute("style").is_some_and(declares_transform)
     }
+}
+
+/// Whether CSS text (a `style` attribute or a style sheet) declares `transform`
+/// or `transform-origin` (conservative: a match inside a comment counts).
+fn declares_transform(css: &str) -> bool {
+    css.split([';', '{', '}']).any(|declaration| {
+        declaration.split_once(':').is_some_and(|(name, _)| {
+            let name = name.trim();
+            name.eq_ignore_ascii_case("transform") || name.eq_ignore_ascii_case("transform-origin")
+        })
+    })
 }
 
 /// Whether `n` is an element in the SVG namespace (or in none).
@@ -570,6 +587,14 @@ mod tests {
         // a style sheet selecting on ids: no private ids
         let text = r#"<svg xmlns="http://www.w3.org/2000/svg"><style>[id] { fill: red }</style><rect/></svg>"#;
         assert!(with_private_ids(text, &doc(text)).is_none());
+    }
+
+    #[test]
+    fn css_transforms_are_recognised() {
+        assert!(declares_transform("fill:red; transform: rotate(3)"));
+        assert!(declares_transform("rect { Transform-Origin : 1px 2px }"));
+        assert!(!declares_transform("text-transform:none;fill:red"));
+        assert!(!declares_transform("fill:url(#transform)"));
     }
 
     #[test]

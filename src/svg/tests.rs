@@ -611,6 +611,8 @@ fn dev_corpus() {
     let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
     let start = std::time::Instant::now();
     let mut slowest = (0.0, String::new());
+    let mut precision = Precision::default();
+    let mut files_by_reason: std::collections::BTreeMap<&str, usize> = Default::default();
     for path in &files {
         let name = path
             .strip_prefix(root)
@@ -618,13 +620,15 @@ fn dev_corpus() {
             .display()
             .to_string();
         let t = std::time::Instant::now();
-        let result = load_file(path);
+        let result = std::fs::read(path)
+            .map_err(Error::Read)
+            .and_then(|data| load_with_precision(&data, Units::User, 1.0));
         let secs = t.elapsed().as_secs_f64();
         if secs > slowest.0 {
             slowest = (secs, name.clone());
         }
         let key = match &result {
-            Ok(d) => {
+            Ok((d, p)) => {
                 assert_sane(d, &name);
                 eprintln!(
                     "ok   {name}: {} shapes, {} features, bbox {:?}, warnings {:?}",
@@ -633,6 +637,12 @@ fn dev_corpus() {
                     d.bbox,
                     d.warnings
                 );
+                precision.exact += p.exact;
+                precision.glyphs += p.glyphs;
+                for (reason, n) in &p.fallback {
+                    *precision.fallback.entry(reason).or_default() += n;
+                    *files_by_reason.entry(reason).or_default() += 1;
+                }
                 "ok".to_owned()
             }
             Err(e) => {
@@ -649,6 +659,13 @@ fn dev_corpus() {
         start.elapsed().as_secs_f64(),
         slowest.0,
         slowest.1
+    );
+    eprintln!(
+        "dev corpus paths: {} f64, {} glyph outlines, {} kept usvg's f32: {:?} (files per reason: {files_by_reason:?})",
+        precision.exact,
+        precision.glyphs,
+        precision.fallbacks(),
+        precision.fallback
     );
 }
 
@@ -919,4 +936,26 @@ fn coordinates_are_checked_after_units_and_scale() {
     // in px the drawing collapses to a point, as before
     let px = load_in(&tiny, Units::Px, 1.0);
     assert_eq!(px.bbox.area(), 0.0);
+}
+
+#[test]
+#[allow(clippy::print_stderr, reason = "scratch")]
+fn scratch_precision() {
+    for body in [
+        r#"<circle cx="50" cy="50" r="20"/>"#,
+        r#"<rect x="10" y="10" width="50" height="30" rx="5" ry="4"/>"#,
+        r##"<defs><g id="g"><rect width="5" height="5"/><circle r="2"/></g></defs><use href="#g" x="3"/><use href="#g" x="30" transform="rotate(10)"/>"##,
+        r##"<svg x="10" y="10" width="20" height="20" viewBox="0 0 10 10"><rect width="10" height="10"/></svg>"##,
+        r#"<path d="M 10 10 Q 20 40 30 10 T 50 10 A 5 5 0 0 1 60 20 a 3 4 30 1 0 5 5 z m 3 3 h 4 v 5 Z"/>"#,
+    ] {
+        let (d, p) = load_with_precision(svg(body).as_bytes(), Units::User, 1.0).unwrap();
+        eprintln!("{body}: {p:?} {:?}", d.warnings);
+    }
+}
+#[test]
+#[allow(clippy::print_stderr, reason = "scratch")]
+fn scratch_file() {
+    let Some(f) = std::env::var_os("TW_FILE") else { return };
+    let (d, p) = load_with_precision(&std::fs::read(f).unwrap(), Units::User, 1.0).unwrap();
+    eprintln!("{p:?} {:?}", d.warnings);
 }
