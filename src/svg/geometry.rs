@@ -18,12 +18,26 @@ use std::f64::consts::FRAC_1_SQRT_2;
 use std::str::FromStr;
 use usvg::roxmltree::Node;
 
+/// kurbo (hence usvg) draws an arc whose radius is at most this (in the
+/// element's units) as a straight line.
+const KURBO_STRAIGHT: f64 = 1e-5;
+
+/// A shape element's outline in its own coordinates.
+#[derive(Debug)]
+pub(super) struct Outline {
+    /// The path commands.
+    pub(super) verbs: Vec<Verb>,
+    /// Whether it has an arc so small that usvg draws it as a line (radius at
+    /// most 1e-5): its bounding box may then differ from usvg's by the arc.
+    pub(super) tiny_arcs: bool,
+}
+
 /// The outline of a shape element as path commands in its own coordinates.
 ///
 /// # Errors
 /// An element this reader does not draw the way usvg does (lengths that need
 /// context, a shape usvg would not render).
-pub(super) fn outline(e: Node<'_, '_>) -> Result<Vec<Verb>, Unsupported> {
+pub(super) fn outline(e: Node<'_, '_>) -> Result<Outline, Unsupported> {
     let mut out = Commands::default();
     match e.tag_name().name() {
         "path" => path_data(e.attribute("d").unwrap_or(""), &mut out),
@@ -34,7 +48,13 @@ pub(super) fn outline(e: Node<'_, '_>) -> Result<Vec<Verb>, Unsupported> {
         }
         "ellipse" => {
             let (rx, ry) = radii(e)?;
-            ellipse(length(e, "cx", 0.0)?, length(e, "cy", 0.0)?, rx, ry, &mut out)?;
+            ellipse(
+                length(e, "cx", 0.0)?,
+                length(e, "cy", 0.0)?,
+                rx,
+                ry,
+                &mut out,
+            )?;
         }
         "line" => {
             out.push(Verb::Move(point(e, "x1", "y1")?));
@@ -47,7 +67,17 @@ pub(super) fn outline(e: Node<'_, '_>) -> Result<Vec<Verb>, Unsupported> {
         }
         _ => return Err("not a shape element"),
     }
-    Ok(out.0)
+    let tiny_arcs = out.0.iter().any(|v| match v {
+        Verb::Conic(c) => {
+            let (a, b) = (c.p1 - c.p0, c.p2 - c.p1);
+            a.hypot().min(b.hypot()) <= 2.0 * KURBO_STRAIGHT
+        }
+        _ => false,
+    });
+    Ok(Outline {
+        verbs: out.0,
+        tiny_arcs,
+    })
 }
 
 /// Path commands, with tiny-skia's normalisation (usvg builds its paths with it):

@@ -146,12 +146,8 @@ pub(crate) fn load_with_precision(
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
     let outlines = load::parse(data, |parsed| {
-        let frame = viewport::Frame::new(
-            units,
-            scale,
-            parsed.facts.root_view_box,
-            parsed.tree.size(),
-        )?;
+        let frame =
+            viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
         outline::collect(parsed, &frame, map)
     })?;

@@ -203,7 +203,9 @@ fn exact_subpaths<'a, 'input>(
                     inst.cursor = k + 1;
                     Ok(sp)
                 }
-                Err(e) => Err(Some(e.unwrap_or("a <use> instance path without a source element"))),
+                Err(e) => Err(Some(
+                    e.unwrap_or("a <use> instance path without a source element"),
+                )),
             }
         }
         Scope::Document => Err(Some(MARKER)),

@@ -104,7 +104,8 @@ pub(super) fn reconstruct(
     let mut steps = source.transform_steps(candidate)?;
     steps.push(map.0?);
     let m = steps.iter().rev().fold(Affine::IDENTITY, |m, s| m * *s);
-    let local = geometry::outline(candidate.node)?;
+    let outline = geometry::outline(candidate.node)?;
+    let local = &outline.verbs;
     let local_size = local
         .iter()
         .flat_map(Verb::points)
@@ -123,12 +124,35 @@ pub(super) fn reconstruct(
         .max(max_abs(reference))
         .max(max_abs(&mine));
     let tol = F32_REL * magnitude;
-    if agrees(&mine, reference, tol) {
+    if agrees(&mine, reference, tol, outline.tiny_arcs) {
         Ok(mine)
     } else {
         if std::env::var_os("TW_DEBUG").is_some() {
-            let d: Vec<_> = mine.iter().zip(reference).map(|(a, b)| (a.closed, b.closed, a.start - b.start, a.segments.len(), b.segments.len())).filter(|x| x.0 != x.1 || x.2.hypot() > tol).take(3).collect();
-            eprintln!("MISMATCH {:?} {:?} n {} vs {} tol {tol:e} bbox {:?} vs {:?} {:?}", candidate.node.tag_name().name(), candidate.node.attribute("id"), mine.len(), reference.len(), bbox(&mine), bbox(reference), d);
+            let d: Vec<_> = mine
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| {
+                    (
+                        a.closed,
+                        b.closed,
+                        a.start - b.start,
+                        a.segments.len(),
+                        b.segments.len(),
+                    )
+                })
+                .filter(|x| x.0 != x.1 || x.2.hypot() > tol)
+                .take(3)
+                .collect();
+            eprintln!(
+                "MISMATCH {:?} {:?} n {} vs {} tol {tol:e} bbox {:?} vs {:?} {:?}",
+                candidate.node.tag_name().name(),
+                candidate.node.attribute("id"),
+                mine.len(),
+                reference.len(),
+                bbox(&mine),
+                bbox(reference),
+                d
+            );
         }
         Err(MISMATCH)
     }
@@ -144,16 +168,21 @@ fn max_abs(subpaths: &[Subpath]) -> f64 {
 }
 
 /// Same subpaths, closed alike, ends within `tol`, bounding boxes within `tol`
-/// (plus the arc approximation allowance when `mine` has conics).
-fn agrees(mine: &[Subpath], reference: &[Subpath], tol: f64) -> bool {
+/// (plus the arc approximation allowance when `mine` has conics; not compared
+/// when usvg drew tiny arcs as lines).
+fn agrees(mine: &[Subpath], reference: &[Subpath], tol: f64, tiny_arcs: bool) -> bool {
     let near = |p: Point, q: Point| (p.x - q.x).abs() <= tol && (p.y - q.y).abs() <= tol;
     let end = |s: &Subpath| s.segments.last().map_or(s.start, Segment::end);
     let same_subpaths = mine.len() == reference.len()
-        && mine.iter().zip(reference).all(|(m, r)| {
-            m.closed == r.closed && near(m.start, r.start) && near(end(m), end(r))
-        });
+        && mine
+            .iter()
+            .zip(reference)
+            .all(|(m, r)| m.closed == r.closed && near(m.start, r.start) && near(end(m), end(r)));
     if !same_subpaths {
         return false;
+    }
+    if tiny_arcs {
+        return true;
     }
     let (Some(a), Some(b)) = (bbox(mine), bbox(reference)) else {
         return mine.is_empty() && reference.is_empty();

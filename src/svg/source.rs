@@ -40,8 +40,22 @@ pub(super) const SHAPES: &[&str] = &[
 /// Containers whose content is never rendered in place (only through a
 /// reference: `<use>`, paint servers, clip paths, markers, ...).
 const NOT_RENDERED: &[&str] = &[
-    "defs", "clipPath", "mask", "pattern", "marker", "symbol", "text", "style", "title", "desc",
-    "metadata", "linearGradient", "radialGradient", "filter", "image", "foreignObject",
+    "defs",
+    "clipPath",
+    "mask",
+    "pattern",
+    "marker",
+    "symbol",
+    "text",
+    "style",
+    "title",
+    "desc",
+    "metadata",
+    "linearGradient",
+    "radialGradient",
+    "filter",
+    "image",
+    "foreignObject",
 ];
 
 /// At most this many shape instances are expanded from `<use>` elements per
@@ -496,12 +510,7 @@ pub(super) fn view_box_mapping(
     if !(width > 0.0 && height > 0.0 && width.is_finite() && height.is_finite()) {
         return None;
     }
-    let (sx, sy, tx, ty) = super::viewport::fit(
-        [vb.x, vb.y, vb.w, vb.h],
-        aspect,
-        width,
-        height,
-    );
+    let (sx, sy, tx, ty) = super::viewport::fit([vb.x, vb.y, vb.w, vb.h], aspect, width, height);
     Some(Affine::new([sx, 0.0, 0.0, sy, tx, ty]))
 }
 
@@ -580,7 +589,8 @@ mod tests {
 
     #[test]
     fn the_prefix_avoids_the_documents_ids() {
-        let text = r#"<svg xmlns="http://www.w3.org/2000/svg"><rect id="triwild0-7"/><rect/></svg>"#;
+        let text =
+            r#"<svg xmlns="http://www.w3.org/2000/svg"><rect id="triwild0-7"/><rect/></svg>"#;
         let (marked, prefix) = with_private_ids(text, &doc(text)).expect("ids added");
         assert_eq!(prefix, "triwild1-");
         assert!(marked.contains(r#"<rect id="triwild1-0"/>"#), "{marked}");

@@ -28,34 +28,45 @@ fn count(sub: &Subpath) -> (usize, usize) {
     (lines, sub.segments.len() - lines)
 }
 
+fn conics(sub: &Subpath) -> usize {
+    sub.segments
+        .iter()
+        .filter(|s| matches!(s, Segment::Conic(_)))
+        .count()
+}
+
 fn close(a: Point, b: Point) -> bool {
     (a - b).hypot() < 1e-9
 }
 
 #[test]
-fn rounded_rect_is_four_cubics_and_four_lines() {
+fn rounded_rect_is_four_conics_and_four_lines() {
     let d = load(r#"<rect x="10" y="10" width="50" height="30" rx="5" ry="4"/>"#);
     assert_eq!(d.shapes.len(), 1);
     let subs = &d.shapes[0].subpaths;
     assert_eq!(subs.len(), 1);
     assert!(subs[0].closed);
     assert_eq!(count(&subs[0]), (4, 4));
+    assert_eq!(conics(&subs[0]), 4);
     assert_eq!(d.features.len(), 8);
     assert!(close(d.bbox.origin(), Point::new(10.0, -40.0)));
     assert!((d.bbox.width() - 50.0).abs() < 1e-9 && (d.bbox.height() - 30.0).abs() < 1e-9);
 }
 
 #[test]
-fn circle_is_four_cubics() {
+fn circle_is_four_conics() {
     let d = load(r#"<circle cx="50" cy="50" r="20"/>"#);
     let sub = &d.shapes[0].subpaths[0];
     assert!(sub.closed);
     assert_eq!(count(sub), (0, 4));
+    assert_eq!(conics(sub), 4);
     for seg in &sub.segments {
-        let c = seg.to_cubic();
+        let Segment::Conic(c) = seg else {
+            panic!("{seg:?}")
+        };
         for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
             let r = (c.eval(t) - Point::new(50.0, -50.0)).hypot();
-            assert!((r - 20.0).abs() < 0.1, "radius {r}");
+            assert!((r - 20.0).abs() < 1e-13, "radius {r}");
         }
     }
 }
@@ -70,6 +81,7 @@ fn ellipse_line_polyline_polygon() {
     );
     assert_eq!(d.shapes.len(), 4);
     assert_eq!(count(&d.shapes[0].subpaths[0]), (0, 4));
+    assert_eq!(conics(&d.shapes[0].subpaths[0]), 4);
     assert_eq!(count(&d.shapes[1].subpaths[0]), (1, 0));
     assert_eq!(count(&d.shapes[2].subpaths[0]), (2, 0));
     assert!(!d.shapes[2].subpaths[0].closed);
@@ -938,24 +950,4 @@ fn coordinates_are_checked_after_units_and_scale() {
     assert_eq!(px.bbox.area(), 0.0);
 }
 
-#[test]
-#[allow(clippy::print_stderr, reason = "scratch")]
-fn scratch_precision() {
-    for body in [
-        r#"<circle cx="50" cy="50" r="20"/>"#,
-        r#"<rect x="10" y="10" width="50" height="30" rx="5" ry="4"/>"#,
-        r##"<defs><g id="g"><rect width="5" height="5"/><circle r="2"/></g></defs><use href="#g" x="3"/><use href="#g" x="30" transform="rotate(10)"/>"##,
-        r##"<svg x="10" y="10" width="20" height="20" viewBox="0 0 10 10"><rect width="10" height="10"/></svg>"##,
-        r#"<path d="M 10 10 Q 20 40 30 10 T 50 10 A 5 5 0 0 1 60 20 a 3 4 30 1 0 5 5 z m 3 3 h 4 v 5 Z"/>"#,
-    ] {
-        let (d, p) = load_with_precision(svg(body).as_bytes(), Units::User, 1.0).unwrap();
-        eprintln!("{body}: {p:?} {:?}", d.warnings);
-    }
-}
-#[test]
-#[allow(clippy::print_stderr, reason = "scratch")]
-fn scratch_file() {
-    let Some(f) = std::env::var_os("TW_FILE") else { return };
-    let (d, p) = load_with_precision(&std::fs::read(f).unwrap(), Units::User, 1.0).unwrap();
-    eprintln!("{p:?} {:?}", d.warnings);
-}
+mod exact;
