@@ -127,33 +127,6 @@ pub(super) fn reconstruct(
     if agrees(&mine, reference, tol, outline.tiny_arcs) {
         Ok(mine)
     } else {
-        if std::env::var_os("TW_DEBUG").is_some() {
-            let d: Vec<_> = mine
-                .iter()
-                .zip(reference)
-                .map(|(a, b)| {
-                    (
-                        a.closed,
-                        b.closed,
-                        a.start - b.start,
-                        a.segments.len(),
-                        b.segments.len(),
-                    )
-                })
-                .filter(|x| x.0 != x.1 || x.2.hypot() > tol)
-                .take(3)
-                .collect();
-            eprintln!(
-                "MISMATCH {:?} {:?} n {} vs {} tol {tol:e} bbox {:?} vs {:?} {:?}",
-                candidate.node.tag_name().name(),
-                candidate.node.attribute("id"),
-                mine.len(),
-                reference.len(),
-                bbox(&mine),
-                bbox(reference),
-                d
-            );
-        }
         Err(MISMATCH)
     }
 }
