@@ -235,7 +235,7 @@ pub(super) fn arc_pieces(arc: &SvgArc) -> Vec<Verb> {
         return vec![Verb::Line(arc.to)];
     };
     centred.center = arc.from + centred.center.to_vec2() / s;
-    centred.radii = centred.radii / s;
+    centred.radii /= s;
     if !(centred.center.is_finite() && centred.radii.is_finite()) {
         return vec![Verb::Line(arc.to)];
     }

@@ -392,7 +392,7 @@ impl<'a, 'input> Source<'a, 'input> {
             };
             let (w, h) = (size("width")?, size("height")?);
             if let Some(vb_map) = view_box_mapping(vb, aspect(e), w, h) {
-                m = m * vb_map;
+                m *= vb_map;
             }
         }
         Ok(m)
