@@ -231,6 +231,12 @@ pub(super) fn arc_pieces(arc: &SvgArc) -> Vec<Verb> {
         radii: arc.radii * s,
         ..*arc
     };
+    // a chord so short against the radii that its squares underflow: kurbo's
+    // centre construction divides by them (0/0); the arc is a point-sized sliver
+    // or a full ellipse through one point, neither of which SVG authors mean
+    if local.to.to_vec2().hypot() < 1e-120 {
+        return vec![Verb::Line(arc.to)];
+    }
     let Some(mut centred) = kurbo::Arc::from_svg_arc(&local) else {
         return vec![Verb::Line(arc.to)];
     };
@@ -349,4 +355,43 @@ fn polyline(e: Node<'_, '_>, out: &mut Commands) -> Result<(), Unsupported> {
         return Err("fewer than two points");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arc(to: (f64, f64), r: f64, large: bool) -> SvgArc {
+        SvgArc {
+            from: Point::ORIGIN,
+            to: to.into(),
+            radii: Vec2::new(r, r),
+            x_rotation: 0.0,
+            large_arc: large,
+            sweep: true,
+        }
+    }
+
+    #[test]
+    fn degenerate_arcs_are_lines_or_nothing() {
+        assert!(arc_pieces(&arc((0.0, 0.0), 1.0, false)).is_empty());
+        for a in [
+            arc((1e-200, 0.0), 1.0, false),
+            arc((1e-200, 0.0), 1.0, true),
+            arc((1.0, 0.0), 0.0, true),
+            arc((1.0, 0.0), f64::INFINITY, true),
+        ] {
+            assert!(
+                matches!(arc_pieces(&a)[..], [Verb::Line(p)] if p == a.to),
+                "{a:?}"
+            );
+        }
+        // a tiny radius (below kurbo's 1e-5) is still an arc: a half circle
+        let half = arc_pieces(&arc((2e-9, 0.0), 1e-9, false));
+        assert_eq!(half.len(), 2);
+        let Verb::Conic(c) = half[0] else {
+            panic!("{half:?}")
+        };
+        assert!(((c.eval(1.0) - Point::new(1e-9, 0.0)).hypot() - 1e-9).abs() < 1e-24);
+    }
 }

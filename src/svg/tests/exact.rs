@@ -265,6 +265,29 @@ fn arc_radii_too_small_scale_up_and_zero_radii_are_lines() {
 }
 
 #[test]
+fn degenerate_arcs_never_panic() {
+    // (a chord of 1e-200 under radius 1 trips a debug assertion in usvg's own
+    // arc conversion, before ours runs: `arc_pieces` is tested on it directly)
+    for d in [
+        "M 0 0 A 1e-300 1e-300 0 1 1 1e-300 0",
+        "M 0 0 A 3e38 3e38 0 1 1 1 0",
+        "M 0 0 A 1 1 0 0 1 0 0 L 5 5",
+    ] {
+        let (drawing, p) = load_with_precision(
+            svg(&format!(
+                r#"<path d="{d}" stroke="black"/><rect width="1" height="1"/>"#
+            ))
+            .as_bytes(),
+            Units::User,
+            1.0,
+        )
+        .expect("loads");
+        assert_sane(&drawing, d);
+        assert_eq!(p.exact + p.fallbacks(), drawing.shapes.len(), "{d}: {p:?}");
+    }
+}
+
+#[test]
 fn transforms_apply_exactly_in_f64() {
     let d = load_exact(&svg(
         r#"<g transform="translate(0.1)"><rect x="1" y="0.2" width="2" height="3"/></g>"#,
