@@ -1,6 +1,7 @@
 //! The baseline's planar input: the feature soup flattened to polylines, scaled by a
 //! power of two into the range spade accepts, with near-duplicate points merged.
 
+use crate::svg::drawing::Conic;
 use crate::svg::{Drawing, FeatureGeom, ShapeId};
 use kurbo::{CubicBez, PathEl, Point, Rect};
 
@@ -128,12 +129,9 @@ impl PlanarInput {
                         CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
                     flatten_cubic(c, accuracy, &mut polyline);
                 }
-                // CONIC-PLACEHOLDER: approximated until the baseline takes conics
                 FeatureGeom::Conic(k) => {
-                    let c = k.approx_cubic();
-                    let c =
-                        CubicBez::new(s.point(c.p0), s.point(c.p1), s.point(c.p2), s.point(c.p3));
-                    flatten_cubic(c, accuracy, &mut polyline);
+                    let c = Conic::new(s.point(k.p0), s.point(k.p1), s.point(k.p2), k.w);
+                    flatten_conic(c, accuracy, &mut polyline);
                 }
             }
             let mut prev: Option<u32> = None;
@@ -201,6 +199,41 @@ fn flatten_cubic(c: CubicBez, accuracy: f64, out: &mut Vec<Point>) {
     // kurbo ends on p3 exactly; make sure of it.
     if out.last() != Some(&c.p3) {
         out.push(c.p3);
+    }
+}
+
+/// Append the flattened polyline of the conic `c` (both ends included) to `out`: every
+/// point of the curve within `accuracy` of the polyline, in at most
+/// `MAX_PIECES_PER_CUBIC` pieces (the accuracy is coarsened beyond that).
+///
+/// A point of the conic is the combination of `p0`, `p1`, `p2` with positive weights
+/// summing to 1 whose `p1` weight `2t(1−t)w / ((1−t)² + 2t(1−t)w + t²)` peaks at
+/// `w / (1 + w)` (t = ½); the distance to the chord's segment being convex, the curve
+/// is within `w / (1 + w) · dist(p1, chord)` of its chord. Pieces are halved
+/// (standard-form [`Conic::subsegment`]) until that bound is within `accuracy`. A conic
+/// whose weight is not positive and finite is no bounded arc: its chord.
+fn flatten_conic(c: Conic, accuracy: f64, out: &mut Vec<Point>) {
+    out.push(c.p0);
+    if c.w > 0.0 && c.w.is_finite() {
+        // Depth-first, first half first: the pieces come out in order.
+        let max_depth = MAX_PIECES_PER_CUBIC.log2() as u32;
+        let mut stack = vec![(c, 0u32)];
+        while let Some((k, depth)) = stack.pop() {
+            let chord = kurbo::Line::new(k.p0, k.p2);
+            let bound = k.w / (1.0 + k.w) * crate::mesh::point_segment_distance(k.p1, chord);
+            // A non-finite bound (overflow) is a flattening defect: take the chord.
+            if bound <= accuracy || !bound.is_finite() || depth >= max_depth {
+                if k.p2.is_finite() {
+                    out.push(k.p2);
+                }
+            } else {
+                stack.push((k.subsegment(0.5, 1.0), depth + 1));
+                stack.push((k.subsegment(0.0, 0.5), depth + 1));
+            }
+        }
+    }
+    if out.last() != Some(&c.p2) {
+        out.push(c.p2);
     }
 }
 
@@ -344,5 +377,42 @@ mod tests {
             &mut out,
         );
         assert!(out.iter().all(|&p| p == Point::new(1.0, 1.0)));
+    }
+
+    #[test]
+    fn conic_flattening_stays_within_accuracy_and_keeps_ends() {
+        let w = std::f64::consts::FRAC_1_SQRT_2;
+        let c = Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
+        for acc in [1e-2, 1e-4, 1e-6] {
+            let mut out = Vec::new();
+            flatten_conic(c, acc, &mut out);
+            assert_eq!(out[0], c.p0);
+            assert_eq!(*out.last().unwrap(), c.p2);
+            // Vertices on the circle, chords within acc of it (sagitta of each chord).
+            for w in out.windows(2) {
+                assert!((w[0].to_vec2().hypot() - 1.0).abs() < 1e-15);
+                let half = 0.5 * w[0].distance(w[1]);
+                let sagitta = 1.0 - (1.0 - half * half).sqrt();
+                assert!(sagitta <= acc, "{sagitta} > {acc}");
+            }
+            // Not wastefully fine: within a factor 4 of the uniform chord count.
+            let uniform = (std::f64::consts::FRAC_PI_2 / (8.0 * acc).sqrt()).ceil();
+            assert!(
+                (out.len() - 1) as f64 <= 4.0 * uniform,
+                "{} pieces",
+                out.len()
+            );
+        }
+        // A tiny accuracy is capped; a bad weight gives the chord.
+        let mut out = Vec::new();
+        flatten_conic(c, 1e-30, &mut out);
+        assert!(
+            out.len() <= MAX_PIECES_PER_CUBIC as usize + 1,
+            "{}",
+            out.len()
+        );
+        let mut out = Vec::new();
+        flatten_conic(Conic::new(c.p0, c.p1, c.p2, -1.0), 1e-3, &mut out);
+        assert_eq!(out, vec![c.p0, c.p2]);
     }
 }

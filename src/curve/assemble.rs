@@ -12,7 +12,7 @@ use crate::element::triangle::{EDGES, straight_inner};
 use crate::fem::{FemMesh, LineKind, VertexNumbers, feature_lines};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh};
 use crate::ops::Context;
-use crate::ops::invariants::curved::{on_cubic, primary};
+use crate::ops::invariants::curved::{on_curved, primary};
 use crate::stage::Stage;
 use crate::svg::ShapeId;
 use crate::{Error, Result};
@@ -161,12 +161,12 @@ pub(super) fn finish_stats(
             .hypot()
             .max((b - sec.parent.eval(t[1])).hypot());
         corner_max = corner_max.max(off);
-        let piece = sec.parent.restrict(t[0], t[1]);
-        let dist = edge_distance(a, b, &inner, &piece, DISTANCE_ACCURACY_REL * opts.d);
+        let acc = DISTANCE_ACCURACY_REL * opts.d;
+        let dist = edge_distance(a, b, &inner, |p| sec.parent.distance(p, t, acc));
         dist_max = dist_max.max(dist);
         dist_sum += dist;
         dist_count += 1;
-        if on_cubic(ctx, section) && shape.edges.contains_key(&key) && order != Order::Linear {
+        if on_curved(ctx, section) && shape.edges.contains_key(&key) && order != Order::Linear {
             mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
             curved_faces.extend(&on_edge);
         }

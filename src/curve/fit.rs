@@ -8,7 +8,7 @@ use super::shape::{Bend, face_edges, uncertified};
 use crate::element::Order;
 use crate::element::triangle::straight_inner;
 use crate::mesh::{EdgeKey, FaceId, TriMesh};
-use kurbo::{ParamCurveNearest, Point, Vec2};
+use kurbo::{Point, Vec2};
 
 /// Bisection steps of the largest certified blend toward the curve (the
 /// blend then within 2^-30 of the largest). Introduced in ac447f1.
@@ -34,9 +34,6 @@ const FIT_LAST_STEP_REL: f64 = 1e-9;
 const FIT_MIN_GAIN: f64 = 1e-12;
 /// Samples of a Lagrange edge in [`edge_distance`]. Introduced in ac447f1.
 const SAMPLES: usize = 16;
-/// Smallest accuracy passed to kurbo's nearest-point search (an accuracy of 0
-/// would never end it). Introduced in ac447f1.
-const MIN_ACCURACY: f64 = 1e-300;
 
 /// How a failing curved edge ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -243,22 +240,17 @@ pub(super) fn fit_edge(
 }
 
 /// Largest distance, over samples of the Lagrange edge `a, inner.., b`, from the
-/// curve piece.
+/// curve piece, given as the distance to it (`Parent::distance`: a cubic's or a
+/// conic's nearest point, to the caller's accuracy).
 pub(super) fn edge_distance(
     a: Point,
     b: Point,
     inner: &[Point],
-    piece: &kurbo::CubicBez,
-    acc: f64,
+    distance: impl Fn(Point) -> f64,
 ) -> f64 {
-    let mut worst = 0.0f64;
-    for i in 0..=SAMPLES {
-        let s = i as f64 / SAMPLES as f64;
-        let p = lagrange_edge(a, b, inner, s);
-        let near = piece.nearest(p, acc.max(MIN_ACCURACY));
-        worst = worst.max(near.distance_sq.sqrt());
-    }
-    worst
+    (0..=SAMPLES)
+        .map(|i| distance(lagrange_edge(a, b, inner, i as f64 / SAMPLES as f64)))
+        .fold(0.0, f64::max)
 }
 
 /// The point at `s ∈ [0, 1]` of the Lagrange curve through `a`, `inner` (equally

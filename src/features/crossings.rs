@@ -17,7 +17,7 @@
 use super::Parent;
 use super::grid::Grid;
 use crate::params::Resolved;
-use kurbo::{ParamCurve, ParamCurveDeriv, Point, Rect, Vec2};
+use kurbo::{Point, Rect, Vec2};
 use std::collections::HashMap;
 
 /// Chords per piece for the search.
@@ -46,15 +46,13 @@ pub(super) struct Crossings {
 }
 
 fn deriv(p: &Parent, t: f64) -> Vec2 {
-    match p {
-        Parent::Cubic(c) => c.deriv().eval(t).to_vec2(),
-        Parent::Line(l) => l.p1 - l.p0,
-    }
+    p.deriv(t)
 }
 
+/// The bounding box of the piece's control hull (it contains the piece).
 fn control_box(p: &Parent, t: [f64; 2]) -> Rect {
     match p {
-        Parent::Cubic(_) => {
+        Parent::Cubic(_) | Parent::Conic(_) => {
             let c = p.restrict(t[0], t[1]);
             Rect::from_points(c.p0, c.p3).union_pt(c.p1).union_pt(c.p2)
         }

@@ -24,6 +24,11 @@ pub(crate) fn to_json(fs: &FeatureSet) -> Value {
             let parent = match s.parent {
                 Parent::Cubic(c) => json!({"kind": "cubic", "ctrl": ctrl(&c)}),
                 Parent::Line(l) => json!({"kind": "line", "ctrl": [pt(l.p0), pt(l.p1)]}),
+                Parent::Conic(c) => json!({
+                    "kind": "conic",
+                    "ctrl": [pt(c.p0), pt(c.p1), pt(c.p2)],
+                    "w": c.w,
+                }),
             };
             json!({
                 "ctrl": ctrl(&s.ctrl),

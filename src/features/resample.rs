@@ -5,7 +5,9 @@
 //! section is *eligible* for primary: its control polygon is no longer than l (so its arc
 //! is not either), its inner control points are within μ of the chord (so the curve is,
 //! being in their convex hull), the angle between its end tangents is below α (its turn,
-//! given the previous splits), and its curvature, sampled, is at most 2/l_m. A section
+//! given the previous splits), and its curvature, sampled, is at most 2/l_m. For a conic
+//! the control polygon is its hull ([`Parent::restrict`]: same ends and end tangents, the
+//! conic inside), so the same bounds hold, and the curvature is the conic's own. A section
 //! that breaks the curvature or turn condition when it is already no longer than μ (the
 //! part around a cusp or a curvature spike) is kept as a *non-eligible* section: it will be
 //! secondary. A section shorter than l_m (an inflection or crossing cut next to a curve's
@@ -57,11 +59,17 @@ fn end_tangent_angle(c: &CubicBez) -> f64 {
     angle_between(u, v)
 }
 
-/// Whether the sampled curvature stays within `kappa_max` (a non-finite value, at a
-/// zero-derivative point, does not).
-fn curvature_bounded(c: &CubicBez, kappa_max: f64) -> bool {
+/// Whether the curvature of `parent` on `[t0, t1]`, sampled, stays within `kappa_max` (a
+/// non-finite value, at a zero-derivative point, does not). A cubic's section is sampled
+/// on its own control polygon (the same curve), a conic's on the conic itself (its hull
+/// cubic has another curvature).
+fn curvature_bounded(parent: &Parent, t0: f64, t1: f64, ctrl: &CubicBez, kappa_max: f64) -> bool {
     (0..=CURVATURE_SAMPLES).all(|i| {
-        let k = c.curvature(i as f64 / CURVATURE_SAMPLES as f64);
+        let s = i as f64 / CURVATURE_SAMPLES as f64;
+        let k = match parent {
+            Parent::Conic(c) => c.curvature(t0 + s * (t1 - t0)),
+            Parent::Cubic(_) | Parent::Line(_) => ctrl.curvature(s),
+        };
         k.is_finite() && k.abs() <= kappa_max
     })
 }
@@ -89,7 +97,7 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                 });
             }
         }
-        Parent::Cubic(_) => {
+        Parent::Cubic(_) | Parent::Conic(_) => {
             let mut stack = vec![(t0, t1, 0u32)];
             // Depth-first, left half first, so sections come out in parameter order.
             while let Some((a, b, depth)) = stack.pop() {
@@ -97,7 +105,7 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
                 let len = polygon_length(&ctrl);
                 let shape_ok = len <= r.l && chord_deviation(&ctrl) <= r.mu;
                 let turn_ok = end_tangent_angle(&ctrl) < r.alpha;
-                let curvature_ok = curvature_bounded(&ctrl, 2.0 / r.l_min);
+                let curvature_ok = curvature_bounded(parent, a, b, &ctrl, 2.0 / r.l_min);
                 let m = 0.5 * (a + b);
                 let can_split =
                     depth < MAX_DEPTH && out.len() + stack.len() < MAX_SECTIONS && m > a && m < b;
@@ -182,5 +190,50 @@ mod tests {
                 .iter()
                 .all(|p| p.eligible)
         );
+    }
+
+    #[test]
+    fn exact_quarter_circle_is_cut_like_its_cubic_and_keeps_its_curvature() {
+        // The same halving as the cubic quarter (16 sections at the default l), and
+        // every section's ends on the circle, its hull around the arc.
+        let r = Params::DEFAULT.resolve(2.0 * 2f64.sqrt());
+        let w = std::f64::consts::FRAC_1_SQRT_2;
+        let c = crate::svg::drawing::Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
+        let ps = resample(&Parent::Conic(c), 0.0, 1.0, &r);
+        assert_eq!(ps.len(), 16);
+        assert_eq!(ps[0].ctrl.p0, c.p0);
+        assert_eq!(ps[15].ctrl.p3, c.p2);
+        for (i, p) in ps.iter().enumerate() {
+            assert!(p.eligible, "{p:?}");
+            assert_eq!(p.ctrl.p0, c.eval(p.t0));
+            assert!((p.ctrl.p0.to_vec2().hypot() - 1.0).abs() < 1e-15);
+            if i > 0 {
+                assert_eq!(p.t0, ps[i - 1].t1);
+            }
+        }
+        // Curvature 1 everywhere on the conic; its hull cubic (an elevated quadratic)
+        // goes from 0.5 at the ends to √2 in the middle: the conic's own is used.
+        let hull = Parent::Conic(c).restrict(0.0, 1.0);
+        assert!(curvature_bounded(
+            &Parent::Conic(c),
+            0.0,
+            1.0,
+            &hull,
+            1.0 + 1e-9
+        ));
+        assert!(!curvature_bounded(
+            &Parent::Conic(c),
+            0.0,
+            1.0,
+            &hull,
+            1.0 - 1e-9
+        ));
+        assert!(!curvature_bounded(
+            &Parent::Cubic(hull),
+            0.0,
+            1.0,
+            &hull,
+            1.0 + 1e-9
+        ));
     }
 }

@@ -13,6 +13,13 @@
 //!   no point moves by more than `tol` and points that were bit-identical stay so;
 //! - each curve end moves to its centre; a cubic's adjacent control point moves with it
 //!   (the end tangent is kept), so no point of the curve moves by more than `tol`;
+//! - a conic whose end moved stays an exact conic: it is mapped by the affine map that takes
+//!   its ends to their centres and moves its control point by the mean of the two end
+//!   moves (an affine image of a conic is the conic with the same weight and mapped
+//!   controls). A point of the curve is a combination of the controls with positive
+//!   weights summing to 1, so it moves by a convex combination of the three moves: at most
+//!   `tol`. A circle may become a slightly different ellipse, and the end tangents turn
+//!   slightly; a conic whose ends did not move is untouched, bit for bit;
 //! - a curve that is left with both ends on one centre and every control point within `tol`
 //!   of it is dropped (its neighbours' ends now meet at that centre), or becomes an isolated
 //!   point if nothing else ends there.
@@ -144,7 +151,6 @@ pub(super) fn snap(features: &[Feature], tol: f64) -> Snapped {
                 let tiny = a == b && [c.p1, c.p2].iter().all(|p| p.distance(ca) <= tol);
                 (FeatureGeom::Cubic(c), tiny)
             }
-            // CONIC-PLACEHOLDER: the features stage converts conics before snapping
             FeatureGeom::Conic(mut c) => {
                 let d0: Vec2 = moved(c.p0, ca);
                 let d2: Vec2 = moved(c.p2, cb);
@@ -305,5 +311,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_conic_with_a_moved_end_stays_a_conic_and_moves_at_most_tol() {
+        let tol = 1e-3;
+        let w = std::f64::consts::FRAC_1_SQRT_2;
+        let q = crate::svg::drawing::Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
+        // A line ending 4e-4 beside the conic's start: the conic's start moves there.
+        let l = Line::new((2.0, 0.0), (1.0004, 0.0003));
+        let s = snap(
+            &[feat(FeatureGeom::Line(l)), feat(FeatureGeom::Conic(q))],
+            tol,
+        );
+        let FeatureGeom::Conic(c) = s.features[1].1.geom else {
+            panic!("a conic expected: {s:?}");
+        };
+        assert_eq!(c.p0, l.p1);
+        assert_eq!(c.p2, q.p2);
+        assert_eq!(c.w, q.w);
+        assert!(((c.p1 - q.p1) - (l.p1 - q.p0) * 0.5).hypot() < 1e-15);
+        for k in 0..=64 {
+            let t = f64::from(k) / 64.0;
+            assert!(c.eval(t).distance(q.eval(t)) <= tol);
+        }
+        // Nothing moved: bit for bit.
+        let s = snap(&[feat(FeatureGeom::Conic(q))], tol);
+        assert_eq!(s.features[0].1.geom, FeatureGeom::Conic(q));
     }
 }

@@ -7,7 +7,13 @@
 //! the turn (the mean of the end tangents, negated when the turn exceeds 180°), until every
 //! piece turns less than 180°: after this, the turn of a piece is the angle between its end
 //! tangents.
+//!
+//! A conic of positive weight turns by less than 180° with constant-sign curvature (its
+//! derivative is a positive combination of `p1 − p0` and `p2 − p1`), so only the turn
+//! split applies, and its turn over any interval is the angle between the end tangents.
 
+use crate::mesh::angle_between;
+use crate::svg::drawing::Conic;
 use kurbo::common::solve_quadratic;
 use kurbo::{CubicBez, ParamCurve, ParamCurveDeriv, Vec2};
 use std::f64::consts::PI;
@@ -183,6 +189,80 @@ pub(super) fn split(c: &CubicBez) -> Splits {
     }
 }
 
+/// A positive multiple of the conic's derivative at `t`: `Q(t)` of `C′ = 2Q/D²`, with
+/// Bernstein coefficients `w(p1 − p0)`, `(p2 − p0)/2`, `w(p2 − p1)`.
+fn conic_tangent_coefficients(c: &Conic) -> [Vec2; 3] {
+    let (u, v) = (c.p1 - c.p0, c.p2 - c.p1);
+    [u * c.w, (u + v) * 0.5, v * c.w]
+}
+
+fn conic_tangent(q: &[Vec2; 3], t: f64) -> Vec2 {
+    let s = 1.0 - t;
+    q[0] * (s * s) + q[1] * (2.0 * s * t) + q[2] * (t * t)
+}
+
+/// The parameter in `(t0, t1)` where the conic's tangent bisects its turn there, if found.
+fn conic_bisecting_parameter(q: &[Vec2; 3], t0: f64, t1: f64) -> Option<f64> {
+    let (d0, d1) = (conic_tangent(q, t0), conic_tangent(q, t1));
+    if d0.hypot2() == 0.0 || d1.hypot2() == 0.0 {
+        return None;
+    }
+    // The turn is below 180°: the bisector is the sum of the unit end tangents.
+    let m = d0.normalize() + d1.normalize();
+    let (a, b, e) = (m.cross(q[0]), m.cross(q[1]), m.cross(q[2]));
+    solve_quadratic(a, 2.0 * (b - a), a - 2.0 * b + e)
+        .into_iter()
+        .filter(|&t| t > t0 && t < t1 && conic_tangent(q, t).dot(m) > 0.0)
+        .min_by(|x, y| {
+            (x - 0.5 * (t0 + t1))
+                .abs()
+                .total_cmp(&(y - 0.5 * (t0 + t1)).abs())
+        })
+}
+
+fn split_conic_turn(
+    q: &[Vec2; 3],
+    t0: f64,
+    t1: f64,
+    depth: u32,
+    out: &mut Vec<[f64; 2]>,
+    n: &mut usize,
+) {
+    let (d0, d1) = (conic_tangent(q, t0), conic_tangent(q, t1));
+    let turn = if d0.hypot2() == 0.0 || d1.hypot2() == 0.0 {
+        PI
+    } else {
+        angle_between(d0, d1)
+    };
+    if turn >= MAX_TURN && depth < MAX_TURN_DEPTH && t1 - t0 > 4.0 * T_MERGE {
+        if let Some(tm) = conic_bisecting_parameter(q, t0, t1) {
+            if tm > t0 + T_MERGE && tm < t1 - T_MERGE {
+                *n += 1;
+                split_conic_turn(q, t0, tm, depth + 1, out, n);
+                split_conic_turn(q, tm, t1, depth + 1, out, n);
+                return;
+            }
+        }
+    }
+    out.push([t0, t1]);
+}
+
+/// Split a (non-degenerate, non-straight, positive-weight) conic into pieces that each
+/// turn less than [`MAX_TURN`]: at most one cut, where the tangent bisects the turn, for
+/// the rare piece of a very eccentric ellipse that turns more (a circle's ≤ 90° pieces
+/// are never cut).
+pub(super) fn split_conic(c: &Conic) -> Splits {
+    let q = conic_tangent_coefficients(c);
+    let mut intervals = Vec::new();
+    let mut curvature_splits = 0;
+    split_conic_turn(&q, 0.0, 1.0, 0, &mut intervals, &mut curvature_splits);
+    Splits {
+        intervals,
+        inflection_splits: 0,
+        curvature_splits,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,5 +323,27 @@ mod tests {
             (turn - PI / 2.0).abs() < 1e-9 && sign > 0.0,
             "{turn} {sign}"
         );
+    }
+
+    #[test]
+    fn conics_split_only_where_they_turn_too_much() {
+        let w = std::f64::consts::FRAC_1_SQRT_2;
+        let quarter = Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
+        assert_eq!(split_conic(&quarter).intervals, vec![[0.0, 1.0]]);
+        // An affine image of a quarter circle turning 170°: one cut, where the tangent
+        // bisects the turn.
+        let a = kurbo::Affine::skew(80f64.to_radians().tan(), 0.0);
+        let c = quarter.transform(a);
+        let turn = angle_between(c.p1 - c.p0, c.p2 - c.p1);
+        assert!(turn > MAX_TURN, "{}", turn.to_degrees());
+        let s = split_conic(&c);
+        assert_eq!(s.intervals.len(), 2, "{s:?}");
+        assert_eq!(s.curvature_splits, 1);
+        let tm = s.intervals[0][1];
+        assert_eq!(s.intervals[1][0], tm);
+        let (t0, tm_d, t1) = (c.deriv(0.0), c.deriv(tm), c.deriv(1.0));
+        let (first, second) = (angle_between(t0, tm_d), angle_between(tm_d, t1));
+        assert!((first - second).abs() < 1e-9, "{first} {second}");
+        assert!((first + second - turn).abs() < 1e-9);
     }
 }

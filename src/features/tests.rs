@@ -3,9 +3,12 @@
 
 use super::*;
 use crate::params::{Length, Params};
+use crate::svg::drawing::Conic;
 use crate::svg::{Feature, ShapeId};
 use kurbo::{Rect, Vec2};
 use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 #[path = "../../tests/support/features_check.rs"]
 pub(crate) mod features_check;
@@ -361,6 +364,78 @@ fn checker_reports_tampered_sets() {
     assert!(check(&t).iter().any(|d| d.contains("chord")));
 }
 
+/// Whether `p` is within `tol` of the convex hull of `q` (inside one of the four
+/// triangles of its points, sides allowed `tol` of slack).
+fn inside_hull(p: Point, q: &[Point; 4], tol: f64) -> bool {
+    [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)]
+        .iter()
+        .any(|&(i, j, k)| {
+            let (a, b, c) = (q[i], q[j], q[k]);
+            let area = (b - a).cross(c - a);
+            if area == 0.0 {
+                return false;
+            }
+            let side = |u: Point, v: Point| {
+                area.signum() * (v - u).cross(p - u) / u.distance(v).max(1e-300)
+            };
+            side(a, b) >= -tol && side(b, c) >= -tol && side(c, a) >= -tol
+        })
+}
+
+#[test]
+fn conic_sections_cut_a_circle_like_its_cubics_and_place_nodes_by_angle() {
+    // The exact circle: the same 64 sections as the cubic one, ends on the circle.
+    let w = std::f64::consts::FRAC_1_SQRT_2;
+    let q = Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
+    let quarters: Vec<FeatureGeom> = (0..4)
+        .map(|k| FeatureGeom::Conic(q.transform(kurbo::Affine::rotate(f64::from(k) * FRAC_PI_2))))
+        .collect();
+    let mut quarters = quarters;
+    // Close the circle bit for bit (the rotations round the joints differently).
+    for k in 0..4 {
+        let next = match quarters[(k + 1) % 4] {
+            FeatureGeom::Conic(c) => c.p0,
+            _ => unreachable!("conics"),
+        };
+        if let FeatureGeom::Conic(c) = &mut quarters[k] {
+            c.p2 = next;
+        }
+    }
+    let (fs, _) = build(quarters, Params::DEFAULT);
+    assert_eq!(fs.primary.len(), 64, "{:?}", fs.counts);
+    assert_eq!(fs.counts.input_conics, 4);
+    assert_eq!(fs.counts.curvature_splits + fs.counts.inflection_splits, 0);
+    for s in &fs.primary {
+        assert!(matches!(s.parent, Parent::Conic(_)));
+        assert!((s.ctrl.p0.to_vec2().hypot() - 1.0).abs() < 1e-15);
+        // `along`: exact ends, inner points equally spaced in angle, either direction.
+        for t in [s.t, [s.t[1], s.t[0]]] {
+            let (a, b) = (s.parent.along(t, 0.0), s.parent.along(t, 1.0));
+            assert_eq!((a, b), (s.parent.eval(t[0]), s.parent.eval(t[1])));
+            let angle = |p: Point| p.to_vec2().atan2();
+            let step = (angle(b) - angle(a) + PI).rem_euclid(2.0 * PI) - PI;
+            for k in 1..3 {
+                let p = s.parent.along(t, f64::from(k) / 3.0);
+                assert!((p.to_vec2().hypot() - 1.0).abs() < 1e-15);
+                let got = (angle(p) - angle(a) + PI).rem_euclid(2.0 * PI) - PI;
+                assert!(
+                    (got - step * f64::from(k) / 3.0).abs() < 1e-13,
+                    "{got} vs {step}"
+                );
+            }
+        }
+    }
+    // A tampered hull is reported.
+    let mut t = fs.clone();
+    t.primary[5].ctrl.p1 = t.primary[5].ctrl.p0.lerp(t.primary[5].ctrl.p3, 0.4);
+    t.primary[5].ctrl.p2 = t.primary[5].ctrl.p0.lerp(t.primary[5].ctrl.p3, 0.6);
+    assert!(
+        check(&t).iter().any(|d| d.contains("hull")),
+        "{:?}",
+        check(&t)
+    );
+}
+
 // ---------- property test ----------
 
 fn coord() -> impl Strategy<Value = f64> {
@@ -380,11 +455,90 @@ fn geom() -> impl Strategy<Value = FeatureGeom> {
         1 => (point(), point(), point()).prop_map(|(a, b, c)| FeatureGeom::Cubic(CubicBez::new(a, c, b, a))),
         2 => (point(), point()).prop_map(|(a, b)| FeatureGeom::Line(Line::new(a, b))),
         1 => point().prop_map(FeatureGeom::Point),
+        // Conics of any positive weight, on the same coarse grid (collinear, coincident).
+        3 => (point(), point(), point(), weight()).prop_map(|(a, b, c, w)| FeatureGeom::Conic(Conic::new(a, b, c, w))),
     ]
+}
+
+fn weight() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(std::f64::consts::FRAC_1_SQRT_2),
+        Just(1.0),
+        1e-3..1.0f64,
+        1.0..4.0f64,
+    ]
+}
+
+/// An affine image of a circle arc (any start, any sweep up to a full turn, any
+/// non-degenerate linear part, any offset), as the loader's conic pieces.
+fn affine_arc() -> impl Strategy<Value = Vec<Conic>> {
+    (
+        -PI..PI,
+        prop_oneof![1e-3..2.0 * PI, Just(2.0 * PI), Just(FRAC_PI_2)],
+        (0.2..5.0f64, 0.2..5.0f64, -2.0..2.0f64, -PI..PI),
+        (-50.0..50.0f64, -50.0..50.0f64),
+    )
+        .prop_map(|(start, sweep, (rx, ry, skew, rot), (x, y))| {
+            let arc = kurbo::Arc {
+                center: Point::ZERO,
+                radii: Vec2::new(1.0, 1.0),
+                start_angle: start,
+                sweep_angle: sweep,
+                x_rotation: 0.0,
+            };
+            let a = kurbo::Affine::translate((x, y))
+                * kurbo::Affine::rotate(rot)
+                * kurbo::Affine::skew(skew, 0.0)
+                * kurbo::Affine::scale_non_uniform(rx, ry);
+            Conic::ellipse_arc(&arc, None, None)
+                .into_iter()
+                .map(|c| c.transform(a))
+                .collect()
+        })
 }
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Affine images of circle arcs through the features stage: the independent checker
+    /// holds (hull containment of every conic section included), every section's hull
+    /// contains its piece of the conic (dense samples), its ends are the conic's points at
+    /// its parameters, and consecutive sections (and pieces) share their ends bit for bit.
+    #[test]
+    fn affine_circle_arcs_keep_exact_hulls_and_shared_ends(pieces in affine_arc()) {
+        let d = drawing(pieces.iter().map(|c| FeatureGeom::Conic(*c)).collect());
+        let fs = FeatureSet::build(&d, &Params::DEFAULT.resolve(d.diagonal()));
+        let defects = check(&fs);
+        prop_assert!(defects.is_empty(), "{:#?}", defects);
+        prop_assert_eq!(fs.counts.input_conics, pieces.len());
+        prop_assert!(!fs.primary.is_empty());
+        for (i, s) in fs.primary.iter().enumerate() {
+            let Parent::Conic(c) = s.parent else {
+                return Err(TestCaseError::fail(format!("p{i}: not a conic parent")));
+            };
+            prop_assert_eq!(s.ctrl.p0, c.eval(s.t[0]));
+            prop_assert_eq!(s.ctrl.p3, c.eval(s.t[1]));
+            let hull = [s.ctrl.p0, s.ctrl.p1, s.ctrl.p2, s.ctrl.p3];
+            let size = s.ctrl.p0.distance(s.ctrl.p3) + 1e-300;
+            for k in 0..=32 {
+                let p = c.eval(s.t[0] + (s.t[1] - s.t[0]) * f64::from(k) / 32.0);
+                prop_assert!(inside_hull(p, &hull, 1e-12 * size), "p{}: {:?} outside {:?}", i, p, hull);
+            }
+            if let Some(n) = s.next {
+                let n = &fs.primary[n.0 as usize];
+                prop_assert_eq!(s.ctrl.p3, n.ctrl.p0);
+            }
+        }
+        // Sections of one conic come in parameter order; where they meet, bit for bit.
+        for w in fs.primary.windows(2) {
+            if w[0].parent == w[1].parent {
+                prop_assert!(w[0].t[1] <= w[1].t[0]);
+                if w[0].t[1] == w[1].t[0] {
+                    prop_assert_eq!(w[0].ctrl.p3, w[1].ctrl.p0);
+                }
+            }
+        }
+    }
 
     #[test]
     fn random_soups_keep_every_invariant(geoms in prop::collection::vec(geom(), 1..6)) {

@@ -84,6 +84,14 @@ fn jet(parent: &Parent, t: f64) -> CurveJet {
             d1: l.p1 - l.p0,
             d2: Vec2::ZERO,
         },
+        Parent::Conic(c) => {
+            let (d1, d2) = c.derivs(t);
+            CurveJet {
+                pos: parent.eval(t),
+                d1,
+                d2,
+            }
+        }
     }
 }
 

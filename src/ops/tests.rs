@@ -38,9 +38,17 @@ fn curve() -> CubicBez {
 /// A CDT of the unit box with a curved primary chain (two sections of one
 /// cubic, split at t = 0.5), a secondary polyline and random points.
 pub(crate) fn delaunay_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
+    delaunay_mesh_on(seed, energy, Parent::Cubic(curve()))
+}
+
+/// An exact conic arc over the same span as [`curve`] (a piece of an ellipse).
+fn conic_curve() -> crate::svg::drawing::Conic {
+    crate::svg::drawing::Conic::new((0.1, 0.3), (0.5, 0.42), (0.9, 0.3), 0.8)
+}
+
+/// [`delaunay_mesh`] with the primary chain on `parent`.
+fn delaunay_mesh_on(seed: u64, energy: EnergyRule, parent: Parent) -> (TriMesh, Context) {
     let mut rng = Rng(seed);
-    let c = curve();
-    let parent = Parent::Cubic(c);
     let sections = vec![
         CurveSection {
             parent,
@@ -332,6 +340,57 @@ fn random_ops_on_delaunay_meshes_keep_every_invariant() {
         "{total:?}"
     );
     assert!(total.rejected.contains_key(&Reject::Inversion), "{total:?}");
+}
+
+#[test]
+fn random_ops_on_a_conic_chain_keep_every_invariant() {
+    // The same runs on an exact conic parent: its vertices stay on the conic (split at
+    // the parameter midpoint, smoothing along its jet), its pieces' turns are measured
+    // on their hulls.
+    let mut total = Tally::default();
+    for seed in 0..4 {
+        let rule = if seed % 2 == 0 {
+            EnergyRule::Ignore
+        } else {
+            EnergyRule::NoWorseMax
+        };
+        let (mesh, ctx) = delaunay_mesh_on(seed, rule, Parent::Conic(conic_curve()));
+        let t = run_ops(mesh, &ctx, seed, 400);
+        for k in 0..7 {
+            total.applied[k] += t.applied[k];
+        }
+    }
+    assert!(total.applied[..4].iter().all(|&n| n > 5), "{total:?}");
+}
+
+#[test]
+fn smoothing_and_splitting_keep_vertices_on_a_conic() {
+    let (mut mesh, ctx) = delaunay_mesh_on(1, EnergyRule::Ignore, Parent::Conic(conic_curve()));
+    let (key, _, t) = primary_edges(&mesh)[0];
+    let Outcome::Applied(change) = try_split(&mut mesh, &ctx, key.lo, key.hi) else {
+        panic!("the split of a primary edge applies")
+    };
+    let m = change.new_vertex.expect("split adds a vertex");
+    let c = conic_curve();
+    assert_eq!(mesh.position(m), c.eval(0.5 * (t[0] + t[1])));
+    assert_eq!(on_curve::off_curve(&mesh, &ctx, m), Some(0.0));
+    let (mut mesh, ctx) = delaunay_mesh_on(3, EnergyRule::Ignore, Parent::Conic(conic_curve()));
+    let mut moved = 0;
+    let verts: Vec<VertexId> = mesh.vertices().collect();
+    for v in verts {
+        let Role::Primary { .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
+            continue;
+        };
+        if let Outcome::Applied(_) = try_smooth(&mut mesh, &ctx, v) {
+            let Role::Primary { t: t2, .. } = role(&mesh, v, &mesh.vertex_ring(v)) else {
+                panic!("still primary")
+            };
+            assert_eq!(mesh.position(v), c.eval(t2));
+            moved += 1;
+        }
+    }
+    assert!(moved > 0);
+    assert!(mesh.check().is_empty());
 }
 
 #[test]

@@ -19,7 +19,7 @@
 //! and also inside the control polygon of the cubic that elevates the
 //! polynomial quadratic with the same controls ([`Conic::hull_cubic`]).
 
-use kurbo::{Affine, CubicBez, Point, Vec2};
+use kurbo::{Affine, CubicBez, Nearest, Point, Vec2};
 use std::f64::consts::FRAC_PI_2;
 
 /// A rational quadratic Bézier in standard form (end weights 1, middle weight `w > 0`).
@@ -183,6 +183,73 @@ impl Conic {
         )
     }
 
+    /// The point of the curve nearest to `p`: its parameter and squared distance
+    /// (kurbo's [`kurbo::ParamCurveNearest`] contract; requires `w > 0`).
+    ///
+    /// `|C(t) − p|²` is stationary where `(C(t) − p)·C′(t) = 0`, and with
+    /// `C − p = A/D`, `C′ = 2Q/D²` (`A`, `Q` quadratic) that is the quartic
+    /// `A(t)·Q(t) = 0`: its roots in `[0, 1]`, the ends, and a few samples (a
+    /// safety net for a root the solver misses) are the candidates; the best is
+    /// polished by Newton steps on the quartic until a step moves the point by
+    /// less than `accuracy`.
+    pub fn nearest(&self, p: Point, accuracy: f64) -> Nearest {
+        let w = self.w;
+        // Power-basis coefficients of a quadratic given by Bernstein coefficients.
+        let power = |b0: Vec2, b1: Vec2, b2: Vec2| [b0, (b1 - b0) * 2.0, b0 - b1 * 2.0 + b2];
+        let a = power(self.p0 - p, (self.p1 - p) * w, self.p2 - p);
+        let (u, v) = (self.p1 - self.p0, self.p2 - self.p1);
+        let q = power(u * w, (u + v) * 0.5, v * w);
+        let mut g = [0.0; 5];
+        for (i, ai) in a.iter().enumerate() {
+            for (j, qj) in q.iter().enumerate() {
+                g[i + j] += ai.dot(*qj);
+            }
+        }
+        let dist2 = |t: f64| (self.eval(t) - p).hypot2();
+        let mut best = Nearest {
+            distance_sq: dist2(0.0),
+            t: 0.0,
+        };
+        let consider = |t: f64, best: &mut Nearest| {
+            if (0.0..=1.0).contains(&t) {
+                let d = dist2(t);
+                if d < best.distance_sq {
+                    *best = Nearest { distance_sq: d, t };
+                }
+            }
+        };
+        consider(1.0, &mut best);
+        for t in kurbo::common::solve_quartic(g[0], g[1], g[2], g[3], g[4]) {
+            consider(t, &mut best);
+        }
+        for k in 1..NEAREST_SAMPLES {
+            consider(f64::from(k) / f64::from(NEAREST_SAMPLES), &mut best);
+        }
+        // Newton on the quartic from the best candidate, keeping improvements only.
+        let mut t = best.t;
+        for _ in 0..NEAREST_NEWTON {
+            let (mut val, mut der) = (0.0, 0.0);
+            for k in (0..5).rev() {
+                der = der * t + val;
+                val = val * t + g[k];
+            }
+            if der == 0.0 || !der.is_finite() {
+                break;
+            }
+            let next = (t - val / der).clamp(0.0, 1.0);
+            if !next.is_finite() {
+                break;
+            }
+            let moved = (self.eval(next) - self.eval(t)).hypot();
+            t = next;
+            consider(t, &mut best);
+            if moved.partial_cmp(&accuracy) != Some(std::cmp::Ordering::Greater) {
+                break;
+            }
+        }
+        best
+    }
+
     /// Pieces of an ellipse arc, each at most 90° of the ellipse's parameter.
     ///
     /// `arc` is kurbo's centre parametrisation (from [`kurbo::Arc::from_svg_arc`], for
@@ -226,6 +293,11 @@ impl Conic {
             .collect()
     }
 }
+
+/// Samples of [`Conic::nearest`]'s safety net (plus both ends).
+const NEAREST_SAMPLES: u32 = 8;
+/// Newton steps of [`Conic::nearest`]'s polish.
+const NEAREST_NEWTON: usize = 8;
 
 /// The area between an ellipse arc of weight `w` and its chord, as a fraction of its
 /// control triangle's area: `(h − sin h cos h) cos h / sin³ h` with `w = cos h` (an
@@ -368,5 +440,47 @@ mod tests {
             let p = inv * c.eval(f64::from(i) / 16.0);
             assert!((p.to_vec2().hypot() - 1.0).abs() < 1e-14);
         }
+    }
+
+    #[test]
+    fn nearest_points_match_dense_sampling() {
+        let a = Affine::new([2.0, 0.5, -1.0, 3.0, 10.0, -4.0]);
+        let curves = [
+            quarter(),
+            quarter().transform(a),
+            quarter().subsegment(0.1, 0.35),
+            Conic::new((0.0, 0.0), (5.0, 0.01), (10.0, 0.0), 0.3),
+            Conic::new((0.0, 0.0), (1.0, 4.0), (2.0, 0.0), 2.5),
+        ];
+        for c in curves {
+            let [p0, p1, p2] = c.control_points();
+            for (i, p) in [
+                p0,
+                p1,
+                p2,
+                p0.midpoint(p2),
+                p1 + (p1 - p0),
+                Point::new(0.3, 0.7),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let n = c.nearest(p, 1e-13);
+                let brute = (0..=20_000)
+                    .map(|k| (c.eval(f64::from(k) / 20_000.0) - p).hypot2())
+                    .fold(f64::INFINITY, f64::min);
+                assert!((0.0..=1.0).contains(&n.t));
+                assert!((n.distance_sq - (c.eval(n.t) - p).hypot2()).abs() <= 1e-12);
+                assert!(
+                    n.distance_sq <= brute * (1.0 + 1e-9) + 1e-24,
+                    "{c:?} point {i}: {} > {brute}",
+                    n.distance_sq
+                );
+            }
+        }
+        // On the curve: distance 0 at the right parameter.
+        let c = quarter();
+        let n = c.nearest(c.eval(0.37), 1e-15);
+        assert!(n.distance_sq < 1e-28 && (n.t - 0.37).abs() < 1e-9, "{n:?}");
     }
 }

@@ -6,16 +6,79 @@
 
 use super::*;
 
-fn controls(p: &Parent) -> [Point; 4] {
+/// The parent curve, evaluated by the checker's own formulas.
+enum Curve {
+    /// Bézier control points (a line as a degree-elevated cubic).
+    Bezier([Point; 4]),
+    /// A rational quadratic: controls and middle weight.
+    Rational([Point; 3], f64),
+}
+
+fn curve_of(p: &Parent) -> Curve {
     match *p {
-        Parent::Cubic(c) => [c.p0, c.p1, c.p2, c.p3],
-        Parent::Line(l) => [
+        Parent::Cubic(c) => Curve::Bezier([c.p0, c.p1, c.p2, c.p3]),
+        Parent::Line(l) => Curve::Bezier([
             l.p0,
             l.p0.lerp(l.p1, 1.0 / 3.0),
             l.p0.lerp(l.p1, 2.0 / 3.0),
             l.p1,
-        ],
+        ]),
+        Parent::Conic(c) => Curve::Rational([c.p0, c.p1, c.p2], c.w),
     }
+}
+
+impl Curve {
+    /// Point, first and second derivative at `t`.
+    fn jet(&self, t: f64) -> (Point, Vec2, Vec2) {
+        match self {
+            Curve::Bezier(c) => (bez(c, t), bez_d(c, t), bez_dd(c, t)),
+            Curve::Rational(c, w) => {
+                // x = n / d with n, d quadratic: x' = (n' − x d') / d,
+                // x'' = (n'' − 2 x' d' − x d'') / d.
+                let s = 1.0 - t;
+                let h = [
+                    (c[0].to_vec2(), 1.0),
+                    (c[1].to_vec2() * *w, *w),
+                    (c[2].to_vec2(), 1.0),
+                ];
+                let b = [s * s, 2.0 * s * t, t * t];
+                let db = [-2.0 * s, 2.0 * (s - t), 2.0 * t];
+                let ddb = [2.0, -4.0, 2.0];
+                let mix = |k: &[f64; 3]| {
+                    (0..3).fold((Vec2::ZERO, 0.0), |(v, d), i| {
+                        (v + h[i].0 * k[i], d + h[i].1 * k[i])
+                    })
+                };
+                let ((n, d), (dn, dd), (ddn, ddd)) = (mix(&b), mix(&db), mix(&ddb));
+                let x = n / d;
+                let dx = (dn - x * dd) / d;
+                let ddx = (ddn - dx * (2.0 * dd) - x * ddd) / d;
+                (x.to_point(), dx, ddx)
+            }
+        }
+    }
+
+    fn point(&self, t: f64) -> Point {
+        self.jet(t).0
+    }
+}
+
+/// Distance from `p` to the triangle `a b c` (0 inside).
+fn pt_triangle(p: Point, a: Point, b: Point, c: Point) -> f64 {
+    let area = cross3(a, b, c);
+    let sides = [cross3(a, b, p), cross3(b, c, p), cross3(c, a, p)];
+    if area != 0.0 && sides.iter().all(|x| x * area >= 0.0) {
+        return 0.0;
+    }
+    pt_seg(p, a, b).min(pt_seg(p, b, c)).min(pt_seg(p, c, a))
+}
+
+/// Distance from `p` to the convex hull of four points (0 inside).
+fn pt_hull(p: Point, q: &[Point; 4]) -> f64 {
+    [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)]
+        .iter()
+        .map(|&(i, j, k)| pt_triangle(p, q[i], q[j], q[k]))
+        .fold(f64::INFINITY, f64::min)
 }
 
 pub(super) fn bez(c: &[Point; 4], t: f64) -> Point {
@@ -88,7 +151,7 @@ pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
     let mut bad = Vec::new();
     let mut items = Vec::new();
     for (i, s) in fs.primary.iter().enumerate() {
-        let pc = controls(&s.parent);
+        let pc = curve_of(&s.parent);
         let [t0, t1] = s.t;
         if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) {
             bad.push(format!("p{i}: empty interval {t0}..{t1}"));
@@ -96,16 +159,33 @@ pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
         let ts: Vec<f64> = (0..=N)
             .map(|k| t0 + (t1 - t0) * k as f64 / N as f64)
             .collect();
-        let pts: Vec<Point> = ts.iter().map(|&t| bez(&pc, t)).collect();
+        let pts: Vec<Point> = ts.iter().map(|&t| pc.point(t)).collect();
         let own = [s.ctrl.p0, s.ctrl.p1, s.ctrl.p2, s.ctrl.p3];
         let scale = 1e-9 * (r.d + pts[0].to_vec2().hypot());
-        for k in 0..=4 {
-            let u = k as f64 / 4.0;
-            let e = bez(&own, u).distance(bez(&pc, t0 + (t1 - t0) * u));
-            if e > scale {
-                bad.push(format!(
-                    "p{i}: ctrl is not the parent restricted (off by {e})"
-                ));
+        match &pc {
+            Curve::Bezier(_) => {
+                for k in 0..=4 {
+                    let u = k as f64 / 4.0;
+                    let e = bez(&own, u).distance(pc.point(t0 + (t1 - t0) * u));
+                    if e > scale {
+                        bad.push(format!(
+                            "p{i}: ctrl is not the parent restricted (off by {e})"
+                        ));
+                    }
+                }
+            }
+            Curve::Rational(..) => {
+                // A hull of the piece, with the piece's end points.
+                let e = own[0]
+                    .distance(pc.point(t0))
+                    .max(own[3].distance(pc.point(t1)));
+                if e > scale {
+                    bad.push(format!("p{i}: ctrl ends are off the conic by {e}"));
+                }
+                let out = pts.iter().map(|p| pt_hull(*p, &own)).fold(0.0, f64::max);
+                if out > scale {
+                    bad.push(format!("p{i}: the conic leaves its ctrl hull by {out}"));
+                }
             }
         }
         // Length.
@@ -140,14 +220,17 @@ pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
             // Constant-sign curvature and turn < α.
             let dets: Vec<f64> = ts
                 .iter()
-                .map(|&t| bez_d(&pc, t).cross(bez_dd(&pc, t)))
+                .map(|&t| {
+                    let (_, d, dd) = pc.jet(t);
+                    d.cross(dd)
+                })
                 .collect();
             let m = dets.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let tol = 1e-6 * m + 1e-300;
             if dets.iter().any(|v| *v > tol) && dets.iter().any(|v| *v < -tol) {
                 bad.push(format!("p{i}: curvature changes sign"));
             }
-            let tans: Vec<Vec2> = ts.iter().map(|&t| bez_d(&pc, t)).collect();
+            let tans: Vec<Vec2> = ts.iter().map(|&t| pc.jet(t).1).collect();
             if tans.iter().any(|v| v.hypot2() == 0.0) {
                 bad.push(format!("p{i}: zero derivative"));
             }
@@ -161,8 +244,8 @@ pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
             let kmax = ts
                 .iter()
                 .map(|&t| {
-                    let d = bez_d(&pc, t);
-                    d.cross(bez_dd(&pc, t)).abs() / d.hypot().powi(3)
+                    let (_, d, dd) = pc.jet(t);
+                    d.cross(dd).abs() / d.hypot().powi(3)
                 })
                 .fold(0.0, f64::max);
             if kmax > 1.5 * 2.0 / r.l_min {

@@ -3,14 +3,19 @@
 //!
 //! A section has constant-sign curvature (the feature stage splits at
 //! inflections), so the turn of a piece is the angle between the end tangents
-//! of its control polygon, the measure the feature stage bounds.
+//! of its control polygon, the measure the feature stage bounds. For a conic
+//! parent the control polygon is its hull ([`Parent::restrict`]), which has the
+//! conic's own end tangents, so the turn is the conic's exactly.
+//!
+//! [`Parent::restrict`]: crate::features::Parent::restrict
 
 use super::super::Context;
 use crate::mesh::angle_between;
 use kurbo::CubicBez;
 
-/// Angle (radians, in `[0, π]`) between the end tangents of a cubic; π when a
-/// tangent cannot be found.
+/// Angle (radians, in `[0, π]`) between the end tangents of a cubic control
+/// polygon (a cubic piece, or a conic piece's hull); π when a tangent cannot be
+/// found.
 pub(crate) fn turn(c: &CubicBez) -> f64 {
     let tangent = |a: kurbo::Point, b: kurbo::Point, d: kurbo::Point| {
         let t = b - a;

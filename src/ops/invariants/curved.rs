@@ -4,9 +4,11 @@
 //! keeping each primary edge's turn below α.
 //!
 //! A triangle's shape is read off the mesh: an edge is curved when it carries a
-//! primary tag whose section lies on a cubic parent (edges on straight parents
-//! stay straight); the curved edge takes its exact curve piece
-//! (`element::triangle::piece_inner`). A triangle passes when it has at
+//! primary tag whose section lies on a curved (cubic or conic) parent (edges on
+//! straight parents stay straight); the curved edge takes its exact curve piece
+//! (`element::triangle::piece_inner`: its inner nodes are points of the parent
+//! at equal steps of its natural parameter, `Parent::along`; a conic's are
+//! exact and equally spaced in its angle). A triangle passes when it has at
 //! most one curved edge and its element is certified
 //! ([`crate::element::jacobian::certify_element`]).
 
@@ -25,14 +27,14 @@ pub(crate) fn primary(mesh: &TriMesh, key: EdgeKey) -> Option<(u32, [f64; 2])> {
         })
 }
 
-/// Whether the section lies on a cubic (not a straight) parent.
-pub(crate) fn on_cubic(ctx: &Context, section: u32) -> bool {
+/// Whether the section lies on a curved (cubic or conic, not a straight) parent.
+pub(crate) fn on_curved(ctx: &Context, section: u32) -> bool {
     ctx.section(section).is_some_and(|s| !s.parent.is_line())
 }
 
-/// The tag of a primary edge on a cubic parent: the edges that are curved.
+/// The tag of a primary edge on a curved parent: the edges that are curved.
 pub(crate) fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<(u32, [f64; 2])> {
-    primary(mesh, key).filter(|&(section, _)| on_cubic(ctx, section))
+    primary(mesh, key).filter(|&(section, _)| on_curved(ctx, section))
 }
 
 /// The exact inner nodes (from `key.lo` to `key.hi`) of a curved edge, or
@@ -46,8 +48,8 @@ pub(crate) fn exact_inner(
     let (section, t) = curved_tag(mesh, ctx, key)?;
     let parent = ctx.section(section)?.parent;
     Some(element::piece_inner(
-        |t| parent.eval(t),
-        t,
+        |s| parent.along(t, s),
+        [0.0, 1.0],
         mesh.position(key.lo),
         mesh.position(key.hi),
         order,

@@ -14,10 +14,9 @@ use std::collections::HashMap;
 
 /// The optimized linear mesh of a small drawing with curves (a disk, and a
 /// rounded shape of cubics and lines), with its context in curved mode.
-fn curved_mode_mesh(svg: &[u8], order: Order) -> (TriMesh, Context) {
-    let drawing = crate::svg::load_bytes(svg).expect("drawing loads");
+fn curved_mode_mesh(drawing: &crate::Drawing, order: Order) -> (TriMesh, Context) {
     let params = crate::Params::DEFAULT.with_l(crate::Length::Rel(0.15));
-    let (mut mesh, _, mut ctx) = crate::pipeline::bsp_stage(&drawing, &params).expect("bsp");
+    let (mut mesh, _, mut ctx) = crate::pipeline::bsp_stage(drawing, &params).expect("bsp");
     let resolved = params.resolve(drawing.diagonal());
     crate::optimize::optimize(
         &mut mesh,
@@ -50,6 +49,32 @@ fn uncertified_faces(mesh: &TriMesh, ctx: &Context, order: Order) -> Vec<[Vertex
 
 #[test]
 fn random_ops_in_curved_mode_keep_every_element_certified() {
+    run_curved_ops(&[]);
+}
+
+/// The same runs on an exact disk of four conics (a hand-built drawing).
+#[test]
+fn random_ops_in_curved_mode_on_exact_conics_keep_every_element_certified() {
+    let drawing = super::conics::drawing_of(vec![crate::svg::Shape {
+        svg_id: Some("disk".into()),
+        element_index: 0,
+        paint_order: 0,
+        filled: true,
+        stroked: false,
+        fill_rule: crate::svg::FillRule::NonZero,
+        fill_colour: None,
+        subpaths: vec![super::conics::disk_subpath()],
+    }]);
+    run_curved_ops(&[
+        (drawing.clone(), Order::Cubic, EnergyRule::NoWorseMax),
+        (drawing.clone(), Order::Cubic, EnergyRule::Ignore),
+        (drawing, Order::Quadratic, EnergyRule::Ignore),
+    ]);
+}
+
+/// Random collapses, swaps and smoothings in curved mode on the drawings of
+/// `cases` (the SVG cases below when empty), each checked.
+fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
     let disk = br#"<svg xmlns="http://www.w3.org/2000/svg" width="100" height="100">
         <circle cx="50" cy="50" r="40" fill="black"/></svg>"#;
     let blob = br#"<svg xmlns="http://www.w3.org/2000/svg" width="120" height="80">
@@ -57,17 +82,22 @@ fn random_ops_in_curved_mode_keep_every_element_certified() {
         <path d="M 30 60 L 90 60" stroke="black" fill="none"/></svg>"#;
     let mut applied = [0usize; 4];
     let mut rejected: HashMap<Reject, usize> = HashMap::new();
-    for (seed, (svg, order, energy)) in [
-        (&disk[..], Order::Cubic, EnergyRule::NoWorseMax),
-        (&disk[..], Order::Cubic, EnergyRule::Ignore),
-        (&blob[..], Order::Cubic, EnergyRule::NoWorseMax),
-        (&blob[..], Order::Cubic, EnergyRule::Ignore),
-        (&blob[..], Order::Quadratic, EnergyRule::Ignore),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let (mesh, ctx) = curved_mode_mesh(svg, order);
+    let load = |svg: &[u8]| crate::svg::load_bytes(svg).expect("drawing loads");
+    let svg_cases = [
+        (load(&disk[..]), Order::Cubic, EnergyRule::NoWorseMax),
+        (load(&disk[..]), Order::Cubic, EnergyRule::Ignore),
+        (load(&blob[..]), Order::Cubic, EnergyRule::NoWorseMax),
+        (load(&blob[..]), Order::Cubic, EnergyRule::Ignore),
+        (load(&blob[..]), Order::Quadratic, EnergyRule::Ignore),
+    ];
+    let cases = if cases.is_empty() {
+        &svg_cases[..]
+    } else {
+        cases
+    };
+    for (seed, (drawing, order, energy)) in cases.iter().enumerate() {
+        let (order, energy) = (*order, *energy);
+        let (mesh, ctx) = curved_mode_mesh(drawing, order);
         let (mut mesh, ctx) = (mesh, Context { energy, ..ctx });
         let start = uncertified_faces(&mesh, &ctx, order);
         let mut rng = Rng(seed as u64 ^ 0x5eed);

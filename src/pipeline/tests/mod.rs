@@ -16,6 +16,7 @@
 mod support;
 
 mod bsp_pipeline;
+mod conics;
 mod curved_ops;
 mod curving;
 mod features_devset;
