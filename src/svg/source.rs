@@ -144,7 +144,8 @@ pub(super) struct Source<'a, 'input> {
     doc: &'a Document<'input>,
     /// The prefix of private ids, if any were added.
     private_prefix: Option<String>,
-    /// Every id → its elements, in document order (duplicates kept).
+    /// Every id → its elements, in document order (duplicates kept; a reference
+    /// resolves to the first, as in usvg).
     by_id: HashMap<&'a str, Vec<Node<'a, 'input>>>,
     /// A style sheet declares `transform` (CSS transforms are presentation
     /// properties that usvg applies): transforms are then not read at all.
@@ -224,9 +225,9 @@ impl<'a, 'input> Source<'a, 'input> {
                     .find(|a| a.name() == "href" && a.namespace() == Some(XLINK_NS))
             })?;
         let id = svgtypes::IRI::from_str(link.value()).ok()?.0;
-        self.doc
-            .descendants()
-            .find(|n| n.attribute("id") == Some(id))
+        self.by_id
+            .get(id)
+            .and_then(|nodes| nodes.first().copied())
             .filter(|n| is_svg(*n))
     }
 
