@@ -462,8 +462,55 @@ mod property {
         ]
     }
 
+    /// A basic shape with random (sometimes zero, negative or clamped) sizes and radii.
+    fn basic_shape() -> impl Strategy<Value = String> {
+        prop_oneof![
+            (
+                num(),
+                num(),
+                radius(),
+                radius(),
+                proptest::option::of(radius()),
+                proptest::option::of(num())
+            )
+                .prop_map(|(x, y, w, h, rx, ry)| {
+                    let rx = rx.map_or(String::new(), |v| format!(r#" rx="{v}""#));
+                    let ry = ry.map_or(String::new(), |v| format!(r#" ry="{v}""#));
+                    format!(r#"<rect x="{x}" y="{y}" width="{w}" height="{h}"{rx}{ry}/>"#)
+                }),
+            (num(), num(), radius())
+                .prop_map(|(x, y, r)| format!(r#"<circle cx="{x}" cy="{y}" r="{r}"/>"#)),
+            (num(), num(), radius(), radius()).prop_map(|(x, y, rx, ry)| format!(
+                r#"<ellipse cx="{x}" cy="{y}" rx="{rx}" ry="{ry}"/>"#
+            )),
+            (num(), num(), num(), num()).prop_map(|(a, b, c, d)| format!(
+                r#"<line x1="{a}" y1="{b}" x2="{c}" y2="{d}" stroke="black"/>"#
+            )),
+            proptest::collection::vec((num(), num()), 1..6).prop_map(|pts| {
+                let pts: Vec<String> = pts.iter().map(|(x, y)| format!("{x},{y}")).collect();
+                format!(r#"<polygon points="{}"/>"#, pts.join(" "))
+            }),
+        ]
+    }
+
     proptest! {
         #![proptest_config(config())]
+
+        /// Random basic shapes under random transforms: reconstructed, never a fallback.
+        #[test]
+        fn random_basic_shapes_are_reconstructed(
+            shapes in proptest::collection::vec(basic_shape(), 1..5),
+            outer in proptest::collection::vec(transform(), 0..3),
+        ) {
+            let body = format!(r#"<g transform="{}">{}</g>"#, outer.join(" "), shapes.join(""));
+            match load_with_precision(svg(&body).as_bytes(), Units::User, 1.0) {
+                Ok((drawing, p)) => {
+                    prop_assert_eq!(p.fallbacks(), 0, "{} {:?} {:?}", body, p, drawing.warnings);
+                    prop_assert_eq!(p.exact, drawing.shapes.len());
+                }
+                Err(e) => prop_assert!(matches!(e, Error::NoGeometry), "{}: {}", body, e),
+            }
+        }
 
         /// Random paths under random transform chains (groups, a `<use>` with x/y,
         /// a nested `<svg>`): the f64 reconstruction agrees with usvg (the loader
