@@ -52,7 +52,8 @@ fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
 #[test]
 fn a_drawing_in_millimetres_meshes_in_millimetres() {
     let (mm, mesh) = meshed(A4_MM, &linear(Units::User, 1.0));
-    assert_rel(mm, 5000.0, 1e-9, "user units");
+    // the document's numbers in f64: exact up to the area sum's rounding
+    assert_rel(mm, 5000.0, 1e-12, "user units");
     // the document's numbers, y flipped: x in [10, 110], y in [-70, -20]
     for p in &mesh.nodes {
         assert!(
@@ -68,9 +69,9 @@ fn a_drawing_in_millimetres_meshes_in_millimetres() {
         &Params::DEFAULT.with_stop_after(Some(Stage::Optimize)),
     );
     assert_eq!(default, mm);
-    // px: 71 424.14...; usvg maps the viewBox in f32, hence the 1e-6
+    // px: 71 424.14...; the root viewBox mapping is computed in f64 too
     let (px, _) = meshed(A4_MM, &linear(Units::Px, 1.0));
-    assert_rel(px, 5000.0 * PX_PER_MM * PX_PER_MM, 1e-6, "px");
+    assert_rel(px, 5000.0 * PX_PER_MM * PX_PER_MM, 1e-12, "px");
     assert!((px - 71_424.0).abs() < 1.0);
 }
 

@@ -9,6 +9,7 @@
 //! stack; a panic inside usvg becomes a [`Error::NotSvg`] instead of unwinding
 //! into the caller.
 
+use super::source::{self, Source};
 use super::viewport::RootViewBox;
 use crate::{Error, Result};
 use std::collections::HashSet;
@@ -54,24 +55,47 @@ impl TextElement {
     }
 }
 
-/// Parse `data` into a usvg tree plus the facts of the XML pre-pass.
-pub(super) fn parse(data: &[u8]) -> Result<(usvg::Tree, XmlFacts)> {
+/// Everything the loader learned from one document: usvg's tree, the facts of
+/// the XML pre-pass, and the source document itself (with private ids, see
+/// [`Source`]).
+pub(super) struct Parsed<'a, 'input> {
+    /// usvg's render tree.
+    pub(super) tree: usvg::Tree,
+    /// What the XML pre-pass learned.
+    pub(super) facts: XmlFacts,
+    /// The source document, for the f64 geometry.
+    pub(super) source: Source<'a, 'input>,
+}
+
+/// Parse `data` and run `work` on the result, on a thread with a large stack.
+///
+/// The usvg tree borrows nothing, but the source document borrows its text, so
+/// the work that needs both runs inside this call.
+pub(super) fn parse<R, F>(data: &[u8], work: F) -> Result<R>
+where
+    R: Send,
+    F: FnOnce(&Parsed<'_, '_>) -> Result<R> + Send,
+{
     let text = decode(data)?;
     let fontdb = font_database();
-    let work = move || parse_text(&text, fontdb);
-    let spawned = std::thread::Builder::new()
-        .name("triwild-svg-parse".into())
-        .stack_size(PARSE_STACK_BYTES)
-        .spawn(work);
-    match spawned {
-        Ok(handle) => handle.join().unwrap_or_else(|_| {
-            Err(Error::NotSvg(
-                "the SVG parser (usvg) crashed on this input".into(),
-            ))
-        }),
-        // No thread available: parse on the caller's stack.
-        Err(_) => parse_text(&decode(data)?, font_database()),
-    }
+    let job = move || parse_text(&text, fontdb, work);
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .name("triwild-svg-parse".into())
+            .stack_size(PARSE_STACK_BYTES)
+            .spawn_scoped(scope, job);
+        match spawned {
+            Ok(handle) => handle.join().unwrap_or_else(|_| {
+                Err(Error::NotSvg(
+                    "the SVG loader crashed on this input (usvg or triwild: a bug)".into(),
+                ))
+            }),
+            // No thread available: not worth a second attempt on a small stack.
+            Err(e) => Err(Error::NotSvg(format!(
+                "cannot start the SVG parsing thread: {e}"
+            ))),
+        }
+    })
 }
 
 /// Bytes → text, recognising common non-SVG inputs on the way.
@@ -139,14 +163,13 @@ fn utf16_units(data: &[u8]) -> Option<Vec<u16>> {
     )
 }
 
-/// Text → XML document → checks → usvg tree.
-fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, XmlFacts)> {
-    let xml_opt = roxmltree::ParsingOptions {
-        allow_dtd: true,
-        ..Default::default()
-    };
-    let doc = roxmltree::Document::parse_with_options(text, xml_opt)
-        .map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
+/// Text → XML document → checks → private ids → usvg tree → `work`.
+fn parse_text<R>(
+    text: &str,
+    fontdb: Arc<fontdb::Database>,
+    work: impl FnOnce(&Parsed<'_, '_>) -> Result<R>,
+) -> Result<R> {
+    let doc = parse_xml(text).map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
     let root = doc.root_element();
     let name = root.tag_name();
     if !name.name().eq_ignore_ascii_case("svg") || !matches!(name.namespace(), None | Some(SVG_NS))
@@ -162,7 +185,34 @@ fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, 
         )));
     }
     check_numbers(&doc)?;
-    let facts = xml_facts(&doc);
+    // The same document with a private id on every anonymous shape and <use>;
+    // should it not parse (it always should), the original is used and the
+    // anonymous paths keep usvg's geometry.
+    if let Some((marked, prefix)) = source::with_private_ids(text, &doc) {
+        if let Ok(marked_doc) = parse_xml(&marked) {
+            return convert(&marked_doc, Some(prefix), fontdb, work);
+        }
+    }
+    convert(&doc, None, fontdb, work)
+}
+
+/// The XML parse, with DTDs allowed (usvg's own settings).
+fn parse_xml(text: &str) -> std::result::Result<roxmltree::Document<'_>, roxmltree::Error> {
+    let xml_opt = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    roxmltree::Document::parse_with_options(text, xml_opt)
+}
+
+/// A checked XML document → usvg tree → `work`.
+fn convert<R>(
+    doc: &roxmltree::Document<'_>,
+    private_prefix: Option<String>,
+    fontdb: Arc<fontdb::Database>,
+    work: impl FnOnce(&Parsed<'_, '_>) -> Result<R>,
+) -> Result<R> {
+    let facts = xml_facts(doc);
     let opt = usvg::Options {
         fontdb,
         image_href_resolver: usvg::ImageHrefResolver {
@@ -173,8 +223,12 @@ fn parse_text(text: &str, fontdb: Arc<fontdb::Database>) -> Result<(usvg::Tree, 
         ..usvg::Options::default()
     };
     let tree =
-        usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| Error::NotSvg(usvg_error_message(&e)))?;
-    Ok((tree, facts))
+        usvg::Tree::from_xmltree(doc, &opt).map_err(|e| Error::NotSvg(usvg_error_message(&e)))?;
+    work(&Parsed {
+        tree,
+        facts,
+        source: Source::new(doc, private_prefix),
+    })
 }
 
 /// usvg's error, made readable.

@@ -5,18 +5,33 @@
 //!
 //! - every drawable element (paths, basic shapes, `<use>`, nested `<svg>`, CSS
 //!   styling, text when a font is found) becomes one [`Shape`] per usvg path, made
-//!   of straight segments and cubic Béziers (quadratics are elevated exactly,
-//!   arcs arrive from usvg as cubics), after all transforms (each path's absolute
-//!   transform applied in f64 to usvg's f32 data), y flipped (y = −y_svg);
+//!   of straight segments, cubic Béziers (quadratics are elevated exactly) and
+//!   exact conic pieces ([`drawing::Conic`]: arcs, `<circle>`, `<ellipse>`,
+//!   rounded `<rect>` corners, at most 90° each), after all transforms, y flipped
+//!   (y = −y_svg);
+//! - geometry is f64 from the document's text: usvg supplies structure, styles,
+//!   `<use>`, CSS, visibility and text, and each of its paths is matched to its
+//!   source element (`source.rs`: private ids on anonymous shapes and `<use>`
+//!   elements, never shown to a user) and re-read in f64 (`geometry.rs`: path
+//!   data with `svgtypes`, arcs kept as arcs, basic shapes by SVG's rules), its
+//!   transform chain composed in f64 (`transform`s, `<use>` x/y, nested `<svg>` and
+//!   `<symbol>` viewBox mappings; lengths in absolute units converted exactly).
+//!   Each reconstruction is checked against usvg's own f32 path (`reconstruct.rs`);
+//!   where it disagrees or needs context this reader lacks (lengths in %, em or
+//!   ex, CSS transforms, a transform on the root `<svg>`), the path keeps usvg's
+//!   f32 data with its absolute transform applied in f64, and one warning in
+//!   [`Drawing::warnings`] counts such paths by reason. Text glyph outlines and
+//!   marker contents come from fonts and usvg: they are always single precision
+//!   (their arcs are cubics), without a warning;
 //! - coordinates are in [`Units`]: by default the user units of the root
 //!   `viewBox`, the numbers written in the document (an Inkscape drawing in mm
-//!   comes out in mm): usvg folds the root `viewBox` → `width`/`height` mapping
-//!   into every absolute transform, and `viewport.rs` undoes it once, in f64
-//!   (nested `<svg>` and `<use>` keep their own transforms; a `transform` on the
-//!   root `<svg>` stays, expressed in user units). [`Units::Px`] keeps the root
+//!   comes out in mm): the root `viewBox` → `width`/`height` mapping is not
+//!   applied (on the f32 fallback, where usvg folds it into every absolute
+//!   transform, `viewport.rs` undoes it once, in f64; a `transform` on the root
+//!   `<svg>` stays, expressed in user units). [`Units::Px`] gives the root
 //!   viewport's CSS px (96 per inch), as usvg and the reference's nanosvg give
-//!   them. Without a root `viewBox` both are the same. A `scale` then multiplies
-//!   every coordinate;
+//!   them, the root mapping computed in f64. Without a root `viewBox` both are
+//!   the same. A `scale` then multiplies every coordinate;
 //! - zero-length segments are dropped; a subpath with no segment left is an
 //!   isolated point (a path that is only `M x y` is dropped by usvg, as by
 //!   browsers and nanosvg; a trailing `M` after drawing commands is kept);
@@ -34,14 +49,19 @@
 
 mod conic;
 pub(crate) mod drawing;
+mod geometry;
 mod load;
 mod outline;
+mod reconstruct;
 mod soup;
+mod source;
 mod viewport;
 
 pub(crate) use drawing::{
     Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
+
+pub(crate) use reconstruct::Precision;
 
 use crate::units::Units;
 use crate::{Error, Result};
@@ -125,19 +145,38 @@ pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
 ///   included), a drawing too small for its distance from the origin, or (in
 ///   user units) a root `viewBox` whose mapping to the viewport cannot be undone.
 pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing> {
+    load_with_precision(data, units, scale).map(|(drawing, _)| drawing)
+}
+
+/// [`load_bytes_with`], and how the paths came out (f64 from the document's
+/// text, or usvg's single precision and why).
+///
+/// # Errors
+/// As [`load_bytes_with`].
+pub(crate) fn load_with_precision(
+    data: &[u8],
+    units: Units,
+    scale: f64,
+) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
-    let (tree, facts) = load::parse(data)?;
-    let frame = viewport::Frame::new(units, scale, facts.root_view_box, tree.size())?;
-    let outlines = outline::collect(&tree, &facts, &frame)?;
+    let outlines = load::parse(data, |parsed| {
+        let frame =
+            viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
+        let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
+        outline::collect(parsed, &frame, map)
+    })?;
     let drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
     tracing::debug!(
         shapes = drawing.shapes.len(),
         features = drawing.features.len(),
         warnings = drawing.warnings.len(),
+        exact_paths = outlines.precision.exact,
+        single_precision_paths = outlines.precision.fallbacks(),
+        glyph_paths = outlines.precision.glyphs,
         "svg loaded"
     );
-    Ok(drawing)
+    Ok((drawing, outlines.precision))
 }
 
 #[cfg(test)]

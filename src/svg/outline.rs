@@ -1,28 +1,58 @@
-//! usvg tree → [`Shape`]s: one shape per usvg path (text glyphs included), its
-//! absolute transform and the output [`Frame`] applied in f64, y flipped,
-//! quadratics elevated to cubics, zero-length segments dropped.
+//! usvg tree → [`Shape`]s: one shape per usvg path (text glyphs included), in
+//! output coordinates (y flipped), quadratics elevated to cubics, zero-length
+//! segments dropped.
+//!
+//! Each path's geometry is re-derived in f64 from its source element
+//! (`reconstruct.rs`); when that is not possible, or disagrees with usvg, the
+//! path keeps usvg's f32 data with its absolute transform and the output
+//! [`Frame`] applied in f64 (text glyphs and markers always do).
 
+use super::conic::Conic;
 use super::drawing::{FillRule, Segment, Shape, Subpath};
-use super::load::XmlFacts;
+use super::load::{Parsed, XmlFacts};
+use super::reconstruct::{self, MARKER, OutputMap, Precision};
+use super::source::{Candidate, Source, Unsupported};
 use super::viewport::Frame;
 use crate::{Error, Result};
-use kurbo::{CubicBez, Line, Point};
+use kurbo::{Affine, CubicBez, Line, Point};
 use std::collections::HashSet;
 use usvg::tiny_skia_path::PathSegment;
+
+/// How many candidates of a `<use>` instance a path is tried against, from the
+/// instance's cursor on (usvg skips invisible elements; ids do not survive into
+/// instances, so their paths are matched in order).
+const INSTANCE_WINDOW: usize = 64;
 
 /// Shapes in paint order plus warnings about what was skipped.
 #[derive(Debug, Default)]
 pub(super) struct Outlines {
     /// One shape per usvg path, in paint (document) order.
     pub(super) shapes: Vec<Shape>,
-    /// Skipped text, ignored images and filters.
+    /// Skipped text, ignored images and filters, paths kept in single precision.
     pub(super) warnings: Vec<String>,
+    /// How the paths came out.
+    pub(super) precision: Precision,
+}
+
+/// Where a usvg node sits: in the document, in a `<use>` instance (index into the
+/// walk's instances), or in a text element's glyph outlines.
+#[derive(Clone, Copy, Debug)]
+enum Scope {
+    Document,
+    Instance(usize),
+    Text,
+}
+
+/// The shape instances a `<use>` draws, and how far its paths have matched them.
+struct Instance<'a, 'input> {
+    candidates: Vec<Candidate<'a, 'input>>,
+    cursor: usize,
 }
 
 /// A pending step of the tree walk.
 enum Step<'a> {
     /// Visit a node; the string is the id inherited from a named `<use>` or `<text>` ancestor.
-    Visit(&'a usvg::Node, Option<&'a str>),
+    Visit(&'a usvg::Node, Option<&'a str>, Scope),
     /// All glyph paths of the text node whose walk began at shape count `.1` are done.
     TextDone(&'a usvg::Text, usize),
 }
@@ -32,47 +62,69 @@ enum Step<'a> {
 /// # Errors
 /// [`Error::BadCoordinate`] when a coordinate is not finite or exceeds
 /// [`super::Drawing::MAX_COORD`] after transforms.
-pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts, frame: &Frame) -> Result<Outlines> {
+pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) -> Result<Outlines> {
+    let (tree, facts, source) = (&parsed.tree, &parsed.facts, &parsed.source);
     let mut out = Outlines::default();
     let mut images = 0usize;
     let mut filters = 0usize;
     let mut texts_with_outline: Vec<&str> = Vec::new();
+    let mut instances: Vec<Instance<'_, '_>> = Vec::new();
     let mut stack: Vec<Step<'_>> = Vec::new();
     if !tree.root().filters().is_empty() {
         filters += 1;
     }
     for node in tree.root().children().iter().rev() {
-        stack.push(Step::Visit(node, None));
+        stack.push(Step::Visit(node, None, Scope::Document));
     }
     while let Some(step) = stack.pop() {
         match step {
-            Step::Visit(usvg::Node::Group(g), inherited) => {
+            Step::Visit(usvg::Node::Group(g), inherited, scope) => {
                 if !g.filters().is_empty() {
                     filters += 1;
                 }
                 let inherited = if facts.use_ids.contains(g.id()) {
-                    Some(g.id())
+                    source.public(g.id()).or(inherited)
                 } else {
                     inherited
                 };
+                let mut scope = scope;
+                if matches!(scope, Scope::Document) {
+                    let uses = source.uses_with_id(g.id());
+                    if !uses.is_empty() {
+                        scope = Scope::Instance(instances.len());
+                        instances.push(Instance {
+                            candidates: source.expand_uses(&uses),
+                            cursor: 0,
+                        });
+                    }
+                }
                 for child in g.children().iter().rev() {
-                    stack.push(Step::Visit(child, inherited));
+                    stack.push(Step::Visit(child, inherited, scope));
                 }
             }
-            Step::Visit(usvg::Node::Path(p), inherited) => {
-                let id = non_empty(p.id()).or(inherited);
-                out.shapes
-                    .push(convert_path(p, out.shapes.len(), id, frame)?);
+            Step::Visit(usvg::Node::Path(p), inherited, scope) => {
+                let id = source.public(p.id()).or(inherited);
+                let mut shape = convert_path(p, out.shapes.len(), id, frame)?;
+                match exact_subpaths(p, scope, source, &mut instances, map, &shape.subpaths) {
+                    Ok(subpaths) => {
+                        shape.subpaths = subpaths;
+                        check_coordinates(&shape)?;
+                        out.precision.exact += 1;
+                    }
+                    Err(None) => out.precision.glyphs += 1,
+                    Err(Some(reason)) => *out.precision.fallback.entry(reason).or_default() += 1,
+                }
+                out.shapes.push(shape);
             }
-            Step::Visit(usvg::Node::Text(t), inherited) => {
-                let id = non_empty(t.id()).or(inherited);
+            Step::Visit(usvg::Node::Text(t), inherited, _) => {
+                let id = source.public(t.id()).or(inherited);
                 stack.push(Step::TextDone(t, out.shapes.len()));
                 let flat = t.flattened();
                 if !flat.filters().is_empty() {
                     filters += 1;
                 }
                 for child in flat.children().iter().rev() {
-                    stack.push(Step::Visit(child, id));
+                    stack.push(Step::Visit(child, id, Scope::Text));
                 }
             }
             Step::TextDone(t, first_shape) => {
@@ -88,7 +140,7 @@ pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts, frame: &Frame) -> Res
                     ));
                 }
             }
-            Step::Visit(usvg::Node::Image(_), _) => images += 1,
+            Step::Visit(usvg::Node::Image(_), _, _) => images += 1,
         }
     }
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
@@ -102,7 +154,62 @@ pub(super) fn collect(tree: &usvg::Tree, facts: &XmlFacts, frame: &Frame) -> Res
             "filter effects ignored on {filters} element(s): only outlines are meshed"
         ));
     }
+    out.warnings.extend(out.precision.warning());
     Ok(out)
+}
+
+/// The f64 subpaths of usvg path `p` from its source element, or why not
+/// (`None` for a text glyph outline, single precision by design).
+fn exact_subpaths<'a, 'input>(
+    p: &usvg::Path,
+    scope: Scope,
+    source: &Source<'a, 'input>,
+    instances: &mut [Instance<'a, 'input>],
+    map: OutputMap,
+    reference: &[Subpath],
+) -> std::result::Result<Vec<Subpath>, Option<Unsupported>> {
+    let attempt = |c: &Candidate<'a, 'input>| reconstruct::reconstruct(source, c, map, reference);
+    let first_ok = |candidates: &mut dyn Iterator<Item = (usize, Candidate<'a, 'input>)>| {
+        let mut first_err = None;
+        for (k, c) in candidates {
+            match attempt(&c) {
+                Ok(sp) => return Ok((k, sp)),
+                Err(e) => {
+                    first_err.get_or_insert(e);
+                }
+            }
+        }
+        Err(first_err)
+    };
+    match scope {
+        Scope::Text => Err(None),
+        // an id (the document's or a private one) names the element
+        _ if !p.id().is_empty() => {
+            let nodes = source.shapes_with_id(p.id());
+            let mut candidates = nodes.into_iter().map(|node| Candidate {
+                node,
+                uses: Vec::new(),
+            });
+            first_ok(&mut candidates.by_ref().enumerate())
+                .map(|(_, sp)| sp)
+                .map_err(|e| Some(e.unwrap_or("no source element with the path's id")))
+        }
+        Scope::Instance(i) => {
+            let inst = &mut instances[i];
+            let end = (inst.cursor + INSTANCE_WINDOW).min(inst.candidates.len());
+            let mut candidates = (inst.cursor..end).map(|k| (k, inst.candidates[k].clone()));
+            match first_ok(&mut candidates) {
+                Ok((k, sp)) => {
+                    inst.cursor = k + 1;
+                    Ok(sp)
+                }
+                Err(e) => Err(Some(
+                    e.unwrap_or("a <use> instance path without a source element"),
+                )),
+            }
+        }
+        Scope::Document => Err(Some(MARKER)),
+    }
 }
 
 /// Warn about `<text>` elements that usvg dropped (no usable font, typically).
@@ -171,7 +278,7 @@ fn convert_path(path: &usvg::Path, index: usize, id: Option<&str>, frame: &Frame
     Ok(shape)
 }
 
-/// A path command in output coordinates.
+/// A path command (in an element's own coordinates or in output coordinates).
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Verb {
     /// Start a subpath.
@@ -182,8 +289,35 @@ pub(super) enum Verb {
     Quad(Point, Point),
     /// Cubic Bézier (control, control, end).
     Cubic(Point, Point, Point),
+    /// An exact conic piece from the current point (its `p0`) to its `p2`.
+    Conic(Conic),
     /// Close the subpath.
     Close,
+}
+
+impl Verb {
+    /// The command's points.
+    pub(super) fn points(&self) -> Vec<Point> {
+        match *self {
+            Verb::Move(p) | Verb::Line(p) => vec![p],
+            Verb::Quad(a, b) => vec![a, b],
+            Verb::Cubic(a, b, c) => vec![a, b, c],
+            Verb::Conic(c) => c.control_points().to_vec(),
+            Verb::Close => Vec::new(),
+        }
+    }
+
+    /// The command under an affine map (exact for conics: weights are kept).
+    pub(super) fn transform(&self, m: Affine) -> Verb {
+        match *self {
+            Verb::Move(p) => Verb::Move(m * p),
+            Verb::Line(p) => Verb::Line(m * p),
+            Verb::Quad(a, b) => Verb::Quad(m * a, m * b),
+            Verb::Cubic(a, b, c) => Verb::Cubic(m * a, m * b, m * c),
+            Verb::Conic(c) => Verb::Conic(c.transform(m)),
+            Verb::Close => Verb::Close,
+        }
+    }
 }
 
 /// Build subpaths from path commands: quadratics elevated, zero-length segments dropped.
@@ -227,6 +361,10 @@ pub(super) fn subpaths(verbs: impl IntoIterator<Item = Verb>) -> Vec<Subpath> {
             }),
             Verb::Cubic(c1, c2, p) => (c1 != pen || c2 != pen || p != pen)
                 .then(|| Segment::Cubic(CubicBez::new(pen, c1, c2, p))),
+            // a conic starts at the current point by construction (its `p0` is
+            // the end of the previous command, bit for bit)
+            Verb::Conic(c) => (c.p1 != pen || c.p2 != pen)
+                .then(|| Segment::Conic(Conic::new(pen, c.p1, c.p2, c.w))),
         };
         let sub = current.get_or_insert_with(|| Subpath {
             segments: Vec::new(),

@@ -28,34 +28,45 @@ fn count(sub: &Subpath) -> (usize, usize) {
     (lines, sub.segments.len() - lines)
 }
 
+fn conics(sub: &Subpath) -> usize {
+    sub.segments
+        .iter()
+        .filter(|s| matches!(s, Segment::Conic(_)))
+        .count()
+}
+
 fn close(a: Point, b: Point) -> bool {
     (a - b).hypot() < 1e-9
 }
 
 #[test]
-fn rounded_rect_is_four_cubics_and_four_lines() {
+fn rounded_rect_is_four_conics_and_four_lines() {
     let d = load(r#"<rect x="10" y="10" width="50" height="30" rx="5" ry="4"/>"#);
     assert_eq!(d.shapes.len(), 1);
     let subs = &d.shapes[0].subpaths;
     assert_eq!(subs.len(), 1);
     assert!(subs[0].closed);
     assert_eq!(count(&subs[0]), (4, 4));
+    assert_eq!(conics(&subs[0]), 4);
     assert_eq!(d.features.len(), 8);
     assert!(close(d.bbox.origin(), Point::new(10.0, -40.0)));
     assert!((d.bbox.width() - 50.0).abs() < 1e-9 && (d.bbox.height() - 30.0).abs() < 1e-9);
 }
 
 #[test]
-fn circle_is_four_cubics() {
+fn circle_is_four_conics() {
     let d = load(r#"<circle cx="50" cy="50" r="20"/>"#);
     let sub = &d.shapes[0].subpaths[0];
     assert!(sub.closed);
     assert_eq!(count(sub), (0, 4));
+    assert_eq!(conics(sub), 4);
     for seg in &sub.segments {
-        let c = seg.to_cubic();
+        let Segment::Conic(c) = seg else {
+            panic!("{seg:?}")
+        };
         for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
             let r = (c.eval(t) - Point::new(50.0, -50.0)).hypot();
-            assert!((r - 20.0).abs() < 0.1, "radius {r}");
+            assert!((r - 20.0).abs() < 1e-13, "radius {r}");
         }
     }
 }
@@ -70,6 +81,7 @@ fn ellipse_line_polyline_polygon() {
     );
     assert_eq!(d.shapes.len(), 4);
     assert_eq!(count(&d.shapes[0].subpaths[0]), (0, 4));
+    assert_eq!(conics(&d.shapes[0].subpaths[0]), 4);
     assert_eq!(count(&d.shapes[1].subpaths[0]), (1, 0));
     assert_eq!(count(&d.shapes[2].subpaths[0]), (2, 0));
     assert!(!d.shapes[2].subpaths[0].closed);
@@ -611,6 +623,8 @@ fn dev_corpus() {
     let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
     let start = std::time::Instant::now();
     let mut slowest = (0.0, String::new());
+    let mut precision = Precision::default();
+    let mut files_by_reason: std::collections::BTreeMap<&str, usize> = Default::default();
     for path in &files {
         let name = path
             .strip_prefix(root)
@@ -618,13 +632,15 @@ fn dev_corpus() {
             .display()
             .to_string();
         let t = std::time::Instant::now();
-        let result = load_file(path);
+        let result = std::fs::read(path)
+            .map_err(Error::Read)
+            .and_then(|data| load_with_precision(&data, Units::User, 1.0));
         let secs = t.elapsed().as_secs_f64();
         if secs > slowest.0 {
             slowest = (secs, name.clone());
         }
         let key = match &result {
-            Ok(d) => {
+            Ok((d, p)) => {
                 assert_sane(d, &name);
                 eprintln!(
                     "ok   {name}: {} shapes, {} features, bbox {:?}, warnings {:?}",
@@ -633,6 +649,12 @@ fn dev_corpus() {
                     d.bbox,
                     d.warnings
                 );
+                precision.exact += p.exact;
+                precision.glyphs += p.glyphs;
+                for (reason, n) in &p.fallback {
+                    *precision.fallback.entry(reason).or_default() += n;
+                    *files_by_reason.entry(reason).or_default() += 1;
+                }
                 "ok".to_owned()
             }
             Err(e) => {
@@ -649,6 +671,13 @@ fn dev_corpus() {
         start.elapsed().as_secs_f64(),
         slowest.0,
         slowest.1
+    );
+    eprintln!(
+        "dev corpus paths: {} f64, {} glyph outlines, {} kept usvg's f32: {:?} (files per reason: {files_by_reason:?})",
+        precision.exact,
+        precision.glyphs,
+        precision.fallbacks(),
+        precision.fallback
     );
 }
 
@@ -920,3 +949,5 @@ fn coordinates_are_checked_after_units_and_scale() {
     let px = load_in(&tiny, Units::Px, 1.0);
     assert_eq!(px.bbox.area(), 0.0);
 }
+
+mod exact;

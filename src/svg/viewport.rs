@@ -43,39 +43,60 @@ impl RootViewBox {
     /// `(sx, sy, tx, ty)`: `x_px = sx·x_user + tx` (usvg's `ViewBox::to_transform`,
     /// the same f32 operations in the same order, so the result is bit-identical).
     fn mapping(&self, size: usvg::Size) -> (f32, f32, f32, f32) {
-        use svgtypes::Align;
         let vr = self.rect;
-        let sx = size.width() / vr.width();
-        let sy = size.height() / vr.height();
-        let (sx, sy) = if self.aspect.align == Align::None {
-            (sx, sy)
-        } else {
-            // meet: the whole viewBox is visible (smaller factor); slice: it covers
-            // the viewport (larger factor)
-            let s = if self.aspect.slice {
-                sx.max(sy)
-            } else {
-                sx.min(sy)
-            };
-            (s, s)
-        };
-        let x = -vr.x() * sx;
-        let y = -vr.y() * sy;
-        let w = size.width() - vr.width() * sx;
-        let h = size.height() - vr.height() * sy;
-        let (tx, ty) = match self.aspect.align {
-            Align::None | Align::XMinYMin => (x, y),
-            Align::XMidYMin => (x + w / 2.0, y),
-            Align::XMaxYMin => (x + w, y),
-            Align::XMinYMid => (x, y + h / 2.0),
-            Align::XMidYMid => (x + w / 2.0, y + h / 2.0),
-            Align::XMaxYMid => (x + w, y + h / 2.0),
-            Align::XMinYMax => (x, y + h),
-            Align::XMidYMax => (x + w / 2.0, y + h),
-            Align::XMaxYMax => (x + w, y + h),
-        };
-        (sx, sy, tx, ty)
+        fit(
+            [vr.x(), vr.y(), vr.width(), vr.height()],
+            self.aspect,
+            size.width(),
+            size.height(),
+        )
     }
+}
+
+/// SVG's `viewBox` → viewport mapping for a viewBox `[x, y, w, h]` shown in a
+/// `width` × `height` viewport, as `(sx, sy, tx, ty)`: `x_vp = sx·x + tx` (usvg's
+/// `ViewBox::to_transform`: the same operations in the same order, so in f32 the
+/// result is usvg's bit for bit; in f64 it is the document's mapping).
+pub(super) fn fit<T>(vb: [T; 4], aspect: svgtypes::AspectRatio, width: T, height: T) -> (T, T, T, T)
+where
+    T: Copy
+        + PartialOrd
+        + From<u8>
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<Output = T>
+        + std::ops::Div<Output = T>
+        + std::ops::Neg<Output = T>,
+{
+    use svgtypes::Align;
+    let [x0, y0, vw, vh] = vb;
+    let sx = width / vw;
+    let sy = height / vh;
+    let (sx, sy) = if aspect.align == Align::None {
+        (sx, sy)
+    } else {
+        // meet: the whole viewBox is visible (smaller factor); slice: it covers
+        // the viewport (larger factor)
+        let s = if aspect.slice == (sx > sy) { sx } else { sy };
+        (s, s)
+    };
+    let x = -x0 * sx;
+    let y = -y0 * sy;
+    let w = width - vw * sx;
+    let h = height - vh * sy;
+    let two = T::from(2u8);
+    let (tx, ty) = match aspect.align {
+        Align::None | Align::XMinYMin => (x, y),
+        Align::XMidYMin => (x + w / two, y),
+        Align::XMaxYMin => (x + w, y),
+        Align::XMinYMid => (x, y + h / two),
+        Align::XMidYMid => (x + w / two, y + h / two),
+        Align::XMaxYMid => (x + w, y + h / two),
+        Align::XMinYMax => (x, y + h),
+        Align::XMidYMax => (x + w / two, y + h),
+        Align::XMaxYMax => (x + w, y + h),
+    };
+    (sx, sy, tx, ty)
 }
 
 /// A scale must be finite and positive.

@@ -1,0 +1,623 @@
+//! The source document behind usvg's tree: which element each usvg path came
+//! from, and the f64 transform from that element's coordinates to the root's
+//! user units, read from the document's own text.
+//!
+//! usvg keeps element ids on paths and on the groups of `<g>` and `<use>`, but
+//! nothing else that ties a path to its element. So before usvg parses, every
+//! shape element and every `<use>` without an `id` gets a private one
+//! ([`with_private_ids`]); [`Source`] maps ids back to elements and hides the
+//! private ones from everything a user sees. usvg drops all ids inside a
+//! `<use>` instance (it would duplicate them), so the paths of an instance are
+//! matched in document order against the instance's expansion
+//! ([`Source::expand_uses`]); every match is validated against usvg's own
+//! geometry by the caller, which makes a wrong match harmless.
+//!
+//! Transforms follow SVG: each element's `transform` (and `transform-origin`),
+//! `<use>` `x`/`y` and `transform`, nested `<svg>` positions and `viewBox`
+//! mappings, the `viewBox` of a `<symbol>` sized by its `<use>`. Lengths in
+//! absolute units (px, in, cm, mm, pt, pc) convert exactly; anything that needs
+//! context (%, em, ex), CSS-set transforms and a `transform` on the root `<svg>`
+//! are [`Unsupported`]: the caller keeps usvg's single-precision geometry.
+
+use kurbo::Affine;
+use std::cell::Cell;
+use std::collections::{HashMap, HashSet};
+use std::str::FromStr;
+use usvg::roxmltree::{Document, Node};
+
+/// Why a path keeps usvg's single-precision geometry (a short, fixed phrase:
+/// warnings count paths per reason).
+pub(super) type Unsupported = &'static str;
+
+/// The SVG namespace.
+const SVG_NS: &str = "http://www.w3.org/2000/svg";
+
+/// Elements usvg turns into one path each.
+pub(super) const SHAPES: &[&str] = &[
+    "path", "rect", "circle", "ellipse", "line", "polyline", "polygon",
+];
+
+/// Containers whose content is never rendered in place (only through a
+/// reference: `<use>`, paint servers, clip paths, markers, ...).
+const NOT_RENDERED: &[&str] = &[
+    "defs",
+    "clipPath",
+    "mask",
+    "pattern",
+    "marker",
+    "symbol",
+    "text",
+    "style",
+    "title",
+    "desc",
+    "metadata",
+    "linearGradient",
+    "radialGradient",
+    "filter",
+    "image",
+    "foreignObject",
+];
+
+/// At most this many shape instances are expanded from `<use>` elements per
+/// document (beyond it, instance paths keep usvg's geometry).
+const MAX_EXPANDED: usize = 200_000;
+
+/// At most this many `<use>` levels are followed.
+const MAX_USE_DEPTH: usize = 64;
+
+/// `text` with an `id` attribute added to every shape element and `<use>` that
+/// has none, and the prefix of those private ids (chosen so that no id of the
+/// document starts with it). `None` when nothing needs one, or when a style
+/// sheet selects on `[id…]` (the ids could change its matches).
+pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String, String)> {
+    let ids: Vec<&str> = doc
+        .descendants()
+        .filter_map(|n| n.attribute("id"))
+        .collect();
+    let style_selects_ids = doc
+        .descendants()
+        .filter(|n| n.tag_name().name() == "style")
+        .any(|n| n.text().is_some_and(|t| t.contains("[id")));
+    if style_selects_ids {
+        return None;
+    }
+    let prefix = (0u32..)
+        .map(|k| format!("triwild{k}-"))
+        .find(|p| !ids.iter().any(|id| id.starts_with(p.as_str())))?;
+    let body_start = doc.root_element().range().start;
+    let bytes = text.as_bytes();
+    let mut inserts: Vec<usize> = Vec::new();
+    let mut seen = HashSet::new();
+    for node in doc.descendants().filter(Node::is_element) {
+        let name = node.tag_name();
+        if !matches!(name.namespace(), None | Some(SVG_NS))
+            || !(SHAPES.contains(&name.name()) || name.name() == "use")
+            || node.attribute("id").is_some()
+            || node.ancestors().any(|a| a.tag_name().name() == "text")
+        {
+            continue;
+        }
+        // The start tag in the text: `<` then the (possibly prefixed) name. An
+        // element from an entity expansion may point elsewhere: skipped.
+        let start = node.range().start;
+        if start < body_start || bytes.get(start) != Some(&b'<') {
+            continue;
+        }
+        let name_len = bytes[start + 1..]
+            .iter()
+            .position(|b| b.is_ascii_whitespace() || *b == b'/' || *b == b'>')
+            .unwrap_or(bytes.len() - start - 1);
+        let end = start + 1 + name_len;
+        let qname = &text[start + 1..end];
+        let local = qname.rsplit(':').next().unwrap_or(qname);
+        if local == name.name() && seen.insert(end) {
+            inserts.push(end);
+        }
+    }
+    if inserts.is_empty() {
+        return None;
+    }
+    inserts.sort_unstable();
+    let mut out = String::with_capacity(text.len() + inserts.len() * (prefix.len() + 12));
+    let mut last = 0;
+    for (k, at) in inserts.into_iter().enumerate() {
+        out.push_str(&text[last..at]);
+        out.push_str(&format!(" id=\"{prefix}{k}\""));
+        last = at;
+    }
+    out.push_str(&text[last..]);
+    Some((out, prefix))
+}
+
+/// A shape element as one instance: the element and the `<use>` elements it is
+/// instantiated through, outermost first (empty when it is drawn in place).
+#[derive(Clone, Debug)]
+pub(super) struct Candidate<'a, 'input> {
+    /// The shape element.
+    pub(super) node: Node<'a, 'input>,
+    /// The `<use>` chain, outermost first.
+    pub(super) uses: Vec<Node<'a, 'input>>,
+}
+
+/// The source document, its ids and its transforms.
+pub(super) struct Source<'a, 'input> {
+    doc: &'a Document<'input>,
+    /// The prefix of private ids, if any were added.
+    private_prefix: Option<String>,
+    /// Every id → its elements, in document order (duplicates kept; a reference
+    /// resolves to the first, as in usvg).
+    by_id: HashMap<&'a str, Vec<Node<'a, 'input>>>,
+    /// A style sheet declares `transform` (CSS transforms are presentation
+    /// properties that usvg applies): transforms are then not read at all.
+    css_transform: bool,
+    /// Shape instances expanded so far (bounded by [`MAX_EXPANDED`]).
+    expanded: Cell<usize>,
+}
+
+impl<'a, 'input> Source<'a, 'input> {
+    /// The model of `doc`, whose private ids (if any) start with `private_prefix`.
+    pub(super) fn new(doc: &'a Document<'input>, private_prefix: Option<String>) -> Self {
+        let mut by_id: HashMap<&'a str, Vec<Node<'a, 'input>>> = HashMap::new();
+        let mut css_transform = false;
+        for node in doc.descendants().filter(Node::is_element) {
+            if let Some(id) = node.attribute("id") {
+                by_id.entry(id).or_default().push(node);
+            }
+            if node.tag_name().name() == "style" {
+                css_transform |= node.text().is_some_and(declares_transform);
+            }
+        }
+        Self {
+            doc,
+            private_prefix,
+            by_id,
+            css_transform,
+            expanded: Cell::new(0),
+        }
+    }
+
+    /// Whether `id` is one of ours.
+    pub(super) fn is_private(&self, id: &str) -> bool {
+        self.private_prefix
+            .as_deref()
+            .is_some_and(|p| id.starts_with(p))
+    }
+
+    /// `id` as a user may see it: `None` for an empty or private id.
+    pub(super) fn public<'s>(&self, id: &'s str) -> Option<&'s str> {
+        (!id.is_empty() && !self.is_private(id)).then_some(id)
+    }
+
+    /// The shape elements with this id, in document order (several if the
+    /// document repeats an id).
+    pub(super) fn shapes_with_id(&self, id: &str) -> Vec<Node<'a, 'input>> {
+        self.elements_with_id(id, |n| SHAPES.contains(&n))
+    }
+
+    /// The `<use>` elements with this id.
+    pub(super) fn uses_with_id(&self, id: &str) -> Vec<Node<'a, 'input>> {
+        self.elements_with_id(id, |n| n == "use")
+    }
+
+    fn elements_with_id(&self, id: &str, tag: impl Fn(&str) -> bool) -> Vec<Node<'a, 'input>> {
+        if id.is_empty() {
+            return Vec::new();
+        }
+        self.by_id.get(id).map_or_else(Vec::new, |nodes| {
+            nodes
+                .iter()
+                .copied()
+                .filter(|n| is_svg(*n) && tag(n.tag_name().name()))
+                .collect()
+        })
+    }
+
+    /// The element a `<use>` refers to, as usvg resolves it (unprefixed `href`
+    /// first, then `xlink:href`; the first element with that id).
+    fn target(&self, use_node: Node<'a, 'input>) -> Option<Node<'a, 'input>> {
+        const XLINK_NS: &str = "http://www.w3.org/1999/xlink";
+        let link = use_node
+            .attributes()
+            .find(|a| a.name() == "href" && a.namespace().is_none())
+            .or_else(|| {
+                use_node
+                    .attributes()
+                    .find(|a| a.name() == "href" && a.namespace() == Some(XLINK_NS))
+            })?;
+        let id = svgtypes::IRI::from_str(link.value()).ok()?.0;
+        self.by_id
+            .get(id)
+            .and_then(|nodes| nodes.first().copied())
+            .filter(|n| is_svg(*n))
+    }
+
+    /// Every shape instance drawn by these `<use>` elements, in document (paint)
+    /// order, nested `<use>` elements expanded.
+    pub(super) fn expand_uses(&self, uses: &[Node<'a, 'input>]) -> Vec<Candidate<'a, 'input>> {
+        let mut out = Vec::new();
+        for &u in uses {
+            self.expand(u, &mut Vec::new(), &mut out);
+        }
+        out
+    }
+
+    fn expand(
+        &self,
+        use_node: Node<'a, 'input>,
+        chain: &mut Vec<Node<'a, 'input>>,
+        out: &mut Vec<Candidate<'a, 'input>>,
+    ) {
+        let Some(target) = self.target(use_node) else {
+            return;
+        };
+        // usvg skips self references and references to an ancestor
+        if chain.len() >= MAX_USE_DEPTH
+            || chain.contains(&use_node)
+            || use_node.ancestors().any(|a| a == target)
+        {
+            return;
+        }
+        chain.push(use_node);
+        let mut stack = vec![target];
+        while let Some(e) = stack.pop() {
+            if self.expanded.get() >= MAX_EXPANDED {
+                break;
+            }
+            if !e.is_element() || !is_svg(e) {
+                continue;
+            }
+            let name = e.tag_name().name();
+            if SHAPES.contains(&name) {
+                self.expanded.set(self.expanded.get() + 1);
+                out.push(Candidate {
+                    node: e,
+                    uses: chain.clone(),
+                });
+            } else if name == "use" {
+                self.expand(e, chain, out);
+            } else if e == target || !NOT_RENDERED.contains(&name) {
+                stack.extend(e.children().rev());
+            }
+        }
+        chain.pop();
+    }
+
+    /// The transform from `c.node`'s coordinates to the user units of the root
+    /// `<svg>` (its own `viewBox` mapping not included), as the steps that make it,
+    /// innermost first (the element's own transform, then its ancestors').
+    ///
+    /// # Errors
+    /// The reason when the chain needs context this reader does not have, or when
+    /// the candidate is not where usvg's tree says it is.
+    pub(super) fn transform_steps(
+        &self,
+        c: &Candidate<'a, 'input>,
+    ) -> Result<Vec<Affine>, Unsupported> {
+        let mut steps = Vec::new();
+        let mut current = c.node;
+        for &u in c.uses.iter().rev() {
+            let target = self.target(u).ok_or("a <use> without target")?;
+            self.ascend(current, Some((target, u)), &mut steps)?;
+            let x = length(u, "x", 0.0)?;
+            let y = length(u, "y", 0.0)?;
+            steps.push(self.own_transform(u)? * Affine::translate((x, y)));
+            // its ancestors next (or the use itself, when an outer use refers to it)
+            current = u;
+        }
+        self.ascend(current, None, &mut steps)?;
+        Ok(steps)
+    }
+
+    /// The transforms of `from` and its ancestors, up to and including the target
+    /// of `via` (a `(target, use)` pair), or up to the root `<svg>` (excluded),
+    /// appended to `steps`. `from` may be a `<use>` whose own transform is applied
+    /// already.
+    fn ascend(
+        &self,
+        from: Node<'a, 'input>,
+        via: Option<(Node<'a, 'input>, Node<'a, 'input>)>,
+        steps: &mut Vec<Affine>,
+    ) -> Result<(), Unsupported> {
+        let unexpected = "an element where usvg's tree does not expect it";
+        let mut node = Some(from);
+        while let Some(e) = node {
+            if !e.is_element() {
+                break;
+            }
+            let is_target = via.is_some_and(|(t, _)| t == e);
+            let use_node = via.filter(|_| is_target).map(|(_, u)| u);
+            let name = e.tag_name().name();
+            if e.parent_element().is_none() {
+                return match (via, name) {
+                    (None, "svg") => Ok(()),
+                    (None, _) => Err("not inside the root <svg>"),
+                    (Some(_), _) => Err("a <use> target outside its expected place"),
+                };
+            }
+            let step = match name {
+                "svg" => Some(self.nested_svg(e, use_node)?),
+                "symbol" if is_target => Some(self.symbol(e, use_node)?),
+                "g" | "a" | "switch" => Some(self.own_transform(e)?),
+                n if SHAPES.contains(&n) && e == from => Some(self.own_transform(e)?),
+                "use" if e == from => None,
+                _ => return Err(unexpected),
+            };
+            steps.extend(step);
+            if is_target {
+                return Ok(());
+            }
+            node = e.parent_element();
+        }
+        Err(unexpected)
+    }
+
+    /// An element's own `transform` (about its `transform-origin`).
+    fn own_transform(&self, e: Node<'a, 'input>) -> Result<Affine, Unsupported> {
+        if self.css_transform || e.attribute("style").is_some_and(declares_transform) {
+            return Err("a transform set by CSS");
+        }
+        // usvg ignores a transform it cannot parse (an invalid one hides the element)
+        let t = e
+            .attribute("transform")
+            .and_then(|s| svgtypes::Transform::from_str(s).ok())
+            .map_or(Affine::IDENTITY, |t| {
+                Affine::new([t.a, t.b, t.c, t.d, t.e, t.f])
+            });
+        match e.attribute("transform-origin") {
+            None => Ok(t),
+            Some(s) => {
+                let origin =
+                    svgtypes::TransformOrigin::from_str(s).map_err(|_| "a bad transform-origin")?;
+                let dx = absolute(origin.x_offset)?;
+                let dy = absolute(origin.y_offset)?;
+                Ok(Affine::translate((dx, dy)) * t * Affine::translate((-dx, -dy)))
+            }
+        }
+    }
+
+    /// A nested `<svg>`: its transform, position and `viewBox` mapping (its size
+    /// replaced by a referencing `<use>`'s width and height when given).
+    fn nested_svg(
+        &self,
+        e: Node<'a, 'input>,
+        use_node: Option<Node<'a, 'input>>,
+    ) -> Result<Affine, Unsupported> {
+        let x = length(e, "x", 0.0)?;
+        let y = length(e, "y", 0.0)?;
+        let mut m = self.own_transform(e)? * Affine::translate((x, y));
+        if let Some(vb) = view_box(e) {
+            let size = |attr: &str| {
+                use_node
+                    .filter(|u| u.has_attribute(attr))
+                    .map_or_else(|| sized(e, attr), |u| sized(u, attr))
+            };
+            let (w, h) = (size("width")?, size("height")?);
+            if let Some(vb_map) = view_box_mapping(vb, aspect(e), w, h) {
+                m *= vb_map;
+            }
+        }
+        Ok(m)
+    }
+
+    /// A `<symbol>` drawn by `use_node`: its `viewBox` mapped to the use's size
+    /// (usvg ignores a symbol's own `transform`).
+    fn symbol(
+        &self,
+        e: Node<'a, 'input>,
+        use_node: Option<Node<'a, 'input>>,
+    ) -> Result<Affine, Unsupported> {
+        let Some(vb) = view_box(e) else {
+            return Ok(Affine::IDENTITY);
+        };
+        let u = use_node.ok_or("a <symbol> outside a <use>")?;
+        let (w, h) = (sized(u, "width")?, sized(u, "height")?);
+        Ok(view_box_mapping(vb, aspect(e), w, h).unwrap_or(Affine::IDENTITY))
+    }
+
+    /// The root `viewBox` → viewport (CSS px) mapping, as usvg sizes the root.
+    ///
+    /// # Errors
+    /// A `transform` on the root (usvg applies it about the viewport's centre), or a
+    /// size that needs context.
+    pub(super) fn root_px_mapping(&self) -> Result<Affine, Unsupported> {
+        let root = self.doc.root_element();
+        if self.root_transform() {
+            return Err("a transform on the root <svg>");
+        }
+        let Some(vb) = view_box(root) else {
+            return Ok(Affine::IDENTITY);
+        };
+        let side = |attr: &str, full: f64| -> Result<(f64, bool), Unsupported> {
+            match root
+                .attribute(attr)
+                .and_then(|s| svgtypes::Length::from_str(s).ok())
+            {
+                None => Ok((full, false)),
+                Some(l) if l.unit == svgtypes::LengthUnit::Percent => {
+                    Ok((full * (l.number / 100.0), true))
+                }
+                Some(l) => Ok((absolute(l)?, true)),
+            }
+        };
+        let (mut w, w_given) = side("width", vb.w)?;
+        let (mut h, h_given) = side("height", vb.h)?;
+        match (w_given, h_given) {
+            (true, false) => h = vb.h * w / vb.w,
+            (false, true) => w = vb.w * h / vb.h,
+            _ => {}
+        }
+        view_box_mapping(vb, aspect(root), w, h).ok_or("a root size that is not positive")
+    }
+
+    /// Whether the root `<svg>` has a transform (its own, or one CSS may set).
+    pub(super) fn root_transform(&self) -> bool {
+        let root = self.doc.root_element();
+        self.css_transform
+            || root.has_attribute("transform")
+            || root.attribute("style").is_some_and(declares_transform)
+    }
+}
+
+/// Whether CSS text (a `style` attribute or a style sheet) declares `transform`
+/// or `transform-origin` (conservative: a match inside a comment counts).
+fn declares_transform(css: &str) -> bool {
+    css.split([';', '{', '}']).any(|declaration| {
+        declaration.split_once(':').is_some_and(|(name, _)| {
+            let name = name.trim();
+            name.eq_ignore_ascii_case("transform") || name.eq_ignore_ascii_case("transform-origin")
+        })
+    })
+}
+
+/// Whether `n` is an element in the SVG namespace (or in none).
+fn is_svg(n: Node<'_, '_>) -> bool {
+    n.is_element() && matches!(n.tag_name().namespace(), None | Some(SVG_NS))
+}
+
+/// A valid `viewBox` (positive, finite size).
+fn view_box(e: Node<'_, '_>) -> Option<svgtypes::ViewBox> {
+    let vb = svgtypes::ViewBox::from_str(e.attribute("viewBox")?).ok()?;
+    (vb.w > 0.0 && vb.h > 0.0 && [vb.x, vb.y, vb.w, vb.h].iter().all(|v| v.is_finite()))
+        .then_some(vb)
+}
+
+/// `preserveAspectRatio` (default `xMidYMid meet`).
+fn aspect(e: Node<'_, '_>) -> svgtypes::AspectRatio {
+    e.attribute("preserveAspectRatio")
+        .and_then(|s| svgtypes::AspectRatio::from_str(s).ok())
+        .unwrap_or_default()
+}
+
+/// A `width`/`height` that a viewBox mapping needs: given in absolute units
+/// (the default, 100% of the parent viewport, needs context).
+fn sized(e: Node<'_, '_>, attr: &str) -> Result<f64, Unsupported> {
+    match e
+        .attribute(attr)
+        .and_then(|s| svgtypes::Length::from_str(s).ok())
+    {
+        Some(l) => absolute(l),
+        None => Err("a viewport sized by percentage"),
+    }
+}
+
+/// The `viewBox` → viewport mapping of SVG (usvg's `ViewBox::to_transform`, in
+/// f64); `None` for a viewport without area.
+pub(super) fn view_box_mapping(
+    vb: svgtypes::ViewBox,
+    aspect: svgtypes::AspectRatio,
+    width: f64,
+    height: f64,
+) -> Option<Affine> {
+    if !(width > 0.0 && height > 0.0 && width.is_finite() && height.is_finite()) {
+        return None;
+    }
+    let (sx, sy, tx, ty) = super::viewport::fit([vb.x, vb.y, vb.w, vb.h], aspect, width, height);
+    Some(Affine::new([sx, 0.0, 0.0, sy, tx, ty]))
+}
+
+/// A length attribute in user units: `default` when absent or not a length
+/// (as usvg does).
+///
+/// # Errors
+/// A length in %, em or ex (context needed).
+pub(super) fn length(e: Node<'_, '_>, attr: &str, default: f64) -> Result<f64, Unsupported> {
+    match e
+        .attribute(attr)
+        .and_then(|s| svgtypes::Length::from_str(s).ok())
+    {
+        None => Ok(default),
+        Some(l) => absolute(l),
+    }
+}
+
+/// A length with an absolute unit, in user units (CSS px, 96 per inch),
+/// with as few roundings as the unit allows.
+///
+/// # Errors
+/// A length in %, em or ex (context needed).
+pub(super) fn absolute(l: svgtypes::Length) -> Result<f64, Unsupported> {
+    use svgtypes::LengthUnit as U;
+    let n = l.number;
+    match l.unit {
+        U::None | U::Px => Ok(n),
+        U::In => Ok(n * 96.0),
+        // 96 / 2.54 = 4800 / 127, 96 / 25.4 = 480 / 127
+        U::Cm => Ok(n * 4800.0 / 127.0),
+        U::Mm => Ok(n * 480.0 / 127.0),
+        U::Pt => Ok(n * 4.0 / 3.0),
+        U::Pc => Ok(n * 16.0),
+        U::Percent | U::Em | U::Ex => Err("a length in %, em or ex"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc(text: &str) -> Document<'_> {
+        Document::parse(text).expect("test XML parses")
+    }
+
+    #[test]
+    fn private_ids_go_on_anonymous_shapes_and_uses_only() {
+        let text = r##"<svg xmlns="http://www.w3.org/2000/svg"><g><rect width="1" height="1"/><svg:path xmlns:svg="http://www.w3.org/2000/svg" d="M0 0L1 1"/></g><circle id="c" r="1"/><use href="#c"/><text><tspan>hi</tspan></text></svg>"##;
+        let (marked, prefix) = with_private_ids(text, &doc(text)).expect("ids added");
+        assert_eq!(prefix, "triwild0-");
+        let d = doc(&marked);
+        let ids: Vec<(&str, Option<&str>)> = d
+            .descendants()
+            .filter(Node::is_element)
+            .map(|n| (n.tag_name().name(), n.attribute("id")))
+            .collect();
+        assert_eq!(
+            ids,
+            [
+                ("svg", None),
+                ("g", None),
+                ("rect", Some("triwild0-0")),
+                ("path", Some("triwild0-1")),
+                ("circle", Some("c")),
+                ("use", Some("triwild0-2")),
+                ("text", None),
+                ("tspan", None),
+            ]
+        );
+        let source = Source::new(&d, Some(prefix));
+        assert_eq!(source.public("triwild0-1"), None);
+        assert_eq!(source.public("c"), Some("c"));
+        assert_eq!(source.public(""), None);
+    }
+
+    #[test]
+    fn the_prefix_avoids_the_documents_ids() {
+        let text =
+            r#"<svg xmlns="http://www.w3.org/2000/svg"><rect id="triwild0-7"/><rect/></svg>"#;
+        let (marked, prefix) = with_private_ids(text, &doc(text)).expect("ids added");
+        assert_eq!(prefix, "triwild1-");
+        assert!(marked.contains(r#"<rect id="triwild1-0"/>"#), "{marked}");
+        // a style sheet selecting on ids: no private ids
+        let text = r#"<svg xmlns="http://www.w3.org/2000/svg"><style>[id] { fill: red }</style><rect/></svg>"#;
+        assert!(with_private_ids(text, &doc(text)).is_none());
+    }
+
+    #[test]
+    fn css_transforms_are_recognised() {
+        assert!(declares_transform("fill:red; transform: rotate(3)"));
+        assert!(declares_transform("rect { Transform-Origin : 1px 2px }"));
+        assert!(!declares_transform("text-transform:none;fill:red"));
+        assert!(!declares_transform("fill:url(#transform)"));
+    }
+
+    #[test]
+    fn lengths_in_absolute_units_convert_exactly() {
+        let l = |s: &str| absolute(svgtypes::Length::from_str(s).expect("a length"));
+        assert_eq!(l("2.54cm"), Ok(96.0));
+        assert_eq!(l("25.4mm"), Ok(96.0));
+        assert_eq!(l("1in"), Ok(96.0));
+        assert_eq!(l("72pt"), Ok(96.0));
+        assert_eq!(l("6pc"), Ok(96.0));
+        assert_eq!(l("0.1"), Ok(0.1));
+        assert_eq!(l("0.1px"), Ok(0.1));
+        assert!(l("10%").is_err() && l("2em").is_err() && l("1ex").is_err());
+    }
+}
