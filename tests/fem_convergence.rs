@@ -1,8 +1,10 @@
 //! Finite-element convergence on the library's meshes (issue 14): P1 on order-1, P2 on
-//! order-2 and P3 on order-3 meshes of a blob bounded by four cubic Bézier arcs (which
-//! the cubic meshes represent exactly, so the geometry is never the limit) must reach
-//! the optimal L2 rates, P2 on the cubic meshes must be as good as on the quadratic
-//! ones, and the cubic meshes' area must be the drawing's.
+//! order-2 and P3 on order-3 meshes must reach the optimal L2 rates (k + 0.6 at least),
+//! P2 on the cubic meshes must be as good as on the quadratic ones, and the cubic
+//! meshes' area must be the drawing's. Two domains: a blob bounded by four cubic Bézier
+//! arcs (which the cubic meshes represent exactly), and a plain SVG `<circle>` (an
+//! exact conic, which no polynomial element represents: the order-k boundary
+//! interpolates it, and the rates must still be optimal).
 //!
 //! The problem is `−Δu = f` with the manufactured solution
 //! `u = eˣ sin y + (x² + y²)/4` (`f = −1`), Dirichlet data interpolated at the boundary
@@ -79,9 +81,9 @@ fn problem() -> Problem<'static> {
     }
 }
 
-/// The blob meshed at `level` and `order`, the background cut away, written to
+/// `drawing` meshed at `level` and `order`, the background cut away, written to
 /// `target/test-out/fem/`.
-fn mesh(drawing: &Drawing, level: f64, order: u8) -> FemMesh {
+fn mesh(name: &str, drawing: &Drawing, level: f64, order: u8) -> FemMesh {
     let element_order = match order {
         1 => Order::Linear,
         2 => Order::Quadratic,
@@ -93,10 +95,11 @@ fn mesh(drawing: &Drawing, level: f64, order: u8) -> FemMesh {
     let regions = RegionOptions::DEFAULT
         .with_mode(RegionMode::Shape)
         .with_cut_outside(true);
-    let meshed = triwild::mesh_drawing_with(drawing, &params, &regions).expect("the blob meshes");
+    let meshed =
+        triwild::mesh_drawing_with(drawing, &params, &regions).expect("the drawing meshes");
     let mesh = meshed.mesh;
     assert_eq!(mesh.order() as u8, order);
-    let path = out_dir().join(format!("blob_o{order}_l{level}.msh"));
+    let path = out_dir().join(format!("{name}_o{order}_l{level}.msh"));
     triwild::write_msh(&mesh, &path, MshOptions::DEFAULT).expect("write the mesh");
     mesh
 }
@@ -172,44 +175,46 @@ fn print_table(name: &str, rows: &[Solution]) {
     );
 }
 
-#[test]
-fn isoparametric_fem_converges_at_optimal_rates() {
-    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
-    let exact_area = blob_area();
+/// Mesh `drawing` at every level and order 1–3, solve, print the tables and return
+/// every failed expectation (so a regression shows its whole picture): L2 rates at
+/// least k + 0.6, h falling at every level, the order-3 area within `area_tol`
+/// (relative) of `exact_area`, and P2 on the cubic meshes as accurate as on the
+/// quadratic ones.
+fn study(name: &str, drawing: &Drawing, exact_area: f64, area_tol: f64) -> Vec<String> {
+    let mut failed = Vec::new();
     let mut p2_on_3 = Vec::new();
     let mut tables = Vec::new();
     for order in [1u8, 2, 3] {
         let mut rows = Vec::new();
         for level in LEVELS {
-            let m = mesh(&drawing, level, order);
+            let m = mesh(name, drawing, level, order);
             let s = run(&m, order as usize);
             if order == 3 {
                 let rel = (s.area - exact_area).abs() / exact_area;
-                assert!(
-                    rel < 1e-12,
-                    "level {level}: area {} vs {exact_area} ({rel:e})",
-                    s.area
-                );
+                if rel > area_tol {
+                    failed.push(format!(
+                        "{name} level {level}: area {} vs {exact_area} ({rel:e})",
+                        s.area
+                    ));
+                }
                 p2_on_3.push(run(&m, 2));
             }
             rows.push(s);
         }
-        print_table(&format!("P{order} on order-{order} meshes"), &rows);
+        print_table(&format!("{name}: P{order} on order-{order} meshes"), &rows);
         tables.push(rows);
     }
-    print_table("P2 on order-3 meshes", &p2_on_3);
+    print_table(&format!("{name}: P2 on order-3 meshes"), &p2_on_3);
 
-    // Collect every failed expectation, so a regression shows its whole picture.
-    let mut failed = Vec::new();
     for (p, (rows, min_rate)) in tables.iter().zip([1.6, 2.6, 3.6]).enumerate() {
         for w in rows.windows(2) {
             if h(&w[1]) >= h(&w[0]) {
-                failed.push(format!("P{}: h does not decrease: {rows:?}", p + 1));
+                failed.push(format!("{name} P{}: h does not decrease: {rows:?}", p + 1));
             }
         }
         let r = slope(rows, |s| s.l2);
         if r < min_rate {
-            failed.push(format!("P{} L2 rate {r:.2} < {min_rate}", p + 1));
+            failed.push(format!("{name} P{} L2 rate {r:.2} < {min_rate}", p + 1));
         }
     }
     // P2 on the cubic meshes (superparametric) is as accurate as on the quadratic ones
@@ -219,7 +224,7 @@ fn isoparametric_fem_converges_at_optimal_rates() {
         let ratio = (a.l2 / h(a).powi(3)) / (b.l2 / h(b).powi(3));
         if ratio > 2.0 {
             failed.push(format!(
-                "P2 on order 3: {:.3e} at h {:.4}, {ratio:.1}× P2 on order 2: {:.3e} at h {:.4}",
+                "{name} P2 on order 3: {:.3e} at h {:.4}, {ratio:.1}× P2 on order 2: {:.3e} at h {:.4}",
                 a.l2,
                 h(a),
                 b.l2,
@@ -227,6 +232,23 @@ fn isoparametric_fem_converges_at_optimal_rates() {
             ));
         }
     }
+    failed
+}
+
+#[test]
+fn isoparametric_fem_converges_at_optimal_rates() {
+    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
+    let failed = study("blob", &drawing, blob_area(), 1e-12);
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+fn a_circle_converges_at_optimal_rates() {
+    // A plain `<circle>`: an exact conic from the document to the mesh, so refinement
+    // is never stopped by the geometry (as four cubics it stalled at L2 ≈ 3e-5).
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;
+    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the disk loads");
+    let failed = study("circle", &drawing, std::f64::consts::PI, 1e-10);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
@@ -241,7 +263,7 @@ fn linear_functions_are_reproduced_on_curved_meshes() {
         f: &|_, _| 0.0,
     };
     for order in [2u8, 3] {
-        let m = mesh(&drawing, 0.2, order);
+        let m = mesh("blob", &drawing, 0.2, order);
         let nodes: Vec<[f64; 2]> = m.nodes.iter().map(|q| [q.x, q.y]).collect();
         let tris: Vec<Vec<u32>> = (0..m.triangle_count())
             .map(|i| m.triangle(i).to_vec())
