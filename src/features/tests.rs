@@ -383,7 +383,7 @@ fn inside_hull(p: Point, q: &[Point; 4], tol: f64) -> bool {
 }
 
 #[test]
-fn conic_sections_cut_a_circle_like_its_cubics_and_place_nodes_by_angle() {
+fn conic_sections_cut_a_circle_like_its_cubics_and_place_nodes_at_area_matched_angles() {
     // The exact circle: the same 64 sections as the cubic one, ends on the circle.
     let w = std::f64::consts::FRAC_1_SQRT_2;
     let q = Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
@@ -408,21 +408,49 @@ fn conic_sections_cut_a_circle_like_its_cubics_and_place_nodes_by_angle() {
     for s in &fs.primary {
         assert!(matches!(s.parent, Parent::Conic(_)));
         assert!((s.ctrl.p0.to_vec2().hypot() - 1.0).abs() < 1e-15);
-        // `along`: exact ends, inner points equally spaced in angle, either direction.
+        // `along`: exact ends, the mid point at the mid angle, the cubic's inner points
+        // at the area-matched angles (the cubic through the four points encloses the
+        // arc's own segment area), either direction.
         for t in [s.t, [s.t[1], s.t[0]]] {
             let (a, b) = (s.parent.along(t, 0.0), s.parent.along(t, 1.0));
             assert_eq!((a, b), (s.parent.eval(t[0]), s.parent.eval(t[1])));
             let angle = |p: Point| p.to_vec2().atan2();
             let step = (angle(b) - angle(a) + PI).rem_euclid(2.0 * PI) - PI;
-            for k in 1..3 {
-                let p = s.parent.along(t, f64::from(k) / 3.0);
+            let inner = (8.0 * super::area_matching_coefficient(step.abs() / 2.0) + 1.0) / 27.0;
+            let mut nodes = vec![a];
+            for (frac, want) in [
+                (1.0 / 3.0, 0.5 * (1.0 - inner)),
+                (0.5, 0.5),
+                (2.0 / 3.0, 0.5 * (1.0 + inner)),
+            ] {
+                let p = s.parent.along(t, frac);
                 assert!((p.to_vec2().hypot() - 1.0).abs() < 1e-15);
                 let got = (angle(p) - angle(a) + PI).rem_euclid(2.0 * PI) - PI;
-                assert!(
-                    (got - step * f64::from(k) / 3.0).abs() < 1e-13,
-                    "{got} vs {step}"
-                );
+                assert!((got - step * want).abs() < 1e-13, "{got} vs {step}·{want}");
+                if frac != 0.5 {
+                    nodes.push(p);
+                }
             }
+            nodes.push(b);
+            // Bézier controls of the Lagrange cubic through the four nodes
+            let ctrl = |w: [f64; 4]| {
+                let v = (0..4).fold(kurbo::Vec2::ZERO, |acc, k| acc + nodes[k].to_vec2() * w[k]);
+                (v / 6.0).to_point()
+            };
+            let cubic = kurbo::CubicBez::new(
+                nodes[0],
+                ctrl([-5.0, 18.0, -9.0, 2.0]),
+                ctrl([2.0, -9.0, 18.0, -5.0]),
+                nodes[3],
+            );
+            let enclosed = kurbo::ParamCurveArea::signed_area(&cubic)
+                + kurbo::ParamCurveArea::signed_area(&kurbo::Line::new(b, a));
+            let h = step.abs() / 2.0;
+            let segment = (h - h.sin() * h.cos()) * step.signum();
+            assert!(
+                (enclosed - segment).abs() <= 1e-9 * segment.abs(),
+                "{enclosed} vs {segment}"
+            );
         }
     }
     // A tampered hull is reported.
