@@ -4,12 +4,11 @@
 //! A `<circle>` and a disk drawn as 64 arcs are meshed (background cut away) at several
 //! `-l`; at every step the element count must strictly grow, by a factor between 2 and 6
 //! per halving once `l` is below the size the boundary itself imposes, and the mean
-//! boundary and element edge lengths must follow `l` within a factor. The disk is meshed
-//! twice: as the loader delivers it today (64 cubics, whose joints must stay mesh
-//! vertices: two different cubics are not one exact curve) and as 64 exact conic arcs
-//! (what the f64 loader delivers for SVG arcs), whose joints are not corners: the
-//! features stage joins them into four exact quarters, so the coarse meshes are not
-//! pinned to a 64-gon. Every mesh is written under `target/test-out/sizing/` and
+//! boundary and element edge lengths must follow `l` within a factor. The disk is drawn
+//! twice: as 64 cubic arcs (`C`; their joints must stay mesh vertices: two different
+//! cubics are not one exact curve) and as 64 SVG arcs (`A`, which the loader keeps as
+//! exact conic pieces), whose joints are not corners: the features stage joins them
+//! into four exact quarters, so the coarse meshes are not pinned to a 64-gon. Every mesh is written under `target/test-out/sizing/` and
 //! checked by the independent checker. `cargo test --test sizing -- --nocapture`
 //! prints the table.
 #![allow(
@@ -19,11 +18,9 @@
 
 mod support;
 
-use kurbo::{Arc, Point, Vec2};
 use std::f64::consts::PI;
 use triwild::{
-    Conic, Drawing, Feature, FeatureGeom, FemMesh, Length, MshOptions, Order, Params, RegionMode,
-    RegionOptions,
+    Drawing, FeatureGeom, FemMesh, Length, MshOptions, Order, Params, RegionMode, RegionOptions,
 };
 
 const CIRCLE: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle cx="1" cy="1" r="1" fill="black"/></svg>"#;
@@ -31,16 +28,21 @@ const CIRCLE: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2
 /// Arcs in the disk drawn as a path.
 const ARCS: usize = 64;
 
-/// The unit disk about (1, 1) drawn as a path of [`ARCS`] arcs.
+/// The end point of the `k`-th of [`ARCS`] arcs of the unit disk about (1, 1).
+fn joint(k: usize) -> (f64, f64) {
+    let a = 2.0 * PI * k as f64 / ARCS as f64;
+    if k % ARCS == 0 {
+        (2.0, 1.0)
+    } else {
+        (1.0 + a.cos(), 1.0 + a.sin())
+    }
+}
+
+/// The unit disk about (1, 1) drawn as a path of [`ARCS`] SVG arcs.
 fn arcs_svg() -> String {
     let mut d = String::from("M 2 1");
     for k in 1..=ARCS {
-        let a = 2.0 * PI * k as f64 / ARCS as f64;
-        let (x, y) = if k == ARCS {
-            (2.0, 1.0)
-        } else {
-            (1.0 + a.cos(), 1.0 + a.sin())
-        };
+        let (x, y) = joint(k);
         d += &format!(" A 1 1 0 0 1 {x:.17} {y:.17}");
     }
     format!(
@@ -48,36 +50,20 @@ fn arcs_svg() -> String {
     )
 }
 
-/// The 64-arc disk with its features replaced by the exact arcs as conic pieces (one
-/// per arc, joints shared bit for bit), in output coordinates (y flipped: the centre is
-/// (1, −1) and the path turns clockwise).
-fn arcs_as_conics() -> Drawing {
-    let mut drawing = triwild::load_bytes(arcs_svg().as_bytes()).expect("the disk loads");
-    let source = drawing.features[0].source;
-    let centre = Point::new(1.0, -1.0);
-    let step = -2.0 * PI / ARCS as f64;
-    let joint = |k: usize| {
-        if k % ARCS == 0 {
-            Point::new(2.0, -1.0)
-        } else {
-            centre + Vec2::from_angle(step * k as f64)
-        }
-    };
-    let mut features = Vec::new();
-    for k in 0..ARCS {
-        let arc = Arc::new(centre, Vec2::new(1.0, 1.0), step * k as f64, step, 0.0);
-        for piece in Conic::ellipse_arc(&arc, Some(joint(k)), Some(joint(k + 1))) {
-            let mut source = source;
-            source.segment = u32::try_from(k).expect("small");
-            features.push(Feature {
-                geom: FeatureGeom::Conic(piece),
-                source,
-            });
-        }
+/// The same disk drawn as [`ARCS`] cubic Béziers (the usual arc approximation).
+fn cubics_svg() -> String {
+    let k = 4.0 / 3.0 * (PI / (2.0 * ARCS as f64)).tan();
+    let mut d = String::from("M 2 1");
+    for i in 0..ARCS {
+        let ((x0, y0), (x1, y1)) = (joint(i), joint(i + 1));
+        // tangents: perpendicular to the radius, in the direction of travel
+        let (c1x, c1y) = (x0 - k * (y0 - 1.0), y0 + k * (x0 - 1.0));
+        let (c2x, c2y) = (x1 + k * (y1 - 1.0), y1 - k * (x1 - 1.0));
+        d += &format!(" C {c1x:.17} {c1y:.17} {c2x:.17} {c2y:.17} {x1:.17} {y1:.17}");
     }
-    assert_eq!(features.len(), ARCS);
-    drawing.features = features;
-    drawing
+    format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><path fill="black" d="{d} Z"/></svg>"#
+    )
 }
 
 /// What one mesh measures.
@@ -104,7 +90,10 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: Order) -> Row {
     triwild::write_msh(&m, &path, MshOptions::DEFAULT).expect("write the mesh");
     support::check_msh(&path).assert_valid(&format!("{name} at -l {level}"));
     let chord = |a: u32, b: u32| m.nodes[a as usize].distance(m.nodes[b as usize]);
+    // the drawn outline's lines (with --cut-outside the physical curve `boundary`
+    // repeats the same edges)
     let boundary: Vec<f64> = (0..m.line_count())
+        .filter(|&i| m.curves[m.line_group[i] as usize] != "boundary")
         .map(|i| chord(m.line(i)[0], m.line(i)[1]))
         .collect();
     let mut edges: Vec<(u32, u32)> = (0..m.triangle_count())
@@ -208,15 +197,28 @@ fn circle_refines_steadily_with_l() {
 
 #[test]
 fn disk_of_64_cubic_arcs_refines_steadily_with_l() {
-    // Today's loader: 64 cubics, every joint a mesh vertex (64 boundary edges at least).
-    let drawing = triwild::load_bytes(arcs_svg().as_bytes()).expect("the disk loads");
+    // 64 cubics: every joint a mesh vertex (64 boundary edges at least).
+    let drawing = triwild::load_bytes(cubics_svg().as_bytes()).expect("the disk loads");
+    assert!(
+        drawing
+            .features
+            .iter()
+            .all(|f| matches!(f.geom, FeatureGeom::Cubic(_)))
+    );
     let rows = assert_follows("disk64", &drawing, &[0.1, 0.05, 0.025], Order::Cubic);
     assert!(rows.iter().all(|r| r.boundary >= ARCS));
 }
 
 #[test]
 fn disk_of_64_exact_arcs_is_not_pinned_to_a_64_gon() {
-    let drawing = arcs_as_conics();
+    // 64 SVG arcs: 64 exact conic pieces, joined where they continue one circle.
+    let drawing = triwild::load_bytes(arcs_svg().as_bytes()).expect("the disk loads");
+    let conics = drawing
+        .features
+        .iter()
+        .filter(|f| matches!(f.geom, FeatureGeom::Conic(_)))
+        .count();
+    assert_eq!(conics, ARCS);
     let rows = assert_follows(
         "disk64-conic",
         &drawing,
