@@ -14,6 +14,7 @@ mod cli {
     pub(crate) mod args;
     pub(crate) mod batch;
     pub(crate) mod check;
+    pub(crate) mod console;
     pub(crate) mod features;
     #[cfg(feature = "test-hooks")]
     pub(crate) mod hooks;
@@ -33,7 +34,8 @@ Exit codes:
   0  success
   2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag)
   3  meshing failed
-  4  I/O error (reading the input or writing an output)";
+  4  I/O error (reading the input or writing an output)
+  141  standard output closed early (`triwild ... --stats | head`); outputs complete";
 
 /// Robust curved triangle meshing of SVG drawings (TriWild, in Rust).
 ///

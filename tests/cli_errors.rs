@@ -201,3 +201,37 @@ fn list(dir: &Path) -> Vec<PathBuf> {
     out.sort();
     out
 }
+
+/// A reader that closes the pipe early (`triwild … | head -c 1`) is no panic:
+/// the process stops quietly with 141 (what a shell reports for `cat`), and
+/// the files it wrote are complete.
+#[test]
+fn a_closed_stdout_is_no_panic() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let dir = scratch("closed-stdout");
+    let out = dir.join("ello.msh");
+    let mut child = bin()
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/ello.svg"))
+        .arg("-o")
+        .arg(&out)
+        .args(["--stats", "-l", "0.2", "--order", "1"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run triwild");
+    // close our end before anything is printed
+    drop(child.stdout.take());
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut stderr)
+        .expect("read stderr");
+    let status = child.wait().expect("wait");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(status.code(), Some(141), "{stderr}");
+    let mesh = fs::read_to_string(&out).expect("the mesh was written");
+    assert!(mesh.ends_with("$EndElements\n"), "an incomplete mesh");
+}

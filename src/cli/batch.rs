@@ -6,6 +6,7 @@
 //! row; everything shown to the user is here.
 
 use super::args::{FormatArgs, ParamArgs};
+use crate::cli::console::{errln, outln};
 use crate::exit_code;
 use clap::{ArgMatches, Args};
 use std::ffi::OsString;
@@ -129,18 +130,18 @@ fn merge(args: &BatchArgs) -> ExitCode {
     match batch::merge_reports(&inputs, &args.output) {
         Ok(m) => {
             for d in &m.duplicates {
-                eprintln!("warning: {d}: in more than one report; kept the last");
+                errln!("warning: {d}: in more than one report; kept the last");
             }
             for l in &m.bad_lines {
-                eprintln!("warning: {l}: not a report row; skipped");
+                errln!("warning: {l}: not a report row; skipped");
             }
             let summary = batch::Summary::of(&m.rows);
-            println!("{summary}");
-            println!("report: {}", args.output.display());
+            outln!("{summary}");
+            outln!("report: {}", args.output.display());
             ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             exit_code(e.kind())
         }
     }
@@ -155,7 +156,7 @@ pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCo
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => {
-            eprintln!("error: cannot find the triwild executable: {e}");
+            errln!("error: cannot find the triwild executable: {e}");
             return ExitCode::from(4);
         }
     };
@@ -171,7 +172,7 @@ pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCo
     let plan = match batch::plan(&args.inputs, &opts) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             return ExitCode::from(match e.kind() {
                 ErrorKind::Io if matches!(e, Error::Write(_)) => 4,
                 _ => 2,
@@ -179,13 +180,13 @@ pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCo
         }
     };
     for w in &plan.warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     if !quiet {
         let shard = opts.shard.map_or(String::new(), |s| {
             format!(" (shard {s} of {} found)", plan.found)
         });
-        eprintln!(
+        errln!(
             "{} files{shard}: {} to mesh, {} done before; {} at once; report {}",
             plan.total(),
             plan.todo.len(),
@@ -200,12 +201,12 @@ pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCo
     match outcome {
         Ok(outcome) => {
             let summary = outcome.summary();
-            println!("{summary}");
-            println!("report: {}", plan.report.display());
+            outln!("{summary}");
+            outln!("report: {}", plan.report.display());
             ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             exit_code(e.kind())
         }
     }
@@ -272,7 +273,7 @@ impl Progress {
                 pb.set_message(format!("ok {} failed {}", self.ok, self.failed));
                 pb.inc(1);
             }
-            None if !self.quiet => eprintln!("[{}/{}] {line}", self.done, self.total),
+            None if !self.quiet => errln!("[{}/{}] {line}", self.done, self.total),
             None => {}
         }
     }

@@ -1,6 +1,7 @@
 //! `triwild check`: certify a gmsh mesh and print the verdict, as a summary
 //! or as one JSON object.
 
+use crate::cli::console::{errln, outln};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -25,9 +26,9 @@ pub(crate) fn run(args: &CheckArgs) -> ExitCode {
         Err(e) => {
             if args.json {
                 let v = serde_json::json!({"file": input, "readable": false, "valid": false, "error": e.to_string()});
-                println!("{v}");
+                outln!("{v}");
             }
-            eprintln!("error: {}: {e}", input.display());
+            errln!("error: {}: {e}", input.display());
             return ExitCode::from(2);
         }
     };
@@ -40,7 +41,7 @@ pub(crate) fn run(args: &CheckArgs) -> ExitCode {
             o.insert("readable".into(), true.into());
             o.insert("invalid".into(), r.mesh.invalid().into());
         }
-        println!("{v}");
+        outln!("{v}");
     } else {
         print_summary(input, &r);
     }
@@ -58,7 +59,7 @@ fn print_summary(input: &Path, r: &FileCheck) {
         .filter(|(n, _)| **n > 0)
         .map(|(n, o)| format!("{n} of order {o}"))
         .collect();
-    println!(
+    outln!(
         "{}: {}",
         input.display(),
         if r.valid {
@@ -67,7 +68,7 @@ fn print_summary(input: &Path, r: &FileCheck) {
             format!("INVALID ({})", r.reasons.join(", "))
         }
     );
-    println!(
+    outln!(
         "  triangles: {} ({}), {} curved, {} invalid",
         m.triangles,
         orders.join(", "),
@@ -75,10 +76,10 @@ fn print_summary(input: &Path, r: &FileCheck) {
         m.invalid()
     );
     if let Some(w) = m.worst_element {
-        println!(
+        outln!(
             "  min Jacobian ratio: {:.6} (triangle {w})",
             m.min_detj_ratio
         );
     }
-    println!("  area: {}", m.total_area);
+    outln!("  area: {}", m.total_area);
 }

@@ -2,6 +2,7 @@
 //! an SVG preview).
 
 use super::args::ParamArgs;
+use crate::cli::console::{errln, outln};
 use crate::exit_code;
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -33,7 +34,7 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     let input = &args.input;
     let params = args.params.to_params();
     let fail = |path: &Path, err: Error| {
-        eprintln!("error: {}: {err}", path.display());
+        errln!("error: {}: {err}", path.display());
         exit_code(err.kind())
     };
     if let Err(e) = params.validate() {
@@ -45,7 +46,7 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     };
     if !quiet {
         for w in &drawing.warnings {
-            eprintln!("warning: {}: {w}", input.display());
+            errln!("warning: {}: {w}", input.display());
         }
     }
     let analysis = FeatureAnalysis::new(&drawing, &params);
@@ -64,7 +65,7 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     }
     if args.stats {
         let stats = serde_json::json!({"input": input, "counts": analysis.counts(), "timing_ms": analysis.timing()});
-        println!("{stats}");
+        outln!("{stats}");
     }
     ExitCode::SUCCESS
 }

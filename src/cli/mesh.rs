@@ -2,6 +2,7 @@
 //! [--stats]`.
 
 use super::args::{FormatArgs, ParamArgs, RegionArgs};
+use crate::cli::console::{errln, outln};
 use crate::exit_code;
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -40,7 +41,7 @@ fn default_output(input: &Path) -> PathBuf {
 /// or 2, 3, 4 by the error's kind.
 pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     let Some(input) = &args.input else {
-        eprintln!("error: no input file given (try `triwild --help`)");
+        errln!("error: no input file given (try `triwild --help`)");
         return ExitCode::from(2);
     };
     #[cfg(feature = "test-hooks")]
@@ -54,7 +55,7 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     // is reported here, naming the preview, before anything is meshed.
     if let Some(preview) = &args.preview {
         if let Err(err) = triwild::check_writable(preview) {
-            eprintln!("error: {}: {err}", preview.display());
+            errln!("error: {}: {err}", preview.display());
             return exit_code(err.kind());
         }
     }
@@ -62,14 +63,14 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
         Ok(report) => {
             if !quiet {
                 for w in &report.warnings {
-                    eprintln!("warning: {}: {w}", input.display());
+                    errln!("warning: {}: {w}", input.display());
                 }
             }
             if args.stats {
                 match serde_json::to_string(&report) {
-                    Ok(s) => println!("{s}"),
+                    Ok(s) => outln!("{s}"),
                     Err(e) => {
-                        eprintln!("error: {}: cannot format statistics: {e}", input.display());
+                        errln!("error: {}: cannot format statistics: {e}", input.display());
                         return ExitCode::from(4);
                     }
                 }
@@ -81,7 +82,7 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
                 Error::Write(_) => &output,
                 _ => input,
             };
-            eprintln!("error: {}: {err}", file.display());
+            errln!("error: {}: {err}", file.display());
             exit_code(err.kind())
         }
     }
