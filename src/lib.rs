@@ -80,7 +80,8 @@ pub use pipeline::{
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use stage::Stage;
 pub use svg::drawing::{
-    Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
+    Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, PathPrecision, Segment, Shape,
+    ShapeId, Subpath,
 };
 pub use svg::{load_bytes, load_bytes_with, load_file, load_file_with};
 pub use units::Units;

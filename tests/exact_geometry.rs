@@ -102,3 +102,24 @@ fn ellipses_rounded_rects_and_arcs_are_exact() {
         }
     }
 }
+
+#[test]
+fn the_drawing_says_how_its_paths_were_read() {
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10">
+        <circle cx="5" cy="5" r="4"/><path d="M 1 1 L 9 1 L 5 4 Z"/>
+        <rect x="1" y="6" width="3" height="3" rx="1"/></svg>"#;
+    let d = triwild::load_bytes(svg.as_bytes()).expect("loads");
+    assert_eq!(
+        d.precision,
+        triwild::PathPrecision {
+            f64_paths: 3,
+            single_precision_paths: 0
+        }
+    );
+    // the same numbers in --stats
+    let meshed = triwild::mesh_drawing(&d, &Params::DEFAULT.with_order(Order::Linear))
+        .expect("meshes");
+    let stats = serde_json::to_value(&meshed.report).expect("stats");
+    assert_eq!(stats["input"]["f64_paths"], 3);
+    assert_eq!(stats["input"]["single_precision_paths"], 0);
+}

@@ -50,6 +50,7 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
             .collect(),
         bbox: bbox.unwrap_or_default(),
         warnings: Vec::new(),
+        precision: Default::default(),
     }
 }
 

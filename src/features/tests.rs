@@ -41,6 +41,7 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
         features,
         bbox: bbox.expect("test drawing has a feature"),
         warnings: Vec::new(),
+        precision: Default::default(),
     }
 }
 

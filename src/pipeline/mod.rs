@@ -74,6 +74,10 @@ impl RunOptions {
 pub struct InputCounts {
     /// Drawable shapes.
     pub shapes: usize,
+    /// Paths read in f64 from the document's text.
+    pub f64_paths: usize,
+    /// Paths in usvg's single precision (text glyphs, markers, unsupported cases).
+    pub single_precision_paths: usize,
     /// Features of every kind.
     pub features: usize,
     /// Isolated points.
@@ -92,6 +96,8 @@ impl InputCounts {
     /// Count the features of `drawing`.
     pub fn of(drawing: &Drawing) -> Self {
         let mut c = InputCounts {
+            f64_paths: drawing.precision.f64_paths,
+            single_precision_paths: drawing.precision.single_precision_paths,
             shapes: drawing.shapes.len(),
             features: drawing.features.len(),
             d: drawing.diagonal(),

@@ -87,6 +87,7 @@ pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
         features,
         bbox: bbox.expect("test drawing has geometry"),
         warnings: vec![],
+        precision: Default::default(),
     }
 }
 

@@ -185,6 +185,17 @@ pub struct Feature {
     pub source: FeatureSource,
 }
 
+/// How many of a drawing's paths were read in f64 from the document's text, and
+/// how many kept usvg's single precision (text glyph outlines and markers by
+/// design; unsupported cases with a warning). Zero for a drawing built in code.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PathPrecision {
+    /// Paths whose every coordinate comes from the document's numbers in f64.
+    pub f64_paths: usize,
+    /// Paths in usvg's single precision.
+    pub single_precision_paths: usize,
+}
+
 /// A loaded drawing: the shapes and the feature soup that the meshers consume,
 /// in output coordinates (the units and scale it was loaded with: by default
 /// the user units of the root `viewBox`, the document's own numbers).
@@ -203,6 +214,9 @@ pub struct Drawing {
     pub bbox: Rect,
     /// Warnings for the user (skipped text, ignored images, ...).
     pub warnings: Vec<String>,
+    /// How the paths' geometry was read: in f64 from the document's text, or in
+    /// usvg's single precision (text glyphs, markers, unsupported cases).
+    pub precision: PathPrecision,
 }
 
 impl Drawing {

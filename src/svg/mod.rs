@@ -166,7 +166,11 @@ pub(crate) fn load_with_precision(
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
         outline::collect(parsed, &frame, map)
     })?;
-    let drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
+    let mut drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
+    drawing.precision = drawing::PathPrecision {
+        f64_paths: outlines.precision.exact,
+        single_precision_paths: outlines.precision.glyphs + outlines.precision.fallbacks(),
+    };
     tracing::debug!(
         shapes = drawing.shapes.len(),
         features = drawing.features.len(),

@@ -1,7 +1,9 @@
 //! Shapes → the feature soup ([`Drawing::features`]), its bounding box, and the
 //! whole-drawing checks (not empty, extent representable in f64).
 
-use super::drawing::{Drawing, Feature, FeatureGeom, FeatureSource, Segment, Shape, ShapeId};
+use super::drawing::{
+    Drawing, Feature, FeatureGeom, FeatureSource, PathPrecision, Segment, Shape, ShapeId,
+};
 use crate::{Error, Result};
 use kurbo::Rect;
 
@@ -47,6 +49,7 @@ pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Draw
         features,
         bbox,
         warnings,
+        precision: PathPrecision::default(),
     })
 }
 

@@ -110,6 +110,7 @@ pub(super) fn drawing_of(shapes: Vec<Shape>) -> Drawing {
         features,
         bbox: bbox.expect("a drawing with features"),
         warnings: Vec::new(),
+        precision: Default::default(),
     }
 }
 
