@@ -117,8 +117,8 @@ fn the_drawing_says_how_its_paths_were_read() {
         }
     );
     // the same numbers in --stats
-    let meshed = triwild::mesh_drawing(&d, &Params::DEFAULT.with_order(Order::Linear))
-        .expect("meshes");
+    let meshed =
+        triwild::mesh_drawing(&d, &Params::DEFAULT.with_order(Order::Linear)).expect("meshes");
     let stats = serde_json::to_value(&meshed.report).expect("stats");
     assert_eq!(stats["input"]["f64_paths"], 3);
     assert_eq!(stats["input"]["single_precision_paths"], 0);
