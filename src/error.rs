@@ -33,9 +33,10 @@ pub enum Error {
     /// The input is not an SVG document (binary data, HTML, broken XML, ...).
     #[error("not a valid SVG document: {0}")]
     NotSvg(String),
-    /// The SVG parsed but holds nothing to mesh.
-    #[error("no geometry: the drawing has no paths, shapes or points to mesh")]
-    NoGeometry,
+    /// The SVG parsed but holds nothing to mesh; the string says what was there
+    /// instead (images, text without a font, ...), or is empty.
+    #[error("no geometry: the drawing has no paths, shapes or points to mesh{0}")]
+    NoGeometry(String),
     /// A coordinate is NaN, infinite, or outside the range the mesher represents.
     #[error("bad coordinate: {0}")]
     BadCoordinate(String),
@@ -68,7 +69,7 @@ impl Error {
             Error::IsDirectory
             | Error::EmptyFile
             | Error::NotSvg(_)
-            | Error::NoGeometry
+            | Error::NoGeometry(_)
             | Error::BadCoordinate(_)
             | Error::BadMesh(_)
             | Error::InvalidParams(_) => ErrorKind::BadInput,

@@ -32,6 +32,9 @@ pub(super) struct XmlFacts {
     /// The root element's `viewBox` and `preserveAspectRatio` (the root viewport
     /// mapping that usvg folds into every absolute transform).
     pub(super) root_view_box: Option<RootViewBox>,
+    /// `<image>` elements outside `<defs>` and the like (usvg drops an image whose
+    /// data it does not decode, and triwild never decodes images).
+    pub(super) images: usize,
 }
 
 /// A `<text>` element outside `<defs>`, clip paths, masks and the like.
@@ -174,6 +177,12 @@ fn parse_text<R>(
     let name = root.tag_name();
     if !name.name().eq_ignore_ascii_case("svg") || !matches!(name.namespace(), None | Some(SVG_NS))
     {
+        if let (true, Some(ns)) = (name.name().eq_ignore_ascii_case("svg"), name.namespace()) {
+            return Err(Error::NotSvg(format!(
+                "the root element <{}> is in the namespace '{ns}', not SVG's ({SVG_NS})",
+                name.name()
+            )));
+        }
         let hint = if name.name().eq_ignore_ascii_case("html") {
             " (an HTML page?)"
         } else {
@@ -397,6 +406,14 @@ fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
         if name == "use" {
             if let Some(id) = node.attribute("id") {
                 facts.use_ids.insert(id.to_owned());
+            }
+        } else if name == "image" {
+            let hidden = node
+                .ancestors()
+                .filter(roxmltree::Node::is_element)
+                .any(|a| NOT_RENDERED.contains(&a.tag_name().name()));
+            if !hidden {
+                facts.images += 1;
             }
         } else if name == "text" {
             let index = text_index;

@@ -144,6 +144,8 @@ pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) ->
         }
     }
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
+    // usvg keeps an image node only for data it could decode (never, here)
+    let images = images.max(facts.images);
     if images > 0 {
         out.warnings.push(format!(
             "{images} image element(s) ignored: raster images are not geometry"

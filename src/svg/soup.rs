@@ -19,7 +19,14 @@ pub(super) const MIN_RELATIVE_EXTENT: f64 = 1e-12;
 pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Drawing> {
     let features = features(&shapes);
     let Some(first) = features.first() else {
-        return Err(Error::NoGeometry);
+        // say what was there instead (the loader's warnings: images, text
+        // without a usable font, ...)
+        let why = if warnings.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", warnings.join("; "))
+        };
+        return Err(Error::NoGeometry(why));
     };
     let start = match first.geom {
         FeatureGeom::Point(p) => p,

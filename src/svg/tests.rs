@@ -283,7 +283,7 @@ fn text_becomes_outlines_when_a_font_exists() {
     );
     if super::load::font_database().is_empty() {
         // No font on this machine: the text is skipped with a warning.
-        assert!(matches!(d, Err(Error::NoGeometry)));
+        assert!(matches!(d, Err(Error::NoGeometry(_))));
     } else {
         let d = d.expect("text drawing loads");
         assert!(!d.shapes.is_empty());
@@ -320,7 +320,7 @@ fn clip_paths_and_masks_are_not_geometry() {
 #[test]
 fn invisible_elements_stay_dropped() {
     let err = load_err(&svg(r#"<rect width="5" height="5" display="none"/>"#));
-    assert!(matches!(err, Error::NoGeometry), "{err}");
+    assert!(matches!(err, Error::NoGeometry(_)), "{err}");
 }
 
 // ---- bad input ----
@@ -405,10 +405,10 @@ fn utf16_with_bom_is_decoded() {
 
 #[test]
 fn empty_svg_has_no_geometry() {
-    assert!(matches!(load_err(&svg("")), Error::NoGeometry));
+    assert!(matches!(load_err(&svg("")), Error::NoGeometry(_)));
     assert!(matches!(
         load_err(&svg(r#"<path d=""/>"#)),
-        Error::NoGeometry
+        Error::NoGeometry(_)
     ));
 }
 
@@ -461,7 +461,7 @@ fn nan_and_overflow_never_give_garbage() {
                     }
                 }
             }
-            Err(Error::BadCoordinate(_) | Error::NoGeometry) => {}
+            Err(Error::BadCoordinate(_) | Error::NoGeometry(_)) => {}
             Err(e) => panic!("{case}: unexpected {e:?}"),
         }
     }
@@ -951,3 +951,29 @@ fn coordinates_are_checked_after_units_and_scale() {
 }
 
 mod exact;
+
+#[test]
+fn messages_say_why_there_is_nothing_to_mesh() {
+    // a root <svg> in another namespace is named as such (not "<svg>, not <svg>")
+    let e =
+        load_err(r#"<svg xmlns="http://example.com/not-svg"><rect width="1" height="1"/></svg>"#);
+    let msg = e.to_string();
+    assert!(
+        msg.contains("namespace 'http://example.com/not-svg'") && msg.contains(SVG_NS_FOR_TESTS),
+        "{msg}"
+    );
+    // a drawing that holds only a raster image says so
+    let e = load_err(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><image width="10" height="10" href="data:image/png;base64,iVBORw0KGgo="/></svg>"#,
+    );
+    assert!(matches!(e, Error::NoGeometry(_)), "{e}");
+    assert!(e.to_string().contains("image"), "{e}");
+    // nothing at all: the plain message
+    let e = load_err(r#"<svg xmlns="http://www.w3.org/2000/svg"/>"#);
+    assert_eq!(
+        e.to_string(),
+        "no geometry: the drawing has no paths, shapes or points to mesh"
+    );
+}
+
+const SVG_NS_FOR_TESTS: &str = "http://www.w3.org/2000/svg";

@@ -508,7 +508,7 @@ mod property {
                     prop_assert_eq!(p.fallbacks(), 0, "{} {:?} {:?}", body, p, drawing.warnings);
                     prop_assert_eq!(p.exact, drawing.shapes.len());
                 }
-                Err(e) => prop_assert!(matches!(e, Error::NoGeometry), "{}: {}", body, e),
+                Err(e) => prop_assert!(matches!(e, Error::NoGeometry(_)), "{}: {}", body, e),
             }
         }
 
@@ -545,7 +545,7 @@ mod property {
                     prop_assert_eq!(p.exact, drawing.shapes.len());
                 }
                 // a path that is only a move, or collapses to nothing: no geometry
-                Err(e) => prop_assert!(matches!(e, Error::NoGeometry), "{}: {}", doc, e),
+                Err(e) => prop_assert!(matches!(e, Error::NoGeometry(_)), "{}: {}", doc, e),
             }
         }
     }
