@@ -154,6 +154,23 @@ fn cubic_edge_lattice(a: usize, b: usize) -> usize {
     super::bernstein::index(3, w[1], w[2])
 }
 
+/// The inner Bézier control points of the cubic Lagrange edge through `a`
+/// (t = 0), `p` (t = 1/3), `q` (t = 2/3) and `b` (t = 1): the inverse of
+/// p = (8A + 12P + 6Q + B)/27, q = (A + 6P + 12Q + 8B)/27.
+pub fn cubic_edge_controls(a: Point, p: Point, q: Point, b: Point) -> [Point; 2] {
+    let (a, p, q, b) = (a.to_vec2(), p.to_vec2(), q.to_vec2(), b.to_vec2());
+    [
+        ((-5.0 * a + 18.0 * p - 9.0 * q + 2.0 * b) / 6.0).to_point(),
+        ((2.0 * a - 9.0 * p + 18.0 * q - 5.0 * b) / 6.0).to_point(),
+    ]
+}
+
+/// The Bézier control point of the quadratic Lagrange edge through `a` (t = 0),
+/// `m` (t = 1/2) and `b` (t = 1): `2m − (a + b)/2`.
+pub fn quadratic_edge_control(a: Point, m: Point, b: Point) -> Point {
+    Point::new(2.0 * m.x - 0.5 * (a.x + b.x), 2.0 * m.y - 0.5 * (a.y + b.y))
+}
+
 /// The cubic Bézier control net (lattice order) of the cubic Lagrange triangle `nodes`.
 pub fn cubic_to_bezier(nodes: &[Point; 10]) -> [Point; 10] {
     let v = |i: usize| nodes[i].to_vec2();
@@ -164,12 +181,10 @@ pub fn cubic_to_bezier(nodes: &[Point; 10]) -> [Point; 10] {
     b[super::bernstein::index(3, 0, 3)] = v(2);
     let mut edge_sum = kurbo::Vec2::ZERO;
     for (e, [a, c]) in EDGES.into_iter().enumerate() {
-        // Lagrange values p at 1/3 (near a), q at 2/3; inverse of
-        // p = (8A + 12P + 6Q + C)/27, q = (A + 6P + 12Q + 8C)/27.
-        let (pa, pc) = (v(a), v(c));
-        let (p, q) = (v(3 + 2 * e), v(4 + 2 * e));
-        let near_a = (-5.0 * pa + 18.0 * p - 9.0 * q + 2.0 * pc) / 6.0;
-        let near_c = (2.0 * pa - 9.0 * p + 18.0 * q - 5.0 * pc) / 6.0;
+        // Lagrange values at 1/3 (near a) and 2/3
+        let [near_a, near_c] =
+            cubic_edge_controls(nodes[a], nodes[3 + 2 * e], nodes[4 + 2 * e], nodes[c])
+                .map(Point::to_vec2);
         b[cubic_edge_lattice(a, c)] = near_a;
         b[cubic_edge_lattice(c, a)] = near_c;
         edge_sum += near_a + near_c;

@@ -265,21 +265,14 @@ pub(crate) fn area_matching_coefficient(h: f64) -> f64 {
     let segment = h - sh * ch;
     let excess = |beta: f64| {
         let (sb, cb) = beta.sin_cos();
-        let p = [(0.0, -sh), (cb - ch, -sb), (cb - ch, sb), (0.0, sh)];
-        // Bézier controls of the Lagrange cubic through p at 0, 1/3, 2/3, 1
-        let ctrl = |i: usize| {
-            let c = [
-                [6.0, 0.0, 0.0, 0.0],
-                [-5.0, 18.0, -9.0, 2.0],
-                [2.0, -9.0, 18.0, -5.0],
-                [0.0, 0.0, 0.0, 6.0],
-            ][i];
-            (
-                (0..4).map(|k| c[k] * p[k].0).sum::<f64>() / 6.0,
-                (0..4).map(|k| c[k] * p[k].1).sum::<f64>() / 6.0,
-            )
-        };
-        let cubic = CubicBez::new(ctrl(0), ctrl(1), ctrl(2), ctrl(3));
+        let (a, p, q, b) = (
+            Point::new(0.0, -sh),
+            Point::new(cb - ch, -sb),
+            Point::new(cb - ch, sb),
+            Point::new(0.0, sh),
+        );
+        let [c1, c2] = crate::element::lagrange::cubic_edge_controls(a, p, q, b);
+        let cubic = CubicBez::new(a, c1, c2, b);
         // the curve's area plus the chord's back (which is 0: the chord passes the origin)
         kurbo::ParamCurveArea::signed_area(&cubic) - segment
     };

@@ -433,17 +433,10 @@ fn conic_sections_cut_a_circle_like_its_cubics_and_place_nodes_at_area_matched_a
                 }
             }
             nodes.push(b);
-            // Bézier controls of the Lagrange cubic through the four nodes
-            let ctrl = |w: [f64; 4]| {
-                let v = (0..4).fold(kurbo::Vec2::ZERO, |acc, k| acc + nodes[k].to_vec2() * w[k]);
-                (v / 6.0).to_point()
-            };
-            let cubic = kurbo::CubicBez::new(
-                nodes[0],
-                ctrl([-5.0, 18.0, -9.0, 2.0]),
-                ctrl([2.0, -9.0, 18.0, -5.0]),
-                nodes[3],
+            let [c1, c2] = crate::element::lagrange::cubic_edge_controls(
+                nodes[0], nodes[1], nodes[2], nodes[3],
             );
+            let cubic = kurbo::CubicBez::new(nodes[0], c1, c2, nodes[3]);
             let enclosed = kurbo::ParamCurveArea::signed_area(&cubic)
                 + kurbo::ParamCurveArea::signed_area(&kurbo::Line::new(b, a));
             let h = step.abs() / 2.0;

@@ -6,6 +6,7 @@
 //! y is flipped back (SVG y = −y), so the preview looks like the input drawing.
 
 use crate::FemMesh;
+use crate::element::lagrange;
 use crate::fem::LineKind;
 use kurbo::Point;
 use std::collections::HashSet;
@@ -30,21 +31,9 @@ enum Curve {
 /// The Bézier form of a Lagrange edge: `ends` and `inner` nodes (evenly spaced in t).
 fn edge_curve(a: Point, b: Point, inner: &[Point]) -> Curve {
     match *inner {
-        [m] => {
-            // Quadratic through a, m (t = 1/2), b: control = 2m − (a + b)/2.
-            let c = Point::new(2.0 * m.x - 0.5 * (a.x + b.x), 2.0 * m.y - 0.5 * (a.y + b.y));
-            Curve::Quad(a, c, b)
-        }
+        [m] => Curve::Quad(a, lagrange::quadratic_edge_control(a, m, b), b),
         [p1, p2] => {
-            // Cubic through a, p1 (t = 1/3), p2 (t = 2/3), b.
-            let c1 = Point::new(
-                (-5.0 * a.x + 18.0 * p1.x - 9.0 * p2.x + 2.0 * b.x) / 6.0,
-                (-5.0 * a.y + 18.0 * p1.y - 9.0 * p2.y + 2.0 * b.y) / 6.0,
-            );
-            let c2 = Point::new(
-                (2.0 * a.x - 9.0 * p1.x + 18.0 * p2.x - 5.0 * b.x) / 6.0,
-                (2.0 * a.y - 9.0 * p1.y + 18.0 * p2.y - 5.0 * b.y) / 6.0,
-            );
+            let [c1, c2] = lagrange::cubic_edge_controls(a, p1, p2, b);
             Curve::Cubic(a, c1, c2, b)
         }
         _ => Curve::Line(a, b),

@@ -2,7 +2,7 @@
 //! a point at barycentric coordinates of the reference triangle, and the exact area.
 //! Works for straight and curved (Lagrange P2, P3) triangles alike.
 
-use crate::element::Order;
+use crate::element::{Order, lagrange};
 use kurbo::{CubicBez, Line, ParamCurveArea, Point, QuadBez};
 
 /// The image of the reference point with barycentric coordinates `l` under the
@@ -55,22 +55,12 @@ pub(crate) fn element_area(order: Order, nodes: &[Point]) -> f64 {
             match order {
                 Order::Linear => Line::new(p, q).signed_area(),
                 Order::Quadratic => {
-                    let m = nodes[3 + e];
-                    let ctrl =
-                        Point::new(2.0 * m.x - 0.5 * (p.x + q.x), 2.0 * m.y - 0.5 * (p.y + q.y));
+                    let ctrl = lagrange::quadratic_edge_control(p, nodes[3 + e], q);
                     QuadBez::new(p, ctrl, q).signed_area()
                 }
                 Order::Cubic => {
-                    // Nodes at t = 0, 1/3, 2/3, 1 → Bézier control points.
-                    let (a, b) = (nodes[3 + 2 * e], nodes[4 + 2 * e]);
-                    let c1 = Point::new(
-                        (-5.0 * p.x + 18.0 * a.x - 9.0 * b.x + 2.0 * q.x) / 6.0,
-                        (-5.0 * p.y + 18.0 * a.y - 9.0 * b.y + 2.0 * q.y) / 6.0,
-                    );
-                    let c2 = Point::new(
-                        (2.0 * p.x - 9.0 * a.x + 18.0 * b.x - 5.0 * q.x) / 6.0,
-                        (2.0 * p.y - 9.0 * a.y + 18.0 * b.y - 5.0 * q.y) / 6.0,
-                    );
+                    let [c1, c2] =
+                        lagrange::cubic_edge_controls(p, nodes[3 + 2 * e], nodes[4 + 2 * e], q);
                     CubicBez::new(p, c1, c2, q).signed_area()
                 }
             }
