@@ -158,10 +158,12 @@ fn cubic_edge_lattice(a: usize, b: usize) -> usize {
 /// (t = 0), `p` (t = 1/3), `q` (t = 2/3) and `b` (t = 1): the inverse of
 /// p = (8A + 12P + 6Q + B)/27, q = (A + 6P + 12Q + 8B)/27.
 pub fn cubic_edge_controls(a: Point, p: Point, q: Point, b: Point) -> [Point; 2] {
-    let (a, p, q, b) = (a.to_vec2(), p.to_vec2(), q.to_vec2(), b.to_vec2());
+    // per coordinate, divided (kurbo's `Vec2 / f64` multiplies by the reciprocal)
+    let near_a = |a: f64, p: f64, q: f64, b: f64| (-5.0 * a + 18.0 * p - 9.0 * q + 2.0 * b) / 6.0;
+    let near_b = |a: f64, p: f64, q: f64, b: f64| (2.0 * a - 9.0 * p + 18.0 * q - 5.0 * b) / 6.0;
     [
-        ((-5.0 * a + 18.0 * p - 9.0 * q + 2.0 * b) / 6.0).to_point(),
-        ((2.0 * a - 9.0 * p + 18.0 * q - 5.0 * b) / 6.0).to_point(),
+        Point::new(near_a(a.x, p.x, q.x, b.x), near_a(a.y, p.y, q.y, b.y)),
+        Point::new(near_b(a.x, p.x, q.x, b.x), near_b(a.y, p.y, q.y, b.y)),
     ]
 }
 
@@ -181,10 +183,12 @@ pub fn cubic_to_bezier(nodes: &[Point; 10]) -> [Point; 10] {
     b[super::bernstein::index(3, 0, 3)] = v(2);
     let mut edge_sum = kurbo::Vec2::ZERO;
     for (e, [a, c]) in EDGES.into_iter().enumerate() {
-        // Lagrange values at 1/3 (near a) and 2/3
-        let [near_a, near_c] =
-            cubic_edge_controls(nodes[a], nodes[3 + 2 * e], nodes[4 + 2 * e], nodes[c])
-                .map(Point::to_vec2);
+        // Lagrange values p at 1/3 (near a), q at 2/3; as `cubic_edge_controls`,
+        // in the Vec2 arithmetic the certification has always used.
+        let (pa, pc) = (v(a), v(c));
+        let (p, q) = (v(3 + 2 * e), v(4 + 2 * e));
+        let near_a = (-5.0 * pa + 18.0 * p - 9.0 * q + 2.0 * pc) / 6.0;
+        let near_c = (2.0 * pa - 9.0 * p + 18.0 * q - 5.0 * pc) / 6.0;
         b[cubic_edge_lattice(a, c)] = near_a;
         b[cubic_edge_lattice(c, a)] = near_c;
         edge_sum += near_a + near_c;
