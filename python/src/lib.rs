@@ -119,6 +119,9 @@ struct Arrays {
     lines: Vec<i64>,
     /// Physical curve tag - 1 per line.
     line_tags: Vec<i32>,
+    /// Elementary curve (entity) tag per line: the pieces a physical curve is
+    /// cut into at its corners.
+    line_entity: Vec<i32>,
     /// The physical curve names, by tag - 1.
     line_names: Vec<String>,
 }
@@ -148,7 +151,9 @@ impl Arrays {
                 .enumerate()
                 .map(|(i, n)| {
                     let tag = i32::try_from(i + 1).unwrap_or(i32::MAX);
-                    names.get(&(dim, tag)).map_or_else(|| n.clone(), |s| (*s).to_owned())
+                    names
+                        .get(&(dim, tag))
+                        .map_or_else(|| n.clone(), |s| (*s).to_owned())
                 })
                 .collect()
         };
@@ -159,19 +164,23 @@ impl Arrays {
             region_names: named(2, &mesh.surfaces),
             lines: Vec::new(),
             line_tags: Vec::new(),
+            line_entity: Vec::new(),
             line_names: named(1, &mesh.curves),
         };
         for b in &msh.triangle_blocks {
             let per = b.order.triangle_nodes();
             a.triangles.extend(b.nodes.iter().map(|&v| i64::from(v)));
             let tag = b.physical.unwrap_or(0) - 1;
-            a.region.extend(std::iter::repeat_n(tag, b.nodes.len() / per));
+            a.region
+                .extend(std::iter::repeat_n(tag, b.nodes.len() / per));
         }
         for b in &msh.line_blocks {
             a.lines.extend(b.nodes.iter().map(|&v| i64::from(v)));
+            let n = b.lines().count();
             let tag = b.physical.unwrap_or(0) - 1;
-            a.line_tags
-                .extend(std::iter::repeat_n(tag, b.lines().count()));
+            a.line_tags.extend(std::iter::repeat_n(tag, n));
+            a.line_entity
+                .extend(std::iter::repeat_n(b.entity.unwrap_or(0), n));
         }
         Ok(a)
     }
@@ -183,17 +192,30 @@ impl MeshData {
     fn arrays<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let a = &self.arrays;
         let d = PyDict::new(py);
-        d.set_item("points", PyBytes::new(py, &le_bytes(&a.points, f64::to_le_bytes)))?;
+        d.set_item(
+            "points",
+            PyBytes::new(py, &le_bytes(&a.points, f64::to_le_bytes)),
+        )?;
         d.set_item(
             "triangles",
             PyBytes::new(py, &le_bytes(&a.triangles, i64::to_le_bytes)),
         )?;
-        d.set_item("region", PyBytes::new(py, &le_bytes(&a.region, i32::to_le_bytes)))?;
+        d.set_item(
+            "region",
+            PyBytes::new(py, &le_bytes(&a.region, i32::to_le_bytes)),
+        )?;
         d.set_item("region_names", a.region_names.clone())?;
-        d.set_item("lines", PyBytes::new(py, &le_bytes(&a.lines, i64::to_le_bytes)))?;
+        d.set_item(
+            "lines",
+            PyBytes::new(py, &le_bytes(&a.lines, i64::to_le_bytes)),
+        )?;
         d.set_item(
             "line_tags",
             PyBytes::new(py, &le_bytes(&a.line_tags, i32::to_le_bytes)),
+        )?;
+        d.set_item(
+            "line_entity",
+            PyBytes::new(py, &le_bytes(&a.line_entity, i32::to_le_bytes)),
         )?;
         d.set_item("line_names", a.line_names.clone())?;
         d.set_item("order", self.mesh.order() as u8)?;

@@ -5,7 +5,7 @@ and returns a :class:`Mesh` of numpy arrays in gmsh's node order: the same mesh,
 node for node, as the ``triwild`` command line writes for the same input and
 flags. Every keyword argument is the command line's flag of the same name
 (``edge_length`` is ``--edge-length``) with the same default; the flags not in
-the signature (``epsilon``, ``stop_after``, ``edge_length_abs``, ...) are
+the signature (``eps``, ``stop_after``, ``edge_length_abs``, ...) are
 accepted as ``**advanced`` keywords.
 
 Errors are exceptions: :class:`BadInput` (the command line's exit code 2),
@@ -87,6 +87,7 @@ class Mesh:
         self.region = np.frombuffer(a["region"], dtype="<i4").astype(np.int32)
         self.lines = np.frombuffer(a["lines"], dtype="<i8").reshape(-1, ln).astype(np.int64)
         self.line_tags = np.frombuffer(a["line_tags"], dtype="<i4").astype(np.int32)
+        self._line_entity = np.frombuffer(a["line_entity"], dtype="<i4").astype(np.int32)
         self.region_names = list(a["region_names"])
         self.line_names = list(a["line_names"])
         self.order = int(a["order"])
@@ -107,45 +108,46 @@ class Mesh:
         self._data.write(os.fspath(path), str(version), bool(binary))
 
     def to_meshio(self) -> Any:
-        """The mesh as a ``meshio.Mesh``, as meshio reads the ``.msh`` file:
-        one cell block per region and per physical curve, ``gmsh:physical``
-        and ``gmsh:geometrical`` cell data, ``cell_sets`` and ``field_data``
-        by physical name. Points get a zero z coordinate.
+        """The mesh as a ``meshio.Mesh``, as meshio reads the MSH 2.2 file
+        :meth:`write` makes: a block of triangles and a block of lines,
+        ``gmsh:physical`` and ``gmsh:geometrical`` cell data, ``field_data``
+        ``{name: [tag, dim]}``; plus ``cell_sets`` by physical name (what
+        ``skfem.io.from_meshio`` turns into subdomains and boundaries). Points
+        get a zero z coordinate.
 
         Needs ``meshio`` (``pip install meshio``).
         """
         import meshio
 
-        cells = []
-        blocks: List[Tuple[str, int]] = []  # (name, tag) of each block
-        ttype = _TRIANGLE_TYPES[self.triangles.shape[1]]
-        for g in range(len(self.region_names)):
-            sel = self.region == g
-            if sel.any():
-                cells.append((ttype, self.triangles[sel]))
-                blocks.append((self.region_names[g], g + 1))
+        cells = [(_TRIANGLE_TYPES[self.triangles.shape[1]], self.triangles)]
+        physical = [self.region + 1]
+        geometrical = [self.region + 1]  # one surface entity per region
         if len(self.lines):
-            ltype = _LINE_TYPES[self.lines.shape[1]]
-            for g in range(len(self.line_names)):
-                sel = self.line_tags == g
-                if sel.any():
-                    cells.append((ltype, self.lines[sel]))
-                    blocks.append((self.line_names[g], g + 1))
-        physical = [np.full(len(c), tag, dtype=np.int32) for (_, tag), (_, c) in zip(blocks, cells)]
-        cell_sets: Dict[str, List[np.ndarray]] = {}
+            cells.append((_LINE_TYPES[self.lines.shape[1]], self.lines))
+            physical.append(self.line_tags + 1)
+            geometrical.append(self._line_entity.copy())
         field_data: Dict[str, np.ndarray] = {}
-        for i, ((name, tag), (ctype, _)) in enumerate(zip(blocks, cells)):
-            cell_sets[name] = [
-                np.arange(len(c)) if j == i else np.array([], dtype=np.int64)
-                for j, (_, c) in enumerate(cells)
-            ]
-            field_data[name] = np.array([tag, 2 if ctype.startswith("triangle") else 1])
+        cell_sets: Dict[str, List[np.ndarray]] = {}
+        for b, (names, dim) in enumerate(((self.region_names, 2), (self.line_names, 1))):
+            if b >= len(cells):
+                break
+            for g, name in enumerate(names):
+                members = np.flatnonzero(physical[b] == g + 1)
+                if len(members) == 0:
+                    continue
+                field_data[name] = np.array([g + 1, dim])
+                cell_sets[name] = [
+                    members if k == b else np.array([], dtype=np.int64) for k in range(len(cells))
+                ]
         pts = np.zeros((len(self.points), 3))
         pts[:, :2] = self.points
         return meshio.Mesh(
             pts,
             cells,
-            cell_data={"gmsh:physical": physical, "gmsh:geometrical": [p.copy() for p in physical]},
+            cell_data={
+                "gmsh:physical": [p.astype(np.int32) for p in physical],
+                "gmsh:geometrical": [g.astype(np.int32) for g in geometrical],
+            },
             field_data=field_data,
             cell_sets=cell_sets,
         )
@@ -219,7 +221,7 @@ def mesh(
         mesher: ``"triwild"`` or ``"cdt"`` (the linear baseline).
         units: ``"user"`` (the root viewBox's units) or ``"px"``.
         **advanced: any other flag of the command line, by its long name with
-            ``_`` for ``-`` (``epsilon=1e-3``, ``stop_after="bsp"``,
+            ``_`` for ``-`` (``eps=1e-3``, ``stop_after="bsp"``,
             ``scale=2.0``, ``max_passes=10``, ...).
 
     Returns:
