@@ -22,25 +22,25 @@ use std::time::Instant;
 use triwild::{ErrorKind, FemMesh, MshOptions, MshVersion};
 
 create_exception!(
-    _triwild,
+    triwild,
     Error,
     PyException,
     "Base class of triwild's errors."
 );
 create_exception!(
-    _triwild,
+    triwild,
     BadInput,
     Error,
     "The input is not a drawing triwild can mesh (missing, not SVG, no geometry, bad flag): exit code 2 of the command line."
 );
 create_exception!(
-    _triwild,
+    triwild,
     MeshingError,
     Error,
     "Meshing failed: exit code 3 of the command line."
 );
 create_exception!(
-    _triwild,
+    triwild,
     IoError,
     Error,
     "Reading the input or writing an output failed: exit code 4 of the command line."
