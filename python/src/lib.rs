@@ -334,6 +334,9 @@ fn cli(py: Python<'_>, argv: Vec<OsString>, child: Vec<OsString>) -> u8 {
 #[pymodule]
 fn _triwild(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // this module's own panic hook (each extension has its own std): quiet
+    // about the spade panics the cdt mesher catches, as the command line is
+    triwild::cli::install_panic_hook();
     m.add("Error", py.get_type::<Error>())?;
     m.add("BadInput", py.get_type::<BadInput>())?;
     m.add("MeshingError", py.get_type::<MeshingError>())?;

@@ -113,7 +113,8 @@ fn init_logging(log: &LogArgs) {
 /// Keep the default panic message, except for panics raised inside spade: the
 /// baseline mesher catches those (a known spade limitation when splitting
 /// crossing constraints) and recovers, so they are not the user's business.
-fn install_panic_hook() {
+/// (The Python package installs it too, for `triwild.mesh(…, mesher="cdt")`.)
+pub fn install_panic_hook() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let in_spade = info
