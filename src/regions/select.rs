@@ -6,7 +6,7 @@ use super::classify::{RegionAssignment, edge_key};
 use super::element::element_area;
 use crate::exact::{Orientation, orient2d};
 use crate::fem::FemMesh;
-use crate::svg::Drawing;
+use crate::svg::{Drawing, Shape};
 use crate::{Error, Result};
 use kurbo::Point;
 use std::collections::{HashMap, HashSet};
@@ -98,6 +98,22 @@ pub(crate) const BACKGROUND: &str = "background";
 /// Name of the single surface of [`RegionMode::None`].
 pub(crate) const DOMAIN: &str = "domain";
 
+/// The surface name of a shape under [`RegionMode::Colour`]: `fill-#rrggbb` for
+/// an opaque colour (a stroke's area by its stroke colour), `fill-#rrggbbaa`
+/// for a translucent one (CSS hex with alpha: the mesh carries no blending),
+/// `fill-<gradient or pattern id>` for a paint server, else `fill-<shape name>`.
+pub(crate) fn colour_name(s: &Shape) -> String {
+    match (s.fill_colour, &s.paint.server) {
+        (Some([r, g, b]), _) if s.paint.alpha >= 1.0 => format!("fill-#{r:02x}{g:02x}{b:02x}"),
+        (Some([r, g, b]), _) => {
+            let a = (s.paint.alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
+            format!("fill-#{r:02x}{g:02x}{b:02x}{a:02x}")
+        }
+        (None, Some(server)) => format!("fill-{server}"),
+        (None, None) => format!("fill-{}", s.name()),
+    }
+}
+
 /// Per-triangle region labels and the label names (background is label 0).
 fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u32>, Vec<String>) {
     let mut names = vec![BACKGROUND.to_owned()];
@@ -119,10 +135,7 @@ fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u
                     n
                 }
             }
-            RegionMode::Colour => match s.fill_colour {
-                Some([r, g, b]) => format!("fill-#{r:02x}{g:02x}{b:02x}"),
-                None => format!("fill-{}", s.name()),
-            },
+            RegionMode::Colour => colour_name(s),
             RegionMode::None => DOMAIN.to_owned(),
         };
         of_shape[i] = *index.entry(name.clone()).or_insert_with(|| {
