@@ -71,6 +71,7 @@ pub use input::msh::{
 };
 pub use output::{
     MshOptions, MshVersion, check_writable, write_file, write_msh, write_msh_to, write_preview,
+    write_preview_coloured,
 };
 pub use params::{Length, Mesher, Params, defaults};
 pub use pipeline::{

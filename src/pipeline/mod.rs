@@ -581,7 +581,13 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let t = Instant::now();
     output::write_msh(&mesh, output, opts.msh)?;
     if let Some(p) = &opts.preview {
-        output::write_preview(&mesh, p)?;
+        let colours: Vec<Option<String>> = report
+            .regions
+            .surfaces
+            .iter()
+            .map(|s| s.colour.clone())
+            .collect();
+        output::write_preview_coloured(&mesh, &colours, p)?;
     }
     report.times.insert("load", t_load);
     report.times.insert("output", t.elapsed().as_secs_f64());

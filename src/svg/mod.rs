@@ -59,8 +59,7 @@ mod source;
 mod viewport;
 
 pub(crate) use drawing::{
-    Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId,
-    Subpath,
+    Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
 pub use paint::{PaintOptions, StrokeMode};
 

@@ -11,8 +11,8 @@ use super::conic::Conic;
 use super::drawing::{
     Clip, ClipPart, FillRule, PaintCounts, Segment, Shape, ShapeKind, ShapePaint, Subpath,
 };
-use super::paint::{self, PaintOptions, StrokeMode};
 use super::load::{Parsed, XmlFacts};
+use super::paint::{self, PaintOptions, StrokeMode};
 use super::reconstruct::{self, MARKER, OutputMap, Precision};
 use super::source::{Candidate, Source, Unsupported};
 use super::viewport::Frame;
@@ -126,8 +126,11 @@ pub(super) fn collect(
         root.filtered = true;
     }
     let root = Rc::new(root);
-    for node in tree.root().children().iter().rev() {
-        stack.push(Step::Visit(node, None, Scope::Document, root.clone()));
+    let children = tree.root().children();
+    for (k, node) in children.iter().enumerate().rev() {
+        if !is_basic_shape_markers(children, k, source) {
+            stack.push(Step::Visit(node, None, Scope::Document, root.clone()));
+        }
     }
     while let Some(step) = stack.pop() {
         match step {
@@ -152,8 +155,11 @@ pub(super) fn collect(
                         });
                     }
                 }
-                for child in g.children().iter().rev() {
-                    stack.push(Step::Visit(child, inherited, scope, ctx.clone()));
+                let children = g.children();
+                for (k, child) in children.iter().enumerate().rev() {
+                    if !is_basic_shape_markers(children, k, source) {
+                        stack.push(Step::Visit(child, inherited, scope, ctx.clone()));
+                    }
                 }
             }
             Step::Visit(usvg::Node::Path(p), inherited, scope, ctx) => {
@@ -169,7 +175,20 @@ pub(super) fn collect(
                     Err(None) => out.precision.glyphs += 1,
                     Err(Some(reason)) => *out.precision.fallback.entry(reason).or_default() += 1,
                 }
-                paint_items(p, shape, &ctx, frame, opts, &mut items, &mut out.paint)?;
+                let servers = [
+                    document_server(p, source, "fill"),
+                    document_server(p, source, "stroke"),
+                ];
+                paint_items(
+                    p,
+                    shape,
+                    &ctx,
+                    frame,
+                    opts,
+                    &servers,
+                    &mut items,
+                    &mut out.paint,
+                )?;
             }
             Step::Visit(usvg::Node::Text(t), inherited, _, ctx) => {
                 let id = source.public(t.id()).or(inherited);
@@ -227,6 +246,57 @@ pub(super) fn collect(
     Ok(out)
 }
 
+/// The id of the paint server `url(#id)` that the source element of `p` (or the
+/// nearest ancestor that sets it) names for `property` (`fill` or `stroke`), as
+/// written in the document: usvg renames a bounding-box gradient used twice.
+fn document_server(p: &usvg::Path, source: &Source<'_, '_>, property: &str) -> Option<String> {
+    if p.id().is_empty() {
+        return None;
+    }
+    let node = *source.shapes_with_id(p.id()).first()?;
+    for n in node.ancestors().filter(usvg::roxmltree::Node::is_element) {
+        let in_style = n.attribute("style").and_then(|style| {
+            style.split(';').find_map(|decl| {
+                let (k, v) = decl.split_once(':')?;
+                (k.trim() == property).then(|| v.trim())
+            })
+        });
+        if let Some(value) = in_style.or_else(|| n.attribute(property)) {
+            let id = value
+                .strip_prefix("url(")?
+                .trim_start_matches(['\'', '"', '#']);
+            let end = id.find([')', '\'', '"'])?;
+            return Some(id[..end].to_owned()).filter(|s| !s.is_empty());
+        }
+    }
+    None
+}
+
+/// Whether `siblings[k]` is the group of markers usvg draws on a `<rect>`,
+/// `<circle>` or `<ellipse>` (SVG draws markers on path, line, polyline and
+/// polygon only): an anonymous group next to such an element's path, the
+/// element having a `marker*` property.
+fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_, '_>) -> bool {
+    let usvg::Node::Group(g) = &siblings[k] else {
+        return false;
+    };
+    if !g.id().is_empty() {
+        return false;
+    }
+    let basic_with_markers = |j: usize| {
+        let Some(usvg::Node::Path(p)) = siblings.get(j) else {
+            return false;
+        };
+        !p.id().is_empty()
+            && source.shapes_with_id(p.id()).first().is_some_and(|n| {
+                matches!(n.tag_name().name(), "rect" | "circle" | "ellipse")
+                    && (n.attributes().any(|a| a.name().starts_with("marker"))
+                        || n.attribute("style").is_some_and(|s| s.contains("marker")))
+            })
+    };
+    (k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)
+}
+
 /// The context of a group's children: its opacity, clip path, mask and filters added.
 fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>, frame: &Frame) -> Result<Rc<Ctx>> {
     let plain = g.opacity().get() >= 1.0
@@ -240,10 +310,12 @@ fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>, frame: &Frame) -> Result<Rc<Ctx>
     ctx.opacity *= g.opacity().get();
     ctx.filtered |= !g.filters().is_empty();
     if let Some(cp) = g.clip_path() {
-        ctx.clips.push(Arc::new(clip_of(cp, g.abs_transform(), frame)?));
+        ctx.clips
+            .push(Arc::new(clip_of(cp, g.abs_transform(), frame)?));
     }
     if let Some(m) = g.mask() {
-        ctx.clips.push(Arc::new(mask_of(m, g.abs_transform(), frame)?));
+        ctx.clips
+            .push(Arc::new(mask_of(m, g.abs_transform(), frame)?));
     }
     Ok(Rc::new(ctx))
 }
@@ -320,7 +392,11 @@ fn clip_parts(
             usvg::Node::Group(c) => {
                 let mut inner = clips.to_vec();
                 if let Some(cp) = c.clip_path() {
-                    inner.push(Arc::new(clip_of(cp, space.pre_concat(c.abs_transform()), frame)?));
+                    inner.push(Arc::new(clip_of(
+                        cp,
+                        space.pre_concat(c.abs_transform()),
+                        frame,
+                    )?));
                 }
                 clip_parts(c, space, &inner, frame, out, rule)?;
             }
@@ -345,12 +421,14 @@ fn clip_parts(
 
 /// What one usvg path paints: its fill and stroke as items in paint order,
 /// unless invisible (hidden, zero opacity) or decoration (below `--min-opacity`).
+#[allow(clippy::too_many_arguments)]
 fn paint_items(
     p: &usvg::Path,
     shape: Shape,
     ctx: &Ctx,
     frame: &Frame,
     opts: &PaintOptions,
+    servers: &[Option<String>; 2],
     items: &mut Vec<Item>,
     counts: &mut PaintCounts,
 ) -> Result<()> {
@@ -418,7 +496,7 @@ fn paint_items(
                 filled: true,
                 paint: ShapePaint {
                     alpha: fill_alpha.unwrap_or(1.0),
-                    server: paint::server_id(f.paint()),
+                    server: servers[0].clone().or_else(|| paint::server_id(f.paint())),
                     average_colour: paint::average_colour(f.paint()),
                     ..base_paint.clone()
                 },
@@ -468,7 +546,7 @@ fn paint_items(
                         paint: ShapePaint {
                             kind: ShapeKind::Stroke,
                             alpha: stroke_alpha.unwrap_or(1.0),
-                            server: paint::server_id(s.paint()),
+                            server: servers[1].clone().or_else(|| paint::server_id(s.paint())),
                             average_colour: paint::average_colour(s.paint()),
                             ..base_paint.clone()
                         },
@@ -528,7 +606,11 @@ fn resolve_items(items: Vec<Item>, opts: &PaintOptions, counts: &mut PaintCounts
     for item in items {
         let shape = match item {
             Item::Shape(s) => Some(s),
-            Item::Stroke { area, centre, width } => {
+            Item::Stroke {
+                area,
+                centre,
+                width,
+            } => {
                 if width < hairline {
                     counts.strokes_as_lines += 1;
                     centre
@@ -568,7 +650,11 @@ fn add_clip_outlines(shapes: &mut Vec<Shape>, paths: usize) {
             Some(e) => e.1 = e.1.union(bb),
             None => seen.push((ptr, bb)),
         }
-        for inner in c.within.iter().chain(c.parts.iter().flat_map(|p| p.clips.iter())) {
+        for inner in c
+            .within
+            .iter()
+            .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+        {
             visit(inner, bb, seen);
         }
     }
@@ -621,7 +707,11 @@ fn collect_clips(c: &Arc<Clip>, all: &mut Vec<Arc<Clip>>) {
         return;
     }
     all.push(c.clone());
-    for inner in c.within.iter().chain(c.parts.iter().flat_map(|p| p.clips.iter())) {
+    for inner in c
+        .within
+        .iter()
+        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+    {
         collect_clips(inner, all);
     }
 }
