@@ -332,7 +332,10 @@ mod tests {
             .lines()
             .find(|l| l.contains("fill=\"#ff000080\""))
             .expect("region path");
-        assert_eq!((fill.matches('M').count(), fill.matches('Z').count()), (1, 1));
+        assert_eq!(
+            (fill.matches('M').count(), fill.matches('Z').count()),
+            (1, 1)
+        );
         let mut buf = Vec::new();
         write_svg(&mut buf, &mesh, &[Some("red\" onload=\"x".into())]).expect("write");
         assert!(!String::from_utf8(buf).expect("utf8").contains("onload"));

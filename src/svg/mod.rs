@@ -39,8 +39,22 @@
 //!   silently drop with its element) is a [`Error::BadCoordinate`];
 //! - [`Drawing::features`] lists every segment, every isolated point and the
 //!   implicit closing segment of each open subpath of a filled shape;
-//! - clip paths, masks, images and filters are not geometry (images and filters
-//!   leave a warning, as does text that yields no outline).
+//! - what you see is what you mesh (`paint.rs`, [`PaintOptions`]): what the
+//!   renderer does not paint is not loaded (hidden, `display: none`, zero
+//!   opacity along the group chain, zero fill or stroke opacity, markers on
+//!   `<rect>`, `<circle>`, `<ellipse>`); paint whose effective opacity is
+//!   below `min_opacity` is decoration (no shape; its outline only on request);
+//!   a stroke becomes the area it paints (kurbo's stroke expansion of the f64
+//!   path in the path's user space: width, joins, caps, miter limit, dashes),
+//!   a shape of its own after (or, `paint-order: stroke`, before) its fill,
+//!   unless thinner than the hairline width; a shape under clip paths and
+//!   masks carries them ([`Clip`]: the clip's own rule, nested clips,
+//!   `clipPathUnits`; a mask approximated by the fills of its content that are
+//!   not fully transparent, within its rectangle, in usvg's single precision),
+//!   and each clip's outline is feature geometry ([`drawing::ShapeKind::ClipOutline`]);
+//!   [`Drawing::paint`] counts all of it;
+//! - images and filters are not geometry (they leave a warning, as does text
+//!   that yields no outline; a filtered shape keeps its outline and is counted).
 //!
 //! Guarantees to the next stage (see [`Drawing`]): at least one feature, every
 //! coordinate finite with magnitude at most [`Drawing::MAX_COORD`], and a bbox

@@ -421,7 +421,10 @@ fn clip_parts(
 
 /// What one usvg path paints: its fill and stroke as items in paint order,
 /// unless invisible (hidden, zero opacity) or decoration (below `--min-opacity`).
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one path's paint: the path, its shape, context, frame, options, servers and outputs"
+)]
 fn paint_items(
     p: &usvg::Path,
     shape: Shape,
