@@ -223,7 +223,7 @@ pub(crate) fn load_with_precision(
     units: Units,
     scale: f64,
 ) -> Result<(Drawing, Precision)> {
-    load_painted_with_precision(data, units, scale, &PaintOptions::DEFAULT)
+    load_painted_with_precision(data, units, scale, &PaintOptions::OUTLINES)
 }
 
 /// [`load_with_precision`] with the paint model read as `paint` says.

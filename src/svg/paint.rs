@@ -52,6 +52,16 @@ impl PaintOptions {
         min_stroke_width: 1e-4,
         min_stroke_relative: true,
     };
+    /// Every outline as written: strokes as centre lines, no decoration (only
+    /// what is not painted at all is left out); the loader's geometry tests.
+    #[cfg(test)]
+    pub(crate) const OUTLINES: PaintOptions = PaintOptions {
+        strokes: StrokeMode::Line,
+        min_opacity: 0.0,
+        keep_decoration: true,
+        min_stroke_width: 1e-4,
+        min_stroke_relative: true,
+    };
     /// Set what strokes become.
     pub fn with_strokes(mut self, strokes: StrokeMode) -> Self {
         self.strokes = strokes;
