@@ -129,7 +129,7 @@ pub fn write_preview(mesh: &FemMesh, path: &Path) -> Result<()> {
 /// [`write_preview`] with each triangle filled with its physical surface's
 /// colour: `colours[s]` is a CSS colour (`#rrggbb`, `#rrggbbaa`) for surface `s`
 /// (a missing entry or `None` leaves it unfilled), so the picture can be
-/// compared with the drawing at a glance ([`crate::RegionStat::colour`]).
+/// compared with the drawing at a glance (the `colour` of each region in `--stats`).
 ///
 /// # Errors
 /// As [`write_msh`].
