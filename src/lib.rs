@@ -87,6 +87,7 @@ pub use input::msh::{
 };
 pub use output::{
     MshOptions, MshVersion, check_writable, write_file, write_msh, write_msh_to, write_preview,
+    write_preview_coloured,
 };
 pub use params::{Length, Mesher, Params, defaults};
 pub use pipeline::{
@@ -96,10 +97,13 @@ pub use pipeline::{
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use stage::Stage;
 pub use svg::drawing::{
-    Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, PathPrecision, Segment, Shape,
-    ShapeId, Subpath,
+    Clip, ClipPart, Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, PaintCounts,
+    PathPrecision, Segment, Shape, ShapeId, ShapeKind, ShapePaint, Subpath,
 };
-pub use svg::{load_bytes, load_bytes_with, load_file, load_file_with};
+pub use svg::{
+    PaintOptions, StrokeMode, load_bytes, load_bytes_painted, load_bytes_with, load_file,
+    load_file_painted, load_file_with,
+};
 pub use units::Units;
 
 /// Not part of the API (hidden, no stability promise): the internals that the

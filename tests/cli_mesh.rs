@@ -199,7 +199,13 @@ fn named_shapes_give_named_physical_curves() {
     let out = support::out_dir("cli_names");
     let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg");
     let msh = out.join("star.msh");
-    let run = bin().arg(&svg).arg("-o").arg(&msh).output().unwrap();
+    let run = bin()
+        .arg(&svg)
+        .arg("-o")
+        .arg(&msh)
+        .args(["--strokes", "line"])
+        .output()
+        .unwrap();
     assert!(run.status.success());
     let m = support::read_msh(&msh).unwrap();
     let curves: Vec<&String> = m
@@ -209,7 +215,8 @@ fn named_shapes_give_named_physical_curves() {
         .map(|(_, n)| n)
         .collect();
     // `path1` is filled, so its surface is `path1` and its curve, written after it,
-    // `path1-curve` (names are unique in a file); `frame` is not filled.
+    // `path1-curve` (names are unique in a file); `frame` is not filled (its
+    // stroke kept as a centre line).
     assert!(curves.iter().any(|n| *n == "path1-curve"), "{curves:?}");
     assert!(curves.iter().any(|n| *n == "frame"), "{curves:?}");
     assert!(
@@ -218,6 +225,72 @@ fn named_shapes_give_named_physical_curves() {
             .any(|((dim, _), n)| *dim == 2 && n == "path1"),
         "{:?}",
         m.physical_names
+    );
+}
+
+#[test]
+fn the_strokes_flag_makes_areas_lines_or_nothing_and_the_stats_count_them() {
+    // star-evenodd.svg: a filled star and a frame stroked 1 unit wide
+    let out = support::out_dir("cli_strokes");
+    let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg");
+    let run = |flags: &[&str]| {
+        let msh = out.join(format!("star{}.msh", flags.join("")));
+        let run = bin()
+            .arg(&svg)
+            .arg("-o")
+            .arg(&msh)
+            .arg("--stats")
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{flags:?}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        support::check_msh(&msh).assert_valid(&format!("{flags:?}"));
+        let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        let surfaces: Vec<(String, f64)> = stats["regions"]["surfaces"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["name"].as_str().unwrap().to_owned(),
+                    s["area"].as_f64().unwrap(),
+                )
+            })
+            .collect();
+        (stats["input"]["paint"].clone(), surfaces)
+    };
+    let (paint, surfaces) = run(&[]);
+    assert_eq!(paint["strokes_as_areas"], 1);
+    let frame = surfaces
+        .iter()
+        .find(|s| s.0 == "frame-stroke")
+        .expect("frame-stroke");
+    // a 1-wide square ring with miter joins around a 198 square
+    assert!(
+        (frame.1 - (199.0f64.powi(2) - 197.0f64.powi(2))).abs() < 1e-6,
+        "{frame:?}"
+    );
+    let (paint, surfaces) = run(&["--strokes", "line"]);
+    assert_eq!(paint["strokes_as_lines"], 1);
+    assert!(
+        !surfaces.iter().any(|s| s.0.contains("stroke")),
+        "{surfaces:?}"
+    );
+    let (paint, _) = run(&["--strokes", "ignore"]);
+    assert_eq!(paint["strokes_ignored"], 1);
+    let bad = bin()
+        .arg(&svg)
+        .args(["-o", "/dev/null", "--min-opacity", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        bad.status.code(),
+        Some(2),
+        "an opacity above 1 is a usage error"
     );
 }
 

@@ -17,6 +17,7 @@ fn shape(i: u32) -> Shape {
         stroked: false,
         fill_rule: FillRule::NonZero,
         fill_colour: None,
+        paint: Default::default(),
         subpaths: Vec::new(),
     }
 }
@@ -51,6 +52,7 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
         bbox: bbox.unwrap_or_default(),
         warnings: Vec::new(),
         precision: Default::default(),
+        paint: Default::default(),
     }
 }
 

@@ -10,6 +10,7 @@ use triwild::Order;
 use triwild::defaults;
 use triwild::{Length, Mesher, Params, Stage, Units};
 use triwild::{MshOptions, MshVersion};
+use triwild::{PaintOptions, StrokeMode};
 use triwild::{RegionMode, RegionOptions};
 
 /// What becomes a physical surface, and what is dropped.
@@ -29,6 +30,36 @@ pub(crate) struct RegionArgs {
     /// times --scale, y pointing up, i.e. y = -y_svg). Repeatable.
     #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
     hole: Vec<(f64, f64)>,
+    /// Strokes: the area they paint (a region `<name>-stroke`; strokes narrower
+    /// than --l-min stay lines), their centre lines (features, no region), or nothing.
+    #[arg(long, value_enum, default_value_t = StrokesArg::Area)]
+    strokes: StrokesArg,
+    /// Paint whose effective opacity (group opacities x fill or stroke opacity x a
+    /// gradient's mean stop opacity) is below this is decoration: no region.
+    #[arg(long, value_name = "ALPHA", default_value_t = PaintOptions::DEFAULT.min_opacity,
+          value_parser = parse_opacity)]
+    min_opacity: f32,
+    /// Keep the outlines of decoration (paint below --min-opacity) as features.
+    #[arg(long)]
+    keep_decoration: bool,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum StrokesArg {
+    /// The area the stroke paints.
+    Area,
+    /// The centre line.
+    Line,
+    /// Nothing.
+    Ignore,
+}
+
+fn parse_opacity(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|v| (0.0..=1.0).contains(v))
+        .ok_or_else(|| format!("not an opacity in [0, 1]: `{s}`"))
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy)]
@@ -74,6 +105,18 @@ fn parse_point(s: &str) -> Result<(f64, f64), String> {
 }
 
 impl RegionArgs {
+    /// How these flags ask the paint model to be read.
+    pub(crate) fn paint_options(&self) -> PaintOptions {
+        PaintOptions::DEFAULT
+            .with_strokes(match self.strokes {
+                StrokesArg::Area => StrokeMode::Area,
+                StrokesArg::Line => StrokeMode::Line,
+                StrokesArg::Ignore => StrokeMode::Ignore,
+            })
+            .with_min_opacity(self.min_opacity)
+            .with_keep_decoration(self.keep_decoration)
+    }
+
     /// The region options these flags ask for.
     pub(crate) fn to_options(&self) -> RegionOptions {
         RegionOptions::DEFAULT

@@ -50,7 +50,8 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     let opts = RunOptions::new(args.params.to_params())
         .with_msh(args.format.to_options())
         .with_preview(args.preview.clone())
-        .with_regions(args.regions.to_options());
+        .with_regions(args.regions.to_options())
+        .with_paint(args.regions.paint_options());
     // The library's write errors do not say which file; an unwritable preview
     // is reported here, naming the preview, before anything is meshed.
     if let Some(preview) = &args.preview {

@@ -42,6 +42,7 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
         bbox: bbox.expect("test drawing has a feature"),
         warnings: Vec::new(),
         precision: Default::default(),
+        paint: Default::default(),
     }
 }
 

@@ -123,8 +123,23 @@ fn write_format(
 /// # Errors
 /// As [`write_msh`].
 pub fn write_preview(mesh: &FemMesh, path: &Path) -> Result<()> {
+    write_preview_coloured(mesh, &[], path)
+}
+
+/// [`write_preview`] with each triangle filled with its physical surface's
+/// colour: `colours[s]` is a CSS colour (`#rrggbb`, `#rrggbbaa`) for surface `s`
+/// (a missing entry or `None` leaves it unfilled), so the picture can be
+/// compared with the drawing at a glance (the `colour` of each region in `--stats`).
+///
+/// # Errors
+/// As [`write_msh`].
+pub fn write_preview_coloured(
+    mesh: &FemMesh,
+    colours: &[Option<String>],
+    path: &Path,
+) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
-    atomic::write_atomic(path, |w| preview::write_svg(w, mesh))
+    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours))
 }
 
 /// Check that a file can be created at `path` (its directory exists and is

@@ -78,7 +78,11 @@ impl PathData {
 }
 
 /// Write the preview. The mesh must have passed `msh::validate`.
-pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
+pub(crate) fn write_svg<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    colours: &[Option<String>],
+) -> io::Result<()> {
     let order = mesh.order();
     let node = |i: u32| mesh.nodes[i as usize];
 
@@ -114,6 +118,34 @@ pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
         w,
         "<rect x=\"{vx:?}\" y=\"{vy:?}\" width=\"{vw:?}\" height=\"{vh:?}\" fill=\"white\"/>"
     )?;
+
+    // Region colours: each triangle filled, one path per surface (its curved
+    // edges as the curves they are).
+    for (g, colour) in colours.iter().enumerate() {
+        let Some(colour) = colour.as_deref().filter(|c| is_css_hex(c)) else {
+            continue;
+        };
+        let mut d = String::new();
+        for t in (0..mesh.triangle_count()).filter(|&t| mesh.triangle_group[t] as usize == g) {
+            let tri = mesh.triangle(t);
+            let mut fill = PathData { d: String::new() };
+            fill.d.push('M');
+            fill.pt(node(tri[0]));
+            for k in 0..3 {
+                inner_nodes(order, k, tri, &node, &mut fill);
+                fill.pt(node(tri[(k + 1) % 3]));
+            }
+            fill.d.push('Z');
+            d.push_str(&fill.d);
+        }
+        if !d.is_empty() {
+            writeln!(
+                w,
+                "<path fill=\"{colour}\" stroke=\"none\" d=\"{}\"/>",
+                d.trim_end()
+            )?;
+        }
+    }
 
     // Triangle edges, each once.
     let mut seen: HashSet<(u32, u32)> = HashSet::with_capacity(mesh.triangle_count() * 2);
@@ -171,6 +203,40 @@ pub(crate) fn write_svg<W: Write>(w: &mut W, mesh: &FemMesh) -> io::Result<()> {
         write_path(w, &path.d, colour, FEATURE_STROKE_REL * diag)?;
     }
     w.write_all(b"</svg>\n")
+}
+
+/// Whether `c` is `#` and 6 or 8 hex digits (nothing else reaches the SVG).
+fn is_css_hex(c: &str) -> bool {
+    c.strip_prefix('#')
+        .is_some_and(|h| matches!(h.len(), 6 | 8) && h.bytes().all(|b| b.is_ascii_hexdigit()))
+}
+
+/// The path command from a triangle's corner `k` to corner `k + 1` (the end
+/// point written by the caller): `L`, or `Q` / `C` with the edge's controls.
+fn inner_nodes(
+    order: crate::element::Order,
+    k: usize,
+    tri: &[u32],
+    node: &impl Fn(u32) -> Point,
+    fill: &mut PathData,
+) {
+    let (a, b) = (node(tri[k]), node(tri[(k + 1) % 3]));
+    let inner: Vec<Point> = crate::fem::triangle_edge_inner(order, k)
+        .iter()
+        .map(|&j| node(tri[j]))
+        .collect();
+    match edge_curve(a, b, &inner) {
+        Curve::Line(..) => fill.d.push('L'),
+        Curve::Quad(_, c, _) => {
+            fill.d.push('Q');
+            fill.pt(c);
+        }
+        Curve::Cubic(_, c1, c2, _) => {
+            fill.d.push('C');
+            fill.pt(c1);
+            fill.pt(c2);
+        }
+    }
 }
 
 fn write_path<W: Write>(w: &mut W, d: &str, colour: &str, width: f64) -> io::Result<()> {
@@ -246,7 +312,7 @@ mod tests {
             curves: vec!["c".into()],
         };
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh).expect("write");
+        write_svg(&mut buf, &mesh, &[]).expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         assert!(s.contains("#d62728") && s.contains("#2ca02c") && !s.contains("#1f77b4"));
         assert!(s.contains("0.0 -2.0"), "{s}");
@@ -257,5 +323,21 @@ mod tests {
             .find(|l| l.contains("#808080"))
             .expect("mesh path");
         assert_eq!(grey.matches('M').count(), 3);
+        // with colours: the surface's triangles filled, one closed outline each;
+        // anything but a hex colour never reaches the SVG
+        let mut buf = Vec::new();
+        write_svg(&mut buf, &mesh, &[Some("#ff000080".into())]).expect("write");
+        let s = String::from_utf8(buf).expect("utf8");
+        let fill = s
+            .lines()
+            .find(|l| l.contains("fill=\"#ff000080\""))
+            .expect("region path");
+        assert_eq!(
+            (fill.matches('M').count(), fill.matches('Z').count()),
+            (1, 1)
+        );
+        let mut buf = Vec::new();
+        write_svg(&mut buf, &mesh, &[Some("red\" onload=\"x".into())]).expect("write");
+        assert!(!String::from_utf8(buf).expect("utf8").contains("onload"));
     }
 }

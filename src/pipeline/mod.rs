@@ -18,10 +18,10 @@ use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MshOptions};
-use crate::params::{Mesher, Params, Resolved, Stage};
+use crate::params::{Length, Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
 use crate::regions::{RegionOptions, RegionReport};
-use crate::svg::{self, Drawing, FeatureGeom};
+use crate::svg::{self, Drawing, FeatureGeom, PaintOptions};
 use crate::{Error, Result};
 use kurbo::Rect;
 use std::collections::BTreeMap;
@@ -40,6 +40,9 @@ pub struct RunOptions {
     pub preview: Option<PathBuf>,
     /// Physical surfaces and dropped regions (default: one surface per filled shape).
     pub regions: RegionOptions,
+    /// How SVG's paint model is read (strokes, opacity); its hairline width is
+    /// always the parameters' l_min.
+    pub paint: PaintOptions,
 }
 
 impl RunOptions {
@@ -50,7 +53,13 @@ impl RunOptions {
             msh: MshOptions::DEFAULT,
             preview: None,
             regions: RegionOptions::DEFAULT,
+            paint: PaintOptions::DEFAULT,
         }
+    }
+    /// Set how the paint model is read (strokes, opacity thresholds).
+    pub fn with_paint(mut self, paint: PaintOptions) -> Self {
+        self.paint = paint;
+        self
     }
     /// Set the output format.
     pub fn with_msh(mut self, msh: MshOptions) -> Self {
@@ -90,6 +99,9 @@ pub struct InputCounts {
     pub conics: usize,
     /// Bounding-box diagonal d.
     pub d: f64,
+    /// What the paint model did: strokes meshed as areas or lines, clipped
+    /// shapes, shapes dropped as invisible or decoration.
+    pub paint: crate::svg::drawing::PaintCounts,
 }
 
 impl InputCounts {
@@ -101,6 +113,7 @@ impl InputCounts {
             shapes: drawing.shapes.len(),
             features: drawing.features.len(),
             d: drawing.diagonal(),
+            paint: drawing.paint,
             ..Default::default()
         };
         for f in &drawing.features {
@@ -558,13 +571,23 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
         output::check_writable(p)?;
     }
     let t = Instant::now();
-    let drawing = svg::load_file_with(input, opts.params.units, opts.params.scale)?;
+    let paint = match opts.params.l_min {
+        Length::Rel(r) => opts.paint.with_min_stroke_width(r, true),
+        Length::Abs(a) => opts.paint.with_min_stroke_width(a, false),
+    };
+    let drawing = svg::load_file_painted(input, opts.params.units, opts.params.scale, &paint)?;
     let t_load = t.elapsed().as_secs_f64();
     let Meshed { mesh, mut report } = mesh_drawing_with(&drawing, &opts.params, &opts.regions)?;
     let t = Instant::now();
     output::write_msh(&mesh, output, opts.msh)?;
     if let Some(p) = &opts.preview {
-        output::write_preview(&mesh, p)?;
+        let colours: Vec<Option<String>> = report
+            .regions
+            .surfaces
+            .iter()
+            .map(|s| s.colour.clone())
+            .collect();
+        output::write_preview_coloured(&mesh, &colours, p)?;
     }
     report.times.insert("load", t_load);
     report.times.insert("output", t.elapsed().as_secs_f64());

@@ -4,7 +4,7 @@
 use super::element::{element_area, element_point};
 use super::winding::{Outline, Winding};
 use crate::fem::FemMesh;
-use crate::svg::{Drawing, FillRule, ShapeId};
+use crate::svg::{Clip, Drawing, FillRule, ShapeId};
 use kurbo::Point;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -65,14 +65,81 @@ const SAMPLES: [[f64; 3]; 7] = [
     [0.4, 0.4, 0.2],
 ];
 
+/// A clip region ready for point queries (see [`crate::svg::Clip`]).
+struct ClipTest {
+    parts: Vec<(FillRule, Outline, Vec<ClipTest>)>,
+    within: Vec<ClipTest>,
+}
+
+impl ClipTest {
+    fn new(clip: &Clip) -> ClipTest {
+        ClipTest {
+            parts: clip
+                .parts
+                .iter()
+                .map(|p| {
+                    (
+                        p.rule,
+                        Outline::new(&p.subpaths),
+                        p.clips.iter().map(|c| ClipTest::new(c)).collect(),
+                    )
+                })
+                .collect(),
+            within: clip.within.iter().map(|c| ClipTest::new(c)).collect(),
+        }
+    }
+
+    /// Whether `p` is inside the clip, and whether that answer is certain
+    /// (`p` clear of every outline that decided it).
+    fn contains(&self, p: Point, eps_abs: f64) -> (bool, bool) {
+        let (inside, mut clear) = all_contain(&self.within, p, eps_abs);
+        if !inside {
+            return (false, clear);
+        }
+        for (rule, outline, clips) in &self.parts {
+            let w = outline.winding(p, eps_abs);
+            clear &= w.is_clear();
+            if w.inside(*rule) {
+                let (inner, inner_clear) = all_contain(clips, p, eps_abs);
+                clear &= inner_clear;
+                if inner {
+                    return (true, clear);
+                }
+            }
+        }
+        (false, clear)
+    }
+}
+
+/// Whether `p` is inside every clip of `clips`, and whether that is certain.
+fn all_contain(clips: &[ClipTest], p: Point, eps_abs: f64) -> (bool, bool) {
+    let mut clear = true;
+    for c in clips {
+        let (inside, c_clear) = c.contains(p, eps_abs);
+        clear &= c_clear;
+        if !inside {
+            return (false, clear);
+        }
+    }
+    (true, clear)
+}
+
+/// One filled shape ready for point queries: its outline, rule and clips.
+struct Layer {
+    id: ShapeId,
+    rule: FillRule,
+    outline: Outline,
+    clips: Vec<ClipTest>,
+}
+
 /// The filled shapes, topmost first, ready for point queries.
 pub(crate) struct Painting {
-    layers: Vec<(ShapeId, FillRule, Outline)>,
+    layers: Vec<Layer>,
 }
 
 impl Painting {
     pub(crate) fn new(drawing: &Drawing) -> Painting {
-        let mut layers: Vec<(u32, ShapeId, FillRule, Outline)> = drawing
+        let mut layers: Vec<(u32, Layer)> = drawing
             .shapes
             .iter()
             .enumerate()
@@ -80,20 +147,20 @@ impl Painting {
             .map(|(i, s)| {
                 (
                     s.paint_order,
-                    ShapeId(i as u32),
-                    s.fill_rule,
-                    Outline::of_shape(s),
+                    Layer {
+                        id: ShapeId(i as u32),
+                        rule: s.fill_rule,
+                        outline: Outline::of_shape(s),
+                        clips: s.paint.clips.iter().map(|c| ClipTest::new(c)).collect(),
+                    },
                 )
             })
-            .filter(|l| l.3.bbox().is_some())
+            .filter(|l| l.1.outline.bbox().is_some())
             .collect();
         // Topmost first; equal paint orders fall back to document order.
-        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
+        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1.id)));
         Painting {
-            layers: layers
-                .into_iter()
-                .map(|(_, id, rule, o)| (id, rule, o))
-                .collect(),
+            layers: layers.into_iter().map(|(_, l)| l).collect(),
         }
     }
 
@@ -101,11 +168,15 @@ impl Painting {
     /// unless `p` is near the outline of a shape at or above the answer.
     pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
         let mut clear = true;
-        for (id, rule, outline) in &self.layers {
-            let w: Winding = outline.winding(p, eps_abs);
+        for layer in &self.layers {
+            let w: Winding = layer.outline.winding(p, eps_abs);
             clear &= w.is_clear();
-            if w.inside(*rule) {
-                return (Some(*id), clear);
+            if w.inside(layer.rule) {
+                let (inside, clip_clear) = all_contain(&layer.clips, p, eps_abs);
+                clear &= clip_clear;
+                if inside {
+                    return (Some(layer.id), clear);
+                }
             }
         }
         (None, clear)

@@ -6,7 +6,7 @@ use super::classify::{RegionAssignment, edge_key};
 use super::element::element_area;
 use crate::exact::{Orientation, orient2d};
 use crate::fem::FemMesh;
-use crate::svg::Drawing;
+use crate::svg::{Drawing, Shape};
 use crate::{Error, Result};
 use kurbo::Point;
 use std::collections::{HashMap, HashSet};
@@ -91,6 +91,10 @@ pub struct RegionStat {
     pub triangles: usize,
     /// Area (exact for the elements as written, straight or curved).
     pub area: f64,
+    /// The colour the region is painted with, `#rrggbb` (`#rrggbbaa` when
+    /// translucent; a gradient's average colour): the first shape's in paint
+    /// order; `None` for the background, a pattern or a mesh without a drawing.
+    pub colour: Option<String>,
 }
 
 /// Name of the surface of triangles no filled shape covers.
@@ -98,9 +102,30 @@ pub(crate) const BACKGROUND: &str = "background";
 /// Name of the single surface of [`RegionMode::None`].
 pub(crate) const DOMAIN: &str = "domain";
 
+/// The surface name of a shape under [`RegionMode::Colour`]: `fill-#rrggbb` for
+/// an opaque colour (a stroke's area by its stroke colour), `fill-#rrggbbaa`
+/// for a translucent one (CSS hex with alpha: the mesh carries no blending),
+/// `fill-<gradient or pattern id>` for a paint server, else `fill-<shape name>`.
+pub(crate) fn colour_name(s: &Shape) -> String {
+    match (s.fill_colour, &s.paint.server) {
+        (Some([r, g, b]), _) if s.paint.alpha >= 1.0 => format!("fill-#{r:02x}{g:02x}{b:02x}"),
+        (Some([r, g, b]), _) => {
+            let a = (s.paint.alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
+            format!("fill-#{r:02x}{g:02x}{b:02x}{a:02x}")
+        }
+        (None, Some(server)) => format!("fill-{server}"),
+        (None, None) => format!("fill-{}", s.name()),
+    }
+}
+
 /// Per-triangle region labels and the label names (background is label 0).
-fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u32>, Vec<String>) {
+fn labels(
+    drawing: &Drawing,
+    asg: &RegionAssignment,
+    mode: RegionMode,
+) -> (Vec<u32>, Vec<String>, Vec<Option<String>>) {
     let mut names = vec![BACKGROUND.to_owned()];
+    let mut colours: Vec<Option<String>> = vec![None];
     let mut index: HashMap<String, u32> = HashMap::from([(BACKGROUND.to_owned(), 0)]);
     // Labels in paint order of the shapes, so the surface order is deterministic.
     let mut order: Vec<usize> = (0..drawing.shapes.len())
@@ -119,14 +144,12 @@ fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u
                     n
                 }
             }
-            RegionMode::Colour => match s.fill_colour {
-                Some([r, g, b]) => format!("fill-#{r:02x}{g:02x}{b:02x}"),
-                None => format!("fill-{}", s.name()),
-            },
+            RegionMode::Colour => colour_name(s),
             RegionMode::None => DOMAIN.to_owned(),
         };
         of_shape[i] = *index.entry(name.clone()).or_insert_with(|| {
             names.push(name);
+            colours.push(css_colour(s));
             (names.len() - 1) as u32
         });
     }
@@ -135,7 +158,18 @@ fn labels(drawing: &Drawing, asg: &RegionAssignment, mode: RegionMode) -> (Vec<u
         .iter()
         .map(|o| o.map_or(0, |s| of_shape[s.index()]))
         .collect();
-    (tri, names)
+    (tri, names, colours)
+}
+
+/// A shape's paint as a CSS colour (see [`RegionStat::colour`]).
+fn css_colour(s: &Shape) -> Option<String> {
+    let [r, g, b] = s.fill_colour.or(s.paint.average_colour)?;
+    Some(if s.paint.alpha >= 1.0 {
+        format!("#{r:02x}{g:02x}{b:02x}")
+    } else {
+        let a = (s.paint.alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
+        format!("#{r:02x}{g:02x}{b:02x}{a:02x}")
+    })
 }
 
 /// The first triangle whose corner triangle contains `p` (exact test).
@@ -164,7 +198,7 @@ pub(crate) fn apply(
 ) -> Result<(FemMesh, Vec<RegionStat>)> {
     let n = mesh.triangle_count();
     debug_assert_eq!(asg.owner.len(), n, "internal: assignment of another mesh");
-    let (tri_label, names) = labels(drawing, asg, opts.mode);
+    let (tri_label, names, label_colours) = labels(drawing, asg, opts.mode);
     let mut count = vec![0usize; names.len()];
     for &l in &tri_label {
         count[l as usize] += 1;
@@ -209,6 +243,7 @@ pub(crate) fn apply(
 
     // Surfaces: the kept labels with triangles, in label order; `none` merges them.
     let mut surfaces: Vec<String> = Vec::new();
+    let mut surface_colours: Vec<Option<String>> = Vec::new();
     let mut surface_of = vec![u32::MAX; names.len()];
     for l in 0..names.len() {
         if keep[l] && count[l] > 0 {
@@ -221,6 +256,11 @@ pub(crate) fn apply(
                 Some(i) => i as u32,
                 None => {
                     surfaces.push(name.to_owned());
+                    surface_colours.push(if opts.mode == RegionMode::None {
+                        None
+                    } else {
+                        label_colours[l].clone()
+                    });
                     (surfaces.len() - 1) as u32
                 }
             };
@@ -289,10 +329,12 @@ pub(crate) fn apply(
     let mut stats: Vec<RegionStat> = out
         .surfaces
         .iter()
-        .map(|name| RegionStat {
+        .zip(surface_colours)
+        .map(|(name, colour)| RegionStat {
             name: name.clone(),
             triangles: 0,
             area: 0.0,
+            colour,
         })
         .collect();
     for &t in &kept {
@@ -326,6 +368,7 @@ pub(crate) fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
             name: name.clone(),
             triangles: 0,
             area: 0.0,
+            colour: None,
         })
         .collect();
     let order = mesh.order();

@@ -23,6 +23,7 @@ pub(crate) fn shape(
         stroked: false,
         fill_rule: rule,
         fill_colour: Some(colour),
+        paint: Default::default(),
         subpaths,
     }
 }
@@ -88,6 +89,7 @@ pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
         bbox: bbox.expect("test drawing has geometry"),
         warnings: vec![],
         precision: Default::default(),
+        paint: Default::default(),
     }
 }
 

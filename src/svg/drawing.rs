@@ -50,14 +50,94 @@ pub struct Shape {
     pub fill_colour: Option<[u8; 3]>,
     /// The outline: one entry per subpath, in output coordinates.
     pub subpaths: Vec<Subpath>,
+    /// What the shape paints (its fill or a stroke's area), how opaquely, and
+    /// the clip paths and masks that limit it.
+    pub paint: ShapePaint,
+}
+
+/// What a [`Shape`] stands for in the picture.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShapeKind {
+    /// The element's own outline (its fill when `filled`, else its centre lines).
+    #[default]
+    Element,
+    /// The area a stroke paints (kurbo's stroke expansion, nonzero fill); named
+    /// `<name>-stroke`.
+    Stroke,
+    /// The outline of a clip path or mask: feature geometry only, never a region.
+    ClipOutline,
+}
+
+/// The paint of a [`Shape`] beyond its outline.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ShapePaint {
+    /// Fill, stroke area, or clip outline.
+    pub kind: ShapeKind,
+    /// Effective opacity of the paint: the group opacities along the chain times
+    /// the fill (or stroke) opacity times, for a gradient, its stops' mean opacity.
+    pub alpha: f32,
+    /// The gradient or pattern id of a paint server fill, if any.
+    pub server: Option<String>,
+    /// The average colour of a gradient fill's opaque stops (for previews).
+    pub average_colour: Option<[u8; 3]>,
+    /// The shape or one of its groups has a filter (its outline is meshed as is).
+    pub filtered: bool,
+    /// Clip regions the shape is painted through (all of them at once).
+    #[serde(skip)]
+    pub clips: Vec<std::sync::Arc<Clip>>,
+}
+
+impl Default for ShapePaint {
+    fn default() -> Self {
+        ShapePaint {
+            kind: ShapeKind::Element,
+            alpha: 1.0,
+            server: None,
+            average_colour: None,
+            filtered: false,
+            clips: Vec::new(),
+        }
+    }
+}
+
+/// A clip region: the union of its parts, intersected with every clip in `within`
+/// (a `clip-path` on the `<clipPath>` itself). A mask is approximated by the clip
+/// of its content that is not fully transparent (its shapes' fills, each
+/// intersected with the mask's rectangle).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// How the clip's outline is named as feature geometry (`clip-<id>`, `mask-<id>`).
+    pub name: String,
+    /// Whether this is a mask approximated as a clip.
+    pub mask: bool,
+    /// The outlines whose union is the clip.
+    pub parts: Vec<ClipPart>,
+    /// Clips the whole clip is itself clipped by.
+    pub within: Vec<std::sync::Arc<Clip>>,
+}
+
+/// One outline of a [`Clip`], with its own rule (`clip-rule`, or `fill-rule` for a mask).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClipPart {
+    /// The rule deciding inside.
+    pub rule: FillRule,
+    /// The outline, in output coordinates.
+    pub subpaths: Vec<Subpath>,
+    /// Clips on this part alone (a `clip-path` on a child of the `<clipPath>`).
+    pub clips: Vec<std::sync::Arc<Clip>>,
 }
 
 impl Shape {
     /// The name used for physical groups: the SVG id, else `shape-N` (N = element index).
     pub fn name(&self) -> String {
-        match &self.svg_id {
+        let base = match &self.svg_id {
             Some(id) if !id.is_empty() => id.clone(),
             _ => format!("shape-{}", self.element_index),
+        };
+        match self.paint.kind {
+            ShapeKind::Stroke => format!("{base}-stroke"),
+            _ => base,
         }
     }
 }
@@ -217,6 +297,32 @@ pub struct Drawing {
     /// How the paths' geometry was read: in f64 from the document's text, or in
     /// usvg's single precision (text glyphs, markers, unsupported cases).
     pub precision: PathPrecision,
+    /// What the paint model did: strokes meshed as areas, clipped shapes, shapes
+    /// dropped as invisible or decoration.
+    pub paint: PaintCounts,
+}
+
+/// What the loader did with SVG's paint model (`--stats`: no region is lost or
+/// gained silently).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PaintCounts {
+    /// Strokes meshed as the area they paint.
+    pub strokes_as_areas: usize,
+    /// Strokes kept as centre lines (`--strokes line`, or hairlines thinner than l_min).
+    pub strokes_as_lines: usize,
+    /// Strokes left out (`--strokes ignore`, or invisible).
+    pub strokes_ignored: usize,
+    /// Shapes (fills and stroke areas) painted through a clip path or mask.
+    pub clipped_shapes: usize,
+    /// Of those, shapes clipped by a mask (approximated as a clip).
+    pub masked_shapes: usize,
+    /// Fills and strokes not painted at all (hidden, zero opacity along the group
+    /// chain, zero fill or stroke opacity, no paint).
+    pub dropped_invisible: usize,
+    /// Fills and strokes whose effective opacity is below `--min-opacity`.
+    pub dropped_decoration: usize,
+    /// Shapes under a filter (meshed by their outline).
+    pub filtered_shapes: usize,
 }
 
 impl Drawing {

@@ -39,8 +39,22 @@
 //!   silently drop with its element) is a [`Error::BadCoordinate`];
 //! - [`Drawing::features`] lists every segment, every isolated point and the
 //!   implicit closing segment of each open subpath of a filled shape;
-//! - clip paths, masks, images and filters are not geometry (images and filters
-//!   leave a warning, as does text that yields no outline).
+//! - what you see is what you mesh (`paint.rs`, [`PaintOptions`]): what the
+//!   renderer does not paint is not loaded (hidden, `display: none`, zero
+//!   opacity along the group chain, zero fill or stroke opacity, markers on
+//!   `<rect>`, `<circle>`, `<ellipse>`); paint whose effective opacity is
+//!   below `min_opacity` is decoration (no shape; its outline only on request);
+//!   a stroke becomes the area it paints (kurbo's stroke expansion of the f64
+//!   path in the path's user space: width, joins, caps, miter limit, dashes),
+//!   a shape of its own after (or, `paint-order: stroke`, before) its fill,
+//!   unless thinner than the hairline width; a shape under clip paths and
+//!   masks carries them ([`Clip`]: the clip's own rule, nested clips,
+//!   `clipPathUnits`; a mask approximated by the fills of its content that are
+//!   not fully transparent, within its rectangle, in usvg's single precision),
+//!   and each clip's outline is feature geometry ([`drawing::ShapeKind::ClipOutline`]);
+//!   [`Drawing::paint`] counts all of it;
+//! - images and filters are not geometry (they leave a warning, as does text
+//!   that yields no outline; a filtered shape keeps its outline and is counted).
 //!
 //! Guarantees to the next stage (see [`Drawing`]): at least one feature, every
 //! coordinate finite with magnitude at most [`Drawing::MAX_COORD`], and a bbox
@@ -52,14 +66,16 @@ pub(crate) mod drawing;
 mod geometry;
 mod load;
 mod outline;
+mod paint;
 mod reconstruct;
 mod soup;
 mod source;
 mod viewport;
 
 pub(crate) use drawing::{
-    Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
+    Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
 };
+pub use paint::{PaintOptions, StrokeMode};
 
 pub(crate) use reconstruct::Precision;
 
@@ -82,6 +98,20 @@ pub fn load_file(path: &Path) -> Result<Drawing> {
 /// [`Error::Read`] if the file cannot be read (the message names the cause),
 /// [`Error::IsDirectory`] for a directory, otherwise as [`load_bytes_with`].
 pub fn load_file_with(path: &Path, units: Units, scale: f64) -> Result<Drawing> {
+    load_file_painted(path, units, scale, &PaintOptions::DEFAULT)
+}
+
+/// [`load_file_with`], SVG's paint model read as `paint` says (strokes,
+/// opacity thresholds).
+///
+/// # Errors
+/// As [`load_file_with`].
+pub fn load_file_painted(
+    path: &Path,
+    units: Units,
+    scale: f64,
+    paint: &PaintOptions,
+) -> Result<Drawing> {
     let meta = std::fs::metadata(path).map_err(Error::Read)?;
     if meta.is_dir() {
         return Err(Error::IsDirectory);
@@ -90,7 +120,7 @@ pub fn load_file_with(path: &Path, units: Units, scale: f64) -> Result<Drawing> 
     if data.is_empty() {
         return Err(Error::EmptyFile);
     }
-    load_bytes_with(&data, units, scale)
+    load_bytes_painted(&data, units, scale, paint)
 }
 
 /// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a
@@ -145,7 +175,41 @@ pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
 ///   included), a drawing too small for its distance from the origin, or (in
 ///   user units) a root `viewBox` whose mapping to the viewport cannot be undone.
 pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing> {
-    load_with_precision(data, units, scale).map(|(drawing, _)| drawing)
+    load_bytes_painted(data, units, scale, &PaintOptions::DEFAULT)
+}
+
+/// [`load_bytes_with`], SVG's paint model read as `paint` says: what the
+/// renderer does not paint is not loaded (hidden, `display: none`, zero
+/// opacity along the group chain, zero fill or stroke opacity); paint below
+/// [`PaintOptions::min_opacity`] is decoration (no region); strokes become
+/// the areas they paint ([`StrokeMode`]); shapes under a clip path or mask
+/// carry it ([`Shape::paint`]) and the clip's outline is feature geometry.
+///
+/// ```
+/// use triwild::{PaintOptions, StrokeMode, Units, load_bytes_painted};
+/// let doc = br##"<svg xmlns="http://www.w3.org/2000/svg">
+///     <rect x="0" y="0" width="10" height="10" fill="none" stroke="#000" stroke-width="2"/>
+///     <rect x="20" y="0" width="10" height="10" fill="#f00" visibility="hidden"/></svg>"##;
+/// let area = load_bytes_painted(doc, Units::User, 1.0, &PaintOptions::DEFAULT)?;
+/// assert_eq!(area.shapes.len(), 1);
+/// assert_eq!(area.shapes[0].name(), "shape-0-stroke");
+/// assert_eq!(area.paint.strokes_as_areas, 1);
+/// assert_eq!(area.paint.dropped_invisible, 1);
+/// let line = PaintOptions::DEFAULT.with_strokes(StrokeMode::Line);
+/// let line = load_bytes_painted(doc, Units::User, 1.0, &line)?;
+/// assert!(!line.shapes[0].filled); // the centre line: a feature, no region
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
+/// # Errors
+/// As [`load_bytes_with`].
+pub fn load_bytes_painted(
+    data: &[u8],
+    units: Units,
+    scale: f64,
+    paint: &PaintOptions,
+) -> Result<Drawing> {
+    load_painted_with_precision(data, units, scale, paint).map(|(drawing, _)| drawing)
 }
 
 /// [`load_bytes_with`], and how the paths came out (f64 from the document's
@@ -153,10 +217,21 @@ pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing>
 ///
 /// # Errors
 /// As [`load_bytes_with`].
+#[cfg(test)]
 pub(crate) fn load_with_precision(
     data: &[u8],
     units: Units,
     scale: f64,
+) -> Result<(Drawing, Precision)> {
+    load_painted_with_precision(data, units, scale, &PaintOptions::OUTLINES)
+}
+
+/// [`load_with_precision`] with the paint model read as `paint` says.
+fn load_painted_with_precision(
+    data: &[u8],
+    units: Units,
+    scale: f64,
+    paint: &PaintOptions,
 ) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
@@ -164,9 +239,10 @@ pub(crate) fn load_with_precision(
         let frame =
             viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
-        outline::collect(parsed, &frame, map)
+        outline::collect(parsed, &frame, map, paint)
     })?;
     let mut drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
+    drawing.paint = outlines.paint;
     drawing.precision = drawing::PathPrecision {
         f64_paths: outlines.precision.exact,
         single_precision_paths: outlines.precision.glyphs + outlines.precision.fallbacks(),

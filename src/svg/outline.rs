@@ -8,14 +8,19 @@
 //! [`Frame`] applied in f64 (text glyphs and markers always do).
 
 use super::conic::Conic;
-use super::drawing::{FillRule, Segment, Shape, Subpath};
+use super::drawing::{
+    Clip, ClipPart, FillRule, PaintCounts, Segment, Shape, ShapeKind, ShapePaint, Subpath,
+};
 use super::load::{Parsed, XmlFacts};
+use super::paint::{self, PaintOptions, StrokeMode};
 use super::reconstruct::{self, MARKER, OutputMap, Precision};
 use super::source::{Candidate, Source, Unsupported};
 use super::viewport::Frame;
 use crate::{Error, Result};
 use kurbo::{Affine, CubicBez, Line, Point};
 use std::collections::HashSet;
+use std::rc::Rc;
+use std::sync::Arc;
 use usvg::tiny_skia_path::PathSegment;
 
 /// How many candidates of a `<use>` instance a path is tried against, from the
@@ -32,6 +37,43 @@ pub(super) struct Outlines {
     pub(super) warnings: Vec<String>,
     /// How the paths came out.
     pub(super) precision: Precision,
+    /// What the paint model did.
+    pub(super) paint: PaintCounts,
+}
+
+/// What the groups above a node do to its paint.
+#[derive(Clone, Debug)]
+struct Ctx {
+    /// Product of the group opacities.
+    opacity: f32,
+    /// Clip paths and masks along the chain (all apply).
+    clips: Vec<Arc<Clip>>,
+    /// A group on the chain has a filter.
+    filtered: bool,
+}
+
+impl Ctx {
+    fn root() -> Ctx {
+        Ctx {
+            opacity: 1.0,
+            clips: Vec::new(),
+            filtered: false,
+        }
+    }
+}
+
+/// One painted element before strokes are resolved (the hairline width needs
+/// the drawing's size).
+enum Item {
+    /// A shape as it is.
+    Shape(Shape),
+    /// A stroke's area, and what replaces it if it is a hairline: its centre
+    /// lines (`None` when the element's fill already carries them).
+    Stroke {
+        area: Shape,
+        centre: Option<Shape>,
+        width: f64,
+    },
 }
 
 /// Where a usvg node sits: in the document, in a `<use>` instance (index into the
@@ -52,36 +94,51 @@ struct Instance<'a, 'input> {
 /// A pending step of the tree walk.
 enum Step<'a> {
     /// Visit a node; the string is the id inherited from a named `<use>` or `<text>` ancestor.
-    Visit(&'a usvg::Node, Option<&'a str>, Scope),
+    Visit(&'a usvg::Node, Option<&'a str>, Scope, Rc<Ctx>),
     /// All glyph paths of the text node whose walk began at shape count `.1` are done.
     TextDone(&'a usvg::Text, usize),
 }
 
-/// Walk the render tree (clip paths, masks and pattern contents are not geometry).
+/// Walk the render tree (clip paths and masks limit the shapes they apply to;
+/// pattern contents are not geometry).
 ///
 /// # Errors
 /// [`Error::BadCoordinate`] when a coordinate is not finite or exceeds
 /// [`super::Drawing::MAX_COORD`] after transforms.
-pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) -> Result<Outlines> {
+pub(super) fn collect(
+    parsed: &Parsed<'_, '_>,
+    frame: &Frame,
+    map: OutputMap,
+    opts: &PaintOptions,
+) -> Result<Outlines> {
     let (tree, facts, source) = (&parsed.tree, &parsed.facts, &parsed.source);
     let mut out = Outlines::default();
+    let mut items: Vec<Item> = Vec::new();
+    let mut paths = 0usize;
     let mut images = 0usize;
     let mut filters = 0usize;
     let mut texts_with_outline: Vec<&str> = Vec::new();
     let mut instances: Vec<Instance<'_, '_>> = Vec::new();
     let mut stack: Vec<Step<'_>> = Vec::new();
+    let mut root = Ctx::root();
     if !tree.root().filters().is_empty() {
         filters += 1;
+        root.filtered = true;
     }
-    for node in tree.root().children().iter().rev() {
-        stack.push(Step::Visit(node, None, Scope::Document));
+    let root = Rc::new(root);
+    let children = tree.root().children();
+    for (k, node) in children.iter().enumerate().rev() {
+        if !is_basic_shape_markers(children, k, source) {
+            stack.push(Step::Visit(node, None, Scope::Document, root.clone()));
+        }
     }
     while let Some(step) = stack.pop() {
         match step {
-            Step::Visit(usvg::Node::Group(g), inherited, scope) => {
+            Step::Visit(usvg::Node::Group(g), inherited, scope, ctx) => {
                 if !g.filters().is_empty() {
                     filters += 1;
                 }
+                let ctx = group_ctx(g, &ctx, frame)?;
                 let inherited = if facts.use_ids.contains(g.id()) {
                     source.public(g.id()).or(inherited)
                 } else {
@@ -98,13 +155,17 @@ pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) ->
                         });
                     }
                 }
-                for child in g.children().iter().rev() {
-                    stack.push(Step::Visit(child, inherited, scope));
+                let children = g.children();
+                for (k, child) in children.iter().enumerate().rev() {
+                    if !is_basic_shape_markers(children, k, source) {
+                        stack.push(Step::Visit(child, inherited, scope, ctx.clone()));
+                    }
                 }
             }
-            Step::Visit(usvg::Node::Path(p), inherited, scope) => {
+            Step::Visit(usvg::Node::Path(p), inherited, scope, ctx) => {
                 let id = source.public(p.id()).or(inherited);
-                let mut shape = convert_path(p, out.shapes.len(), id, frame)?;
+                let mut shape = convert_path(p, paths, id, frame)?;
+                paths += 1;
                 match exact_subpaths(p, scope, source, &mut instances, map, &shape.subpaths) {
                     Ok(subpaths) => {
                         shape.subpaths = subpaths;
@@ -114,21 +175,35 @@ pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) ->
                     Err(None) => out.precision.glyphs += 1,
                     Err(Some(reason)) => *out.precision.fallback.entry(reason).or_default() += 1,
                 }
-                out.shapes.push(shape);
+                let servers = [
+                    document_server(p, source, "fill"),
+                    document_server(p, source, "stroke"),
+                ];
+                paint_items(
+                    p,
+                    shape,
+                    &ctx,
+                    frame,
+                    opts,
+                    &servers,
+                    &mut items,
+                    &mut out.paint,
+                )?;
             }
-            Step::Visit(usvg::Node::Text(t), inherited, _) => {
+            Step::Visit(usvg::Node::Text(t), inherited, _, ctx) => {
                 let id = source.public(t.id()).or(inherited);
-                stack.push(Step::TextDone(t, out.shapes.len()));
+                stack.push(Step::TextDone(t, paths));
                 let flat = t.flattened();
                 if !flat.filters().is_empty() {
                     filters += 1;
                 }
+                let ctx = group_ctx(flat, &ctx, frame)?;
                 for child in flat.children().iter().rev() {
-                    stack.push(Step::Visit(child, id, Scope::Text));
+                    stack.push(Step::Visit(child, id, Scope::Text, ctx.clone()));
                 }
             }
-            Step::TextDone(t, first_shape) => {
-                if out.shapes.len() > first_shape {
+            Step::TextDone(t, first_path) => {
+                if paths > first_path {
                     texts_with_outline.push(t.id());
                 } else {
                     let name = non_empty(t.id()).map_or_else(
@@ -140,9 +215,11 @@ pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) ->
                     ));
                 }
             }
-            Step::Visit(usvg::Node::Image(_), _, _) => images += 1,
+            Step::Visit(usvg::Node::Image(_), _, _, _) => images += 1,
         }
     }
+    out.shapes = resolve_items(items, opts, &mut out.paint);
+    add_clip_outlines(&mut out.shapes, paths);
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
     // usvg keeps an image node only for data it could decode (never, here)
     let images = images.max(facts.images);
@@ -153,11 +230,493 @@ pub(super) fn collect(parsed: &Parsed<'_, '_>, frame: &Frame, map: OutputMap) ->
     }
     if filters > 0 {
         out.warnings.push(format!(
-            "filter effects ignored on {filters} element(s): only outlines are meshed"
+            "filter effects ignored on {filters} element(s): only outlines are meshed \
+             ({} shape(s) under a filter)",
+            out.paint.filtered_shapes
+        ));
+    }
+    if out.paint.masked_shapes > 0 {
+        out.warnings.push(format!(
+            "{} shape(s) under a mask: the mask is approximated as a clip by its \
+             content's fills (where it is not fully transparent)",
+            out.paint.masked_shapes
         ));
     }
     out.warnings.extend(out.precision.warning());
     Ok(out)
+}
+
+/// The id of the paint server `url(#id)` that the source element of `p` (or the
+/// nearest ancestor that sets it) names for `property` (`fill` or `stroke`), as
+/// written in the document: usvg renames a bounding-box gradient used twice.
+fn document_server(p: &usvg::Path, source: &Source<'_, '_>, property: &str) -> Option<String> {
+    if p.id().is_empty() {
+        return None;
+    }
+    let node = *source.shapes_with_id(p.id()).first()?;
+    for n in node.ancestors().filter(usvg::roxmltree::Node::is_element) {
+        let in_style = n.attribute("style").and_then(|style| {
+            style.split(';').find_map(|decl| {
+                let (k, v) = decl.split_once(':')?;
+                (k.trim() == property).then(|| v.trim())
+            })
+        });
+        if let Some(value) = in_style.or_else(|| n.attribute(property)) {
+            let id = value
+                .strip_prefix("url(")?
+                .trim_start_matches(['\'', '"', '#']);
+            let end = id.find([')', '\'', '"'])?;
+            return Some(id[..end].to_owned()).filter(|s| !s.is_empty());
+        }
+    }
+    None
+}
+
+/// Whether `siblings[k]` is the group of markers usvg draws on a `<rect>`,
+/// `<circle>` or `<ellipse>` (SVG draws markers on path, line, polyline and
+/// polygon only): an anonymous group next to such an element's path, the
+/// element having a `marker*` property.
+fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_, '_>) -> bool {
+    let usvg::Node::Group(g) = &siblings[k] else {
+        return false;
+    };
+    if !g.id().is_empty() {
+        return false;
+    }
+    let basic_with_markers = |j: usize| {
+        let Some(usvg::Node::Path(p)) = siblings.get(j) else {
+            return false;
+        };
+        !p.id().is_empty()
+            && source.shapes_with_id(p.id()).first().is_some_and(|n| {
+                matches!(n.tag_name().name(), "rect" | "circle" | "ellipse")
+                    && (n.attributes().any(|a| a.name().starts_with("marker"))
+                        || n.attribute("style").is_some_and(|s| s.contains("marker")))
+            })
+    };
+    (k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)
+}
+
+/// The context of a group's children: its opacity, clip path, mask and filters added.
+fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>, frame: &Frame) -> Result<Rc<Ctx>> {
+    let plain = g.opacity().get() >= 1.0
+        && g.clip_path().is_none()
+        && g.mask().is_none()
+        && g.filters().is_empty();
+    if plain {
+        return Ok(parent.clone());
+    }
+    let mut ctx = (**parent).clone();
+    ctx.opacity *= g.opacity().get();
+    ctx.filtered |= !g.filters().is_empty();
+    if let Some(cp) = g.clip_path() {
+        ctx.clips
+            .push(Arc::new(clip_of(cp, g.abs_transform(), frame)?));
+    }
+    if let Some(m) = g.mask() {
+        ctx.clips
+            .push(Arc::new(mask_of(m, g.abs_transform(), frame)?));
+    }
+    Ok(Rc::new(ctx))
+}
+
+/// A `<clipPath>` in output coordinates; `base` maps the clipped element's user space.
+fn clip_of(cp: &usvg::ClipPath, base: usvg::Transform, frame: &Frame) -> Result<Clip> {
+    let space = base.pre_concat(cp.transform());
+    let mut parts = Vec::new();
+    clip_parts(cp.root(), space, &[], frame, &mut parts, &mut |p| {
+        p.fill().map(|f| f.rule())
+    })?;
+    let within = match cp.clip_path() {
+        Some(inner) => vec![Arc::new(clip_of(inner, base, frame)?)],
+        None => Vec::new(),
+    };
+    Ok(Clip {
+        name: format!("clip-{}", cp.id()),
+        mask: false,
+        parts,
+        within,
+    })
+}
+
+/// A `<mask>` approximated as a clip: the fills of its content that are not
+/// fully transparent (black is transparent in a luminance mask), within the
+/// mask's rectangle.
+fn mask_of(m: &usvg::Mask, base: usvg::Transform, frame: &Frame) -> Result<Clip> {
+    let luminance = m.kind() == usvg::MaskType::Luminance;
+    let mut parts = Vec::new();
+    clip_parts(m.root(), base, &[], frame, &mut parts, &mut |p| {
+        let f = p.fill()?;
+        let alpha = f.opacity().get() * paint::server_alpha(f.paint());
+        let dark = match f.paint() {
+            usvg::Paint::Color(c) => luminance && c.red == 0 && c.green == 0 && c.blue == 0,
+            _ => false,
+        };
+        (p.is_visible() && alpha > 0.0 && !dark).then(|| f.rule())
+    })?;
+    let r = m.rect();
+    let rect = usvg::tiny_skia_path::PathBuilder::from_rect(r.to_rect());
+    let mut within = vec![Arc::new(Clip {
+        name: format!("mask-{}", m.id()),
+        mask: true,
+        parts: vec![ClipPart {
+            rule: FillRule::NonZero,
+            subpaths: outline_of(&rect, base, frame),
+            clips: Vec::new(),
+        }],
+        within: Vec::new(),
+    })];
+    if let Some(inner) = m.mask() {
+        within.push(Arc::new(mask_of(inner, base, frame)?));
+    }
+    Ok(Clip {
+        name: format!("mask-{}", m.id()),
+        mask: true,
+        parts,
+        within,
+    })
+}
+
+/// The paths under `g` (a clip path's or mask's content) as clip parts; `rule`
+/// says whether a path counts and by which rule.
+fn clip_parts(
+    g: &usvg::Group,
+    space: usvg::Transform,
+    clips: &[Arc<Clip>],
+    frame: &Frame,
+    out: &mut Vec<ClipPart>,
+    rule: &mut dyn FnMut(&usvg::Path) -> Option<usvg::FillRule>,
+) -> Result<()> {
+    for node in g.children() {
+        match node {
+            usvg::Node::Group(c) => {
+                let mut inner = clips.to_vec();
+                if let Some(cp) = c.clip_path() {
+                    inner.push(Arc::new(clip_of(
+                        cp,
+                        space.pre_concat(c.abs_transform()),
+                        frame,
+                    )?));
+                }
+                clip_parts(c, space, &inner, frame, out, rule)?;
+            }
+            usvg::Node::Path(p) => {
+                if let Some(r) = rule(p) {
+                    out.push(ClipPart {
+                        rule: match r {
+                            usvg::FillRule::EvenOdd => FillRule::EvenOdd,
+                            usvg::FillRule::NonZero => FillRule::NonZero,
+                        },
+                        subpaths: outline_of(p.data(), space.pre_concat(p.abs_transform()), frame),
+                        clips: clips.to_vec(),
+                    });
+                }
+            }
+            usvg::Node::Text(t) => clip_parts(t.flattened(), space, clips, frame, out, rule)?,
+            usvg::Node::Image(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// What one usvg path paints: its fill and stroke as items in paint order,
+/// unless invisible (hidden, zero opacity) or decoration (below `--min-opacity`).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one path's paint: the path, its shape, context, frame, options, servers and outputs"
+)]
+fn paint_items(
+    p: &usvg::Path,
+    shape: Shape,
+    ctx: &Ctx,
+    frame: &Frame,
+    opts: &PaintOptions,
+    servers: &[Option<String>; 2],
+    items: &mut Vec<Item>,
+    counts: &mut PaintCounts,
+) -> Result<()> {
+    #[derive(PartialEq)]
+    enum Fate {
+        None,
+        Invisible,
+        Decoration,
+        Painted,
+    }
+    let visible = p.is_visible();
+    let fate = |alpha: f32| {
+        if !visible || alpha <= 0.0 {
+            Fate::Invisible
+        } else if alpha < opts.min_opacity {
+            Fate::Decoration
+        } else {
+            Fate::Painted
+        }
+    };
+    let fill_alpha = p
+        .fill()
+        .map(|f| ctx.opacity * f.opacity().get() * paint::server_alpha(f.paint()));
+    let stroke_alpha = p
+        .stroke()
+        .map(|s| ctx.opacity * s.opacity().get() * paint::server_alpha(s.paint()));
+    let fill_fate = fill_alpha.map_or(Fate::None, fate);
+    let stroke_fate = stroke_alpha.map_or(Fate::None, fate);
+    let base_paint = ShapePaint {
+        filtered: ctx.filtered,
+        clips: ctx.clips.clone(),
+        ..ShapePaint::default()
+    };
+    let centre = |shape: &Shape| Shape {
+        filled: false,
+        paint: base_paint.clone(),
+        ..shape.clone()
+    };
+    let count_painted = |counts: &mut PaintCounts| {
+        if !ctx.clips.is_empty() {
+            counts.clipped_shapes += 1;
+            if ctx.clips.iter().any(|c| c.mask) {
+                counts.masked_shapes += 1;
+            }
+        }
+        if ctx.filtered {
+            counts.filtered_shapes += 1;
+        }
+    };
+
+    let mut fill_item = None;
+    match fill_fate {
+        Fate::None => {}
+        Fate::Invisible => counts.dropped_invisible += 1,
+        Fate::Decoration => {
+            counts.dropped_decoration += 1;
+            if opts.keep_decoration {
+                fill_item = Some(Item::Shape(centre(&shape)));
+            }
+        }
+        Fate::Painted => {
+            count_painted(counts);
+            let f = p.fill().expect("internal: a painted fill exists");
+            fill_item = Some(Item::Shape(Shape {
+                filled: true,
+                paint: ShapePaint {
+                    alpha: fill_alpha.unwrap_or(1.0),
+                    server: servers[0].clone().or_else(|| paint::server_id(f.paint())),
+                    average_colour: paint::average_colour(f.paint()),
+                    ..base_paint.clone()
+                },
+                ..shape.clone()
+            }));
+        }
+    }
+    let fill_is_region = fill_fate == Fate::Painted;
+    let mut stroke_item = None;
+    match (stroke_fate, opts.strokes) {
+        (Fate::None, _) => {}
+        (_, StrokeMode::Ignore) => counts.strokes_ignored += 1,
+        (Fate::Invisible, _) => {
+            counts.strokes_ignored += 1;
+            counts.dropped_invisible += 1;
+        }
+        (Fate::Decoration, _) => {
+            counts.dropped_decoration += 1;
+            if opts.keep_decoration && fill_item.is_none() {
+                stroke_item = Some(Item::Shape(centre(&shape)));
+            }
+        }
+        (Fate::Painted, StrokeMode::Line) => {
+            counts.strokes_as_lines += 1;
+            if !fill_is_region {
+                stroke_item = Some(Item::Shape(centre(&shape)));
+            }
+        }
+        (Fate::Painted, StrokeMode::Area) => {
+            let s = p.stroke().expect("internal: a painted stroke exists");
+            let [sx, ky, kx, sy, tx, ty] = frame.map(p.abs_transform());
+            let to_output = Affine::new([sx, -ky, kx, -sy, tx, -ty]);
+            let width = f64::from(s.width().get()) * to_output.determinant().abs().sqrt();
+            let centre_shape = (!fill_is_region).then(|| centre(&shape));
+            match paint::stroke_area(&shape.subpaths, s, to_output) {
+                Some(area) => {
+                    let colour = match s.paint() {
+                        usvg::Paint::Color(c) => Some([c.red, c.green, c.blue]),
+                        _ => None,
+                    };
+                    let area = Shape {
+                        filled: true,
+                        stroked: false,
+                        fill_rule: FillRule::NonZero,
+                        fill_colour: colour,
+                        subpaths: area,
+                        paint: ShapePaint {
+                            kind: ShapeKind::Stroke,
+                            alpha: stroke_alpha.unwrap_or(1.0),
+                            server: servers[1].clone().or_else(|| paint::server_id(s.paint())),
+                            average_colour: paint::average_colour(s.paint()),
+                            ..base_paint.clone()
+                        },
+                        ..shape.clone()
+                    };
+                    check_coordinates(&area)?;
+                    stroke_item = Some(Item::Stroke {
+                        area,
+                        centre: centre_shape,
+                        width,
+                    });
+                }
+                None => {
+                    counts.strokes_as_lines += 1;
+                    stroke_item = centre_shape.map(Item::Shape);
+                }
+            }
+        }
+    }
+    let stroke_first = p.paint_order() == usvg::PaintOrder::StrokeAndFill;
+    let (first, second) = if stroke_first {
+        (stroke_item, fill_item)
+    } else {
+        (fill_item, stroke_item)
+    };
+    items.extend(first);
+    items.extend(second);
+    Ok(())
+}
+
+/// Items → shapes in paint order: a stroke narrower than the hairline width
+/// (see [`PaintOptions::min_stroke_width`]) becomes its centre lines.
+fn resolve_items(items: Vec<Item>, opts: &PaintOptions, counts: &mut PaintCounts) -> Vec<Shape> {
+    let hairline = if opts.min_stroke_relative {
+        let mut bbox: Option<kurbo::Rect> = None;
+        let mut add = |s: &Shape| {
+            for sp in &s.subpaths {
+                let pts = std::iter::once(sp.start)
+                    .chain(sp.segments.iter().flat_map(Segment::control_points));
+                for p in pts {
+                    bbox = Some(bbox.map_or(kurbo::Rect::from_points(p, p), |b| b.union_pt(p)));
+                }
+            }
+        };
+        for item in &items {
+            match item {
+                Item::Shape(s) => add(s),
+                Item::Stroke { area, centre, .. } => add(centre.as_ref().unwrap_or(area)),
+            }
+        }
+        let d = bbox.map_or(0.0, |b| b.width().hypot(b.height()));
+        opts.min_stroke_width * d
+    } else {
+        opts.min_stroke_width
+    };
+    let mut shapes = Vec::with_capacity(items.len());
+    for item in items {
+        let shape = match item {
+            Item::Shape(s) => Some(s),
+            Item::Stroke {
+                area,
+                centre,
+                width,
+            } => {
+                if width < hairline {
+                    counts.strokes_as_lines += 1;
+                    centre
+                } else {
+                    counts.strokes_as_areas += 1;
+                    Some(area)
+                }
+            }
+        };
+        if let Some(mut s) = shape {
+            s.paint_order = u32::try_from(shapes.len()).unwrap_or(u32::MAX);
+            shapes.push(s);
+        }
+    }
+    shapes
+}
+
+/// The outlines of the clips that limit a region, as feature geometry (one
+/// [`ShapeKind::ClipOutline`] shape per clip, after the painted shapes): the
+/// pieces whose bounding box meets a clipped shape's.
+fn add_clip_outlines(shapes: &mut Vec<Shape>, paths: usize) {
+    let mut seen: Vec<(*const Clip, kurbo::Rect)> = Vec::new();
+    fn bbox_of(subpaths: &[Subpath]) -> Option<kurbo::Rect> {
+        let mut b: Option<kurbo::Rect> = None;
+        for sp in subpaths {
+            for p in std::iter::once(sp.start)
+                .chain(sp.segments.iter().flat_map(Segment::control_points))
+            {
+                b = Some(b.map_or(kurbo::Rect::from_points(p, p), |r| r.union_pt(p)));
+            }
+        }
+        b
+    }
+    fn visit(c: &Arc<Clip>, bb: kurbo::Rect, seen: &mut Vec<(*const Clip, kurbo::Rect)>) {
+        let ptr = Arc::as_ptr(c);
+        match seen.iter_mut().find(|e| e.0 == ptr) {
+            Some(e) => e.1 = e.1.union(bb),
+            None => seen.push((ptr, bb)),
+        }
+        for inner in c
+            .within
+            .iter()
+            .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+        {
+            visit(inner, bb, seen);
+        }
+    }
+    let mut all: Vec<Arc<Clip>> = Vec::new();
+    for s in shapes.iter().filter(|s| s.filled) {
+        let Some(bb) = bbox_of(&s.subpaths) else {
+            continue;
+        };
+        for c in &s.paint.clips {
+            visit(c, bb, &mut seen);
+            collect_clips(c, &mut all);
+        }
+    }
+    let mut index = paths;
+    for (ptr, bb) in seen {
+        let Some(clip) = all.iter().find(|c| Arc::as_ptr(c) == ptr) else {
+            continue;
+        };
+        let subpaths: Vec<Subpath> = clip
+            .parts
+            .iter()
+            .flat_map(|p| p.subpaths.iter())
+            .filter(|sp| bbox_of(std::slice::from_ref(sp)).is_some_and(|b| b.overlaps(bb)))
+            .cloned()
+            .collect();
+        if subpaths.is_empty() {
+            continue;
+        }
+        shapes.push(Shape {
+            svg_id: Some(clip.name.clone()),
+            element_index: u32::try_from(index).unwrap_or(u32::MAX),
+            paint_order: u32::try_from(shapes.len()).unwrap_or(u32::MAX),
+            filled: false,
+            stroked: false,
+            fill_rule: FillRule::NonZero,
+            fill_colour: None,
+            subpaths,
+            paint: ShapePaint {
+                kind: ShapeKind::ClipOutline,
+                ..ShapePaint::default()
+            },
+        });
+        index += 1;
+    }
+}
+
+/// `c` and every clip inside it, once each.
+fn collect_clips(c: &Arc<Clip>, all: &mut Vec<Arc<Clip>>) {
+    if all.iter().any(|e| Arc::ptr_eq(e, c)) {
+        return;
+    }
+    all.push(c.clone());
+    for inner in c
+        .within
+        .iter()
+        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+    {
+        collect_clips(inner, all);
+    }
 }
 
 /// The f64 subpaths of usvg path `p` from its source element, or why not
@@ -248,18 +807,7 @@ fn non_empty(s: &str) -> Option<&str> {
 /// One usvg path → one [`Shape`], in output coordinates.
 fn convert_path(path: &usvg::Path, index: usize, id: Option<&str>, frame: &Frame) -> Result<Shape> {
     let element_index = u32::try_from(index).unwrap_or(u32::MAX);
-    let [sx, ky, kx, sy, tx, ty] = frame.map(path.abs_transform());
-    let map = |p: usvg::tiny_skia_path::Point| {
-        let (x, y) = (f64::from(p.x), f64::from(p.y));
-        Point::new(sx * x + kx * y + tx, -(ky * x + sy * y + ty))
-    };
-    let subpaths = subpaths(path.data().segments().map(|seg| match seg {
-        PathSegment::MoveTo(p) => Verb::Move(map(p)),
-        PathSegment::LineTo(p) => Verb::Line(map(p)),
-        PathSegment::QuadTo(p1, p2) => Verb::Quad(map(p1), map(p2)),
-        PathSegment::CubicTo(p1, p2, p3) => Verb::Cubic(map(p1), map(p2), map(p3)),
-        PathSegment::Close => Verb::Close,
-    }));
+    let subpaths = outline_of(path.data(), path.abs_transform(), frame);
     let shape = Shape {
         svg_id: id.map(str::to_owned),
         element_index,
@@ -275,9 +823,30 @@ fn convert_path(path: &usvg::Path, index: usize, id: Option<&str>, frame: &Frame
             _ => None,
         }),
         subpaths,
+        paint: ShapePaint::default(),
     };
     check_coordinates(&shape)?;
     Ok(shape)
+}
+
+/// usvg path data under `transform` (then the output frame), in output coordinates.
+fn outline_of(
+    data: &usvg::tiny_skia_path::Path,
+    transform: usvg::Transform,
+    frame: &Frame,
+) -> Vec<Subpath> {
+    let [sx, ky, kx, sy, tx, ty] = frame.map(transform);
+    let map = |p: usvg::tiny_skia_path::Point| {
+        let (x, y) = (f64::from(p.x), f64::from(p.y));
+        Point::new(sx * x + kx * y + tx, -(ky * x + sy * y + ty))
+    };
+    subpaths(data.segments().map(|seg| match seg {
+        PathSegment::MoveTo(p) => Verb::Move(map(p)),
+        PathSegment::LineTo(p) => Verb::Line(map(p)),
+        PathSegment::QuadTo(p1, p2) => Verb::Quad(map(p1), map(p2)),
+        PathSegment::CubicTo(p1, p2, p3) => Verb::Cubic(map(p1), map(p2), map(p3)),
+        PathSegment::Close => Verb::Close,
+    }))
 }
 
 /// A path command (in an element's own coordinates or in output coordinates).

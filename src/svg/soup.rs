@@ -2,7 +2,8 @@
 //! whole-drawing checks (not empty, extent representable in f64).
 
 use super::drawing::{
-    Drawing, Feature, FeatureGeom, FeatureSource, PathPrecision, Segment, Shape, ShapeId,
+    Drawing, Feature, FeatureGeom, FeatureSource, PaintCounts, PathPrecision, Segment, Shape,
+    ShapeId,
 };
 use crate::{Error, Result};
 use kurbo::Rect;
@@ -57,6 +58,7 @@ pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Draw
         bbox,
         warnings,
         precision: PathPrecision::default(),
+        paint: PaintCounts::default(),
     })
 }
 

@@ -11,8 +11,16 @@ fn svg(body: &str) -> String {
     )
 }
 
+/// Load with strokes as centre lines (the outlines as written: most tests here
+/// are about geometry; the paint model has its own tests below).
 fn load(body: &str) -> Drawing {
-    load_bytes(svg(body).as_bytes()).expect("test SVG loads")
+    load_bytes_painted(
+        svg(body).as_bytes(),
+        Units::User,
+        1.0,
+        &PaintOptions::OUTLINES,
+    )
+    .expect("test SVG loads")
 }
 
 fn load_err(doc: &str) -> Error {
@@ -131,7 +139,9 @@ fn nested_svg_and_use_are_positioned() {
             <defs><rect id="r" width="5" height="5"/></defs>
             <use id="u" xlink:href="#r" x="50" y="60"/>"##,
     );
-    assert_eq!(d.shapes.len(), 2);
+    // the two rects, then the nested viewport's clip outline (feature geometry)
+    assert_eq!(d.shapes.len(), 3);
+    assert!(!d.shapes[2].filled && d.shapes[0].paint.clips.len() == 1);
     let b0 = bbox_of(&d.shapes[0]);
     assert!(close(b0.origin(), Point::new(10.0, -30.0)), "{b0:?}");
     assert!(
@@ -204,9 +214,18 @@ fn fill_rule_colour_and_id() {
     assert_eq!(s.fill_colour, Some([0x10, 0x20, 0x30]));
     assert_eq!(d.shapes[1].fill_rule, FillRule::NonZero);
     assert_eq!(d.shapes[1].name(), "shape-1");
-    // Neither fill nor stroke: still geometry (TriWild meshes every outline).
-    assert_eq!((d.shapes[2].filled, d.shapes[2].stroked), (false, false));
-    assert_eq!(d.shapes.len(), 3);
+    // Neither fill nor stroke: the renderer paints nothing, so nothing is loaded.
+    assert_eq!(d.shapes.len(), 2);
+    assert_eq!(
+        d.paint.dropped_invisible, 0,
+        "no paint at all is not a dropped paint"
+    );
+    // the stroke of shape 1 as the area it paints (the default)
+    let d = load_bytes(
+        svg(r##"<path d="M 0 0 L 10 0 L 5 10 Z" fill="url(#nope)" stroke="blue"/>"##).as_bytes(),
+    )
+    .expect("loads");
+    assert_eq!(d.shapes[0].name(), "shape-0-stroke");
 }
 
 #[test]
@@ -307,14 +326,23 @@ fn images_are_ignored_with_a_warning() {
 }
 
 #[test]
-fn clip_paths_and_masks_are_not_geometry() {
+fn clip_paths_and_masks_limit_the_shape_and_their_outlines_are_features() {
     let d = load(
         r##"<clipPath id="c"><circle cx="5" cy="5" r="5"/></clipPath>
             <mask id="m"><rect width="100" height="100" fill="white"/></mask>
             <rect width="10" height="10" clip-path="url(#c)" mask="url(#m)"/>"##,
     );
-    assert_eq!(d.shapes.len(), 1);
     assert_eq!(count(&d.shapes[0].subpaths[0]), (4, 0));
+    assert_eq!(d.shapes[0].paint.clips.len(), 2);
+    assert_eq!((d.paint.clipped_shapes, d.paint.masked_shapes), (1, 1));
+    // the clip's circle, the mask's content and its rectangle: outlines only
+    let outlines: Vec<String> = d.shapes[1..].iter().map(Shape::name).collect();
+    assert!(
+        d.shapes[1..]
+            .iter()
+            .all(|s| !s.filled && s.paint.kind == drawing::ShapeKind::ClipOutline)
+    );
+    assert_eq!(outlines, ["clip-c", "mask-m", "mask-m"]);
 }
 
 #[test]

@@ -75,6 +75,7 @@ fn shape(name: &str, index: u32, subpath: crate::svg::Subpath) -> Shape {
         stroked: false,
         fill_rule: FillRule::NonZero,
         fill_colour: Some([0, 0, 0]),
+        paint: Default::default(),
         subpaths: vec![subpath],
     }
 }
@@ -111,6 +112,7 @@ pub(super) fn drawing_of(shapes: Vec<Shape>) -> Drawing {
         bbox: bbox.expect("a drawing with features"),
         warnings: Vec::new(),
         precision: Default::default(),
+        paint: Default::default(),
     }
 }
 

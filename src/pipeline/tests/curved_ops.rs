@@ -63,6 +63,7 @@ fn random_ops_in_curved_mode_on_exact_conics_keep_every_element_certified() {
         stroked: false,
         fill_rule: crate::svg::FillRule::NonZero,
         fill_colour: None,
+        paint: Default::default(),
         subpaths: vec![super::conics::disk_subpath()],
     }]);
     run_curved_ops(&[

@@ -1,0 +1,227 @@
+//! SVG's paint model (issue 16, "what you see is what you mesh"): invisible
+//! shapes, decoration, strokes as areas, clip paths and masks, each checked by
+//! the regions it gives and their exact areas.
+
+use std::f64::consts::PI;
+use triwild::{Drawing, Params, RegionMode, RegionOptions, RegionStat};
+use triwild::{PaintOptions, StrokeMode, Units, load_bytes_painted, mesh_drawing_with};
+
+fn load_with(body: &str, paint: &PaintOptions) -> Drawing {
+    let doc =
+        format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="200">{body}</svg>"#);
+    load_bytes_painted(doc.as_bytes(), Units::User, 1.0, paint).expect("test SVG loads")
+}
+
+fn load(body: &str) -> Drawing {
+    load_with(body, &PaintOptions::DEFAULT)
+}
+
+/// The regions (name, area) of the default TriWild mesh, background left out.
+fn regions_of(d: &Drawing, mode: RegionMode) -> Vec<RegionStat> {
+    let opts = RegionOptions::DEFAULT.with_mode(mode);
+    let meshed = mesh_drawing_with(d, &Params::DEFAULT, &opts).expect("meshing succeeds");
+    meshed
+        .report
+        .regions
+        .surfaces
+        .into_iter()
+        .filter(|s| s.name != "background")
+        .collect()
+}
+
+fn regions(body: &str) -> Vec<RegionStat> {
+    regions_of(&load(body), RegionMode::Shape)
+}
+
+fn area(stats: &[RegionStat], name: &str) -> f64 {
+    stats
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no region {name} in {stats:?}"))
+        .area
+}
+
+fn names(stats: &[RegionStat]) -> Vec<&str> {
+    stats.iter().map(|s| s.name.as_str()).collect()
+}
+
+fn assert_close(got: f64, want: f64, rel: f64) {
+    assert!(
+        (got - want).abs() <= rel * want.abs(),
+        "area {got} != {want} (relative tolerance {rel:e})"
+    );
+}
+
+#[test]
+fn a_hidden_layer_and_invisible_shapes_are_not_meshed() {
+    // an Inkscape drawing: a hidden layer with a background rectangle
+    let body = r##"
+      <g id="layer1" style="display:none"><rect id="bg" x="0" y="0" width="200" height="200" fill="#000"/></g>
+      <rect id="blue" x="10" y="10" width="180" height="80" fill="#0000ff"/>
+      <rect id="hidden" x="20" y="20" width="60" height="60" fill="#ff0000" visibility="hidden"/>
+      <g opacity="0"><rect id="zero-group" x="120" y="20" width="60" height="60" fill="#00ff00"/></g>
+      <rect id="no-fill-opacity" x="20" y="100" width="60" height="60" fill="#ff0" fill-opacity="0"/>
+      <g opacity="0.5"><rect id="half" x="100" y="100" width="60" height="60" fill="#f0f" opacity="0.5"/></g>"##;
+    let d = load(body);
+    assert_eq!(
+        d.shapes.len(),
+        1,
+        "only the blue rect is painted: {:?}",
+        d.shapes
+    );
+    assert_eq!(d.paint.dropped_invisible, 3);
+    assert_eq!(
+        d.paint.dropped_decoration, 1,
+        "opacity 0.5 × 0.5 is decoration"
+    );
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_eq!(names(&r), ["blue"]);
+    assert_close(area(&r, "blue"), 180.0 * 80.0, 1e-12);
+    // decoration kept as feature geometry on request, still no region
+    let keep = PaintOptions::DEFAULT.with_keep_decoration(true);
+    let d = load_with(body, &keep);
+    assert_eq!(d.shapes.len(), 2);
+    assert!(!d.shapes[1].filled);
+    assert_eq!(names(&regions_of(&d, RegionMode::Shape)), ["blue"]);
+    // a lower threshold makes the translucent rect a region, named with its alpha
+    let d = load_with(body, &PaintOptions::DEFAULT.with_min_opacity(0.2));
+    let r = regions_of(&d, RegionMode::Colour);
+    assert_eq!(names(&r), ["fill-#0000ff", "fill-#ff00ff40"]);
+    assert_close(area(&r, "fill-#ff00ff40"), 3600.0, 1e-12);
+}
+
+#[test]
+fn a_stroked_square_is_a_ring_of_its_width() {
+    let body = r##"<rect id="sq" x="20" y="20" width="80" height="80" fill="#ff0"
+                   stroke="#000" stroke-width="10" stroke-linejoin="miter"/>"##;
+    let d = load(body);
+    assert_eq!(d.paint.strokes_as_areas, 1);
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_eq!(names(&r), ["sq", "sq-stroke"]);
+    // the fill shows inside the stroke's inner edge; the ring is 90² − 70²
+    assert_close(area(&r, "sq"), 70.0 * 70.0, 1e-12);
+    assert_close(area(&r, "sq-stroke"), 90.0 * 90.0 - 70.0 * 70.0, 1e-12);
+    // by colour, the ring is the stroke's colour
+    let r = regions_of(&d, RegionMode::Colour);
+    assert_eq!(names(&r), ["fill-#ffff00", "fill-#000000"]);
+    // paint-order stroke: the fill covers the stroke's inner half
+    let d = load(&body.replace("/>", r#" paint-order="stroke"/>"#));
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_close(area(&r, "sq"), 80.0 * 80.0, 1e-12);
+    assert_close(area(&r, "sq-stroke"), 90.0 * 90.0 - 80.0 * 80.0, 1e-12);
+    // as lines: no stroke region, the centre line is the fill's outline
+    let d = load_with(body, &PaintOptions::DEFAULT.with_strokes(StrokeMode::Line));
+    assert_eq!(d.paint.strokes_as_lines, 1);
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_eq!(names(&r), ["sq"]);
+    assert_close(area(&r, "sq"), 80.0 * 80.0, 1e-12);
+}
+
+#[test]
+fn a_round_cap_stroke_and_a_dashed_line_cover_their_areas() {
+    // dashes 10 on, 10 off along 100 units with butt caps: five 10 × 4 dashes
+    let r = regions(
+        r##"<path id="dash" d="M 0 50 L 100 50" stroke="#000" stroke-width="4"
+               stroke-dasharray="10 10"/>
+            <rect x="0" y="0" width="1" height="1" fill="#fff"/>"##,
+    );
+    assert_close(area(&r, "dash-stroke"), 5.0 * 10.0 * 4.0, 1e-12);
+    // a round-capped segment: a 100 × 10 rectangle and a disk of radius 5
+    let r = regions(
+        r##"<line id="l" x1="10" y1="50" x2="110" y2="50" stroke="#00f" stroke-width="10"
+               stroke-linecap="round"/>"##,
+    );
+    assert_close(area(&r, "l-stroke"), 1000.0 + PI * 25.0, 1e-4);
+}
+
+#[test]
+fn a_hairline_stroke_stays_a_line() {
+    let d = load(
+        r##"<rect id="a" x="0" y="0" width="100" height="100" fill="#f00"/>
+             <path id="h" d="M 10 10 L 90 90" fill="none" stroke="#000" stroke-width="0.001"/>"##,
+    );
+    assert_eq!(d.paint.strokes_as_lines, 1);
+    assert_eq!(d.paint.strokes_as_areas, 0);
+    assert_eq!(d.shapes.len(), 2);
+    assert!(
+        !d.shapes[1].filled,
+        "the centre line is a feature, not a region"
+    );
+}
+
+#[test]
+fn a_clipped_disk_is_the_part_inside_the_clip() {
+    let body = r##"<defs><clipPath id="c"><rect x="100" y="0" width="100" height="200"/></clipPath></defs>
+        <circle id="disk" cx="100" cy="100" r="50" fill="#0c0" clip-path="url(#c)"/>"##;
+    let d = load(body);
+    assert_eq!(d.paint.clipped_shapes, 1);
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_eq!(names(&r), ["disk"]);
+    assert_close(area(&r, "disk"), PI * 2500.0 / 2.0, 1e-6);
+    // the clip's own rule, nested clips and objectBoundingBox units
+    let body = r##"<defs>
+          <clipPath id="outer"><rect x="0" y="0" width="200" height="100"/></clipPath>
+          <clipPath id="c" clipPathUnits="objectBoundingBox" clip-path="url(#outer)">
+            <rect x="0.5" y="0" width="0.5" height="1"/></clipPath></defs>
+        <g clip-path="url(#c)"><circle id="disk" cx="100" cy="100" r="50" fill="#0c0"/></g>"##;
+    let r = regions(body);
+    // both clip lines pass through ends of the circle's conic pieces, where the
+    // features stage keeps secondary polylines: |Δ area| ≤ μ · length
+    assert_close(area(&r, "disk"), PI * 2500.0 / 4.0, 1e-3);
+    let body = r##"<defs><clipPath id="c">
+          <path clip-rule="evenodd" d="M 0 0 H 200 V 200 H 0 Z M 50 50 H 150 V 150 H 50 Z"/></clipPath></defs>
+        <rect id="r" x="0" y="0" width="200" height="200" fill="#123456" clip-path="url(#c)"/>"##;
+    let r = regions(body);
+    // the clip's outer square coincides with the rect's outline: overlapping
+    // features are met within the ε-envelope, |Δ area| ≤ ε · perimeter
+    assert_close(area(&r, "r"), 200.0 * 200.0 - 100.0 * 100.0, 1e-3);
+}
+
+#[test]
+fn a_mask_clips_where_it_is_not_transparent() {
+    let body = r##"<defs><mask id="m" maskUnits="userSpaceOnUse" x="0" y="0" width="200" height="200">
+          <rect x="0" y="0" width="200" height="200" fill="#000"/>
+          <rect x="50" y="0" width="100" height="200" fill="#fff"/></mask></defs>
+        <rect id="r" x="0" y="50" width="200" height="100" fill="#f00" mask="url(#m)"/>"##;
+    let d = load(body);
+    assert_eq!(d.paint.masked_shapes, 1);
+    assert!(
+        d.warnings.iter().any(|w| w.contains("mask")),
+        "{:?}",
+        d.warnings
+    );
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_close(area(&r, "r"), 100.0 * 100.0, 1e-12);
+}
+
+#[test]
+fn markers_are_drawn_on_paths_only() {
+    let defs = r##"<defs><marker id="dot" markerWidth="10" markerHeight="10" refX="5" refY="5"
+        markerUnits="userSpaceOnUse"><circle cx="5" cy="5" r="5" fill="#f00"/></marker></defs>"##;
+    let on_circle = load(&format!(
+        r##"{defs}<circle cx="100" cy="100" r="50" fill="#00f" marker-start="url(#dot)"/>"##
+    ));
+    let filled = |d: &Drawing| d.shapes.iter().filter(|s| s.filled).count();
+    assert_eq!(filled(&on_circle), 1, "{:?}", on_circle.shapes);
+    let on_path = load(&format!(
+        r##"{defs}<path d="M 50 100 L 150 100 L 100 50 Z" fill="#00f" marker-start="url(#dot)"/>"##
+    ));
+    assert_eq!(filled(&on_path), 2, "the path and its marker");
+}
+
+#[test]
+fn a_gradient_is_named_by_its_id_and_a_mostly_transparent_one_is_decoration() {
+    let body = r##"<defs>
+          <linearGradient id="g"><stop offset="0" stop-color="#f00"/><stop offset="1" stop-color="#00f"/></linearGradient>
+          <radialGradient id="fade"><stop offset="0" stop-color="#000"/>
+            <stop offset="0.3" stop-color="#000" stop-opacity="0"/></radialGradient></defs>
+        <rect id="a" x="0" y="0" width="100" height="100" fill="url(#g)"/>
+        <rect id="b" x="100" y="0" width="100" height="100" fill="url(#g)"/>
+        <rect id="shade" x="0" y="100" width="100" height="100" fill="url(#fade)"/>"##;
+    let d = load(body);
+    assert_eq!(d.paint.dropped_decoration, 1);
+    assert_eq!(d.shapes[0].paint.average_colour, Some([128, 0, 128]));
+    let r = regions_of(&d, RegionMode::Colour);
+    assert_eq!(names(&r), ["fill-g"]);
+    assert_close(area(&r, "fill-g"), 20000.0, 1e-12);
+}
