@@ -34,7 +34,11 @@ Exit codes:
   0  success
   2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag)
   3  meshing failed
+  2  also: input over a budget ('too large: ...', raise with --max-segments,
+     --max-shapes or --max-memory)
+  3  also: --time-limit reached (nothing is written)
   4  I/O error (reading the input or writing an output)
+  130, 143  interrupted by SIGINT / SIGTERM (no temporary file is left)
   141  standard output closed early (`triwild ... --stats | head`); outputs complete";
 
 /// Robust curved triangle meshing of SVG drawings (TriWild, in Rust).
@@ -126,11 +130,59 @@ fn install_panic_hook() {
     }));
 }
 
+/// SIGINT and SIGTERM: remove the temporary output files and exit 128 + the
+/// signal (130, 143); in `triwild batch`, stop the children, write their rows
+/// as interrupted and let the batch finish (a second signal exits at once).
+fn install_signal_handlers(batch: bool) {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        for sig in signals.forever() {
+            if batch && triwild::batch::interrupted().is_none() {
+                triwild::batch::interrupt(sig);
+                continue;
+            }
+            triwild::remove_temporaries();
+            std::process::exit(128 + sig);
+        }
+    });
+}
+
+/// A `triwild batch` child: its standard input is a pipe from the batch, which
+/// closes when the batch ends in any way (SIGKILL included). At end-of-file the
+/// child removes its temporary output and exits, so no orphan writes a mesh
+/// that no report row describes.
+fn watch_parent_pipe() {
+    if std::env::var_os(triwild::batch::PARENT_PIPE_ENV).is_none() {
+        return;
+    }
+    std::thread::spawn(|| {
+        let mut sink = [0u8; 64];
+        let mut stdin = std::io::stdin().lock();
+        loop {
+            match std::io::Read::read(&mut stdin, &mut sink) {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+        }
+        triwild::remove_temporaries();
+        std::process::exit(EXIT_ORPHAN);
+    });
+}
+
+/// Exit code of a batch child whose batch is gone (128 + SIGHUP, as a shell
+/// reports a process that lost its terminal).
+const EXIT_ORPHAN: i32 = 129;
+
 fn main() -> ExitCode {
     install_panic_hook();
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     init_logging(&cli.log);
+    install_signal_handlers(matches!(cli.command, Some(Command::Batch(_))));
+    watch_parent_pipe();
     let quiet = cli.log.quiet;
     match &cli.command {
         None => cli::mesh::run(&cli.mesh, quiet),

@@ -43,6 +43,7 @@
 //! Nodes on an edge are shared by both triangles on it and by the edge's line
 //! element.
 
+use crate::budget::Deadline;
 use super::assemble::{assemble, finish_stats};
 use super::fit::fit_all;
 use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
@@ -88,6 +89,9 @@ pub(crate) struct CurveOptions {
     /// Bound on the turn of a primary edge's curve piece in the curved
     /// optimization, radians (strict; less than π).
     pub curved_alpha: f64,
+    /// The run's wall-clock limit: the curved optimization starts no pass
+    /// after it (default none).
+    pub deadline: Deadline,
 }
 
 /// Default [`CurveOptions::max_splits`]: a budget that only a runaway repair
@@ -123,7 +127,13 @@ impl CurveOptions {
             stop_energy: defaults.stop_energy_curved,
             max_passes: defaults.max_passes_curved,
             curved_alpha: rule.alpha,
+            deadline: Deadline::NONE,
         }
+    }
+    /// Set the wall-clock limit.
+    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
+        self.deadline = deadline;
+        self
     }
     /// Set the minimal edge length below which curved edges are not split.
     pub(crate) fn with_l_min_abs(mut self, l: f64) -> Self {
@@ -256,6 +266,7 @@ fn curved_optimization(
         l: opts.l_abs,
         stop_energy: opts.stop_energy,
         max_passes: opts.max_passes,
+        deadline: opts.deadline,
     };
     optimize_curved(mesh, &ctx.with_curved(rule), &curved_opts)
 }

@@ -18,6 +18,7 @@ mod atomic;
 mod msh;
 mod preview;
 
+pub use atomic::remove_temporaries;
 use crate::{Error, FemMesh, Result};
 use std::path::Path;
 

@@ -47,6 +47,7 @@
 //! whose diagonal is not negligible (< 1e-12) relative to its distance from the
 //! origin unless the drawing is a single point.
 
+mod budget;
 mod conic;
 pub(crate) mod drawing;
 mod geometry;
@@ -63,6 +64,7 @@ pub(crate) use drawing::{
 
 pub(crate) use reconstruct::Precision;
 
+use crate::budget::Limits;
 use crate::units::Units;
 use crate::{Error, Result};
 use std::path::Path;
@@ -158,15 +160,83 @@ pub(crate) fn load_with_precision(
     units: Units,
     scale: f64,
 ) -> Result<(Drawing, Precision)> {
+    load_limited(data, units, scale, &Limits::NONE)
+}
+
+/// Load and normalise an SVG file within input budgets (see [`load_limited`]).
+///
+/// # Errors
+/// As [`load_file_with`], and [`Error::TooLarge`] past a budget.
+pub(crate) fn load_file_limited(
+    path: &Path,
+    units: Units,
+    scale: f64,
+    limits: &Limits,
+) -> Result<Drawing> {
+    let meta = std::fs::metadata(path).map_err(Error::Read)?;
+    if meta.is_dir() {
+        return Err(Error::IsDirectory);
+    }
+    let data = std::fs::read(path).map_err(Error::Read)?;
+    if data.is_empty() {
+        return Err(Error::EmptyFile);
+    }
+    load_limited(&data, units, scale, limits).map(|(drawing, _)| drawing)
+}
+
+/// A coordinate error that `--scale` caused says so.
+fn blame_scale(e: Error, scale: f64) -> Error {
+    match e {
+        Error::BadCoordinate(m) if scale > 1.0 => {
+            Error::BadCoordinate(format!("coordinates too large after --scale {scale:e}: {m}"))
+        }
+        e => e,
+    }
+}
+
+/// [`load_with_precision`] within input budgets: XML entity expansion is
+/// checked on the raw text, segments, elements and the memory estimate on the
+/// XML tree before usvg builds its tree, and again on the drawing.
+///
+/// # Errors
+/// As [`load_bytes_with`], and [`Error::TooLarge`] past a budget.
+pub(crate) fn load_limited(
+    data: &[u8],
+    units: Units,
+    scale: f64,
+    limits: &Limits,
+) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
-    let outlines = load::parse(data, |parsed| {
+    let outlines = load::parse(data, limits, |parsed| {
         let frame =
             viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
         outline::collect(parsed, &frame, map)
-    })?;
+    })
+    .map_err(|e| blame_scale(e, scale))?;
     let mut drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
+    let d = drawing.diagonal();
+    if d < Drawing::MIN_DIAGONAL {
+        let cause = format!(
+            "the drawing's bounding-box diagonal is {d:e}, below {:e}",
+            Drawing::MIN_DIAGONAL
+        );
+        return Err(Error::BadCoordinate(if scale < 1.0 {
+            format!("coordinates too small after --scale {scale:e}: {cause}")
+        } else {
+            format!("coordinates too small: {cause}")
+        }));
+    }
+    let counts = budget::Counts {
+        segments: drawing
+            .features
+            .iter()
+            .filter(|f| !matches!(f.geom, FeatureGeom::Point(_)))
+            .count() as u64,
+        shapes: drawing.shapes.len() as u64,
+    };
+    budget::check_counts(counts, data.len() as u64, limits)?;
     drawing.precision = drawing::PathPrecision {
         f64_paths: outlines.precision.exact,
         single_precision_paths: outlines.precision.glyphs + outlines.precision.fallbacks(),
