@@ -139,10 +139,21 @@ fn install_signal_handlers(batch: bool) {
         return;
     };
     std::thread::spawn(move || {
+        let mut first: Option<std::time::Instant> = None;
         for sig in signals.forever() {
-            if batch && triwild::batch::interrupted().is_none() {
-                triwild::batch::interrupt(sig);
-                continue;
+            if batch {
+                // The same signal often comes twice at once (to the process
+                // and to its group, as `timeout` and a terminal send it):
+                // only a repeat after a grace period ends the batch at once.
+                match first {
+                    None => {
+                        first = Some(std::time::Instant::now());
+                        triwild::batch::interrupt(sig);
+                        continue;
+                    }
+                    Some(t) if t.elapsed() < SIGNAL_GRACE => continue,
+                    Some(_) => {}
+                }
             }
             triwild::remove_temporaries();
             std::process::exit(128 + sig);
@@ -171,6 +182,9 @@ fn watch_parent_pipe() {
         std::process::exit(EXIT_ORPHAN);
     });
 }
+
+/// A second SIGINT / SIGTERM this long after the first ends a batch at once.
+const SIGNAL_GRACE: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// Exit code of a batch child whose batch is gone (128 + SIGHUP, as a shell
 /// reports a process that lost its terminal).

@@ -181,16 +181,19 @@ enum Killed {
 }
 
 /// Remove `output` and the temporary files the writer may have left next to
-/// it (`NAME.tmp*`), after a failure.
+/// it (`.NAME.tmp*`, and `NAME.tmp*`), after a failure.
 fn remove_output(output: &Path) {
     let _ = std::fs::remove_file(output);
     let (Some(dir), Some(name)) = (output.parent(), output.file_name()) else {
         return;
     };
+    // The writer's temporary files are hidden: `.NAME.tmpXXXXXX`.
     let prefix = format!("{}.tmp", name.to_string_lossy());
+    let hidden = format!(".{prefix}");
     if let Ok(entries) = std::fs::read_dir(dir) {
         for e in entries.flatten() {
-            if e.file_name().to_string_lossy().starts_with(&prefix) {
+            let n = e.file_name().to_string_lossy().into_owned();
+            if n.starts_with(&prefix) || n.starts_with(&hidden) {
                 let _ = std::fs::remove_file(e.path());
             }
         }
@@ -538,7 +541,7 @@ mod tests {
     fn cleanup_removes_temporaries() {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("a.msh");
-        for name in ["a.msh", "a.msh.tmp123", "b.msh"] {
+        for name in ["a.msh", "a.msh.tmp123", ".a.msh.tmpAbC123", "b.msh"] {
             std::fs::write(dir.path().join(name), "x").expect("write");
         }
         remove_output(&out);
