@@ -76,8 +76,8 @@ pub use output::{
 };
 pub use params::{Length, Mesher, Params, defaults};
 pub use pipeline::{
-    FeatureAnalysis, Meshed, Report, RunOptions, load_file_params, mesh_drawing,
-    mesh_drawing_with, mesh_svg, run_file,
+    FeatureAnalysis, Meshed, Report, RunOptions, load_file_params, mesh_drawing, mesh_drawing_with,
+    mesh_svg, run_file,
 };
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use stage::Stage;

@@ -72,19 +72,22 @@ pub mod defaults {
     pub const UNITS: Units = Units::User;
     /// Output scale: 1, the coordinates as [`UNITS`] gives them.
     pub const SCALE: f64 = 1.0;
-    /// Most input segments, 1 000 000 (ours: about 10 times the largest
-    /// drawing of the dev set; `<use>` copies and XML entities counted
+    /// Most input segments, 1 000 000 (ours: about 60 times the dev set's
+    /// largest drawing, 16 896; `<use>` copies and XML entities counted
     /// expanded): `--max-segments`.
     pub const MAX_SEGMENTS: u64 = 1_000_000;
-    /// Most drawable elements, 200 000 (ours; about 50 times the dev set's
-    /// largest): `--max-shapes`.
+    /// Most drawable elements, 200 000 (ours: about 230 times the dev set's
+    /// largest, 878): `--max-shapes`.
     pub const MAX_SHAPES: u64 = 200_000;
-    /// Most estimated memory, MiB: 16 GiB (ours; the estimate is about 16 KiB
-    /// per segment plus the document's text): `--max-memory`.
-    pub const MAX_MEMORY_MB: u64 = 16 << 10;
-    /// Wall-clock limit of one run: none (`--time-limit`; `triwild batch` has
-    /// its own per-file `--timeout`, 600 s).
-    pub const TIME_LIMIT: Option<f64> = None;
+    /// Most estimated memory, MiB: 8 GiB (ours; the estimate is 64 MiB, plus
+    /// 4 KiB per segment and 4 bytes per byte of text, about twice what was
+    /// measured): `--max-memory`.
+    pub const MAX_MEMORY_MB: u64 = 8 << 10;
+    /// Wall-clock limit of one run: one hour (ours: the dev set's slowest
+    /// drawing takes under two minutes; a run that would take hours stops
+    /// cleanly instead, exit 3): `--time-limit`. `triwild batch` also kills a
+    /// child after its `--timeout` (600 s).
+    pub const TIME_LIMIT: Option<f64> = Some(3600.0);
 }
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.

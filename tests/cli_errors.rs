@@ -261,28 +261,94 @@ fn budgets_fail_with_one_line_naming_the_flag() {
     uses.push_str(&r##"<use href="#p"/>"##.repeat(1000));
     uses.push_str("</svg>");
     let cases: Vec<(&str, Vec<u8>, &[&str], i32, &str)> = vec![
-        ("segments", SQUARE.to_vec(), &["--max-segments", "3"], 2, "too large: 8 segments (limit 3), raise with --max-segments"),
-        ("shapes", two.to_vec(), &["--max-shapes", "1"], 2, "too large: 2 shapes (limit 1), raise with --max-shapes"),
-        ("memory", SQUARE.to_vec(), &["--max-memory", "1"], 2, "raise with --max-memory"),
-        ("use-copies", uses.into_bytes(), &["--max-segments", "2000"], 2, "too large: 3000 segments (limit 2000)"),
+        (
+            "segments",
+            SQUARE.to_vec(),
+            &["--max-segments", "3"],
+            2,
+            "too large: 8 segments (limit 3), raise with --max-segments",
+        ),
+        (
+            "shapes",
+            two.to_vec(),
+            &["--max-shapes", "1"],
+            2,
+            "too large: 2 shapes (limit 1), raise with --max-shapes",
+        ),
+        (
+            "memory",
+            SQUARE.to_vec(),
+            &["--max-memory", "1"],
+            2,
+            "raise with --max-memory",
+        ),
+        (
+            "use-copies",
+            uses.into_bytes(),
+            &["--max-segments", "2000"],
+            2,
+            "too large: 3000 segments (limit 2000)",
+        ),
         // 10 million segments (120 MB of expanded text, within the entity
         // allowance): counted on the XML tree, before usvg builds its own
-        ("entity-10m", entity_path(400), &[], 2, "too large: 10000001 segments (limit 1000000)"),
+        (
+            "entity-10m",
+            entity_path(400),
+            &[],
+            2,
+            "too large: 10000001 segments (limit 1000000)",
+        ),
         // just over the segment budget
-        ("entity-1m", entity_path(41), &[], 2, "too large: 1025001 segments (limit 1000000)"),
-        ("time-limit", SQUARE.to_vec(), &["--time-limit", "1e-9"], 3, "time limit of 0.000000001 s reached in features"),
-        ("scale-overflow", SQUARE.to_vec(), &["--scale", "1e300"], 2, "coordinates too large after --scale 1e300"),
-        ("scale-underflow", SQUARE.to_vec(), &["--scale", "1e-300"], 2, "coordinates too small after --scale 1e-300"),
+        (
+            "entity-1m",
+            entity_path(41),
+            &[],
+            2,
+            "too large: 1025001 segments (limit 1000000)",
+        ),
+        (
+            "time-limit",
+            SQUARE.to_vec(),
+            &["--time-limit", "1e-9"],
+            3,
+            "time limit of 0.000000001 s reached in features",
+        ),
+        (
+            "scale-overflow",
+            SQUARE.to_vec(),
+            &["--scale", "1e300"],
+            2,
+            "coordinates too large after --scale 1e300",
+        ),
+        (
+            "scale-underflow",
+            SQUARE.to_vec(),
+            &["--scale", "1e-300"],
+            2,
+            "coordinates too small after --scale 1e-300",
+        ),
         // 25 million segments: refused on the raw text, before the XML parser
         // expands the entities
-        ("entity-25m-text", entity_path(1000), &[], 2, "xml entities expand the document by"),
+        (
+            "entity-25m-text",
+            entity_path(1000),
+            &[],
+            2,
+            "xml entities expand the document by",
+        ),
     ];
     for (name, input_bytes, args, code, cause) in cases {
         let dir = scratch(&format!("budget-{name}"));
         let input = dir.join("in.svg");
         fs::write(&input, &input_bytes).unwrap();
         let output = dir.join("out.msh");
-        let out = bin().arg(&input).arg("-o").arg(&output).args(args).output().unwrap();
+        let out = bin()
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .args(args)
+            .output()
+            .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
         assert_eq!(out.status.code(), Some(code), "{name}: {stderr}");
@@ -294,6 +360,10 @@ fn budgets_fail_with_one_line_naming_the_flag() {
             "{name}: `{}` should contain `{cause}`",
             lines[0]
         );
-        assert_eq!(list(&dir), vec![PathBuf::from("in.svg")], "{name}: no output");
+        assert_eq!(
+            list(&dir),
+            vec![PathBuf::from("in.svg")],
+            "{name}: no output"
+        );
     }
 }

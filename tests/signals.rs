@@ -45,7 +45,12 @@ fn names(dir: &Path) -> Vec<String> {
             if p.is_dir() {
                 stack.push(p.clone());
             }
-            out.push(p.strip_prefix(dir).expect("below").to_string_lossy().into_owned());
+            out.push(
+                p.strip_prefix(dir)
+                    .expect("below")
+                    .to_string_lossy()
+                    .into_owned(),
+            );
         }
     }
     out.sort();
@@ -130,7 +135,10 @@ fn a_signal_leaves_no_temporary_file() {
         if matches!(moment, Moment::Start) && status.success() {
             // finished before the signal: the mesh is complete
             let mesh = fs::read_to_string(dir.join("out.msh")).expect("the mesh");
-            assert!(mesh.ends_with("$EndElements\n"), "case {k}: incomplete mesh");
+            assert!(
+                mesh.ends_with("$EndElements\n"),
+                "case {k}: incomplete mesh"
+            );
             assert_eq!(names(&dir), ["in.svg", "out.msh"], "case {k}");
             continue;
         }
@@ -214,7 +222,10 @@ fn children_die_with_a_killed_batch() {
         wait_for(20, || kids.iter().all(|&k| !alive(k))),
         "orphaned children still run: {kids:?}"
     );
-    let meshes: Vec<String> = names(&out).into_iter().filter(|n| n.contains(".msh")).collect();
+    let meshes: Vec<String> = names(&out)
+        .into_iter()
+        .filter(|n| n.contains(".msh"))
+        .collect();
     assert!(meshes.is_empty(), "{meshes:?}");
 }
 
@@ -237,8 +248,14 @@ fn an_interrupted_batch_reports_the_files_in_flight() {
     assert_eq!(rows.len(), 2, "{report}");
     for r in &rows {
         assert_eq!(r["cause"], "interrupted", "{r}");
-        assert!(r["message"].as_str().is_some_and(|m| m.contains("SIGTERM")), "{r}");
+        assert!(
+            r["message"].as_str().is_some_and(|m| m.contains("SIGTERM")),
+            "{r}"
+        );
     }
-    let meshes: Vec<String> = names(&out).into_iter().filter(|n| n.contains(".msh")).collect();
+    let meshes: Vec<String> = names(&out)
+        .into_iter()
+        .filter(|n| n.contains(".msh"))
+        .collect();
     assert!(meshes.is_empty(), "{meshes:?}");
 }

@@ -31,8 +31,8 @@ mod cut;
 mod fan;
 mod seed;
 
-use crate::budget::Deadline;
 use crate::Result;
+use crate::budget::Deadline;
 use crate::mesh::TriMesh;
 use kurbo::{Point, Rect};
 use std::time::Instant;

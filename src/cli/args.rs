@@ -276,10 +276,16 @@ pub(crate) struct ParamArgs {
     #[arg(long, default_value_t = defaults::MAX_MEMORY_MB, value_name = "MB", value_parser = parse_mb)]
     max_memory: u64,
     /// Stop with exit 3 after this many seconds of wall-clock time (checked
-    /// between and inside the stages; nothing is written) [default: none].
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
-    time_limit: Option<f64>,
+    /// between and inside the stages; nothing is written); `none` for no limit.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIME_LIMIT, value_parser = parse_seconds)]
+    time_limit: f64,
 }
+
+/// `--time-limit`'s default from [`defaults::TIME_LIMIT`]; infinite for none.
+const DEFAULT_TIME_LIMIT: f64 = match defaults::TIME_LIMIT {
+    Some(t) => t,
+    None => f64::INFINITY,
+};
 
 /// A memory size in MiB: a bare number is MiB, a number with a suffix (`4G`,
 /// `512M`, `100K`) is converted (rounded up to whole MiB).
@@ -296,11 +302,16 @@ pub(crate) fn parse_mb(s: &str) -> Result<u64, String> {
     Ok(mb)
 }
 
-/// A positive, finite number of seconds.
+/// A positive, finite number of seconds, or `none` (infinite).
 fn parse_seconds(s: &str) -> Result<f64, String> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(f64::INFINITY);
+    }
     match s.trim().parse::<f64>() {
         Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
-        _ => Err(format!("expected a positive number of seconds, got `{s}`")),
+        _ => Err(format!(
+            "expected a positive number of seconds or `none`, got `{s}`"
+        )),
     }
 }
 
@@ -344,7 +355,7 @@ impl ParamArgs {
             .with_max_vertices(self.max_vertices)
             .with_paranoid(self.paranoid)
             .with_limits(self.max_segments, self.max_shapes, self.max_memory)
-            .with_time_limit(self.time_limit)
+            .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))
     }
 
     /// `--max-memory` in bytes.

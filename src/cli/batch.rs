@@ -212,7 +212,9 @@ pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCo
             outln!("{summary}");
             outln!("report: {}", plan.report.display());
             if let Some(sig) = batch::interrupted() {
-                errln!("interrupted by signal {sig}: the files being meshed have an `interrupted` row; --resume runs the rest");
+                errln!(
+                    "interrupted by signal {sig}: the files being meshed have an `interrupted` row; --resume runs the rest"
+                );
                 return ExitCode::from(u8::try_from(128 + sig).unwrap_or(130));
             }
             ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })

@@ -43,13 +43,13 @@
 //! Nodes on an edge are shared by both triangles on it and by the edge's line
 //! element.
 
-use crate::budget::Deadline;
 use super::assemble::{assemble, finish_stats};
 use super::fit::fit_all;
 use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curved};
 use super::repair::{repair, round_all, split_multi_primary};
 use super::shape::{Bend, exact_shape};
 use crate::Result;
+use crate::budget::Deadline;
 use crate::element::Order;
 use crate::element::jacobian::CertifyOptions;
 use crate::fem::LineKind;

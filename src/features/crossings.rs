@@ -14,9 +14,9 @@
 //! `c1(s) = c2(t)`, and only converged solutions inside both pieces count.
 //! Budgets bound the work per piece and in total.
 
-use crate::budget::Deadline;
 use super::Parent;
 use super::grid::Grid;
+use crate::budget::Deadline;
 use crate::params::Resolved;
 use kurbo::{Point, Rect, Vec2};
 use std::collections::HashMap;

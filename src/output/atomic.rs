@@ -24,7 +24,10 @@ fn live() -> MutexGuard<'static, Option<Vec<PathBuf>>> {
 }
 
 fn ending() -> io::Error {
-    io::Error::new(io::ErrorKind::Interrupted, "the process is ending (interrupted)")
+    io::Error::new(
+        io::ErrorKind::Interrupted,
+        "the process is ending (interrupted)",
+    )
 }
 
 /// A temporary file listed in [`LIVE`] while this lives.

@@ -18,8 +18,8 @@ mod atomic;
 mod msh;
 mod preview;
 
-pub use atomic::remove_temporaries;
 use crate::{Error, FemMesh, Result};
+pub use atomic::remove_temporaries;
 use std::path::Path;
 
 /// gmsh file format version.

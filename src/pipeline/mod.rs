@@ -11,7 +11,9 @@
 //! ([`crate::fem::VertexNumbers`], [`crate::fem::feature_lines`]).
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
+use crate::budget::Deadline;
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
+use crate::error::check_deadline;
 use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
@@ -22,8 +24,6 @@ use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
 use crate::regions::{RegionOptions, RegionReport};
 use crate::svg::{self, Drawing, FeatureGeom};
-use crate::budget::Deadline;
-use crate::error::check_deadline;
 use crate::{Error, Result};
 use kurbo::Rect;
 use std::collections::BTreeMap;
@@ -313,7 +313,8 @@ fn mesh_within(
     let delivered = match params.mesher {
         Mesher::Cdt => {
             check_deadline(&deadline, Stage::Baseline)?;
-            let linear = times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
+            let linear =
+                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
             check_deadline(&deadline, Stage::Baseline)?;
             Delivered::Linear(linear)
         }
@@ -326,19 +327,15 @@ fn mesh_within(
             features = Some(fs.counts);
             let chains = fs.primary_chains();
             let (mut mesh, stats) = bsp_trimesh(
-                drawing,
-                &fs,
-                &chains,
-                params,
-                &resolved,
-                deadline,
-                &mut times,
+                drawing, &fs, &chains, params, &resolved, deadline, &mut times,
             )?;
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
             if params.stop_after == Some(Stage::Bsp) {
                 // Exact, but rounded to f64 a few triangles may be degenerate.
-                times.time("snap", || snap::snap_degenerate(&mut mesh, &ctx, resolved.d))?;
+                times.time("snap", || {
+                    snap::snap_degenerate(&mut mesh, &ctx, resolved.d)
+                })?;
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
                 let opts = optimize_options(params, &resolved).with_deadline(deadline);

@@ -4,12 +4,14 @@
 //! degenerate and those nodes as duplicates. Before the mesh is delivered,
 //! such triangles are removed by the operations the optimizer uses (each
 //! checked by the same invariants: no inversion, features kept within their
-//! envelope): collapse of the shortest edge, else a swap of the longest; what
-//! cannot be removed is refused with one line naming it.
+//! envelope): collapse of the shortest edge, else a swap of the longest, else
+//! smoothing a corner; vertices the BSP left rational are rounded, smoothed
+//! or collapsed the same way (or rounded after splitting their edges). What cannot be removed is refused with one line
+//! naming it.
 
 use crate::error::Error;
 use crate::mesh::{FaceId, TriMesh, VertexId};
-use crate::ops::{Context, try_collapse, try_round, try_swap};
+use crate::ops::{Context, try_collapse, try_round, try_smooth, try_split, try_swap};
 use crate::params::Stage;
 use kurbo::Point;
 
@@ -36,7 +38,9 @@ fn degenerate(p: [Point; 3], d: f64) -> bool {
     let (a, b, c) = (p[0], p[1], p[2]);
     let twice_area = (b - a).cross(c - a);
     let (xs, ys) = ([a.x, b.x, c.x], [a.y, b.y, c.y]);
-    let ext = |v: [f64; 3]| v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x));
+    let ext = |v: [f64; 3]| {
+        v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x))
+    };
     let h2 = ext(xs).powi(2) + ext(ys).powi(2);
     let short = [(a, b), (b, c), (c, a)]
         .iter()
@@ -51,7 +55,8 @@ fn bad_faces(mesh: &TriMesh, d: f64) -> Vec<FaceId> {
 }
 
 /// One attempt to remove the degenerate face `f`: collapse along its edges,
-/// shortest first (either way), then swap its edges, longest first.
+/// shortest first (either way), then swap its edges, longest first, then
+/// smooth its corners.
 fn remove(mesh: &mut TriMesh, ctx: &Context, f: FaceId) -> bool {
     let v = mesh.face(f);
     let mut edges: Vec<(VertexId, VertexId)> = vec![(v[0], v[1]), (v[1], v[2]), (v[2], v[0])];
@@ -63,10 +68,15 @@ fn remove(mesh: &mut TriMesh, ctx: &Context, f: FaceId) -> bool {
             return true;
         }
     }
-    edges
+    if edges
         .iter()
         .rev()
         .any(|&(a, b)| try_swap(mesh, ctx, a, b).is_applied())
+    {
+        return true;
+    }
+    // Smoothing a corner (on its feature, within its envelope) may lift it.
+    v.iter().any(|&u| try_smooth(mesh, ctx, u).is_applied())
 }
 
 /// Remove the triangles of `mesh` that are degenerate in f64, and refuse
@@ -80,7 +90,10 @@ pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crat
     // (which may move them a few ulps), else a collapse into a neighbour.
     let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
     for v in rational {
-        if !mesh.is_vertex_alive(v) || try_round(mesh, ctx, v).is_applied() {
+        if !mesh.is_vertex_alive(v)
+            || try_round(mesh, ctx, v).is_applied()
+            || try_smooth(mesh, ctx, v).is_applied()
+        {
             continue;
         }
         let mut around: Vec<VertexId> = mesh
@@ -98,10 +111,21 @@ pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crat
                 .hypot()
                 .total_cmp(&(mesh.position(*b) - p).hypot())
         });
-        for u in around {
-            if try_collapse(mesh, ctx, u, v).is_applied() {
-                removed += 1;
+        if around
+            .iter()
+            .any(|&u| try_collapse(mesh, ctx, u, v).is_applied())
+        {
+            removed += 1;
+            continue;
+        }
+        // A smaller star may hold it: split its edges, then round again.
+        for &u in &around {
+            if !mesh.is_rational(v) {
                 break;
+            }
+            if try_split(mesh, ctx, v, u).is_applied() {
+                let _ =
+                    try_round(mesh, ctx, v).is_applied() || try_smooth(mesh, ctx, v).is_applied();
             }
         }
     }

@@ -39,9 +39,7 @@ fn entities(text: &str) -> Vec<(&str, &str)> {
         if rest.starts_with('%') {
             continue; // a parameter entity: not expanded in the document
         }
-        let name_end = rest
-            .find(|c: char| c.is_whitespace())
-            .unwrap_or(rest.len());
+        let name_end = rest.find(|c: char| c.is_whitespace()).unwrap_or(rest.len());
         let name = &rest[..name_end];
         let after = rest[name_end..].trim_start();
         let Some(quote) = after.chars().next().filter(|c| *c == '"' || *c == '\'') else {
@@ -77,7 +75,11 @@ pub(super) fn entity_growth(text: &str) -> u64 {
     if decls.is_empty() {
         return 0;
     }
-    let names: HashMap<&str, usize> = decls.iter().enumerate().map(|(i, (n, _))| (*n, i)).collect();
+    let names: HashMap<&str, usize> = decls
+        .iter()
+        .enumerate()
+        .map(|(i, (n, _))| (*n, i))
+        .collect();
     let refs: Vec<Vec<(usize, u64)>> = decls.iter().map(|(_, v)| references(v, &names)).collect();
     // Expanded length of each entity, innermost first; a reference loop
     // counts as empty (roxmltree rejects it anyway).
@@ -160,7 +162,9 @@ impl Counts {
             segments: self
                 .segments
                 .saturating_add(other.segments.saturating_mul(times)),
-            shapes: self.shapes.saturating_add(other.shapes.saturating_mul(times)),
+            shapes: self
+                .shapes
+                .saturating_add(other.shapes.saturating_mul(times)),
         }
     }
 }
@@ -309,7 +313,13 @@ mod tests {
         );
         // path: 2 line segments + the closing one counted as 1 extra (3), twice;
         // the group (rect 8 + polygon 4) twice
-        assert_eq!(c, Counts { segments: 2 * 3 + 2 * 12, shapes: 2 + 4 });
+        assert_eq!(
+            c,
+            Counts {
+                segments: 2 * 3 + 2 * 12,
+                shapes: 2 + 4
+            }
+        );
     }
 
     #[test]
@@ -345,14 +355,43 @@ mod tests {
         };
         let msg = |c, t| check_counts(c, t, &limits).expect_err("over").to_string();
         assert_eq!(
-            msg(Counts { segments: 11, shapes: 1 }, 0),
+            msg(
+                Counts {
+                    segments: 11,
+                    shapes: 1
+                },
+                0
+            ),
             "too large: 11 segments (limit 10), raise with --max-segments"
         );
         assert_eq!(
-            msg(Counts { segments: 1, shapes: 3 }, 0),
+            msg(
+                Counts {
+                    segments: 1,
+                    shapes: 3
+                },
+                0
+            ),
             "too large: 3 shapes (limit 2), raise with --max-shapes"
         );
-        assert!(msg(Counts { segments: 1, shapes: 1 }, 1 << 30).contains("--max-memory"));
-        check_counts(Counts { segments: 10, shapes: 2 }, 0, &limits).expect("at the limit");
+        assert!(
+            msg(
+                Counts {
+                    segments: 1,
+                    shapes: 1
+                },
+                1 << 30
+            )
+            .contains("--max-memory")
+        );
+        check_counts(
+            Counts {
+                segments: 10,
+                shapes: 2,
+            },
+            0,
+            &limits,
+        )
+        .expect("at the limit");
     }
 }

@@ -11,8 +11,8 @@
 
 use super::budget;
 use super::source::{self, Source};
-use crate::budget::Limits;
 use super::viewport::RootViewBox;
+use crate::budget::Limits;
 use crate::{Error, Result};
 use std::collections::HashSet;
 use std::sync::{Arc, OnceLock};

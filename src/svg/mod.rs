@@ -187,9 +187,9 @@ pub(crate) fn load_file_limited(
 /// A coordinate error that `--scale` caused says so.
 fn blame_scale(e: Error, scale: f64) -> Error {
     match e {
-        Error::BadCoordinate(m) if scale > 1.0 => {
-            Error::BadCoordinate(format!("coordinates too large after --scale {scale:e}: {m}"))
-        }
+        Error::BadCoordinate(m) if scale > 1.0 => Error::BadCoordinate(format!(
+            "coordinates too large after --scale {scale:e}: {m}"
+        )),
         e => e,
     }
 }
