@@ -260,7 +260,15 @@ fn budgets_fail_with_one_line_naming_the_flag() {
     );
     uses.push_str(&r##"<use href="#p"/>"##.repeat(1000));
     uses.push_str("</svg>");
-    let cases: Vec<(&str, Vec<u8>, &[&str], i32, &str)> = vec![
+    /// name, input, flags, exit code, what the line says
+    type BudgetCase = (
+        &'static str,
+        Vec<u8>,
+        &'static [&'static str],
+        i32,
+        &'static str,
+    );
+    let cases: Vec<BudgetCase> = vec![
         (
             "segments",
             SQUARE.to_vec(),

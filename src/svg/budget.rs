@@ -55,7 +55,7 @@ fn entities(text: &str) -> Vec<(&str, &str)> {
 }
 
 /// How often each entity of `names` is referenced in `s`.
-fn references<'a>(s: &str, names: &HashMap<&'a str, usize>) -> Vec<(usize, u64)> {
+fn references(s: &str, names: &HashMap<&str, usize>) -> Vec<(usize, u64)> {
     let mut counts: HashMap<usize, u64> = HashMap::new();
     let mut rest = s;
     while let Some(i) = rest.find('&') {
