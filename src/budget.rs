@@ -113,7 +113,7 @@ mod tests {
         assert!(big > 30_000, "{big}");
         assert_eq!(
             Limits::estimate_mb(u64::MAX, u64::MAX, u64::MAX),
-            u64::MAX >> 20
+            u64::MAX.div_ceil(1 << 20)
         );
     }
 }

@@ -32,11 +32,10 @@ use triwild::ErrorKind;
 const EXIT_HELP: &str = "\
 Exit codes:
   0  success
-  2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag)
-  3  meshing failed
-  2  also: input over a budget ('too large: ...', raise with --max-segments,
+  2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag),
+     or an input over a budget ('too large: ...', raise with --max-segments,
      --max-shapes or --max-memory)
-  3  also: --time-limit reached (nothing is written)
+  3  meshing failed, or --time-limit reached (nothing is written)
   4  I/O error (reading the input or writing an output)
   130, 143  interrupted by SIGINT / SIGTERM (no temporary file is left)
   141  standard output closed early (`triwild ... --stats | head`); outputs complete";

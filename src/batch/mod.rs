@@ -213,7 +213,8 @@ pub fn plan(inputs: &[PathBuf], opts: &BatchOptions) -> Result<Plan> {
 /// What a batch did.
 #[derive(Clone, Debug)]
 pub struct Outcome {
-    /// One row per file of the plan (kept and new), sorted by key.
+    /// One row per file of the plan (kept and new), sorted by key; after an
+    /// [`interrupt`], the files not started have none.
     pub rows: Vec<Row>,
     /// Wall-clock time of the run, seconds.
     pub wall: f64,

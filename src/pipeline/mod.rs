@@ -336,6 +336,11 @@ fn mesh_within(
                 times.time("snap", || {
                     snap::snap_degenerate(&mut mesh, &ctx, resolved.d)
                 })?;
+                if let Some(s) = &mut bsp {
+                    // the counts of the mesh delivered
+                    s.vertices = mesh.num_vertices();
+                    s.triangles = mesh.num_faces();
+                }
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
                 let opts = optimize_options(params, &resolved).with_deadline(deadline);

@@ -97,6 +97,8 @@ pub(super) fn entity_growth(text: &str) -> u64 {
         if depth > 16 {
             return 0;
         }
+        // in progress: a reference back to it (a loop) counts as empty
+        len[k] = Some(0);
         let mut n = decls[k].1.len() as u64;
         for &(r, count) in &refs[k] {
             let inner = expanded(r, decls, refs, len, depth + 1);
@@ -332,14 +334,17 @@ mod tests {
             "&b;".repeat(400)
         );
         let growth = entity_growth(&text);
-        let expected = 400 * (250 * (seg.len() as u64 - 3) + 1000 - 3);
+        // b: its own 750 bytes ("&a;" 250 times) and 250 expansions of a;
+        // each of the 400 references to b adds b's length less its own 3
+        let expected = 400 * (750 + 250 * (seg.len() as u64 - 3) - 3);
         assert_eq!(growth, expected);
         let limits = Limits {
-            max_segments: 1_000_000,
+            max_segments: 100_000,
             max_shapes: 10,
             max_memory_mb: 1 << 20,
         };
-        let e = check_text(&text, &limits).expect_err("50 MB of path data");
+        // 50 MB of path data, more than 64 bytes for each of 100 000 segments
+        let e = check_text(&text, &limits).expect_err("over the entity allowance");
         assert!(e.to_string().contains("raise with --max-segments"), "{e}");
         assert_eq!(entity_growth("<svg/>"), 0);
         // a loop is not followed forever
