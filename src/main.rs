@@ -168,18 +168,35 @@ fn watch_parent_pipe() {
     if std::env::var_os(triwild::batch::PARENT_PIPE_ENV).is_none() {
         return;
     }
-    std::thread::spawn(|| {
-        let mut sink = [0u8; 64];
-        let mut stdin = std::io::stdin().lock();
-        loop {
-            match std::io::Read::read(&mut stdin, &mut sink) {
-                Ok(0) | Err(_) => break,
-                Ok(_) => {}
-            }
+    // The pipe is read through its own file descriptor, not std's buffered
+    // stdin: the thread then never allocates, so it gets no malloc arena of
+    // its own (64 MiB of address space, which a child under `prlimit --as`
+    // cannot spare).
+    let pipe = {
+        use std::os::fd::AsFd;
+        match std::io::stdin().as_fd().try_clone_to_owned() {
+            Ok(fd) => std::fs::File::from(fd),
+            Err(_) => return,
         }
-        triwild::remove_temporaries();
-        std::process::exit(EXIT_ORPHAN);
-    });
+    };
+    let watcher = std::thread::Builder::new()
+        .name("triwild-parent-pipe".into())
+        .stack_size(64 << 10)
+        .spawn(move || {
+            let mut pipe = pipe;
+            let mut sink = [0u8; 64];
+            loop {
+                match std::io::Read::read(&mut pipe, &mut sink) {
+                    Ok(0) => break,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(_) => break,
+                    Ok(_) => {}
+                }
+            }
+            triwild::remove_temporaries();
+            std::process::exit(EXIT_ORPHAN);
+        });
+    drop(watcher);
 }
 
 /// A second SIGINT / SIGTERM this long after the first ends a batch at once.
