@@ -63,6 +63,22 @@ mod stage;
 mod svg;
 mod units;
 
+// The command line (`src/main.rs` and the Python package's `triwild` command
+// run it); not API. Its modules name the library `triwild::…` as the binary's
+// did, and `crate::exit_code`.
+#[cfg(feature = "cli")]
+extern crate self as triwild;
+#[cfg(feature = "cli")]
+#[doc(hidden)]
+#[allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "the command line talks to the user"
+)]
+pub mod cli;
+#[cfg(feature = "cli")]
+use cli::exit_code;
+
 pub use curve::certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use element::{CertifyOptions, Order};
 pub use error::{Error, ErrorKind, Result};

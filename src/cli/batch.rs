@@ -157,19 +157,31 @@ fn merge(args: &BatchArgs) -> ExitCode {
 
 /// Run the batch (or merge reports), show progress, print the summary; exit
 /// 0 when every file meshed, 1 when some failed, 2 usage, 4 I/O.
-pub(crate) fn run(args: &BatchArgs, matches: &ArgMatches, quiet: bool) -> ExitCode {
+///
+/// The children run `child` (a program and its leading arguments) when given,
+/// else this executable.
+pub(crate) fn run(
+    args: &BatchArgs,
+    matches: &ArgMatches,
+    quiet: bool,
+    child: Option<&[OsString]>,
+) -> ExitCode {
     if args.merge_reports {
         return merge(args);
     }
-    let exe = match std::env::current_exe() {
-        Ok(e) => e,
-        Err(e) => {
-            errln!("error: cannot find the triwild executable: {e}");
-            return ExitCode::from(4);
-        }
+    let (exe, mut leading) = match child {
+        Some([program, leading @ ..]) => (program.into(), leading.to_vec()),
+        _ => match std::env::current_exe() {
+            Ok(e) => (e, Vec::new()),
+            Err(e) => {
+                errln!("error: cannot find the triwild executable: {e}");
+                return ExitCode::from(4);
+            }
+        },
     };
+    leading.extend(child_args(matches));
     let mut opts = BatchOptions::new(exe, args.output.clone())
-        .with_child_args(child_args(matches))
+        .with_child_args(leading)
         .with_timeout(Duration::from_secs_f64(args.timeout))
         .with_memory(MemoryGuard::detect(memory_limit(args, matches)))
         .with_resume(args.resume)

@@ -18,9 +18,12 @@
 //!    sliver (exactly positive, but `det J` within the zero tolerance) is swapped,
 //!    smoothed or collapsed away; for a curved element, smooth the
 //!    vertex opposite the curved edge, then split the curved edge at its
-//!    parameter midpoint (within [`CurveOptions::max_splits`] and never below
-//!    [`CurveOptions::l_min_abs`]), re-curving and re-certifying what changed
-//!    (`repair`);
+//!    parameter midpoint (within [`CurveOptions::max_splits`], never below
+//!    [`CurveOptions::l_min_abs`], and only when no new triangle's energy exceeds
+//!    [`CurveOptions::stop_energy`] or the worst of the faces it replaces: a
+//!    vertex almost on the curve's chord line would make the halves needles,
+//!    and such an element is better fitted in step 6), re-curving and
+//!    re-certifying what changed (`repair`);
 //! 5. curved optimization ([`super::optimize`]): collapse, swap and smoothing
 //!    with the invariants in curved mode (a primary edge's piece may turn up to
 //!    [`CurveOptions::curved_alpha`], every touched element certified with its

@@ -186,7 +186,16 @@ pub(super) fn repair(
             if len < SPLIT_MIN_MULTIPLE * opts.l_min_abs || curved_tag(mesh, ctx, key).is_none() {
                 continue;
             }
-            if let Outcome::Applied(_) = ops::try_split(mesh, ctx, key.lo, key.hi) {
+            // The split must not trade an uncertified element for slivers (a
+            // vertex almost on the curve's chord line makes the halves needles):
+            // its triangles stay within the curved stop energy, or within the
+            // worst of the faces it replaces when that is already worse.
+            let mut on_edge = Vec::new();
+            mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
+            let bound = ops::max_energy(mesh, ctx, &on_edge).max(opts.stop_energy);
+            if let Outcome::Applied(_) =
+                ops::try_split_bounded(mesh, ctx, key.lo, key.hi, Some(bound))
+            {
                 *budget -= 1;
                 stats.splits_repair += 1;
                 progress = true;

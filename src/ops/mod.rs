@@ -43,7 +43,7 @@ pub(crate) use collapse::try_collapse;
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;
 pub(crate) use smooth::{Objective, try_smooth, try_smooth_with};
-pub(crate) use split::try_split;
+pub(crate) use split::{try_split, try_split_bounded};
 pub(crate) use swap::{try_reroute, try_swap};
 
 use crate::features::{FeatureSet, Parent, PrimaryChains};

@@ -31,6 +31,8 @@ pub(crate) struct SplitPlan {
     faces: Vec<(FaceId, usize)>,
     tags: Vec<FeatureOn>,
     candidates: Vec<Candidate>,
+    /// Largest energy a new triangle may have (none: splits ignore the energy rule).
+    max_energy: Option<f64>,
 }
 
 impl SplitPlan {
@@ -99,6 +101,7 @@ impl SplitPlan {
             faces,
             tags,
             candidates,
+            max_energy: None,
         })
     }
 
@@ -159,6 +162,11 @@ impl SplitPlan {
         if let Err(r) = invariants::validate(&tx, ctx, &check) {
             return Outcome::Rejected(r);
         }
+        if let Some(bound) = self.max_energy {
+            if super::max_energy(&tx, ctx, &created) > bound {
+                return Outcome::Rejected(Reject::Energy);
+            }
+        }
         tx.commit();
         Outcome::Applied(LocalChange {
             created,
@@ -170,8 +178,22 @@ impl SplitPlan {
 
 /// Split the edge `a b` (see the module doc). Splits ignore the energy rule.
 pub(crate) fn try_split(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
+    try_split_bounded(mesh, ctx, a, b, None)
+}
+
+/// Split the edge `a b` as [`try_split`] does, but refuse ([`Reject::Energy`])
+/// when a new triangle's energy would exceed `max_energy`: a split made for
+/// another reason than quality (the curving stage's repair) must not leave a
+/// sliver behind.
+pub(crate) fn try_split_bounded(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    a: VertexId,
+    b: VertexId,
+    max_energy: Option<f64>,
+) -> Outcome {
     let plan = match SplitPlan::new(mesh, ctx, a, b) {
-        Ok(p) => p,
+        Ok(p) => SplitPlan { max_energy, ..p },
         Err(r) => return Outcome::Rejected(r),
     };
     let mut last = Reject::NoChange;

@@ -861,3 +861,41 @@ fn curved_mode_relaxes_the_turn_bound_only() {
     assert!(curvature::holds(&curved, 0, [0.0, 0.5]));
     assert!(!curvature::holds(&curved, 0, [0.0, 1.0]));
 }
+
+/// A bounded split (the curving stage's repair split) refuses to leave a
+/// triangle worse than its bound, leaving the mesh as it was; unbounded, the
+/// same split is applied. `k` lies almost on the line through `a b`, so the
+/// half `m b k` is a needle worse than the triangle `a b k` it comes from.
+#[test]
+fn a_bounded_split_refuses_to_make_a_needle() {
+    let mut mesh = TriMesh::new();
+    let [a, b, k, c] = [(0.0, 0.0), (1.0, 0.0), (3.0, 0.1), (0.5, -1.0)]
+        .map(|(x, y)| mesh.add_vertex(Point::new(x, y), VertexTag::default()));
+    let upper = mesh.add_face([a, b, k]);
+    let lower = mesh.add_face([b, a, c]);
+    mesh.link_all();
+    assert!(mesh.check().is_empty(), "{:?}", mesh.check());
+    let ctx = Context {
+        sections: Vec::new(),
+        envelope: Envelope::new(&[], 0.01, 0.01),
+        alpha: 10f64.to_radians(),
+        on_curve_abs: 1e-12,
+        energy: EnergyRule::NoWorseMax,
+        energy_floor: 0.0,
+        max_new_edge: f64::INFINITY,
+        curved: None,
+    };
+    let before = mesh.clone();
+    let old = max_energy(&mesh, &ctx, &[upper, lower]);
+    assert_eq!(
+        try_split_bounded(&mut mesh, &ctx, a, b, Some(old)),
+        Outcome::Rejected(Reject::Energy)
+    );
+    assert!(mesh == before, "a refused split changed the mesh");
+    let Outcome::Applied(change) = try_split_bounded(&mut mesh, &ctx, a, b, Some(4.0 * old)) else {
+        panic!("a split within four times the old energy is refused");
+    };
+    assert!(max_energy(&mesh, &ctx, &change.created) > old);
+    assert!(max_energy(&mesh, &ctx, &change.created) <= 4.0 * old);
+    assert!(mesh.check().is_empty(), "{:?}", mesh.check());
+}

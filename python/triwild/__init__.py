@@ -1,0 +1,274 @@
+"""triwild: robust curved triangle meshing of SVG drawings, for finite elements.
+
+``triwild.mesh(svg, ...)`` meshes a drawing (a path, ``bytes`` or an SVG string)
+and returns a :class:`Mesh` of numpy arrays in gmsh's node order: the same mesh,
+node for node, as the ``triwild`` command line writes for the same input and
+flags. Every keyword argument is the command line's flag of the same name
+(``edge_length`` is ``--edge-length``) with the same default; the flags not in
+the signature (``eps``, ``stop_after``, ``edge_length_abs``, ...) are
+accepted as ``**advanced`` keywords.
+
+Errors are exceptions: :class:`BadInput` (the command line's exit code 2),
+:class:`MeshingError` (3) and :class:`IoError` (4), all subclasses of
+:class:`Error`, with the command line's one-line messages. The GIL is released
+while meshing, so several threads can mesh at once.
+"""
+
+from __future__ import annotations
+
+import json
+import numbers
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _triwild
+from ._triwild import BadInput, Error, IoError, MeshingError
+
+__all__ = [
+    "Mesh",
+    "mesh",
+    "check",
+    "Error",
+    "BadInput",
+    "MeshingError",
+    "IoError",
+    "__version__",
+]
+
+__version__: str = _triwild.__version__
+
+# The long flags of the single-file command that mesh() accepts.
+_FLAGS = frozenset(_triwild.mesh_flags())
+
+_TRIANGLE_TYPES = {3: "triangle", 6: "triangle6", 10: "triangle10"}
+_LINE_TYPES = {2: "line", 3: "line3", 4: "line4"}
+
+
+class Mesh:
+    """A triangle mesh of a drawing, as the ``.msh`` file holds it.
+
+    Attributes:
+        points: ``(N, 2)`` float64 node coordinates; node ``i`` is node tag
+            ``i + 1`` of the ``.msh`` file.
+        triangles: ``(M, 3 | 6 | 10)`` int64 node indices per triangle, in
+            gmsh's node order (corners counter-clockwise, then the edge nodes),
+            in the file's element order.
+        order: 1, 2 or 3 (3, 6 or 10 nodes per triangle).
+        region: ``(M,)`` int32, each triangle's region: an index into
+            ``region_names`` (physical surface tag - 1).
+        region_names: the physical surface names, as the ``.msh`` file names
+            them (one per filled shape, colour, or ``domain``; ``background``).
+        lines: ``(K, 2 | 3 | 4)`` int64 node indices of the line elements of
+            the physical curves (ends first, then the inner nodes).
+        line_tags: ``(K,)`` int32, each line's curve: an index into
+            ``line_names`` (physical curve tag - 1).
+        line_names: the physical curve names (``boundary`` first, ...).
+        stats: the command line's ``--stats`` dictionary for this run.
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    order: int
+    region: np.ndarray
+    region_names: List[str]
+    lines: np.ndarray
+    line_tags: np.ndarray
+    line_names: List[str]
+    stats: Dict[str, Any]
+
+    def __init__(self, data: "_triwild.MeshData") -> None:
+        a = data.arrays()
+        tn, ln = a["triangle_nodes"], a["line_nodes"]
+        self._data = data
+        self.points = np.frombuffer(a["points"], dtype="<f8").reshape(-1, 2).astype(np.float64)
+        self.triangles = np.frombuffer(a["triangles"], dtype="<i8").reshape(-1, tn).astype(np.int64)
+        self.region = np.frombuffer(a["region"], dtype="<i4").astype(np.int32)
+        self.lines = np.frombuffer(a["lines"], dtype="<i8").reshape(-1, ln).astype(np.int64)
+        self.line_tags = np.frombuffer(a["line_tags"], dtype="<i4").astype(np.int32)
+        self._line_entity = np.frombuffer(a["line_entity"], dtype="<i4").astype(np.int32)
+        self.region_names = list(a["region_names"])
+        self.line_names = list(a["line_names"])
+        self.order = int(a["order"])
+        self.stats = json.loads(data.stats)
+
+    def __repr__(self) -> str:
+        return (
+            f"<triwild.Mesh order={self.order} points={len(self.points)} "
+            f"triangles={len(self.triangles)} regions={self.region_names}>"
+        )
+
+    def write(self, path: Union[str, "os.PathLike[str]"], version: str = "4.1", binary: bool = False) -> None:
+        """Write the mesh as a gmsh file (``version`` "4.1" or "2.2", ASCII or
+        ``binary``), exactly as the command line writes it, atomically.
+
+        Raises :class:`IoError` when the file cannot be written.
+        """
+        self._data.write(os.fspath(path), str(version), bool(binary))
+
+    def to_meshio(self) -> Any:
+        """The mesh as a ``meshio.Mesh``, as meshio reads the MSH 2.2 file
+        :meth:`write` makes: a block of triangles and a block of lines,
+        ``gmsh:physical`` and ``gmsh:geometrical`` cell data, ``field_data``
+        ``{name: [tag, dim]}``; plus ``cell_sets`` by physical name (what
+        ``skfem.io.from_meshio`` turns into subdomains and boundaries). Points
+        get a zero z coordinate.
+
+        Needs ``meshio`` (``pip install meshio``).
+        """
+        import meshio
+
+        cells = [(_TRIANGLE_TYPES[self.triangles.shape[1]], self.triangles)]
+        physical = [self.region + 1]
+        geometrical = [self.region + 1]  # one surface entity per region
+        if len(self.lines):
+            cells.append((_LINE_TYPES[self.lines.shape[1]], self.lines))
+            physical.append(self.line_tags + 1)
+            geometrical.append(self._line_entity.copy())
+        field_data: Dict[str, np.ndarray] = {}
+        cell_sets: Dict[str, List[np.ndarray]] = {}
+        for b, (names, dim) in enumerate(((self.region_names, 2), (self.line_names, 1))):
+            if b >= len(cells):
+                break
+            for g, name in enumerate(names):
+                members = np.flatnonzero(physical[b] == g + 1)
+                if len(members) == 0:
+                    continue
+                field_data[name] = np.array([g + 1, dim])
+                cell_sets[name] = [
+                    members if k == b else np.array([], dtype=np.int64) for k in range(len(cells))
+                ]
+        pts = np.zeros((len(self.points), 3))
+        pts[:, :2] = self.points
+        return meshio.Mesh(
+            pts,
+            cells,
+            cell_data={
+                "gmsh:physical": [p.astype(np.int32) for p in physical],
+                "gmsh:geometrical": [g.astype(np.int32) for g in geometrical],
+            },
+            field_data=field_data,
+            cell_sets=cell_sets,
+        )
+
+
+def _flag_value(value: Any) -> str:
+    if isinstance(value, bool):
+        raise TypeError("a boolean flag takes True or False")
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        return repr(float(value))
+    return str(value)
+
+
+def _flags(kwargs: Dict[str, Any]) -> List[str]:
+    """Keyword arguments -> the command line's flags."""
+    out: List[str] = []
+    for key, value in kwargs.items():
+        name = "hole" if key == "holes" else key.replace("_", "-")
+        if name not in _FLAGS or key == "hole":
+            raise TypeError(f"mesh() got an unexpected keyword argument {key!r}")
+        if value is None or value is False:
+            continue
+        if value is True:
+            out.append(f"--{name}")
+        elif name == "keep":
+            names = [value] if isinstance(value, str) else list(value)
+            if names:
+                out.append("--keep=" + ",".join(names))
+        elif name == "hole":
+            for point in value:
+                x, y = point
+                out.append(f"--hole={_flag_value(x)},{_flag_value(y)}")
+        else:
+            out.append(f"--{name}={_flag_value(value)}")
+    return out
+
+
+def mesh(
+    svg: Union[str, bytes, bytearray, memoryview, "os.PathLike[str]"],
+    *,
+    edge_length: float = 0.05,
+    order: int = 3,
+    regions: str = "shape",
+    cut_outside: bool = False,
+    keep: Optional[Union[str, Sequence[str]]] = None,
+    holes: Optional[Sequence[Tuple[float, float]]] = None,
+    linear: bool = False,
+    mesher: str = "triwild",
+    units: str = "user",
+    **advanced: Any,
+) -> Mesh:
+    """Mesh an SVG drawing, as ``triwild SVG [flags]`` does.
+
+    Args:
+        svg: a path to an SVG file, the document as ``bytes``, or the document
+            as a string (a string that starts with ``<`` is a document,
+            anything else a path).
+        edge_length: target edge length, relative to the diagonal of the
+            drawing's bounding box (``edge_length_abs=`` in output units).
+        order: element order 1, 2 or 3 (3-, 6- or 10-node triangles).
+        regions: ``"shape"`` (a region per filled shape), ``"colour"`` (per
+            fill colour) or ``"none"`` (one region ``domain``); plus
+            ``background``.
+        cut_outside: drop the background (what no filled shape covers).
+        keep: keep only the named regions.
+        holes: remove the regions containing these (x, y) points (output
+            coordinates, y up).
+        linear: stop after the optimization (straight triangles).
+        mesher: ``"triwild"`` or ``"cdt"`` (the linear baseline).
+        units: ``"user"`` (the root viewBox's units) or ``"px"``.
+        **advanced: any other flag of the command line, by its long name with
+            ``_`` for ``-`` (``eps=1e-3``, ``stop_after="bsp"``,
+            ``scale=2.0``, ``max_passes=10``, ...).
+
+    Returns:
+        The :class:`Mesh`.
+
+    Raises:
+        BadInput: a missing or unreadable-as-SVG input, a drawing with nothing
+            to mesh, non-finite coordinates, a bad parameter value.
+        MeshingError: meshing failed.
+        IoError: the input could not be read.
+        TypeError: an unknown keyword argument.
+    """
+    kwargs: Dict[str, Any] = dict(
+        edge_length=edge_length,
+        order=order,
+        regions=regions,
+        cut_outside=cut_outside,
+        keep=keep,
+        holes=holes,
+        linear=linear,
+        mesher=mesher,
+        units=units,
+    )
+    for key in advanced:
+        if key in kwargs or key == "hole":
+            raise TypeError(f"mesh() got an unexpected keyword argument {key!r}")
+    kwargs.update(advanced)
+    flags = _flags(kwargs)
+    path: Optional[str] = None
+    data: Optional[bytes] = None
+    if isinstance(svg, (bytes, bytearray, memoryview)):
+        data = bytes(svg)
+    elif isinstance(svg, str) and svg.lstrip().startswith("<"):
+        data = svg.encode("utf-8")
+    elif isinstance(svg, (str, os.PathLike)):
+        path = os.fspath(svg)
+    else:
+        raise TypeError(f"svg must be a path, bytes or an SVG string, not {type(svg).__name__}")
+    return Mesh(_triwild.mesh(path, data, flags))
+
+
+def check(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:
+    """Check a gmsh ``.msh`` file as ``triwild check`` does: certify every
+    triangle's Jacobian. Returns the verdict as a dict (``valid``,
+    ``reasons``, ``triangles``, ``min_jacobian_ratio``, ...).
+
+    Raises :class:`BadInput` or :class:`IoError` when the file cannot be read
+    as a mesh.
+    """
+    return json.loads(_triwild.check(os.fspath(path)))

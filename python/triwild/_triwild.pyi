@@ -1,0 +1,31 @@
+"""Type stubs of the native module ``triwild._triwild`` (PyO3). Use the
+``triwild`` package's API; this module is its implementation."""
+
+from typing import Dict, List, Optional, Union
+
+__version__: str
+
+class Error(Exception):
+    """Base class of triwild's errors."""
+
+class BadInput(Error):
+    """The input is not a drawing triwild can mesh (exit code 2)."""
+
+class MeshingError(Error):
+    """Meshing failed (exit code 3)."""
+
+class IoError(Error):
+    """Reading the input or writing an output failed (exit code 4)."""
+
+class MeshData:
+    """A mesh made by :func:`mesh`."""
+
+    @property
+    def stats(self) -> str: ...
+    def arrays(self) -> Dict[str, Union[bytes, List[str], int]]: ...
+    def write(self, path: str, version: str, binary: bool) -> None: ...
+
+def mesh(path: Optional[str], data: Optional[bytes], flags: List[str]) -> MeshData: ...
+def mesh_flags() -> List[str]: ...
+def check(path: str) -> str: ...
+def cli(argv: List[str], child: List[str]) -> int: ...

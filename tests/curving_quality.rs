@@ -1,0 +1,41 @@
+//! The curving stage must not trade an element it cannot certify for needles.
+//!
+//! A flag of Albania (public domain, tests/fixtures/quality) has a vertex almost
+//! on the chord line of a curved edge it faces; the curving repair used to split
+//! that edge twice, and the halves were needles of 0.04° (AMIPS 750, fitted at
+//! the 1 % Jacobian floor). The linear mesh's worst angle there is 4.9°. A repair
+//! split now stays within the curved stop energy (or the worst of the faces it
+//! replaces), so the element is fitted instead and the mesh keeps the linear
+//! mesh's angles. The mesh is written under `target/test-out/curving_quality/`
+//! and checked by the independent checker.
+
+mod support;
+
+use std::path::Path;
+use triwild::{MshOptions, Params};
+
+#[test]
+fn curving_never_makes_needles_on_a_flag_of_albania() {
+    let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/quality/albania.svg");
+    let drawing = triwild::load_file(&svg).expect("the flag loads");
+    let meshed = triwild::mesh_drawing(&drawing, &Params::DEFAULT).expect("the flag meshes");
+    let path = support::out_dir("curving_quality").join("albania.msh");
+    triwild::write_msh(&meshed.mesh, &path, MshOptions::DEFAULT).expect("write the mesh");
+    support::check_msh(&path).assert_valid("albania");
+    let q = &meshed.report.quality;
+    let curve = meshed.report.curve.as_ref().expect("a curved mesh");
+    // The straight mesh's worst angle is 4.90°; curving keeps the vertices.
+    assert!(
+        q.min_angle_deg > 4.0,
+        "min angle {} ({curve:?})",
+        q.min_angle_deg
+    );
+    assert!(q.max_amips < 10.0, "max AMIPS {}", q.max_amips);
+    // The flag is still followed: no curved edge was left straight.
+    assert_eq!(curve.straight_triangles, 0);
+    assert!(
+        curve.max_curve_distance_rel < 1e-4,
+        "{}",
+        curve.max_curve_distance_rel
+    );
+}
