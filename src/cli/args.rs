@@ -263,11 +263,11 @@ pub(crate) struct ParamArgs {
     /// Validate the mesh after every stage (slow; for debugging).
     #[arg(long)]
     paranoid: bool,
-    /// Most input segments (<use> copies and XML entities expanded); more
+    /// Most input segments (`<use>` copies and XML entities expanded); more
     /// fails at once with exit 2.
     #[arg(long, default_value_t = defaults::MAX_SEGMENTS, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     max_segments: u64,
-    /// Most drawable elements (paths and basic shapes, <use> copies included).
+    /// Most drawable elements (paths and basic shapes, `<use>` copies included).
     #[arg(long, default_value_t = defaults::MAX_SHAPES, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     max_shapes: u64,
     /// Most memory the run is estimated to need, MiB (or a size like 4G),
