@@ -46,6 +46,18 @@ pub enum Error {
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),
+    /// The input exceeds a resource budget (`--max-segments`, `--max-shapes`,
+    /// `--max-memory`); the string names the count, the limit and the flag.
+    #[error("too large: {0}")]
+    TooLarge(String),
+    /// The wall-clock budget (`--time-limit`) ran out; nothing was written.
+    #[error("time limit of {seconds} s reached in {stage}")]
+    TimeLimit {
+        /// The limit, seconds.
+        seconds: f64,
+        /// The stage that noticed.
+        stage: crate::stage::Stage,
+    },
     /// A meshing stage failed.
     #[error("meshing failed in stage {stage}: {message}")]
     Meshing {
@@ -72,8 +84,9 @@ impl Error {
             | Error::NoGeometry(_)
             | Error::BadCoordinate(_)
             | Error::BadMesh(_)
-            | Error::InvalidParams(_) => ErrorKind::BadInput,
-            Error::Meshing { .. } => ErrorKind::Meshing,
+            | Error::InvalidParams(_)
+            | Error::TooLarge(_) => ErrorKind::BadInput,
+            Error::Meshing { .. } | Error::TimeLimit { .. } => ErrorKind::Meshing,
         }
     }
 
@@ -84,6 +97,23 @@ impl Error {
             message: message.into(),
         }
     }
+}
+
+/// A time-limit error in `stage` once `deadline` has passed.
+///
+/// # Errors
+/// [`Error::TimeLimit`] when the deadline has passed.
+pub(crate) fn check_deadline(
+    deadline: &crate::budget::Deadline,
+    stage: crate::stage::Stage,
+) -> Result<()> {
+    if deadline.expired() {
+        return Err(Error::TimeLimit {
+            seconds: deadline.seconds(),
+            stage,
+        });
+    }
+    Ok(())
 }
 
 /// `Result` with [`Error`].

@@ -43,6 +43,7 @@
 mod baseline;
 pub mod batch;
 mod bsp;
+mod budget;
 mod curve;
 pub mod element;
 mod error;
@@ -86,13 +87,13 @@ pub use input::msh::{
     LineBlock, MshEntity, MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file,
 };
 pub use output::{
-    MshOptions, MshVersion, check_writable, write_file, write_msh, write_msh_to, write_preview,
-    write_preview_coloured,
+    MshOptions, MshVersion, check_writable, remove_temporaries, write_file, write_msh,
+    write_msh_to, write_preview, write_preview_coloured,
 };
 pub use params::{Length, Mesher, Params, defaults};
 pub use pipeline::{
-    FeatureAnalysis, Meshed, Report, RunOptions, mesh_drawing, mesh_drawing_with, mesh_svg,
-    run_file,
+    FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,
+    mesh_drawing_with, mesh_svg, run_file,
 };
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use stage::Stage;

@@ -5,6 +5,7 @@
 //! [`Params::scale`]); [`Params::resolve`] turns them into absolute [`Resolved`]
 //! values once `d` is known.
 
+use crate::budget::{Deadline, Limits};
 use crate::element::Order;
 pub(crate) use crate::stage::Stage;
 pub(crate) use crate::units::Units;
@@ -71,6 +72,22 @@ pub mod defaults {
     pub const UNITS: Units = Units::User;
     /// Output scale: 1, the coordinates as [`UNITS`] gives them.
     pub const SCALE: f64 = 1.0;
+    /// Most input segments, 1 000 000 (ours: about 60 times the dev set's
+    /// largest drawing, 16 896; `<use>` copies and XML entities counted
+    /// expanded): `--max-segments`.
+    pub const MAX_SEGMENTS: u64 = 1_000_000;
+    /// Most drawable elements, 200 000 (ours: about 230 times the dev set's
+    /// largest, 878): `--max-shapes`.
+    pub const MAX_SHAPES: u64 = 200_000;
+    /// Most estimated memory, MiB: 8 GiB (ours; the estimate is 64 MiB, plus
+    /// 4 KiB per segment and 4 bytes per byte of text, about twice what was
+    /// measured): `--max-memory`.
+    pub const MAX_MEMORY_MB: u64 = 8 << 10;
+    /// Wall-clock limit of one run: one hour (ours: the dev set's slowest
+    /// drawing takes under two minutes; a run that would take hours stops
+    /// cleanly instead, exit 3): `--time-limit`. `triwild batch` also kills a
+    /// child after its `--timeout` (600 s).
+    pub const TIME_LIMIT: Option<f64> = Some(3600.0);
 }
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
@@ -170,6 +187,20 @@ pub struct Params {
     /// mesh in m); absolute lengths are in the scaled units. Default
     /// [`defaults::SCALE`]. Applied when an SVG is loaded, like [`Params::units`].
     pub scale: f64,
+    /// Most input segments (`<use>` copies and XML entities expanded); more is
+    /// an [`Error::TooLarge`] before usvg builds its tree. Default
+    /// [`defaults::MAX_SEGMENTS`].
+    pub max_segments: u64,
+    /// Most drawable elements (paths and basic shapes, `<use>` copies
+    /// included). Default [`defaults::MAX_SHAPES`].
+    pub max_shapes: u64,
+    /// Most memory, MiB, the run is estimated to need from the input's counts
+    /// (checked before the large allocations). Default [`defaults::MAX_MEMORY_MB`].
+    pub max_memory_mb: u64,
+    /// Wall-clock limit, seconds, checked cooperatively in the pipeline's
+    /// loops: past it the run stops with [`Error::TimeLimit`] and writes
+    /// nothing. Default [`defaults::TIME_LIMIT`] (none).
+    pub time_limit: Option<f64>,
 }
 
 impl Params {
@@ -206,6 +237,10 @@ impl Params {
         order: defaults::ORDER,
         units: defaults::UNITS,
         scale: defaults::SCALE,
+        max_segments: defaults::MAX_SEGMENTS,
+        max_shapes: defaults::MAX_SHAPES,
+        max_memory_mb: defaults::MAX_MEMORY_MB,
+        time_limit: defaults::TIME_LIMIT,
     };
 
     /// Set the feature envelope μ.
@@ -292,6 +327,33 @@ impl Params {
         self.stop_after = stage;
         self
     }
+    /// Set the input budgets: segments, drawable elements, estimated memory (MiB).
+    pub fn with_limits(mut self, max_segments: u64, max_shapes: u64, max_memory_mb: u64) -> Self {
+        self.max_segments = max_segments;
+        self.max_shapes = max_shapes;
+        self.max_memory_mb = max_memory_mb;
+        self
+    }
+    /// Set the wall-clock limit, seconds (`None`: no limit).
+    pub fn with_time_limit(mut self, seconds: Option<f64>) -> Self {
+        self.time_limit = seconds;
+        self
+    }
+
+    /// The input budgets the loader checks.
+    pub(crate) fn limits(&self) -> Limits {
+        Limits {
+            max_segments: self.max_segments,
+            max_shapes: self.max_shapes,
+            max_memory_mb: self.max_memory_mb,
+        }
+    }
+
+    /// The deadline of a run starting now.
+    pub(crate) fn deadline(&self) -> Deadline {
+        Deadline::after(self.time_limit)
+    }
+
     /// Turn the paranoid validator on or off.
     pub fn with_paranoid(mut self, paranoid: bool) -> Self {
         self.paranoid = paranoid;
@@ -350,6 +412,24 @@ impl Params {
             if !(e.is_finite() && e >= 1.0) {
                 return Err(Error::InvalidParams(format!(
                     "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
+                )));
+            }
+        }
+        for (name, v) in [
+            ("max-segments", self.max_segments),
+            ("max-shapes", self.max_shapes),
+            ("max-memory", self.max_memory_mb),
+        ] {
+            if v == 0 {
+                return Err(Error::InvalidParams(format!(
+                    "--{name} must be at least 1, got 0"
+                )));
+            }
+        }
+        if let Some(t) = self.time_limit {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(Error::InvalidParams(format!(
+                    "--time-limit must be a positive finite number of seconds, got {t}"
                 )));
             }
         }

@@ -235,3 +235,143 @@ fn a_closed_stdout_is_no_panic() {
     let mesh = fs::read_to_string(&out).expect("the mesh was written");
     assert!(mesh.ends_with("$EndElements\n"), "an incomplete mesh");
 }
+
+/// An input with `n` references to an entity of 25 000 segments (issue 17:
+/// path data multiplied by XML entities, never expanded by triwild's checks).
+fn entity_path(n: usize) -> Vec<u8> {
+    let seg = "l1 1 l-1 -1 ".repeat(50);
+    format!(
+        "<?xml version=\"1.0\"?>\n<!DOCTYPE svg [\n<!ENTITY a \"{seg}\">\n<!ENTITY b \"{}\">\n]>\n\
+         <svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 100 100\">\
+         <path d=\"M10 10 {}\" fill=\"none\" stroke=\"black\"/></svg>\n",
+        "&a;".repeat(250),
+        "&b;".repeat(n)
+    )
+    .into_bytes()
+}
+
+/// Resource budgets (issue 17): too large an input, or too long a run, is one
+/// line naming the flag to raise, exit 2 (or 3 for the time limit), no output.
+#[test]
+fn budgets_fail_with_one_line_naming_the_flag() {
+    let two = br#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><rect x="1" y="1" width="3" height="3"/><rect x="5" y="5" width="3" height="3"/></svg>"#;
+    let mut uses = String::from(
+        r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><defs><path id="p" d="M1 1 L2 1 L2 2 Z"/></defs>"##,
+    );
+    uses.push_str(&r##"<use href="#p"/>"##.repeat(1000));
+    uses.push_str("</svg>");
+    /// name, input, flags, exit code, what the line says
+    type BudgetCase = (
+        &'static str,
+        Vec<u8>,
+        &'static [&'static str],
+        i32,
+        &'static str,
+    );
+    let cases: Vec<BudgetCase> = vec![
+        (
+            "segments",
+            SQUARE.to_vec(),
+            &["--max-segments", "3"],
+            2,
+            "too large: 8 segments (limit 3), raise with --max-segments",
+        ),
+        (
+            "shapes",
+            two.to_vec(),
+            &["--max-shapes", "1"],
+            2,
+            "too large: 2 shapes (limit 1), raise with --max-shapes",
+        ),
+        (
+            "memory",
+            SQUARE.to_vec(),
+            &["--max-memory", "1"],
+            2,
+            "raise with --max-memory",
+        ),
+        (
+            "use-copies",
+            uses.into_bytes(),
+            &["--max-segments", "2000"],
+            2,
+            "too large: 3000 segments (limit 2000)",
+        ),
+        // 10 million segments (120 MB of expanded text, within the entity
+        // allowance): counted on the XML tree, before usvg builds its own
+        (
+            "entity-10m",
+            entity_path(400),
+            &[],
+            2,
+            "too large: 10000001 segments (limit 1000000)",
+        ),
+        // just over the segment budget
+        (
+            "entity-1m",
+            entity_path(41),
+            &[],
+            2,
+            "too large: 1025001 segments (limit 1000000)",
+        ),
+        (
+            "time-limit",
+            SQUARE.to_vec(),
+            &["--time-limit", "1e-9"],
+            3,
+            "time limit of 0.000000001 s reached in features",
+        ),
+        (
+            "scale-overflow",
+            SQUARE.to_vec(),
+            &["--scale", "1e300"],
+            2,
+            "coordinates too large after --scale 1e300",
+        ),
+        (
+            "scale-underflow",
+            SQUARE.to_vec(),
+            &["--scale", "1e-300"],
+            2,
+            "coordinates too small after --scale 1e-300",
+        ),
+        // 25 million segments: refused on the raw text, before the XML parser
+        // expands the entities
+        (
+            "entity-25m-text",
+            entity_path(1000),
+            &[],
+            2,
+            "xml entities expand the document by",
+        ),
+    ];
+    for (name, input_bytes, args, code, cause) in cases {
+        let dir = scratch(&format!("budget-{name}"));
+        let input = dir.join("in.svg");
+        fs::write(&input, &input_bytes).unwrap();
+        let output = dir.join("out.msh");
+        let out = bin()
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(out.status.code(), Some(code), "{name}: {stderr}");
+        assert_eq!(lines.len(), 1, "{name}: one line, got {stderr}");
+        let prefix = format!("error: {}: ", input.display());
+        assert!(lines[0].starts_with(&prefix), "{name}: {}", lines[0]);
+        assert!(
+            lines[0].to_lowercase().contains(&cause.to_lowercase()),
+            "{name}: `{}` should contain `{cause}`",
+            lines[0]
+        );
+        assert_eq!(
+            list(&dir),
+            vec![PathBuf::from("in.svg")],
+            "{name}: no output"
+        );
+    }
+}

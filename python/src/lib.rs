@@ -266,13 +266,13 @@ fn mesh(
     py.detach(move || {
         guarded(|| {
             let t0 = Instant::now();
-            let (params, regions) =
+            let (params, regions, paint) =
                 triwild::cli::mesh_options(flags.into_iter().map(OsString::from))
                     .map_err(Failure::Flag)?;
             params.validate().map_err(|e| Failure::Lib(e, None))?;
             let drawing = match (&path, &data) {
-                (Some(p), _) => triwild::load_file_with(p, params.units, params.scale),
-                (None, Some(d)) => triwild::load_bytes_with(d, params.units, params.scale),
+                (Some(p), _) => triwild::load_file_params(p, &params, &paint),
+                (None, Some(d)) => triwild::load_bytes_params(d, &params, &paint),
                 (None, None) => return Err(Failure::Flag("no SVG given".to_owned())),
             }
             .map_err(|e| Failure::Lib(e, path.clone()))?;

@@ -11,7 +11,31 @@ use std::ffi::OsString;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicI32, Ordering};
 use std::time::{Duration, Instant};
+
+/// The signal that interrupted the batch (0: none), set by [`interrupt`].
+static INTERRUPTED: AtomicI32 = AtomicI32::new(0);
+
+/// Interrupt the running batch (the binary calls this from its SIGINT /
+/// SIGTERM handler): running children are stopped and their files get an
+/// `interrupted` row, no new file starts, and [`super::run`] returns.
+pub fn interrupt(signal: i32) {
+    INTERRUPTED.store(signal.max(1), Ordering::SeqCst);
+}
+
+/// The signal [`interrupt`] was called with, if any.
+pub fn interrupted() -> Option<i32> {
+    match INTERRUPTED.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(s),
+    }
+}
+
+/// The environment variable that tells a child its standard input is a pipe
+/// from the batch: when it reads end-of-file there, the batch is gone (even
+/// killed with SIGKILL) and the child removes its temporary files and exits.
+pub const PARENT_PIPE_ENV: &str = "TRIWILD_BATCH_PARENT_PIPE";
 
 /// How a child's memory is limited.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -153,19 +177,23 @@ fn rss(pid: u32) -> Option<(u64, u64)> {
 enum Killed {
     Timeout,
     Memory,
+    Interrupted(i32),
 }
 
 /// Remove `output` and the temporary files the writer may have left next to
-/// it (`NAME.tmp*`), after a failure.
+/// it (`.NAME.tmp*`, and `NAME.tmp*`), after a failure.
 fn remove_output(output: &Path) {
     let _ = std::fs::remove_file(output);
     let (Some(dir), Some(name)) = (output.parent(), output.file_name()) else {
         return;
     };
+    // The writer's temporary files are hidden: `.NAME.tmpXXXXXX`.
     let prefix = format!("{}.tmp", name.to_string_lossy());
+    let hidden = format!(".{prefix}");
     if let Ok(entries) = std::fs::read_dir(dir) {
         for e in entries.flatten() {
-            if e.file_name().to_string_lossy().starts_with(&prefix) {
+            let n = e.file_name().to_string_lossy().into_owned();
+            if n.starts_with(&prefix) || n.starts_with(&hidden) {
                 let _ = std::fs::remove_file(e.path());
             }
         }
@@ -234,6 +262,7 @@ fn signal_name(sig: i32) -> &'static str {
         6 => "SIGABRT",
         7 => "SIGBUS",
         8 => "SIGFPE",
+        2 => "SIGINT",
         9 => "SIGKILL",
         11 => "SIGSEGV",
         15 => "SIGTERM",
@@ -302,7 +331,9 @@ pub fn run_child(
         // The batch keeps only the panic message; symbolizing a backtrace
         // costs seconds and memory, and under a memory limit it may not finish.
         .env("RUST_BACKTRACE", "0")
-        .stdin(Stdio::null())
+        .env(PARENT_PIPE_ENV, "1")
+        // The child watches this pipe: it closes when the batch dies, however.
+        .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let t0 = Instant::now();
@@ -310,6 +341,9 @@ pub fn run_child(
         Ok(c) => c,
         Err(e) => return fail(row, Cause::Internal, format!("cannot start the child: {e}")),
     };
+    // Held until the child has been waited for: dropping it tells the child
+    // its batch is gone.
+    let parent_pipe = child.stdin.take();
     let out = child.stdout.take().map(drain);
     let err = child.stderr.take().map(drain);
     let pid = child.id();
@@ -338,6 +372,9 @@ pub fn run_child(
         if t0.elapsed() > spec.timeout {
             killed = Some(Killed::Timeout);
         }
+        if let Some(sig) = interrupted() {
+            killed = Some(Killed::Interrupted(sig));
+        }
         if killed.is_some() {
             let _ = child.kill();
             break child.wait();
@@ -346,6 +383,7 @@ pub fn run_child(
         nap = (nap * 2).min(Duration::from_millis(50));
     };
     row.wall = t0.elapsed().as_secs_f64();
+    drop(parent_pipe);
     let join = |h: Option<std::thread::JoinHandle<Vec<u8>>>| {
         h.and_then(|h| h.join().ok())
             .map(|b| String::from_utf8_lossy(&b).into_owned())
@@ -365,6 +403,12 @@ pub fn run_child(
     row.exit_code = status.code();
     row.signal = signal_of(status);
     let message = message_of(&stderr);
+    // A child that a terminal's Ctrl-C reached before the batch stopped it.
+    if killed.is_none() && status.code() != Some(0) {
+        if let Some(sig) = interrupted() {
+            killed = Some(Killed::Interrupted(sig));
+        }
+    }
     match killed {
         Some(Killed::Timeout) => {
             let m = format!(
@@ -372,6 +416,10 @@ pub fn run_child(
                 spec.timeout.as_secs_f64()
             );
             return fail(row, Cause::Timeout, m);
+        }
+        Some(Killed::Interrupted(sig)) => {
+            let m = format!("interrupted by {} ({sig}) while meshing", signal_name(sig));
+            return fail(row, Cause::Interrupted, m);
         }
         Some(Killed::Memory) => {
             let limit = poll_limit.unwrap_or(0);
@@ -493,7 +541,7 @@ mod tests {
     fn cleanup_removes_temporaries() {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("a.msh");
-        for name in ["a.msh", "a.msh.tmp123", "b.msh"] {
+        for name in ["a.msh", "a.msh.tmp123", ".a.msh.tmpAbC123", "b.msh"] {
             std::fs::write(dir.path().join(name), "x").expect("write");
         }
         remove_output(&out);

@@ -27,7 +27,9 @@ mod discover;
 mod report;
 mod summary;
 
-pub use child::{ChildSpec, MemoryGuard, parse_size, run_child};
+pub use child::{
+    ChildSpec, MemoryGuard, PARENT_PIPE_ENV, interrupt, interrupted, parse_size, run_child,
+};
 pub use discover::{Discovery, Shard, SourceFile, discover};
 pub use report::{
     Cause, Merged, ReadReport, ReportWriter, Row, Status, last_per_file, merge_reports,
@@ -211,7 +213,8 @@ pub fn plan(inputs: &[PathBuf], opts: &BatchOptions) -> Result<Plan> {
 /// What a batch did.
 #[derive(Clone, Debug)]
 pub struct Outcome {
-    /// One row per file of the plan (kept and new), sorted by key.
+    /// One row per file of the plan (kept and new), sorted by key; after an
+    /// [`interrupt`], the files not started have none.
     pub rows: Vec<Row>,
     /// Wall-clock time of the run, seconds.
     pub wall: f64,
@@ -263,7 +266,7 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
             let tx = tx.clone();
             let (spec, next, stop) = (&spec, &next, &stop);
             s.spawn(move || {
-                while !stop.load(Ordering::Relaxed) {
+                while !stop.load(Ordering::Relaxed) && interrupted().is_none() {
                     let Some(f) = plan.todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
                         break;
                     };

@@ -43,11 +43,14 @@ pub enum Cause {
     Memory,
     /// The batch could not run the child or read its statistics.
     Internal,
+    /// The batch was interrupted (SIGINT / SIGTERM) while the file was being
+    /// meshed: the child was stopped, nothing written.
+    Interrupted,
 }
 
 impl Cause {
     /// Every cause, in display order.
-    pub const ALL: [Cause; 8] = [
+    pub const ALL: [Cause; 9] = [
         Cause::BadInput,
         Cause::Meshing,
         Cause::Io,
@@ -56,6 +59,7 @@ impl Cause {
         Cause::Timeout,
         Cause::Memory,
         Cause::Internal,
+        Cause::Interrupted,
     ];
 
     /// The cause's name in reports (`bad-input`, `timeout`, ...).
@@ -69,6 +73,7 @@ impl Cause {
             Cause::Timeout => "timeout",
             Cause::Memory => "memory",
             Cause::Internal => "internal",
+            Cause::Interrupted => "interrupted",
         }
     }
 }

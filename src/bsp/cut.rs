@@ -181,6 +181,9 @@ pub(super) fn cut_all(
     for (ti, tri) in seed.triangles.iter().enumerate() {
         let tp = tri.map(|i| seed.points[i as usize].0);
         let tag = u32::try_from(ti).expect("internal: fewer than 2^32 triangles");
+        if ti % 256 == 0 {
+            crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
+        }
         candidates.clear();
         let (cx0, cx1, cy0, cy1) = grid.range(tp[0], tp[1], tp[2]);
         for cy in cy0..=cy1 {

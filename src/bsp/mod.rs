@@ -32,6 +32,7 @@ mod fan;
 mod seed;
 
 use crate::Result;
+use crate::budget::Deadline;
 use crate::mesh::TriMesh;
 use kurbo::{Point, Rect};
 use std::time::Instant;
@@ -90,6 +91,8 @@ pub(crate) struct BspOptions {
     /// Stop with an error when the mesh would exceed this many vertices
     /// (default 50 million): the BSP can be quadratic in the segment count.
     pub max_vertices: u32,
+    /// The run's wall-clock limit, checked while cutting (default none).
+    pub deadline: Deadline,
 }
 
 impl BspOptions {
@@ -98,7 +101,14 @@ impl BspOptions {
         round: true,
         round_passes: 4,
         max_vertices: 50_000_000,
+        deadline: Deadline::NONE,
     };
+
+    /// Set [`BspOptions::deadline`].
+    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
+        self.deadline = deadline;
+        self
+    }
 
     /// Set [`BspOptions::round`].
     #[cfg(test)]

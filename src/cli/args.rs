@@ -306,6 +306,56 @@ pub(crate) struct ParamArgs {
     /// Validate the mesh after every stage (slow; for debugging).
     #[arg(long)]
     paranoid: bool,
+    /// Most input segments (`<use>` copies and XML entities expanded); more
+    /// fails at once with exit 2.
+    #[arg(long, default_value_t = defaults::MAX_SEGMENTS, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_segments: u64,
+    /// Most drawable elements (paths and basic shapes, `<use>` copies included).
+    #[arg(long, default_value_t = defaults::MAX_SHAPES, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_shapes: u64,
+    /// Most memory the run is estimated to need, MiB (or a size like 4G),
+    /// checked from the input's counts before meshing. `triwild batch` also
+    /// limits each child's memory to it when given.
+    #[arg(long, default_value_t = defaults::MAX_MEMORY_MB, value_name = "MB", value_parser = parse_mb)]
+    max_memory: u64,
+    /// Stop with exit 3 after this many seconds of wall-clock time (checked
+    /// between and inside the stages; nothing is written); `none` for no limit.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIME_LIMIT, value_parser = parse_seconds)]
+    time_limit: f64,
+}
+
+/// `--time-limit`'s default from [`defaults::TIME_LIMIT`]; infinite for none.
+const DEFAULT_TIME_LIMIT: f64 = match defaults::TIME_LIMIT {
+    Some(t) => t,
+    None => f64::INFINITY,
+};
+
+/// A memory size in MiB: a bare number is MiB, a number with a suffix (`4G`,
+/// `512M`, `100K`) is converted (rounded up to whole MiB).
+pub(crate) fn parse_mb(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let mb = if let Ok(v) = t.parse::<u64>() {
+        v
+    } else {
+        triwild::batch::parse_size(t)?.div_ceil(1 << 20)
+    };
+    if mb == 0 {
+        return Err(format!("expected at least 1 MiB, got `{s}`"));
+    }
+    Ok(mb)
+}
+
+/// A positive, finite number of seconds, or `none` (infinite).
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(f64::INFINITY);
+    }
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        _ => Err(format!(
+            "expected a positive number of seconds or `none`, got `{s}`"
+        )),
+    }
 }
 
 fn len(rel: f64, abs: Option<f64>) -> Length {
@@ -347,5 +397,12 @@ impl ParamArgs {
             .with_cdt_min_angle_deg(self.cdt_min_angle)
             .with_max_vertices(self.max_vertices)
             .with_paranoid(self.paranoid)
+            .with_limits(self.max_segments, self.max_shapes, self.max_memory)
+            .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))
+    }
+
+    /// `--max-memory` in bytes.
+    pub(crate) fn max_memory_bytes(&self) -> u64 {
+        self.max_memory.saturating_mul(1 << 20)
     }
 }

@@ -26,10 +26,11 @@ appends one JSON line to OUTDIR/report.jsonl (OUTDIR/report.shard-K-of-N.jsonl
 with --shard): file, status, cause, message, wall time, peak memory, output,
 and the child's --stats object (times per stage, counts, quality).
 
---max-memory runs each child under `prlimit --as=BYTES` (util-linux) when
-prlimit is on the PATH (a limit on address space, enforced by the kernel);
-otherwise the batch samples the child's resident memory in /proc every 50 ms
-and kills it past the limit.
+--max-memory (MiB, or a size like 8G), when given, is each child's budget of
+estimated memory and also its limit: the child runs under `prlimit --as=BYTES`
+(util-linux) when prlimit is on the PATH (a limit on address space, enforced by
+the kernel); otherwise the batch samples the child's resident memory in /proc
+every 50 ms and kills it past the limit.
 
 Merging shards: triwild batch --merge-reports A.jsonl B.jsonl ... -o OUT.jsonl
 
@@ -37,7 +38,10 @@ Exit codes:
   0  every file meshed
   1  some file failed (see the report)
   2  usage error (bad flag, missing input, no .svg file found)
-  4  I/O error (cannot write OUTDIR or the report)";
+  4  I/O error (cannot write OUTDIR or the report)
+  130, 143  interrupted by SIGINT / SIGTERM: running children are stopped,
+     their files get an `interrupted` row; a child whose batch dies (even by
+     SIGKILL) removes its temporary output and exits";
 
 /// The text after `triwild batch --help`'s options.
 #[cfg(not(feature = "test-hooks"))]
@@ -68,9 +72,6 @@ pub(crate) struct BatchArgs {
     /// Time limit per file, seconds.
     #[arg(long, default_value_t = BatchOptions::DEFAULT_TIMEOUT.as_secs_f64(), value_name = "SECONDS", value_parser = parse_timeout)]
     timeout: f64,
-    /// Memory limit per file, like 8G or 512M [default: none].
-    #[arg(long, value_name = "SIZE", value_parser = batch::parse_size)]
-    max_memory: Option<u64>,
     /// Skip the files whose report row is ok and whose mesh exists; run the rest.
     #[arg(long)]
     resume: bool,
@@ -79,7 +80,7 @@ pub(crate) struct BatchArgs {
     shard: Option<Shard>,
     /// Merge the reports given as inputs into the file given by -o (one row per
     /// file, sorted) and print their summary.
-    #[arg(long, conflicts_with_all = ["resume", "shard", "jobs", "max_memory"])]
+    #[arg(long, conflicts_with_all = ["resume", "shard", "jobs"])]
     merge_reports: bool,
     #[command(flatten)]
     format: FormatArgs,
@@ -121,6 +122,13 @@ fn child_args(matches: &ArgMatches) -> Vec<OsString> {
         }
     }
     out
+}
+
+/// Each child's memory limit, bytes: `--max-memory` when given on the command
+/// line (its default is only the children's estimate budget), else none.
+fn memory_limit(args: &BatchArgs, matches: &ArgMatches) -> Option<u64> {
+    (matches.value_source("max_memory") == Some(clap::parser::ValueSource::CommandLine))
+        .then(|| args.params.max_memory_bytes())
 }
 
 /// `--merge-reports`: join the reports, print their summary; exit 0 when no
@@ -175,7 +183,7 @@ pub(crate) fn run(
     let mut opts = BatchOptions::new(exe, args.output.clone())
         .with_child_args(leading)
         .with_timeout(Duration::from_secs_f64(args.timeout))
-        .with_memory(MemoryGuard::detect(args.max_memory))
+        .with_memory(MemoryGuard::detect(memory_limit(args, matches)))
         .with_resume(args.resume)
         .with_shard(args.shard);
     if let Some(j) = args.jobs {
@@ -215,6 +223,12 @@ pub(crate) fn run(
             let summary = outcome.summary();
             outln!("{summary}");
             outln!("report: {}", plan.report.display());
+            if let Some(sig) = batch::interrupted() {
+                errln!(
+                    "interrupted by signal {sig}: the files being meshed have an `interrupted` row; --resume runs the rest"
+                );
+                return ExitCode::from(u8::try_from(128 + sig).unwrap_or(130));
+            }
             ExitCode::from(if summary.failed_total() == 0 { 0 } else { 1 })
         }
         Err(e) => {

@@ -40,7 +40,7 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
     if let Err(e) = params.validate() {
         return fail(input, e);
     }
-    let drawing = match triwild::load_file_with(input, params.units, params.scale) {
+    let drawing = match triwild::load_file_params(input, &params, &triwild::PaintOptions::DEFAULT) {
         Ok(d) => d,
         Err(e) => return fail(input, e),
     };

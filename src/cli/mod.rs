@@ -24,14 +24,17 @@ use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::ffi::OsString;
 use std::process::ExitCode;
 use triwild::ErrorKind;
-use triwild::{Params, RegionOptions};
+use triwild::{PaintOptions, Params, RegionOptions};
 
 const EXIT_HELP: &str = "\
 Exit codes:
   0  success
-  2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag)
-  3  meshing failed
+  2  bad input or usage (missing, unreadable-as-SVG or empty drawing, bad flag),
+     or an input over a budget ('too large: ...', raise with --max-segments,
+     --max-shapes or --max-memory)
+  3  meshing failed, or --time-limit reached (nothing is written)
   4  I/O error (reading the input or writing an output)
+  130, 143  interrupted by SIGINT / SIGTERM (no temporary file is left)
   141  standard output closed early (`triwild ... --stats | head`); outputs complete";
 
 /// Robust curved triangle meshing of SVG drawings (TriWild, in Rust).
@@ -126,6 +129,49 @@ pub fn install_panic_hook() {
     }));
 }
 
+/// A `triwild batch` child: its standard input is a pipe from the batch, which
+/// closes when the batch ends in any way (SIGKILL included). At end-of-file the
+/// child removes its temporary output and exits, so no orphan writes a mesh
+/// that no report row describes.
+fn watch_parent_pipe() {
+    if std::env::var_os(crate::batch::PARENT_PIPE_ENV).is_none() {
+        return;
+    }
+    // The pipe is read through its own file descriptor, not std's buffered
+    // stdin: the thread then never allocates, so it gets no malloc arena of
+    // its own (64 MiB of address space, which a child under `prlimit --as`
+    // cannot spare).
+    let pipe = {
+        use std::os::fd::AsFd;
+        match std::io::stdin().as_fd().try_clone_to_owned() {
+            Ok(fd) => std::fs::File::from(fd),
+            Err(_) => return,
+        }
+    };
+    let watcher = std::thread::Builder::new()
+        .name("triwild-parent-pipe".into())
+        .stack_size(64 << 10)
+        .spawn(move || {
+            let mut pipe = pipe;
+            let mut sink = [0u8; 64];
+            loop {
+                match std::io::Read::read(&mut pipe, &mut sink) {
+                    Ok(0) => break,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(_) => break,
+                    Ok(_) => {}
+                }
+            }
+            crate::remove_temporaries();
+            std::process::exit(EXIT_ORPHAN);
+        });
+    drop(watcher);
+}
+
+/// Exit code of a batch child whose batch is gone (128 + SIGHUP, as a shell
+/// reports a process that lost its terminal).
+const EXIT_ORPHAN: i32 = 129;
+
 /// Run the command line on `args` (the program name first, as
 /// `std::env::args_os()` gives it) and return the process's exit code.
 ///
@@ -134,6 +180,7 @@ pub fn install_panic_hook() {
 /// `None` runs this executable (`std::env::current_exe()`).
 pub fn main_with(args: impl IntoIterator<Item = OsString>, child: Option<&[OsString]>) -> u8 {
     install_panic_hook();
+    watch_parent_pipe();
     let matches = match Cli::command().try_get_matches_from(args) {
         Ok(m) => m,
         Err(e) => {
@@ -168,7 +215,7 @@ pub fn main_with(args: impl IntoIterator<Item = OsString>, child: Option<&[OsStr
         .unwrap_or(1)
 }
 
-/// The single-file command's parameter and region flags, parsed as the command
+/// The single-file command's parameter, region and paint flags, parsed as the command
 /// line parses them (same defaults, same checks): what the Python package's
 /// `triwild.mesh(svg, **flags)` turns its keyword arguments into.
 ///
@@ -177,9 +224,13 @@ pub fn main_with(args: impl IntoIterator<Item = OsString>, child: Option<&[OsStr
 /// unknown flag or a bad value.
 pub fn mesh_options(
     flags: impl IntoIterator<Item = OsString>,
-) -> Result<(Params, RegionOptions), String> {
+) -> Result<(Params, RegionOptions, PaintOptions), String> {
     match MeshFlags::try_parse_from(flags) {
-        Ok(f) => Ok((f.params.to_params(), f.regions.to_options())),
+        Ok(f) => Ok((
+            f.params.to_params(),
+            f.regions.to_options(),
+            f.regions.paint_options(),
+        )),
         Err(e) => {
             let text = e.render().to_string();
             let line = text.lines().next().unwrap_or("bad flag");

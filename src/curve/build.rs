@@ -52,6 +52,7 @@ use super::optimize::{CurvedOptimizeOptions, CurvedOptimizeStats, optimize_curve
 use super::repair::{repair, round_all, split_multi_primary};
 use super::shape::{Bend, exact_shape};
 use crate::Result;
+use crate::budget::Deadline;
 use crate::element::Order;
 use crate::element::jacobian::CertifyOptions;
 use crate::fem::LineKind;
@@ -91,6 +92,9 @@ pub(crate) struct CurveOptions {
     /// Bound on the turn of a primary edge's curve piece in the curved
     /// optimization, radians (strict; less than π).
     pub curved_alpha: f64,
+    /// The run's wall-clock limit: the curved optimization starts no pass
+    /// after it (default none).
+    pub deadline: Deadline,
 }
 
 /// Default [`CurveOptions::max_splits`]: a budget that only a runaway repair
@@ -126,7 +130,13 @@ impl CurveOptions {
             stop_energy: defaults.stop_energy_curved,
             max_passes: defaults.max_passes_curved,
             curved_alpha: rule.alpha,
+            deadline: Deadline::NONE,
         }
+    }
+    /// Set the wall-clock limit.
+    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
+        self.deadline = deadline;
+        self
     }
     /// Set the minimal edge length below which curved edges are not split.
     pub(crate) fn with_l_min_abs(mut self, l: f64) -> Self {
@@ -259,6 +269,7 @@ fn curved_optimization(
         l: opts.l_abs,
         stop_energy: opts.stop_energy,
         max_passes: opts.max_passes,
+        deadline: opts.deadline,
     };
     optimize_curved(mesh, &ctx.with_curved(rule), &curved_opts)
 }

@@ -29,6 +29,7 @@
 //! created is a certified curved element with at most one curved edge, and no
 //! certified face became uncertified.
 
+use crate::budget::Deadline;
 use crate::element::Order;
 use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
@@ -59,6 +60,8 @@ pub(crate) struct CurvedOptimizeOptions {
     pub stop_energy: f64,
     /// Passes after the preliminary one; 0 skips the stage.
     pub max_passes: u32,
+    /// The run's wall-clock limit: no pass starts after it.
+    pub deadline: Deadline,
 }
 
 /// What the curved optimization did (part of [`super::CurveStats`]).
@@ -131,6 +134,7 @@ pub(crate) fn optimize_curved(
         alpha_deg: 0.0,
         max_passes: opts.max_passes,
         max_vertices: usize::MAX,
+        deadline: opts.deadline,
     };
     let mut sched_ctx = ctx.clone();
     let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED);
@@ -151,7 +155,7 @@ pub(crate) fn optimize_curved(
     pass(&mut s);
     let mut last = measure(s.mesh(), ctx, &rule);
     for _ in 0..opts.max_passes {
-        if last.max < opts.stop_energy {
+        if last.max < opts.stop_energy || opts.deadline.expired() {
             break;
         }
         pass(&mut s);

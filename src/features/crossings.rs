@@ -16,6 +16,7 @@
 
 use super::Parent;
 use super::grid::Grid;
+use crate::budget::Deadline;
 use crate::params::Resolved;
 use kurbo::{Point, Rect, Vec2};
 use std::collections::HashMap;
@@ -98,7 +99,10 @@ fn newton(p: &Piece, q: &Piece, mut s: f64, mut t: f64, tol: f64) -> Option<(f64
 }
 
 /// Find the transversal crossings of `pieces` (see the module doc).
-pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
+///
+/// Stops early, with the crossings found so far, once `deadline` has passed
+/// (the caller discards the result then).
+pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> Crossings {
     let n = pieces.len();
     let mut out = Crossings {
         splits: vec![Vec::new(); n],
@@ -130,6 +134,9 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved) -> Crossings {
     };
     let mut found: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
     for i in 0..n {
+        if i % 64 == 0 && deadline.expired() {
+            break;
+        }
         let mut near = grid.query(boxes[i]);
         near.retain(|&j| (j as usize) > i && boxes[j as usize].overlaps(boxes[i]));
         if near.is_empty() {

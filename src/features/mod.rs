@@ -56,6 +56,7 @@ pub(crate) use chains::PrimaryChains;
 pub(crate) use json::to_json;
 pub(crate) use preview::to_svg;
 
+use crate::budget::Deadline;
 use crate::params::Resolved;
 use crate::svg::drawing::Conic;
 use crate::svg::{Drawing, FeatureGeom, FeatureSource};
@@ -472,6 +473,16 @@ impl FeatureSet {
     /// Never fails and always terminates: every refinement loop has a budget; what exceeds
     /// it is made secondary.
     pub(crate) fn build(drawing: &Drawing, params: &Resolved) -> FeatureSet {
+        Self::build_within(drawing, params, &Deadline::NONE)
+    }
+
+    /// [`FeatureSet::build`] that gives up once `deadline` has passed: the
+    /// set is then incomplete (the caller checks the deadline and discards it).
+    pub(crate) fn build_within(
+        drawing: &Drawing,
+        params: &Resolved,
+        deadline: &Deadline,
+    ) -> FeatureSet {
         let _span = tracing::debug_span!("features").entered();
         let start = Instant::now();
         let mut counts = FeatureCounts::default();
@@ -558,9 +569,23 @@ impl FeatureSet {
                     .map(move |&t| (k, crossings::Piece { parent: *parent, t }))
             })
             .collect();
-        let found = crossings::find(&flat.iter().map(|f| f.1).collect::<Vec<_>>(), params);
+        let found = crossings::find(
+            &flat.iter().map(|f| f.1).collect::<Vec<_>>(),
+            params,
+            deadline,
+        );
         counts.crossing_splits = found.count;
         timing.split_ms = ms(t);
+        if deadline.expired() {
+            return FeatureSet {
+                params: *params,
+                points,
+                primary: Vec::new(),
+                secondary: Vec::new(),
+                counts,
+                timing,
+            };
+        }
 
         // 3. Resampling.
         let t = Instant::now();

@@ -43,6 +43,7 @@
 //! rounding and smoothing); a vertex left rational after them makes the mesh
 //! unusable, which the caller reports as an error.
 
+use crate::budget::Deadline;
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, min_angle_deg};
 use crate::ops::{
@@ -168,6 +169,9 @@ pub(crate) struct OptimizeOptions {
     pub max_passes: u32,
     /// No split once the mesh has this many vertices.
     pub max_vertices: usize,
+    /// The run's wall-clock limit: past it the schedule stops at the next
+    /// pass ([`StopReason::TimeLimit`]).
+    pub deadline: Deadline,
 }
 
 /// How often an operation was applied and why it was refused.
@@ -177,6 +181,14 @@ pub struct OpTally {
     pub applied: u64,
     /// Refusals, by the rule or invariant that refused.
     pub rejected: BTreeMap<&'static str, u64>,
+}
+
+impl OptimizeOptions {
+    /// Set [`OptimizeOptions::deadline`].
+    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
+        self.deadline = deadline;
+        self
+    }
 }
 
 impl OpTally {
@@ -205,6 +217,9 @@ pub enum StopReason {
     Stalled,
     /// The pass limit was reached.
     PassLimit,
+    /// The run's wall-clock limit (`--time-limit`) passed: the pipeline
+    /// reports an error and writes nothing.
+    TimeLimit,
 }
 
 /// What the schedule did.
@@ -855,6 +870,9 @@ pub(crate) fn optimize(
     let mut ever_off = Vec::new();
     let mut s = Schedule::new(mesh, ctx, opts, SEED);
     let rational = s.improve(&mut ever_off);
+    if s.stats().stop == StopReason::TimeLimit {
+        return s.stats().clone();
+    }
     // From here on no operation stretches an edge past 2 l: the coarsening's
     // collapses by their length rule, smoothing and swaps by the context's bound.
     s.ctx.max_new_edge = STOP_STRETCH * opts.l;
@@ -906,6 +924,10 @@ impl Schedule<'_> {
         let mut hit_floor = false;
         let mut history: Vec<(f64, f64)> = Vec::new();
         for pass in 0..opts.max_passes {
+            if opts.deadline.expired() {
+                self.stats.stop = StopReason::TimeLimit;
+                break;
+            }
             if quality_reached(&last, &opts, rational, off) {
                 self.stats.stop = StopReason::Quality;
                 break;

@@ -28,6 +28,7 @@ fn options(l: f64) -> OptimizeOptions {
         alpha_deg: 10.0,
         max_passes: 40,
         max_vertices: 20_000,
+        deadline: crate::budget::Deadline::NONE,
     }
 }
 

@@ -3,11 +3,66 @@
 //! Guarantees: the target path either keeps its old content (or stays absent) or
 //! holds the complete new content; a failure at any point (the writer returns an
 //! error, the disk fills up, the rename is refused) removes the temporary file.
+//!
+//! Every live temporary file is also listed in a process-global registry, so
+//! a signal handler (the binary's, on SIGINT / SIGTERM) can remove them with
+//! [`remove_temporaries`] before the process exits: after that call no
+//! temporary file is created and none is renamed into place.
 
 use crate::{Error, Result};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+/// Temporary files of this process not yet renamed or removed; `None` once
+/// [`remove_temporaries`] has run (the process is ending).
+static LIVE: Mutex<Option<Vec<PathBuf>>> = Mutex::new(Some(Vec::new()));
+
+fn live() -> MutexGuard<'static, Option<Vec<PathBuf>>> {
+    LIVE.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+fn ending() -> io::Error {
+    io::Error::new(
+        io::ErrorKind::Interrupted,
+        "the process is ending (interrupted)",
+    )
+}
+
+/// A temporary file listed in [`LIVE`] while this lives.
+struct Registered(PathBuf);
+
+impl Registered {
+    fn new(path: &Path) -> io::Result<Registered> {
+        match live().as_mut() {
+            Some(list) => {
+                list.push(path.to_path_buf());
+                Ok(Registered(path.to_path_buf()))
+            }
+            None => Err(ending()),
+        }
+    }
+}
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        if let Some(list) = live().as_mut() {
+            list.retain(|p| p != &self.0);
+        }
+    }
+}
+
+/// Remove every temporary file this process is writing, and refuse to create
+/// or rename any from now on: for a signal handler, just before the process
+/// exits. Returns how many files were removed.
+pub fn remove_temporaries() -> usize {
+    let mut live = live();
+    let list = live.take().unwrap_or_default();
+    list.iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count()
+}
 
 /// Buffer size of the writers: large enough that a million-triangle mesh is a
 /// few thousand system calls.
@@ -84,6 +139,7 @@ pub(crate) fn check_writable(path: &Path) -> Result<()> {
             format!("directory {} is not writable: {e}", dir.display()),
         ))
     })?;
+    let _listed = Registered::new(tmp.path()).map_err(Error::Write)?;
     tmp.close().map_err(Error::Write)
 }
 
@@ -102,14 +158,37 @@ where
             format!("cannot create a file in {}: {e}", dir.display()),
         ))
     })?;
+    let _listed = Registered::new(tmp.path()).map_err(Error::Write)?;
     {
         let mut w = BufWriter::with_capacity(BUFFER_BYTES, tmp.as_file_mut());
         write(&mut w).map_err(Error::Write)?;
         w.flush().map_err(Error::Write)?;
     }
+    #[cfg(feature = "test-hooks")]
+    slow_write_hook(path);
     tmp.as_file().sync_all().map_err(Error::Write)?;
+    // Renamed under the registry's lock: a signal handler's cleanup runs
+    // wholly before (the complete file is in place) or after (no rename).
+    let live = live();
+    if live.is_none() {
+        return Err(Error::Write(ending()));
+    }
     tmp.persist(path).map_err(|e| Error::Write(e.error))?;
+    drop(live);
     Ok(())
+}
+
+/// Test-only (`test-hooks`): with `TRIWILD_TEST_SLOW_WRITE_ON=S`, a write
+/// whose target path contains S sleeps for a minute with its temporary file
+/// complete but not yet renamed, so a test can signal the process then.
+#[cfg(feature = "test-hooks")]
+fn slow_write_hook(path: &Path) {
+    let hit = std::env::var("TRIWILD_TEST_SLOW_WRITE_ON")
+        .ok()
+        .is_some_and(|s| !s.is_empty() && path.to_string_lossy().contains(&s));
+    if hit {
+        std::thread::sleep(std::time::Duration::from_secs(60));
+    }
 }
 
 #[cfg(test)]

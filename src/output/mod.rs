@@ -19,6 +19,7 @@ mod msh;
 mod preview;
 
 use crate::{Error, FemMesh, Result};
+pub use atomic::remove_temporaries;
 use std::path::Path;
 
 /// gmsh file format version.

@@ -11,7 +11,9 @@
 //! ([`crate::fem::VertexNumbers`], [`crate::fem::feature_lines`]).
 
 use crate::bsp::{self, BspInput, BspOptions, BspSegment, BspStats};
+use crate::budget::Deadline;
 use crate::curve::{CurveOptions, CurveStats, CurvedMesh, curve_mesh};
+use crate::error::check_deadline;
 use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
@@ -265,8 +267,41 @@ impl FeatureAnalysis {
 /// a drawing (as [`crate::load_bytes_with`]), then as [`mesh_drawing`].
 pub fn mesh_svg(svg: &[u8], params: &Params) -> Result<Meshed> {
     params.validate()?;
-    let drawing = svg::load_bytes_with(svg, params.units, params.scale)?;
-    mesh_drawing(&drawing, params)
+    let deadline = params.deadline();
+    let drawing = load_bytes_params(svg, params, &PaintOptions::DEFAULT)?;
+    mesh_within(&drawing, params, &RegionOptions::DEFAULT, deadline)
+}
+
+/// Load an SVG file in `params`' units and scale within its input budgets
+/// ([`Params::max_segments`], [`Params::max_shapes`], [`Params::max_memory_mb`]),
+/// its paint model read as `paint` says (strokes narrower than `params.l_min`
+/// stay lines): what [`run_file`], `triwild features` and the Python package load.
+///
+/// # Errors
+/// As [`crate::load_file_with`], and [`Error::TooLarge`] past a budget.
+pub fn load_file_params(path: &Path, params: &Params, paint: &PaintOptions) -> Result<Drawing> {
+    params.validate()?;
+    let paint = hairlines_below_l_min(params, paint);
+    svg::load_file_limited(path, params.units, params.scale, &paint, &params.limits())
+}
+
+/// [`load_file_params`] for an SVG document in memory.
+///
+/// # Errors
+/// As [`crate::load_bytes_with`], and [`Error::TooLarge`] past a budget.
+pub fn load_bytes_params(data: &[u8], params: &Params, paint: &PaintOptions) -> Result<Drawing> {
+    params.validate()?;
+    let paint = hairlines_below_l_min(params, paint);
+    svg::load_limited(data, params.units, params.scale, &paint, &params.limits())
+        .map(|(drawing, _)| drawing)
+}
+
+/// `paint` with strokes narrower than `params.l_min` kept as lines (hairlines).
+fn hairlines_below_l_min(params: &Params, paint: &PaintOptions) -> PaintOptions {
+    match params.l_min {
+        Length::Rel(r) => paint.with_min_stroke_width(r, true),
+        Length::Abs(a) => paint.with_min_stroke_width(a, false),
+    }
 }
 
 /// Mesh an already loaded drawing, with the default regions (one surface per
@@ -291,6 +326,17 @@ pub fn mesh_drawing_with(
     regions: &RegionOptions,
 ) -> Result<Meshed> {
     params.validate()?;
+    mesh_within(drawing, params, regions, params.deadline())
+}
+
+/// [`mesh_drawing_with`] with the run's deadline, checked between stages and
+/// in the BSP's, the optimizer's and the curved optimization's loops.
+fn mesh_within(
+    drawing: &Drawing,
+    params: &Params,
+    regions: &RegionOptions,
+    deadline: Deadline,
+) -> Result<Meshed> {
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
@@ -299,27 +345,43 @@ pub fn mesh_drawing_with(
     let mut warnings = drawing.warnings.clone();
     let mut curve = None;
     let delivered = match params.mesher {
-        Mesher::Cdt => Delivered::Linear(
-            times.time("baseline", || crate::baseline::triangulate(drawing, params))?,
-        ),
+        Mesher::Cdt => {
+            check_deadline(&deadline, Stage::Baseline)?;
+            let linear =
+                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
+            check_deadline(&deadline, Stage::Baseline)?;
+            Delivered::Linear(linear)
+        }
         Mesher::TriWild => {
-            let fs = times.time("features", || FeatureSet::build(drawing, &resolved));
+            check_deadline(&deadline, Stage::Features)?;
+            let fs = times.time("features", || {
+                FeatureSet::build_within(drawing, &resolved, &deadline)
+            });
+            check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
             let chains = fs.primary_chains();
-            let (mut mesh, stats) =
-                bsp_trimesh(drawing, &fs, &chains, params, &resolved, &mut times)?;
+            let (mut mesh, stats) = bsp_trimesh(
+                drawing, &fs, &chains, params, &resolved, deadline, &mut times,
+            )?;
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
             if params.stop_after == Some(Stage::Bsp) {
+                // Exact, but rounded to f64 a few triangles may be degenerate.
+                times.time("snap", || {
+                    snap::snap_degenerate(&mut mesh, &ctx, resolved.d)
+                })?;
+                if let Some(s) = &mut bsp {
+                    // the counts of the mesh delivered
+                    s.vertices = mesh.num_vertices();
+                    s.triangles = mesh.num_faces();
+                }
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
+                let opts = optimize_options(params, &resolved).with_deadline(deadline);
                 let stats = times.time("optimize", || {
-                    crate::optimize::optimize(
-                        &mut mesh,
-                        &mut ctx,
-                        &optimize_options(params, &resolved),
-                    )
+                    crate::optimize::optimize(&mut mesh, &mut ctx, &opts)
                 });
+                check_deadline(&deadline, Stage::Optimize)?;
                 if params.paranoid {
                     check_trimesh(&mesh, Stage::Optimize)?;
                 }
@@ -337,9 +399,11 @@ pub fn mesh_drawing_with(
                         let opts = CurveOptions::new(params.order, resolved.d)
                             .with_l_min_abs(resolved.l_min)
                             .with_l_abs(resolved.l)
-                            .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
+                            .with_stop_curved(params.stop_energy_curved, params.max_passes_curved)
+                            .with_deadline(deadline);
                         curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;
+                    check_deadline(&deadline, Stage::Curve)?;
                     curve = Some(cs);
                     Delivered::Curved(cm)
                 }
@@ -449,7 +513,15 @@ pub(crate) fn bsp_stage(
     let mut times = Times::default();
     let fs = FeatureSet::build(drawing, &resolved);
     let chains = fs.primary_chains();
-    let (mesh, _) = bsp_trimesh(drawing, &fs, &chains, params, &resolved, &mut times)?;
+    let (mesh, _) = bsp_trimesh(
+        drawing,
+        &fs,
+        &chains,
+        params,
+        &resolved,
+        Deadline::NONE,
+        &mut times,
+    )?;
     let ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
     Ok((mesh, fs, ctx))
 }
@@ -479,11 +551,14 @@ fn bsp_trimesh(
     chains: &PrimaryChains,
     params: &Params,
     resolved: &Resolved,
+    deadline: Deadline,
     times: &mut Times,
 ) -> Result<(TriMesh, BspStats)> {
     let input = bsp_input(fs, chains);
     let bbox = padded_box(drawing, resolved.padding);
-    let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &BspOptions::DEFAULT))?;
+    let opts = BspOptions::DEFAULT.with_deadline(deadline);
+    let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &opts))?;
+    check_deadline(&deadline, Stage::Bsp)?;
     if params.paranoid {
         times.time("check", || check_trimesh(&mesh, Stage::Bsp))?;
     }
@@ -512,6 +587,7 @@ pub(crate) fn optimize_options(params: &Params, resolved: &Resolved) -> Optimize
         alpha_deg: params.alpha_deg,
         max_passes: params.max_passes,
         max_vertices: params.max_vertices as usize,
+        deadline: Deadline::NONE,
     }
 }
 
@@ -570,14 +646,12 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     if let Some(p) = &opts.preview {
         output::check_writable(p)?;
     }
+    let deadline = opts.params.deadline();
     let t = Instant::now();
-    let paint = match opts.params.l_min {
-        Length::Rel(r) => opts.paint.with_min_stroke_width(r, true),
-        Length::Abs(a) => opts.paint.with_min_stroke_width(a, false),
-    };
-    let drawing = svg::load_file_painted(input, opts.params.units, opts.params.scale, &paint)?;
+    let params = &opts.params;
+    let drawing = load_file_params(input, params, &opts.paint)?;
     let t_load = t.elapsed().as_secs_f64();
-    let Meshed { mesh, mut report } = mesh_drawing_with(&drawing, &opts.params, &opts.regions)?;
+    let Meshed { mesh, mut report } = mesh_within(&drawing, params, &opts.regions, deadline)?;
     let t = Instant::now();
     output::write_msh(&mesh, output, opts.msh)?;
     if let Some(p) = &opts.preview {
@@ -595,5 +669,6 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     Ok(report)
 }
 
+mod snap;
 #[cfg(test)]
 mod tests;

@@ -330,6 +330,10 @@ impl Drawing {
     /// `--scale`). Far beyond any drawing,
     /// and small enough that squares and products stay finite in f64.
     pub const MAX_COORD: f64 = 1e15;
+    /// Smallest accepted bounding-box diagonal (output units) of a drawing that
+    /// is not a single point: products of coordinates (areas, orientations in
+    /// f64) must not underflow.
+    pub const MIN_DIAGONAL: f64 = 1e-100;
 
     /// The diagonal `d` of the bounding box (the unit of relative parameters);
     /// 1.0 for a drawing that is a single point.

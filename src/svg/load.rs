@@ -9,8 +9,10 @@
 //! stack; a panic inside usvg becomes a [`Error::NotSvg`] instead of unwinding
 //! into the caller.
 
+use super::budget;
 use super::source::{self, Source};
 use super::viewport::RootViewBox;
+use crate::budget::Limits;
 use crate::{Error, Result};
 use std::collections::HashSet;
 use std::sync::{Arc, OnceLock};
@@ -74,14 +76,15 @@ pub(super) struct Parsed<'a, 'input> {
 ///
 /// The usvg tree borrows nothing, but the source document borrows its text, so
 /// the work that needs both runs inside this call.
-pub(super) fn parse<R, F>(data: &[u8], work: F) -> Result<R>
+pub(super) fn parse<R, F>(data: &[u8], limits: &Limits, work: F) -> Result<R>
 where
     R: Send,
     F: FnOnce(&Parsed<'_, '_>) -> Result<R> + Send,
 {
     let text = decode(data)?;
     let fontdb = font_database();
-    let job = move || parse_text(&text, fontdb, work);
+    let limits = *limits;
+    let job = move || parse_text(&text, &limits, fontdb, work);
     std::thread::scope(|scope| {
         let spawned = std::thread::Builder::new()
             .name("triwild-svg-parse".into())
@@ -169,9 +172,13 @@ fn utf16_units(data: &[u8]) -> Option<Vec<u16>> {
 /// Text → XML document → checks → private ids → usvg tree → `work`.
 fn parse_text<R>(
     text: &str,
+    limits: &Limits,
     fontdb: Arc<fontdb::Database>,
     work: impl FnOnce(&Parsed<'_, '_>) -> Result<R>,
 ) -> Result<R> {
+    // Budgets first: entity expansion before the XML parser expands, segments
+    // and elements before usvg builds its tree.
+    budget::check_text(text, limits)?;
     let doc = parse_xml(text).map_err(|e| Error::NotSvg(xml_error_message(text, &e)))?;
     let root = doc.root_element();
     let name = root.tag_name();
@@ -193,6 +200,7 @@ fn parse_text<R>(
             name.name()
         )));
     }
+    budget::check_counts(budget::count(&doc), text.len() as u64, limits)?;
     check_numbers(&doc)?;
     // The same document with a private id on every anonymous shape and <use>;
     // should it not parse (it always should), the original is used and the

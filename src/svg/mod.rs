@@ -61,6 +61,7 @@
 //! whose diagonal is not negligible (< 1e-12) relative to its distance from the
 //! origin unless the drawing is a single point.
 
+mod budget;
 mod conic;
 pub(crate) mod drawing;
 mod geometry;
@@ -79,6 +80,7 @@ pub use paint::{PaintOptions, StrokeMode};
 
 pub(crate) use reconstruct::Precision;
 
+use crate::budget::Limits;
 use crate::units::Units;
 use crate::{Error, Result};
 use std::path::Path;
@@ -209,7 +211,7 @@ pub fn load_bytes_painted(
     scale: f64,
     paint: &PaintOptions,
 ) -> Result<Drawing> {
-    load_painted_with_precision(data, units, scale, paint).map(|(drawing, _)| drawing)
+    load_limited(data, units, scale, paint, &Limits::NONE).map(|(drawing, _)| drawing)
 }
 
 /// [`load_bytes_with`], and how the paths came out (f64 from the document's
@@ -223,26 +225,88 @@ pub(crate) fn load_with_precision(
     units: Units,
     scale: f64,
 ) -> Result<(Drawing, Precision)> {
-    load_painted_with_precision(data, units, scale, &PaintOptions::OUTLINES)
+    load_limited(data, units, scale, &PaintOptions::OUTLINES, &Limits::NONE)
 }
 
-/// [`load_with_precision`] with the paint model read as `paint` says.
-fn load_painted_with_precision(
+/// Load and normalise an SVG file within input budgets (see [`load_limited`]),
+/// the paint model read as `paint` says.
+///
+/// # Errors
+/// As [`load_file_with`], and [`Error::TooLarge`] past a budget.
+pub(crate) fn load_file_limited(
+    path: &Path,
+    units: Units,
+    scale: f64,
+    paint: &PaintOptions,
+    limits: &Limits,
+) -> Result<Drawing> {
+    let meta = std::fs::metadata(path).map_err(Error::Read)?;
+    if meta.is_dir() {
+        return Err(Error::IsDirectory);
+    }
+    let data = std::fs::read(path).map_err(Error::Read)?;
+    if data.is_empty() {
+        return Err(Error::EmptyFile);
+    }
+    load_limited(&data, units, scale, paint, limits).map(|(drawing, _)| drawing)
+}
+
+/// A coordinate error that `--scale` caused says so.
+fn blame_scale(e: Error, scale: f64) -> Error {
+    match e {
+        Error::BadCoordinate(m) if scale > 1.0 => Error::BadCoordinate(format!(
+            "coordinates too large after --scale {scale:e}: {m}"
+        )),
+        e => e,
+    }
+}
+
+/// [`load_bytes_painted`] within input budgets, and how the paths came out:
+/// XML entity expansion is checked on the raw text, segments, elements and the
+/// memory estimate on the XML tree before usvg builds its tree, and again on
+/// the drawing.
+///
+/// # Errors
+/// As [`load_bytes_with`], and [`Error::TooLarge`] past a budget.
+pub(crate) fn load_limited(
     data: &[u8],
     units: Units,
     scale: f64,
     paint: &PaintOptions,
+    limits: &Limits,
 ) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
-    let outlines = load::parse(data, |parsed| {
+    let outlines = load::parse(data, limits, |parsed| {
         let frame =
             viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
         outline::collect(parsed, &frame, map, paint)
-    })?;
+    })
+    .map_err(|e| blame_scale(e, scale))?;
     let mut drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
     drawing.paint = outlines.paint;
+    let d = drawing.diagonal();
+    if d < Drawing::MIN_DIAGONAL {
+        let cause = format!(
+            "the drawing's bounding-box diagonal is {d:e}, below {:e}",
+            Drawing::MIN_DIAGONAL
+        );
+        return Err(Error::BadCoordinate(if scale < 1.0 {
+            format!("coordinates too small after --scale {scale:e}: {cause}")
+        } else {
+            format!("coordinates too small: {cause}")
+        }));
+    }
+    let counts = budget::Counts {
+        segments: drawing
+            .features
+            .iter()
+            .filter(|f| !matches!(f.geom, FeatureGeom::Point(_)))
+            .count() as u64,
+        shapes: drawing.shapes.len() as u64,
+    };
+    budget::check_counts(counts, data.len() as u64, limits)?;
     drawing.precision = drawing::PathPrecision {
         f64_paths: outlines.precision.exact,
         single_precision_paths: outlines.precision.glyphs + outlines.precision.fallbacks(),

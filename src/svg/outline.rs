@@ -967,12 +967,22 @@ fn check_coordinates(shape: &Shape) -> Result<()> {
             return Err(Error::BadCoordinate(format!(
                 "{} has the point ({}, {}) after transforms, which {what}",
                 describe(shape),
-                p.x,
-                -p.y
+                short_number(p.x),
+                short_number(-p.y)
             )));
         }
     }
     Ok(())
+}
+
+/// A number as a message shows it: plain when moderate, else in scientific
+/// notation (never 300 digits).
+fn short_number(x: f64) -> String {
+    if x == 0.0 || (1e-6..1e15).contains(&x.abs()) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// How an error message names a shape.

@@ -305,3 +305,57 @@ fn devset_meshes_valid_and_conforming() {
     );
     assert!(failed.is_empty(), "failed: {failed:?}");
 }
+
+/// What gmsh and `mshcheck --strict` reject in a straight mesh: triangles with
+/// `|2·area| ≤ 1e-12·h²` (h² the squared extents of their bounding box) and
+/// nodes within 1e-12 of the mesh's diagonal of each other.
+fn rejected_by_gmsh(nodes: &[Point], triangles: &[[Point; 3]]) -> (usize, usize) {
+    let degenerate = triangles
+        .iter()
+        .filter(|[a, b, c]| {
+            let (xs, ys) = ([a.x, b.x, c.x], [a.y, b.y, c.y]);
+            let ext = |v: [f64; 3]| {
+                v.iter().copied().fold(f64::MIN, f64::max)
+                    - v.iter().copied().fold(f64::MAX, f64::min)
+            };
+            (*b - *a).cross(*c - *a).abs() <= 1e-12 * (ext(xs).powi(2) + ext(ys).powi(2))
+        })
+        .count();
+    let bbox = nodes
+        .iter()
+        .fold(kurbo::Rect::from_points(nodes[0], nodes[0]), |r, p| {
+            r.union_pt(*p)
+        });
+    let q = 1e-12 * bbox.width().hypot(bbox.height());
+    let cells: HashSet<(i64, i64)> = nodes
+        .iter()
+        .map(|p| ((p.x / q).round() as i64, (p.y / q).round() as i64))
+        .collect();
+    (degenerate, nodes.len() - cells.len())
+}
+
+/// Issue 17: rounded to f64, the exact BSP mesh of this drawing has degenerate
+/// triangles and coinciding vertices; the delivered `--stop-after bsp` mesh
+/// has neither (they are collapsed, swapped or smoothed away).
+#[test]
+fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
+    let f =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp/rounding-degenerate.svg");
+    let svg = std::fs::read(&f).expect("fixture");
+    let drawing = crate::load_bytes(&svg).expect("load");
+    let (raw, _, _) = pipeline::bsp_stage(&drawing, &bsp_params()).expect("bsp");
+    let nodes: Vec<Point> = raw.vertices().map(|v| raw.position(v)).collect();
+    let tris: Vec<[Point; 3]> = raw
+        .faces()
+        .map(|t| raw.face(t).map(|v| raw.position(v)))
+        .collect();
+    let (degenerate, duplicate) = rejected_by_gmsh(&nodes, &tris);
+    assert!(
+        degenerate + duplicate > 0,
+        "the fixture no longer exercises the fix"
+    );
+    let meshed = pipeline::mesh_svg(&svg, &bsp_params()).expect("the bsp mesh");
+    let m = &meshed.mesh;
+    let tris: Vec<[Point; 3]> = (0..m.triangle_count()).map(|i| m.corners(i)).collect();
+    assert_eq!(rejected_by_gmsh(&m.nodes, &tris), (0, 0));
+}
