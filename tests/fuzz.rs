@@ -42,6 +42,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 const EXE: &str = env!("CARGO_BIN_EXE_triwild");
+
+/// The binary under test: this build's, or `TRIWILD_FUZZ_BIN` (another build).
+fn exe() -> PathBuf {
+    std::env::var_os("TRIWILD_FUZZ_BIN").map_or_else(|| PathBuf::from(EXE), PathBuf::from)
+}
 /// The meshing parameters of every case: coarse and quadratic, to keep cases fast.
 const PARAMS: &[&str] = &["-q", "-l", "0.1", "--order", "2"];
 /// Placeholders in case bytes (and fixtures), replaced at run time: a FIFO nobody
@@ -70,6 +75,9 @@ fn env_num(name: &str) -> Option<u64> {
 /// harness works before and after the resource budgets exist) and the watchdog.
 struct Runner {
     budget_args: Vec<String>,
+    /// The binary has `--time-limit` and `--max-segments`: the `budget-*` fixtures
+    /// (inputs that only a budget bounds) are replayed.
+    has_budgets: bool,
     /// Past this a run is a hang: the time limit plus a margin, or a fixed
     /// generous limit when the binary has no `--time-limit`.
     watchdog: Duration,
@@ -85,7 +93,7 @@ struct Runner {
 
 impl Runner {
     fn new(scratch: &Path) -> Runner {
-        let help = Command::new(EXE)
+        let help = Command::new(exe())
             .arg("--help")
             .output()
             .expect("run triwild --help");
@@ -102,6 +110,9 @@ impl Runner {
         if has("--max-shapes") {
             budget_args.extend(["--max-shapes".to_owned(), "2000".to_owned()]);
         }
+        if has("--max-memory") {
+            budget_args.extend(["--max-memory".to_owned(), "2048".to_owned()]);
+        }
         let watchdog = if has("--time-limit") {
             Duration::from_secs(time_limit + 20)
         } else {
@@ -110,7 +121,7 @@ impl Runner {
         let max_path_segments = if has("--max-segments") {
             100_000
         } else {
-            3_000
+            500
         };
         let mshcheck = std::env::var_os("TRIWILD_FUZZ_MSHCHECK").map(|script| {
             let python = std::env::var_os("TRIWILD_FUZZ_PYTHON")
@@ -138,6 +149,7 @@ impl Runner {
         let url = format!("http://{}/external.svg", listener.local_addr().unwrap());
         Runner {
             budget_args,
+            has_budgets: has("--time-limit") && has("--max-segments"),
             watchdog,
             max_path_segments,
             mshcheck,
@@ -175,7 +187,7 @@ impl Runner {
         fs::write(&input, self.substitute(bytes)).unwrap();
         let before = self.poll_connections();
         let start = Instant::now();
-        let mut child = Command::new(EXE)
+        let mut child = Command::new(exe())
             .args(PARAMS)
             .args(&self.budget_args)
             .arg(&input)
@@ -239,7 +251,7 @@ impl Runner {
                 if !output.is_file() {
                     return Outcome::Invalid("exit 0 without the .msh".into());
                 }
-                let check = Command::new(EXE)
+                let check = Command::new(exe())
                     .arg("check")
                     .arg(output)
                     .output()
@@ -1520,6 +1532,10 @@ fn shrink(
     class: &str,
     dir: &Path,
 ) -> Option<Vec<u8>> {
+    // A hang costs the whole watchdog per run: not shrunk (the case is kept as is).
+    if class == "hang" {
+        return None;
+    }
     let steps = env_num("TRIWILD_FUZZ_SHRINK").unwrap_or(48);
     let mut tree = strategy.new_tree(&mut case_runner(seed, index)).ok()?;
     let mut best = None;
@@ -1589,6 +1605,13 @@ fn fuzz_the_binary() {
 
     // The fixtures: earlier findings and notable attacks, replayed every time.
     for path in fixtures() {
+        let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
+        if stem.starts_with("budget-") && !runner.has_budgets {
+            eprintln!(
+                "fuzz: fixture {stem} skipped: the binary has no --time-limit/--max-segments"
+            );
+            continue;
+        }
         let bytes = fs::read(&path).unwrap();
         let name = format!("fixture-{}", path.file_stem().unwrap().to_string_lossy());
         let run = runner.run(&bytes, &out, &name);
@@ -1648,15 +1671,15 @@ fn fuzz_the_binary() {
                     ));
                     if !run.outcome.is_pass() {
                         eprintln!("fuzz: FAIL {name}: {:?} ({:.1} s)", run.outcome, run.wall);
-                        failures.lock().unwrap().push((
-                            i,
-                            Failure {
-                                name,
-                                outcome: run.outcome,
-                                stderr: run.stderr,
-                                bytes,
-                            },
-                        ));
+                        let failure = Failure {
+                            name,
+                            outcome: run.outcome,
+                            stderr: run.stderr,
+                            bytes,
+                        };
+                        // kept at once: a long run killed later keeps its findings
+                        save_failure(&runner, &failure);
+                        failures.lock().unwrap().push((i, failure));
                     }
                     let n = done.fetch_add(1, Ordering::SeqCst) + 1;
                     if cases >= 100 && n % 50 == 0 {
