@@ -1600,9 +1600,11 @@ fn fuzz_the_binary() {
     // TRIWILD_FUZZ_FIRST=i with TRIWILD_FUZZ_CASES=i+1 reruns case i alone.
     let first = env_num("TRIWILD_FUZZ_FIRST").map_or(0, |n| n as usize);
     let jobs = env_num("TRIWILD_FUZZ_JOBS").map_or(1, |n| n.max(1) as usize);
-    // One directory per run, so a long run and the default suite can go at once.
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("../test-out/fuzz/seed-{seed:x}-{first}-{cases}"));
+    // One directory per run (and process), so runs can go at once.
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "../test-out/fuzz/seed-{seed:x}-{first}-{cases}-{}",
+        std::process::id()
+    ));
     let _ = fs::remove_dir_all(&out);
     fs::create_dir_all(&out).unwrap();
     let runner = Runner::new(&out);
