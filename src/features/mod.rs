@@ -623,7 +623,18 @@ impl FeatureSet {
         // 4. μ-separation.
         let t = Instant::now();
         points = separation::merge_points(points, params.mu);
-        let mut primary = separation::separate(&sections, &points, params.mu, params.alpha);
+        let mut primary =
+            separation::separate(&sections, &points, params.mu, params.alpha, deadline);
+        if deadline.expired() {
+            return FeatureSet {
+                params: *params,
+                points,
+                primary: Vec::new(),
+                secondary: Vec::new(),
+                counts,
+                timing,
+            };
+        }
         counts.not_separated = sections
             .iter()
             .zip(&primary)

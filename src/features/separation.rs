@@ -25,6 +25,7 @@
 use super::grid::Grid;
 use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
+use crate::budget::Deadline;
 use crate::mesh::{angle_between, point_segment_distance};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
@@ -200,12 +201,15 @@ pub(super) fn merge_points(points: Vec<FeaturePoint>, mu: f64) -> Vec<FeaturePoi
     out
 }
 
-/// Decide, for every section, whether it is primary.
+/// Decide, for every section, whether it is primary. Stops early once
+/// `deadline` has passed (the answer is then incomplete: the caller checks the
+/// deadline and discards it).
 pub(super) fn separate(
     sections: &[Section],
     points: &[FeaturePoint],
     mu: f64,
     alpha: f64,
+    deadline: &Deadline,
 ) -> Vec<bool> {
     let n = sections.len();
     let boxes = sections
@@ -217,6 +221,9 @@ pub(super) fn separate(
     for (i, s) in sections.iter().enumerate() {
         if !s.eligible {
             continue;
+        }
+        if i % 64 == 0 && deadline.expired() {
+            break;
         }
         let hull = ctrl_points(&s.ctrl);
         let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
