@@ -912,6 +912,15 @@ fn stalled(history: &[(f64, f64)]) -> bool {
 }
 
 impl Schedule<'_> {
+    /// Whether the deadline has passed (then the stop reason says so).
+    fn out_of_time(&mut self) -> bool {
+        let expired = self.opts.deadline.expired();
+        if expired {
+            self.stats.stop = StopReason::TimeLimit;
+        }
+        expired
+    }
+
     /// The main passes (split, collapse, swap, smooth, round, project), the
     /// sizing field refined when they stop paying off, until a stop rule holds
     /// or the pass limit. Returns how many vertices stay rational.
@@ -933,9 +942,20 @@ impl Schedule<'_> {
                 break;
             }
             self.stats.passes = pass + 1;
+            // The deadline is also checked between the sub-passes: one pass of
+            // a large mesh can take seconds, more on a loaded machine.
             let (long, splits) = self.split_pass();
+            if self.out_of_time() {
+                break;
+            }
             let collapses = self.collapse_pass(COLLAPSE_FACTOR);
+            if self.out_of_time() {
+                break;
+            }
             let swaps = self.swap_pass();
+            if self.out_of_time() {
+                break;
+            }
             let smooths = self.smooth_pass();
             rational = self.round_all();
             off = self.project_all(ever_off);

@@ -3,6 +3,10 @@
 //! Guarantees: the target path either keeps its old content (or stays absent) or
 //! holds the complete new content; a failure at any point (the writer returns an
 //! error, the disk fills up, the rename is refused) removes the temporary file.
+//! A target that exists and is neither a regular file nor a directory (a device
+//! such as `/dev/null`, a FIFO, `/dev/stdout`) is written in place: a rename
+//! would replace the device node by a regular file (as root, `/dev/null`
+//! itself), and no rename is atomic for a stream anyway.
 //!
 //! Every live temporary file is also listed in a process-global registry, so
 //! a signal handler (the binary's, on SIGINT / SIGTERM) can remove them with
@@ -129,9 +133,19 @@ fn check_target(path: &Path) -> io::Result<PathBuf> {
     Ok(dir)
 }
 
+/// Whether `path` exists and is neither a regular file nor a directory (a
+/// device, a FIFO, a socket; symbolic links followed): written in place.
+fn is_special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 /// Check that a file can be created at `path`: creates and removes a temporary
-/// file in its directory.
+/// file in its directory (a device or FIFO is not checked: it is written in
+/// place, and opening a FIFO would wait for a reader).
 pub(crate) fn check_writable(path: &Path) -> Result<()> {
+    if is_special(path) {
+        return Ok(());
+    }
     let dir = check_target(path).map_err(Error::Write)?;
     let tmp = temp_in(&dir, path).map_err(|e| {
         Error::Write(io::Error::new(
@@ -151,6 +165,15 @@ pub(crate) fn write_atomic<F>(path: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<&mut File>) -> io::Result<()>,
 {
+    if is_special(path) {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(Error::Write)?;
+        let mut w = BufWriter::with_capacity(BUFFER_BYTES, &mut file);
+        write(&mut w).map_err(Error::Write)?;
+        return w.flush().map_err(Error::Write);
+    }
     let dir = check_target(path).map_err(Error::Write)?;
     let mut tmp = temp_in(&dir, path).map_err(|e| {
         Error::Write(io::Error::new(
@@ -211,6 +234,42 @@ mod tests {
             .collect();
         v.sort();
         v
+    }
+
+    /// A FIFO (like `/dev/null` or `/dev/stdout`: not a regular file) is
+    /// written in place and stays a FIFO; renaming a temporary file onto it
+    /// would replace it (as root, `-o /dev/null` replaced the device node).
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_is_written_in_place_and_never_replaced() {
+        use std::io::Read;
+        use std::os::unix::fs::FileTypeExt;
+        let d = scratch("fifo");
+        let p = d.join("out.msh");
+        let made = std::process::Command::new("mkfifo").arg(&p).status();
+        if !made.is_ok_and(|s| s.success()) {
+            return; // no mkfifo here: nothing to test
+        }
+        let reader = {
+            let p = p.clone();
+            std::thread::spawn(move || {
+                let mut got = Vec::new();
+                File::open(&p)
+                    .expect("open the fifo")
+                    .read_to_end(&mut got)
+                    .expect("read");
+                got
+            })
+        };
+        write_atomic(&p, |w| w.write_all(b"mesh bytes")).expect("write into the fifo");
+        // (checked before joining: a replaced fifo would leave the reader waiting)
+        let kind = std::fs::symlink_metadata(&p)
+            .expect("still there")
+            .file_type();
+        assert!(kind.is_fifo(), "the fifo was replaced: {kind:?}");
+        assert_eq!(reader.join().expect("reader"), b"mesh bytes");
+        assert_eq!(entries(&d), vec!["out.msh".to_owned()]);
+        check_writable(&p).expect("a fifo counts as writable");
     }
 
     #[test]

@@ -334,11 +334,26 @@ impl Drawing {
     /// is not a single point: products of coordinates (areas, orientations in
     /// f64) must not underflow.
     pub const MIN_DIAGONAL: f64 = 1e-100;
+    /// Smallest accepted ratio of the bounding-box diagonal to the largest
+    /// coordinate magnitude: f64 then resolves the drawing to about 2e-10 of its
+    /// size (l_min is 1e-4 of it by default, and the nodes of one edge, computed
+    /// by any client, agree far below 1e-8 of it). Below it the drawing is
+    /// refused: translate it closer to the origin.
+    pub const MIN_RELATIVE_EXTENT: f64 = 1e-6;
 
     /// The diagonal `d` of the bounding box (the unit of relative parameters);
-    /// 1.0 for a drawing that is a single point.
+    /// for a drawing that is a single point, 1.0, or [`Self::MIN_RELATIVE_EXTENT`]
+    /// times the point's largest coordinate magnitude when that is larger (so
+    /// the mesh around a far point is resolved in f64 as any drawing's is).
     pub fn diagonal(&self) -> f64 {
         let d = self.bbox.width().hypot(self.bbox.height());
-        if d > 0.0 { d } else { 1.0 }
+        if d > 0.0 {
+            d
+        } else {
+            let magnitude = [self.bbox.x0, self.bbox.y0]
+                .into_iter()
+                .fold(0.0_f64, |m, c| m.max(c.abs()));
+            (Self::MIN_RELATIVE_EXTENT * magnitude).max(1.0)
+        }
     }
 }

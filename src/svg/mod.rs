@@ -58,7 +58,7 @@
 //!
 //! Guarantees to the next stage (see [`Drawing`]): at least one feature, every
 //! coordinate finite with magnitude at most [`Drawing::MAX_COORD`], and a bbox
-//! whose diagonal is not negligible (< 1e-12) relative to its distance from the
+//! whose diagonal is not negligible (< 1e-6) relative to its distance from the
 //! origin unless the drawing is a single point.
 
 mod budget;

@@ -10,7 +10,7 @@ use kurbo::Rect;
 
 /// Smallest accepted ratio of the bbox diagonal to the largest coordinate
 /// magnitude: below it, f64 cannot resolve the drawing's details.
-pub(super) const MIN_RELATIVE_EXTENT: f64 = 1e-12;
+const MIN_RELATIVE_EXTENT: f64 = Drawing::MIN_RELATIVE_EXTENT;
 
 /// Assemble a [`Drawing`] from shapes: features, bbox and the whole-drawing checks.
 ///

@@ -513,8 +513,11 @@ fn numbers_beyond_f32_are_bad_not_silently_dropped() {
         };
         assert!(msg.contains("id='a'") && msg.contains(attr), "{msg}");
     }
-    // Large but representable numbers and foreign attributes are fine.
-    load(r#"<rect width="5" height="5" x="1e10" y="-3e9" data-x="1e999"/>"#);
+    // Large but representable numbers and foreign attributes are fine (up to
+    // `Drawing::MIN_RELATIVE_EXTENT`: at 1e10 a 5-unit drawing is refused).
+    load(r#"<rect width="5" height="5" x="1e6" y="-3e5" data-x="1e999"/>"#);
+    let far = load_err(&svg(r#"<rect width="5" height="5" x="1e10" y="-3e9"/>"#));
+    assert!(matches!(far, Error::BadCoordinate(_)), "{far:?}");
 }
 
 #[test]
