@@ -476,6 +476,24 @@ impl FeatureSet {
         Self::build_within(drawing, params, &Deadline::NONE)
     }
 
+    /// What a build stopped by its deadline returns: no sections, the counts and
+    /// timings so far (the caller sees the deadline passed and discards it).
+    fn incomplete(
+        params: &Resolved,
+        points: Vec<FeaturePoint>,
+        counts: FeatureCounts,
+        timing: FeatureTiming,
+    ) -> FeatureSet {
+        FeatureSet {
+            params: *params,
+            points,
+            primary: Vec::new(),
+            secondary: Vec::new(),
+            counts,
+            timing,
+        }
+    }
+
     /// [`FeatureSet::build`] that gives up once `deadline` has passed: the
     /// set is then incomplete (the caller checks the deadline and discards it).
     pub(crate) fn build_within(
@@ -577,14 +595,7 @@ impl FeatureSet {
         counts.crossing_splits = found.count;
         timing.split_ms = ms(t);
         if deadline.expired() {
-            return FeatureSet {
-                params: *params,
-                points,
-                primary: Vec::new(),
-                secondary: Vec::new(),
-                counts,
-                timing,
-            };
+            return FeatureSet::incomplete(params, points, counts, timing);
         }
 
         // 3. Resampling.
@@ -626,14 +637,7 @@ impl FeatureSet {
         let mut primary =
             separation::separate(&sections, &points, params.mu, params.alpha, deadline);
         if deadline.expired() {
-            return FeatureSet {
-                params: *params,
-                points,
-                primary: Vec::new(),
-                secondary: Vec::new(),
-                counts,
-                timing,
-            };
+            return FeatureSet::incomplete(params, points, counts, timing);
         }
         counts.not_separated = sections
             .iter()

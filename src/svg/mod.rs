@@ -114,6 +114,15 @@ pub fn load_file_painted(
     scale: f64,
     paint: &PaintOptions,
 ) -> Result<Drawing> {
+    let data = read_input(path)?;
+    load_bytes_painted(&data, units, scale, paint)
+}
+
+/// The bytes of the input file at `path`.
+///
+/// # Errors
+/// [`Error::Read`], [`Error::IsDirectory`], [`Error::EmptyFile`].
+fn read_input(path: &Path) -> Result<Vec<u8>> {
     let meta = std::fs::metadata(path).map_err(Error::Read)?;
     if meta.is_dir() {
         return Err(Error::IsDirectory);
@@ -122,7 +131,7 @@ pub fn load_file_painted(
     if data.is_empty() {
         return Err(Error::EmptyFile);
     }
-    load_bytes_painted(&data, units, scale, paint)
+    Ok(data)
 }
 
 /// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a
@@ -240,14 +249,7 @@ pub(crate) fn load_file_limited(
     paint: &PaintOptions,
     limits: &Limits,
 ) -> Result<Drawing> {
-    let meta = std::fs::metadata(path).map_err(Error::Read)?;
-    if meta.is_dir() {
-        return Err(Error::IsDirectory);
-    }
-    let data = std::fs::read(path).map_err(Error::Read)?;
-    if data.is_empty() {
-        return Err(Error::EmptyFile);
-    }
+    let data = read_input(path)?;
     load_limited(&data, units, scale, paint, limits).map(|(drawing, _)| drawing)
 }
 
