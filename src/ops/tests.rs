@@ -575,17 +575,22 @@ fn sliver_of_three_features(h: f64) -> (TriMesh, Context, [VertexId; 3]) {
     }
     assert!(mesh.check().is_empty(), "{:?}", mesh.check());
     let polylines = edges.map(|(u, v)| vec![mesh.position(u), mesh.position(v)]);
-    let ctx = Context {
+    (mesh, straight_context(&polylines), [a, b, k])
+}
+
+/// A context without primary sections: these secondary polylines in an
+/// envelope of 0.01, α = 10°, the no-worse-max energy rule, linear mode.
+fn straight_context(polylines: &[Vec<Point>]) -> Context {
+    Context {
         sections: Vec::new(),
-        envelope: Envelope::new(&polylines, 0.01, 0.01),
+        envelope: Envelope::new(polylines, 0.01, 0.01),
         alpha: 10f64.to_radians(),
         on_curve_abs: 1e-12,
         energy: EnergyRule::NoWorseMax,
         energy_floor: 0.0,
         max_new_edge: f64::INFINITY,
         curved: None,
-    };
-    (mesh, ctx, [a, b, k])
+    }
 }
 
 #[test]
@@ -875,16 +880,7 @@ fn a_bounded_split_refuses_to_make_a_needle() {
     let lower = mesh.add_face([b, a, c]);
     mesh.link_all();
     assert!(mesh.check().is_empty(), "{:?}", mesh.check());
-    let ctx = Context {
-        sections: Vec::new(),
-        envelope: Envelope::new(&[], 0.01, 0.01),
-        alpha: 10f64.to_radians(),
-        on_curve_abs: 1e-12,
-        energy: EnergyRule::NoWorseMax,
-        energy_floor: 0.0,
-        max_new_edge: f64::INFINITY,
-        curved: None,
-    };
+    let ctx = straight_context(&[]);
     let before = mesh.clone();
     let old = max_energy(&mesh, &ctx, &[upper, lower]);
     assert_eq!(
