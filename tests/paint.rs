@@ -225,3 +225,77 @@ fn a_gradient_is_named_by_its_id_and_a_mostly_transparent_one_is_decoration() {
     assert_eq!(names(&r), ["fill-g"]);
     assert_close(area(&r, "fill-g"), 20000.0, 1e-12);
 }
+
+/// The mesh's line elements that do not separate two regions: each is named by
+/// its physical curve, with its end nodes' coordinates. A line on the outer
+/// boundary (one triangle) separates its region from the outside.
+fn lines_inside_one_region(m: &triwild::FemMesh) -> Vec<(String, [f64; 4])> {
+    use std::collections::HashMap;
+    let tn = m.order().triangle_nodes();
+    let ln = m.order().line_nodes();
+    let mut sides: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (k, tri) in m.triangles.chunks(tn).enumerate() {
+        for (a, b) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])] {
+            sides
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push(m.triangle_group[k]);
+        }
+    }
+    m.lines
+        .chunks(ln)
+        .enumerate()
+        .filter_map(|(k, line)| {
+            let (a, b) = (line[0], line[1]);
+            let groups = sides.get(&(a.min(b), a.max(b)))?;
+            (groups.len() == 2 && groups[0] == groups[1]).then(|| {
+                let (p, q) = (m.nodes[a as usize], m.nodes[b as usize]);
+                (
+                    m.curves[m.line_group[k] as usize].clone(),
+                    [p.x, p.y, q.x, q.y],
+                )
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
+    // A stroked triangle with a 29° corner (as resvg's M-L-L-Z test): the inner
+    // offsets of the two edges at each corner overshoot one another inside the
+    // stroke's area (kurbo's inner joins). Those pieces bound nothing: trimmed,
+    // they are no feature, and no line of the mesh runs inside one region.
+    let body = r##"<path id="t" d="M 30 40 L 100 150 L 160 110 z" fill="none" stroke="#080"
+                     stroke-width="5"/>"##;
+    let d = load(body);
+    let meshed =
+        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let trimmed = meshed.report.features.map(|f| f.trimmed_pieces);
+    assert!(trimmed.unwrap_or(0) >= 6, "trimmed pieces: {trimmed:?}");
+    let stray = lines_inside_one_region(&meshed.mesh);
+    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    // the ring's area is still exact: the outer miter triangle minus the inner
+    // one; nothing was lost with the trimmed pieces
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_eq!(names(&r), ["t-stroke"]);
+    let painted = area(&r, "t-stroke");
+    // perimeter × width within the corners' miter and inner-corner terms
+    let perimeter = 130.24 + 72.11 + 147.65;
+    assert!(
+        (painted - 5.0 * perimeter).abs() < 0.1 * 5.0 * perimeter,
+        "ring area {painted}"
+    );
+
+    // A disk clipped by a rectangle that reaches beyond it: the rectangle's
+    // outline outside the disk bounds nothing painted, nor does the disk's
+    // outline outside the clip.
+    let body = r##"<defs><clipPath id="c"><rect x="100" y="10" width="90" height="180"/></clipPath></defs>
+        <circle id="disk" cx="100" cy="100" r="50" fill="#0c0" clip-path="url(#c)"/>"##;
+    let d = load(body);
+    let meshed =
+        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let stray = lines_inside_one_region(&meshed.mesh);
+    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_close(area(&r, "disk"), PI * 2500.0 / 2.0, 1e-6);
+}

@@ -27,6 +27,11 @@ const CHORDS: usize = 16;
 const MAX_PER_PIECE: usize = 32;
 /// Newton iterations per seed.
 const NEWTON: usize = 30;
+/// Smallest crossing angle (degrees) split between two trimmable pieces.
+const TRIM_MIN_DEG: f64 = 1.0;
+/// Between two trimmable pieces, the distance (fraction of μ) from the ends and
+/// between crossings below which a crossing is not split.
+const TRIM_NEAR: f64 = 0.01;
 
 /// A curve piece: its parent and parameter interval.
 #[derive(Clone, Copy, Debug)]
@@ -100,9 +105,20 @@ fn newton(p: &Piece, q: &Piece, mut s: f64, mut t: f64, tol: f64) -> Option<(f64
 
 /// Find the transversal crossings of `pieces` (see the module doc).
 ///
+/// Two pieces that are both `trimmable` (outlines the features stage keeps only
+/// where they bound what is painted, see `trim`) are split at any crossing
+/// steeper than [`TRIM_MIN_DEG`] and farther than [`TRIM_NEAR`]·μ from their
+/// ends: a stroke's inner join overshoots its neighbour at the corner's own
+/// angle, and the overshoot is dropped only if it is a piece of its own.
+///
 /// Stops early, with the crossings found so far, once `deadline` has passed
 /// (the caller discards the result then).
-pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> Crossings {
+pub(super) fn find(
+    pieces: &[Piece],
+    trimmable: &[bool],
+    params: &Resolved,
+    deadline: &Deadline,
+) -> Crossings {
     let n = pieces.len();
     let mut out = Crossings {
         splits: vec![Vec::new(); n],
@@ -124,6 +140,8 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> 
     // (1e-9·d): the shared point is their mean.
     let tol = (1e-10 * params.d).max(f64::MIN_POSITIVE);
     let min_sin = (4.0 * params.alpha).min(std::f64::consts::FRAC_PI_2).sin();
+    let trim_sin = TRIM_MIN_DEG.to_radians().sin();
+    let is_trimmable = |k: usize| trimmable.get(k).copied().unwrap_or(false);
     let chords = |p: &Piece| -> Vec<(Point, f64)> {
         (0..=CHORDS)
             .map(|k| {
@@ -132,7 +150,9 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> 
             })
             .collect()
     };
-    let mut found: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
+    // (piece, s, piece, t, point, nearness bound, split the first, the second)
+    type Found = (usize, f64, usize, f64, Point, f64, bool, bool);
+    let mut found: Vec<Found> = Vec::new();
     for i in 0..n {
         if i % 64 == 0 && deadline.expired() {
             break;
@@ -146,6 +166,11 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> 
         for j in near {
             let j = j as usize;
             let cj = chords(&pieces[j]);
+            let (near_ends, pair_sin) = if is_trimmable(i) && is_trimmable(j) {
+                (TRIM_NEAR * params.mu, trim_sin)
+            } else {
+                (params.mu, min_sin)
+            };
             // This pair's crossings so far: found[pair..].
             let pair = found.len();
             for a in ci.windows(2) {
@@ -159,54 +184,76 @@ pub(super) fn find(pieces: &[Piece], params: &Resolved, deadline: &Deadline) -> 
                         continue;
                     };
                     let (p, q) = (&pieces[i], &pieces[j]);
-                    let x = p.parent.eval(s).midpoint(q.parent.eval(t));
-                    // Away from every end of both pieces (no tiny sections).
-                    let ends = [
-                        p.parent.eval(p.t[0]),
-                        p.parent.eval(p.t[1]),
-                        q.parent.eval(q.t[0]),
-                        q.parent.eval(q.t[1]),
-                    ];
-                    if ends.iter().any(|e| e.distance(x) <= params.mu) {
-                        continue;
-                    }
+                    let mut x = p.parent.eval(s).midpoint(q.parent.eval(t));
+                    // Away from every end of both pieces (no tiny sections); between
+                    // trimmable pieces, one ending on the other splits the other
+                    // there (at the end point itself).
+                    let p_ends = [p.parent.eval(p.t[0]), p.parent.eval(p.t[1])];
+                    let q_ends = [q.parent.eval(q.t[0]), q.parent.eval(q.t[1])];
+                    let near = |ends: &[Point; 2]| {
+                        ends.iter().find(|e| e.distance(x) <= near_ends).copied()
+                    };
+                    // An end on the other curve (within the crossing tolerance).
+                    let on = |e: Option<Point>| e.filter(|e| e.distance(x) <= tol);
+                    let (p_end, q_end) = (near(&p_ends), near(&q_ends));
+                    let t_junction = near_ends < params.mu;
+                    let (split_p, split_q) = match (p_end, q_end) {
+                        (None, None) => (true, true),
+                        (Some(_), None) if t_junction && on(p_end).is_some() => {
+                            x = p_end.expect("checked");
+                            (false, true)
+                        }
+                        (None, Some(_)) if t_junction && on(q_end).is_some() => {
+                            x = q_end.expect("checked");
+                            (true, false)
+                        }
+                        _ => continue,
+                    };
                     // Transversal: at least 4α between the tangents.
                     let (dp, dq) = (deriv(&p.parent, s), deriv(&q.parent, t));
                     let sin = dp.cross(dq).abs() / (dp.hypot() * dq.hypot());
-                    if sin.is_nan() || sin < min_sin {
+                    if sin.is_nan() || sin < pair_sin {
                         continue;
                     }
                     // The same crossing from another chord pair.
-                    if found[pair..].iter().any(|f| f.4.distance(x) <= params.mu) {
+                    if found[pair..].iter().any(|f| f.4.distance(x) <= near_ends) {
                         continue;
                     }
-                    found.push((i, s, j, t, x));
+                    found.push((i, s, j, t, x, near_ends, split_p, split_q));
                 }
             }
         }
     }
     // Crossings within μ of each other on one piece would make tiny sections:
     // keep the first of such a cluster (by order found) and drop its partners.
-    let mut kept: Vec<(usize, f64, usize, f64, Point)> = Vec::new();
+    let mut kept: Vec<Found> = Vec::new();
     // The points kept on each piece.
     let mut on_piece: Vec<Vec<Point>> = vec![Vec::new(); n];
     for f in found {
         let clash = [f.0, f.2]
             .iter()
-            .any(|&k| on_piece[k].iter().any(|x| x.distance(f.4) <= params.mu));
+            .any(|&k| on_piece[k].iter().any(|x| x.distance(f.4) <= f.5));
         let full = out.splits[f.0].len() >= MAX_PER_PIECE || out.splits[f.2].len() >= MAX_PER_PIECE;
         if clash || full {
             continue;
         }
-        out.splits[f.0].push(f.1);
-        out.splits[f.2].push(f.3);
-        on_piece[f.0].push(f.4);
-        on_piece[f.2].push(f.4);
+        if f.6 {
+            out.splits[f.0].push(f.1);
+            on_piece[f.0].push(f.4);
+        }
+        if f.7 {
+            out.splits[f.2].push(f.3);
+            on_piece[f.2].push(f.4);
+        }
         kept.push(f);
     }
-    for (i, s, j, t, x) in &kept {
-        out.points.insert((*i, s.to_bits()), *x);
-        out.points.insert((*j, t.to_bits()), *x);
+    for &(i, s, j, t, x, _, split_i, split_j) in &kept {
+        if split_i {
+            out.points.insert((i, s.to_bits()), x);
+        }
+        if split_j {
+            out.points.insert((j, t.to_bits()), x);
+        }
     }
     out.count = kept.len();
     for s in &mut out.splits {

@@ -51,6 +51,7 @@ mod resample;
 mod separation;
 mod snap;
 mod split;
+mod trim;
 
 pub(crate) use chains::PrimaryChains;
 pub(crate) use json::to_json;
@@ -392,6 +393,9 @@ pub struct FeatureCounts {
     /// Transversal crossings of two curves where both were split (so the
     /// sections around a crossing share its point).
     pub crossing_splits: usize,
+    /// Pieces of stroke areas, clipped fills, clip outlines and clipped centre
+    /// lines dropped because they bound nothing painted (see `trim`).
+    pub trimmed_pieces: usize,
     /// Discrete curve sections after resampling.
     pub sections: usize,
     /// Sections not eligible because of curvature above 2/l_m (or a refinement budget).
@@ -587,8 +591,17 @@ impl FeatureSet {
                     .map(move |&t| (k, crossings::Piece { parent: *parent, t }))
             })
             .collect();
+        let trimmer = trim::Trimmer::new(drawing, params.d, params.eps_m);
+        let trimmable: Vec<bool> = match &trimmer {
+            Some(tr) => flat
+                .iter()
+                .map(|(k, _)| tr.trims(drawing.features[pieces[*k].0 as usize].source.shape))
+                .collect(),
+            None => Vec::new(),
+        };
         let found = crossings::find(
             &flat.iter().map(|f| f.1).collect::<Vec<_>>(),
+            &trimmable,
             params,
             deadline,
         );
@@ -598,7 +611,8 @@ impl FeatureSet {
             return FeatureSet::incomplete(params, points, counts, timing);
         }
 
-        // 3. Resampling.
+        // 3. Trimming (derived outlines only where they bound what is painted) and
+        // resampling.
         let t = Instant::now();
         let mut sections = Vec::new();
         for (idx, (k, piece)) in flat.iter().enumerate() {
@@ -606,7 +620,14 @@ impl FeatureSet {
             let mut cuts = vec![piece.t[0]];
             cuts.extend(found.splits[idx].iter().copied());
             cuts.push(piece.t[1]);
+            let shape = drawing.features[i as usize].source.shape;
             for w in cuts.windows(2) {
+                if let Some(trimmer) = &trimmer
+                    && !trimmer.keeps(shape, parent, w[0], w[1])
+                {
+                    counts.trimmed_pieces += 1;
+                    continue;
+                }
                 for p in resample::resample(parent, w[0], w[1], params) {
                     let mut ctrl = p.ctrl;
                     // Sections meeting at a crossing share its point exactly.

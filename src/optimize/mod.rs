@@ -8,7 +8,9 @@
 
 pub(crate) mod schedule;
 
-pub(crate) use schedule::{OptimizeOptions, OptimizeStats, optimize};
+#[cfg(test)]
+pub(crate) use schedule::optimize;
+pub(crate) use schedule::{OptimizeOptions, OptimizeStats, optimize_with_caps, stroke_size_caps};
 
 #[cfg(test)]
 mod tests;

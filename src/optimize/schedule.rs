@@ -58,6 +58,14 @@ use std::collections::{BTreeMap, BinaryHeap};
 /// and Kobbelt 2004; Dunyach et al. 2013] times the average of the target edge
 /// lengths".
 const SPLIT_ABOVE: f64 = 4.0 / 3.0;
+
+/// At most this many split passes resolve the thin strokes' size caps before
+/// the main passes (each halves the longest capped edges: 2^12 covers any cap
+/// above the sizing floor).
+const CAP_SPLIT_PASSES: usize = 12;
+
+/// How fast sizes grow away from a capped outline (length per unit distance).
+const CAP_GRADING: f64 = 0.5;
 /// Edges shorter than this fraction of their target are collapsed in a pass
 /// (the collapse may not make an edge longer than [`SPLIT_ABOVE`] of its
 /// target, so splits never undo it). The thesis (§2.3.2) collapses below 4/5;
@@ -393,6 +401,14 @@ pub(crate) struct Schedule<'a> {
     opts: OptimizeOptions,
     /// Target edge length by vertex slot.
     target: Vec<f64>,
+    /// The largest target by vertex slot: `l`, or less on the outline of a thin
+    /// stroke (see [`optimize_with_caps`]); the sizing field relaxes and the
+    /// coarsening resets to it.
+    base: Vec<f64>,
+    /// Whether some vertex has a base below `l`.
+    capped: bool,
+    /// Size cap by shape index (see [`optimize_with_caps`]).
+    caps: Vec<f64>,
     stats: OptimizeStats,
     rng: Shuffle,
     /// Operation clock: advanced by every applied operation.
@@ -420,6 +436,9 @@ impl<'a> Schedule<'a> {
     ) -> Self {
         Schedule {
             target: vec![opts.l; mesh.vertex_capacity()],
+            base: vec![opts.l; mesh.vertex_capacity()],
+            capped: false,
+            caps: Vec::new(),
             mesh,
             ctx,
             opts: *opts,
@@ -492,6 +511,108 @@ impl<'a> Schedule<'a> {
         self.target[i]
     }
 
+    fn base_of(&mut self, v: VertexId) -> f64 {
+        let i = v.index();
+        if i >= self.base.len() {
+            self.base.resize(i + 1, self.opts.l);
+        }
+        self.base[i]
+    }
+
+    fn set_base(&mut self, v: VertexId, t: f64) {
+        let i = v.index();
+        if i >= self.base.len() {
+            self.base.resize(i + 1, self.opts.l);
+        }
+        self.base[i] = t;
+    }
+
+    /// Cap the base (and target) of every vertex on a primary edge whose shape
+    /// has a size cap (`caps` by shape index; `∞` or missing: none). Caps are
+    /// kept within `[l_floor, l]`.
+    fn apply_caps(&mut self, caps: &[f64]) {
+        if !caps.iter().any(|&c| c < self.opts.l) {
+            return;
+        }
+        self.caps = caps.to_vec();
+        let mut edges: Vec<(EdgeKey, f64)> = Vec::new();
+        for (k, tags) in self.mesh.tagged_edges() {
+            for tag in tags {
+                let FeatureOn::Primary { section, .. } = *tag else {
+                    continue;
+                };
+                let Some(src) = self
+                    .ctx
+                    .sections
+                    .get(section as usize)
+                    .and_then(|c| c.source)
+                else {
+                    continue;
+                };
+                if let Some(&cap) = caps.get(src.shape.index())
+                    && cap < self.opts.l
+                {
+                    edges.push((k, cap.max(self.opts.l_floor)));
+                }
+            }
+        }
+        for (k, cap) in edges {
+            for v in [k.lo, k.hi] {
+                if cap < self.base_of(v) {
+                    self.set_base(v, cap);
+                    self.set_target(v, cap);
+                    self.capped = true;
+                }
+            }
+        }
+    }
+
+    /// Whether the edge lies on a primary section of a capped shape.
+    fn on_capped_feature(&self, k: EdgeKey) -> bool {
+        self.mesh.edge_tags(k.lo, k.hi).iter().any(|tag| {
+            let FeatureOn::Primary { section, .. } = *tag else {
+                return false;
+            };
+            self.ctx
+                .sections
+                .get(section as usize)
+                .and_then(|c| c.source)
+                .and_then(|src| self.caps.get(src.shape.index()))
+                .is_some_and(|&cap| cap < self.opts.l)
+        })
+    }
+
+    /// Whether an edge on a capped shape's outline is still longer than the
+    /// split bound of its mean base (the thin strokes are not yet resolved).
+    fn caps_pending(&mut self) -> bool {
+        if !self.capped {
+            return false;
+        }
+        let edges: Vec<EdgeKey> = self.mesh.edges().collect();
+        edges.into_iter().any(|k| {
+            let b = 0.5 * (self.base_of(k.lo) + self.base_of(k.hi));
+            b < self.opts.l
+                && self.mesh.distance(k.lo, k.hi) > SPLIT_ABOVE * b
+                && self.on_capped_feature(k)
+        })
+    }
+
+    /// The target length of edge `k`: its ends' mean target; off a capped
+    /// outline, an edge from a capped vertex grows with its length (grading
+    /// [`CAP_GRADING`] away from the thin stroke, up to `l`), so the stroke's
+    /// small sizes do not spread over the plain parts of the drawing.
+    fn edge_target(&mut self, k: EdgeKey) -> f64 {
+        let t = self.mean_target(k);
+        if !self.capped || self.base_of(k.lo).min(self.base_of(k.hi)) >= self.opts.l {
+            return t;
+        }
+        if self.on_capped_feature(k) {
+            return t;
+        }
+        let len = self.mesh.distance(k.lo, k.hi);
+        (t + CAP_GRADING * 0.5 * len).min(self.opts.l).max(t)
+    }
+
     fn set_target(&mut self, v: VertexId, t: f64) {
         let i = v.index();
         if i >= self.target.len() {
@@ -509,7 +630,7 @@ impl<'a> Schedule<'a> {
     fn split_pass(&mut self) -> (usize, u64) {
         let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
         for k in self.mesh.edges().collect::<Vec<_>>() {
-            let (len, t) = (self.mesh.distance(k.lo, k.hi), self.mean_target(k));
+            let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
             if len > SPLIT_ABOVE * t {
                 cands.push((len, k, t));
             }
@@ -521,11 +642,16 @@ impl<'a> Schedule<'a> {
             if self.mesh.num_vertices() >= self.opts.max_vertices {
                 break;
             }
+            let on_cap = self.capped && self.on_capped_feature(k);
             let out = try_split(self.mesh, self.ctx, k.lo, k.hi);
             self.touch(&out);
             if let Outcome::Applied(ch) = &out {
                 if let Some(m) = ch.new_vertex {
                     self.set_target(m, t);
+                    if on_cap {
+                        let b = 0.5 * (self.base_of(k.lo) + self.base_of(k.hi));
+                        self.set_base(m, b);
+                    }
                 }
                 applied += 1;
             }
@@ -591,7 +717,8 @@ impl<'a> Schedule<'a> {
             if t < self.opts.l_floor {
                 hit_floor = true;
             }
-            self.set_target(v, t.clamp(self.opts.l_floor, self.opts.l));
+            let top = self.base_of(v);
+            self.set_target(v, t.clamp(self.opts.l_floor, top));
         }
         hit_floor
     }
@@ -618,7 +745,7 @@ impl<'a> Schedule<'a> {
         let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
         for k in self.mesh.edges().collect::<Vec<_>>() {
             let len = self.mesh.distance(k.lo, k.hi);
-            if len < factor * self.mean_target(k) {
+            if len < factor * self.edge_target(k) {
                 heap.push(std::cmp::Reverse((len.to_bits(), k)));
             }
         }
@@ -633,7 +760,7 @@ impl<'a> Schedule<'a> {
                 continue;
             }
             let len = self.mesh.distance(k.lo, k.hi);
-            if len.to_bits() != bits || len >= factor * self.mean_target(k) {
+            if len.to_bits() != bits || len >= factor * self.edge_target(k) {
                 continue;
             }
             if let Some(&at) = self.failed_collapse.get(&k) {
@@ -673,7 +800,7 @@ impl<'a> Schedule<'a> {
                 for w in self.mesh.vertex_ring(u).neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
-                    if len < factor * self.mean_target(e) {
+                    if len < factor * self.edge_target(e) {
                         heap.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
                 }
@@ -862,13 +989,31 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
 
 /// Improve `mesh` in place (see the module doc). `ctx.envelope` may be
 /// restaged (denser sampling, larger ε) when rational vertices are left.
+#[cfg(test)]
 pub(crate) fn optimize(
     mesh: &mut TriMesh,
     ctx: &mut Context,
     opts: &OptimizeOptions,
 ) -> OptimizeStats {
+    optimize_with_caps(mesh, ctx, opts, &[])
+}
+
+/// [`optimize`] with a size cap per shape (`caps[shape index]`, user units;
+/// `∞` or missing: none): the vertices on a capped shape's primary edges target
+/// at most its cap (within `[l_floor, l]`), from the start through the final
+/// coarsening, and the quality goal also asks that edges between them be
+/// resolved to it. The pipeline caps the area of a thin stroke at a small
+/// multiple of its width ([`stroke_size_caps`]): a strip meshed at the global
+/// size is a row of needles.
+pub(crate) fn optimize_with_caps(
+    mesh: &mut TriMesh,
+    ctx: &mut Context,
+    opts: &OptimizeOptions,
+    caps: &[f64],
+) -> OptimizeStats {
     let mut ever_off = Vec::new();
     let mut s = Schedule::new(mesh, ctx, opts, SEED);
+    s.apply_caps(caps);
     let rational = s.improve(&mut ever_off);
     if s.stats().stop == StopReason::TimeLimit {
         return s.stats().clone();
@@ -883,6 +1028,26 @@ pub(crate) fn optimize(
     s.minmax_polish();
     let rational = s.envelope_stages(rational);
     s.finish(rational, &mut ever_off)
+}
+
+/// Edge length per stroke width on the outline of a stroke meshed as an area:
+/// the sides of a strip of width w then carry vertices about 2–2.7 w apart,
+/// and its triangles have angles near 35° (20° where two vertices face each
+/// other straight across), where the global size would make needles.
+pub(crate) const STROKE_SIZE_PER_WIDTH: f64 = 2.0;
+
+/// The size caps of [`optimize_with_caps`] for `drawing`: a stroke area's
+/// shape is capped at [`STROKE_SIZE_PER_WIDTH`] times its width.
+pub(crate) fn stroke_size_caps(drawing: &crate::svg::Drawing) -> Vec<f64> {
+    drawing
+        .shapes
+        .iter()
+        .map(|s| {
+            s.paint
+                .stroke_width
+                .map_or(f64::INFINITY, |w| STROKE_SIZE_PER_WIDTH * w)
+        })
+        .collect()
 }
 
 /// Whether the quality goal is met: every vertex in `f64` and on its curve, no
@@ -932,6 +1097,15 @@ impl Schedule<'_> {
         let mut just_updated = false;
         let mut hit_floor = false;
         let mut history: Vec<(f64, f64)> = Vec::new();
+        // Thin strokes first: split their outlines down to their caps (the
+        // main passes then work at those sizes; their stop rule knows nothing
+        // of the caps, so they would not wait for them).
+        for _ in 0..CAP_SPLIT_PASSES {
+            if !self.caps_pending() || self.out_of_time() {
+                break;
+            }
+            self.split_pass();
+        }
         for pass in 0..opts.max_passes {
             if opts.deadline.expired() {
                 self.stats.stop = StopReason::TimeLimit;
@@ -1001,7 +1175,8 @@ impl Schedule<'_> {
     fn coarsen(&mut self) {
         let all: Vec<VertexId> = self.mesh.vertices().collect();
         for v in all {
-            self.set_target(v, self.opts.l);
+            let b = self.base_of(v);
+            self.set_target(v, b);
         }
         self.failed_collapse.clear();
         self.max_stretch = COARSEN_STRETCH;

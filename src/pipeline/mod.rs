@@ -379,7 +379,8 @@ fn mesh_within(
             } else {
                 let opts = optimize_options(params, &resolved).with_deadline(deadline);
                 let stats = times.time("optimize", || {
-                    crate::optimize::optimize(&mut mesh, &mut ctx, &opts)
+                    let caps = crate::optimize::stroke_size_caps(drawing);
+                    crate::optimize::optimize_with_caps(&mut mesh, &mut ctx, &opts, &caps)
                 });
                 check_deadline(&deadline, Stage::Optimize)?;
                 if params.paranoid {
@@ -540,8 +541,12 @@ pub(crate) fn optimize_stage(
 ) -> Result<(TriMesh, FeatureSet, Context, OptimizeStats)> {
     let (mut mesh, fs, mut ctx) = bsp_stage(drawing, params)?;
     let resolved = params.resolve(drawing.diagonal());
-    let stats =
-        crate::optimize::optimize(&mut mesh, &mut ctx, &optimize_options(params, &resolved));
+    let stats = crate::optimize::optimize_with_caps(
+        &mut mesh,
+        &mut ctx,
+        &optimize_options(params, &resolved),
+        &crate::optimize::stroke_size_caps(drawing),
+    );
     Ok((mesh, fs, ctx, stats))
 }
 

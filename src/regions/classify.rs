@@ -2,9 +2,9 @@
 //! whose fill covers it, or none (background).
 
 use super::element::{element_area, element_point};
-use super::winding::{Outline, Winding};
 use crate::fem::FemMesh;
-use crate::svg::{Clip, Drawing, FillRule, ShapeId};
+use crate::svg::winding::PaintTest;
+use crate::svg::{Drawing, ShapeId};
 use kurbo::Point;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -65,71 +65,10 @@ const SAMPLES: [[f64; 3]; 7] = [
     [0.4, 0.4, 0.2],
 ];
 
-/// A clip region ready for point queries (see [`crate::svg::Clip`]).
-struct ClipTest {
-    parts: Vec<(FillRule, Outline, Vec<ClipTest>)>,
-    within: Vec<ClipTest>,
-}
-
-impl ClipTest {
-    fn new(clip: &Clip) -> ClipTest {
-        ClipTest {
-            parts: clip
-                .parts
-                .iter()
-                .map(|p| {
-                    (
-                        p.rule,
-                        Outline::new(&p.subpaths),
-                        p.clips.iter().map(|c| ClipTest::new(c)).collect(),
-                    )
-                })
-                .collect(),
-            within: clip.within.iter().map(|c| ClipTest::new(c)).collect(),
-        }
-    }
-
-    /// Whether `p` is inside the clip, and whether that answer is certain
-    /// (`p` clear of every outline that decided it).
-    fn contains(&self, p: Point, eps_abs: f64) -> (bool, bool) {
-        let (inside, mut clear) = all_contain(&self.within, p, eps_abs);
-        if !inside {
-            return (false, clear);
-        }
-        for (rule, outline, clips) in &self.parts {
-            let w = outline.winding(p, eps_abs);
-            clear &= w.is_clear();
-            if w.inside(*rule) {
-                let (inner, inner_clear) = all_contain(clips, p, eps_abs);
-                clear &= inner_clear;
-                if inner {
-                    return (true, clear);
-                }
-            }
-        }
-        (false, clear)
-    }
-}
-
-/// Whether `p` is inside every clip of `clips`, and whether that is certain.
-fn all_contain(clips: &[ClipTest], p: Point, eps_abs: f64) -> (bool, bool) {
-    let mut clear = true;
-    for c in clips {
-        let (inside, c_clear) = c.contains(p, eps_abs);
-        clear &= c_clear;
-        if !inside {
-            return (false, clear);
-        }
-    }
-    (true, clear)
-}
-
-/// One filled shape ready for point queries: its outline, rule and clips.
+/// One filled shape ready for point queries.
 struct Layer {
     id: ShapeId,
-    rule: FillRule,
-    outline: Outline,
-    clips: Vec<ClipTest>,
+    test: PaintTest,
 }
 
 /// The filled shapes, topmost first, ready for point queries.
@@ -149,13 +88,11 @@ impl Painting {
                     s.paint_order,
                     Layer {
                         id: ShapeId(i as u32),
-                        rule: s.fill_rule,
-                        outline: Outline::of_shape(s),
-                        clips: s.paint.clips.iter().map(|c| ClipTest::new(c)).collect(),
+                        test: PaintTest::new(s),
                     },
                 )
             })
-            .filter(|l| l.1.outline.bbox().is_some())
+            .filter(|l| l.1.test.bbox().is_some())
             .collect();
         // Topmost first; equal paint orders fall back to document order.
         layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1.id)));
@@ -169,14 +106,10 @@ impl Painting {
     pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
         let mut clear = true;
         for layer in &self.layers {
-            let w: Winding = layer.outline.winding(p, eps_abs);
-            clear &= w.is_clear();
-            if w.inside(layer.rule) {
-                let (inside, clip_clear) = all_contain(&layer.clips, p, eps_abs);
-                clear &= clip_clear;
-                if inside {
-                    return (Some(layer.id), clear);
-                }
+            let (inside, layer_clear) = layer.test.paints(p, eps_abs);
+            clear &= layer_clear;
+            if inside {
+                return (Some(layer.id), clear);
             }
         }
         (None, clear)
@@ -189,7 +122,7 @@ impl Painting {
 /// curved element the image of the reference centroid, node 9 of a cubic
 /// triangle); when that point is within `eps_abs` of an outline, other interior
 /// points are tried. Winding numbers are evaluated on the input curves
-/// ([`super::winding`]). With [`ClassifyOptions::vote_per_face`], each face of
+/// ([`crate::svg::winding`]). With [`ClassifyOptions::vote_per_face`], each face of
 /// the mesh (triangles connected across edges that are not line elements) then
 /// takes the label that covers most of its area.
 pub(crate) fn classify(

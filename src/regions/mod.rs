@@ -7,7 +7,7 @@
 //!
 //! # What a region is
 //! - Inside / outside per shape comes from the shape's own fill rule (nonzero,
-//!   evenodd) and winding numbers evaluated on the input curves ([`winding`]);
+//!   evenodd) and winding numbers evaluated on the input curves ([`crate::svg::winding`]);
 //!   an open subpath is closed by a straight segment, as SVG fills it (the loader
 //!   adds that segment as a feature, so region boundaries conform to the mesh).
 //! - A triangle belongs to the topmost filled shape (paint order) covering it,
@@ -48,7 +48,6 @@ mod classify;
 mod element;
 mod orient;
 pub(crate) mod select;
-pub(crate) mod winding;
 
 pub(crate) use classify::{ClassifyOptions, classify};
 pub(crate) use orient::orient_lines;

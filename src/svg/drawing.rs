@@ -83,9 +83,16 @@ pub struct ShapePaint {
     pub average_colour: Option<[u8; 3]>,
     /// The shape or one of its groups has a filter (its outline is meshed as is).
     pub filtered: bool,
+    /// For a [`ShapeKind::Stroke`], the stroke's width in output units (the
+    /// optimizer sizes the mesh of a thin stroke by it).
+    pub stroke_width: Option<f64>,
     /// Clip regions the shape is painted through (all of them at once).
     #[serde(skip)]
     pub clips: Vec<std::sync::Arc<Clip>>,
+    /// For a [`ShapeKind::ClipOutline`], the clip it outlines (the features
+    /// stage keeps its pieces only where they bound what that clip lets paint).
+    #[serde(skip)]
+    pub outlined_clip: Option<std::sync::Arc<Clip>>,
 }
 
 impl Default for ShapePaint {
@@ -96,7 +103,9 @@ impl Default for ShapePaint {
             server: None,
             average_colour: None,
             filtered: false,
+            stroke_width: None,
             clips: Vec::new(),
+            outlined_clip: None,
         }
     }
 }

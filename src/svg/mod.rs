@@ -72,6 +72,7 @@ mod reconstruct;
 mod soup;
 mod source;
 mod viewport;
+pub(crate) mod winding;
 
 pub(crate) use drawing::{
     Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,

@@ -548,6 +548,7 @@ fn paint_items(
                         subpaths: area,
                         paint: ShapePaint {
                             kind: ShapeKind::Stroke,
+                            stroke_width: Some(width),
                             alpha: stroke_alpha.unwrap_or(1.0),
                             server: servers[1].clone().or_else(|| paint::server_id(s.paint())),
                             average_colour: paint::average_colour(s.paint()),
@@ -697,6 +698,7 @@ fn add_clip_outlines(shapes: &mut Vec<Shape>, paths: usize) {
             subpaths,
             paint: ShapePaint {
                 kind: ShapeKind::ClipOutline,
+                outlined_clip: Some(clip.clone()),
                 ..ShapePaint::default()
             },
         });

@@ -28,9 +28,9 @@
 //! subdivision stops), is reported as [`Winding::Near`] with a best-effort
 //! number, and the caller picks another point.
 
+use super::drawing::Conic;
+use super::{Clip, FillRule, Segment, Shape, Subpath};
 use crate::exact::{Orientation, orient2d};
-use crate::svg::drawing::Conic;
-use crate::svg::{FillRule, Segment, Shape, Subpath};
 use kurbo::{CubicBez, Point, Rect};
 
 /// Subdivision depth at which a cubic piece is given up on (2⁻⁶⁰ of the curve).
@@ -253,6 +253,100 @@ impl Outline {
 #[cfg(test)]
 pub(crate) fn winding(subpaths: &[Subpath], p: Point, eps_abs: f64) -> Winding {
     Outline::new(subpaths).winding(p, eps_abs)
+}
+
+/// A clip region ready for point queries (see [`Clip`]).
+pub(crate) struct ClipTest {
+    parts: Vec<(FillRule, Outline, Vec<ClipTest>)>,
+    within: Vec<ClipTest>,
+}
+
+impl ClipTest {
+    pub(crate) fn new(clip: &Clip) -> ClipTest {
+        ClipTest {
+            parts: clip
+                .parts
+                .iter()
+                .map(|p| {
+                    (
+                        p.rule,
+                        Outline::new(&p.subpaths),
+                        p.clips.iter().map(|c| ClipTest::new(c)).collect(),
+                    )
+                })
+                .collect(),
+            within: clip.within.iter().map(|c| ClipTest::new(c)).collect(),
+        }
+    }
+
+    /// Whether `p` is inside the clip, and whether that answer is certain
+    /// (`p` clear of every outline that decided it).
+    pub(crate) fn contains(&self, p: Point, eps_abs: f64) -> (bool, bool) {
+        let (inside, mut clear) = all_contain(&self.within, p, eps_abs);
+        if !inside {
+            return (false, clear);
+        }
+        for (rule, outline, clips) in &self.parts {
+            let w = outline.winding(p, eps_abs);
+            clear &= w.is_clear();
+            if w.inside(*rule) {
+                let (inner, inner_clear) = all_contain(clips, p, eps_abs);
+                clear &= inner_clear;
+                if inner {
+                    return (true, clear);
+                }
+            }
+        }
+        (false, clear)
+    }
+}
+
+/// Whether `p` is inside every clip of `clips`, and whether that is certain.
+pub(crate) fn all_contain(clips: &[ClipTest], p: Point, eps_abs: f64) -> (bool, bool) {
+    let mut clear = true;
+    for c in clips {
+        let (inside, c_clear) = c.contains(p, eps_abs);
+        clear &= c_clear;
+        if !inside {
+            return (false, clear);
+        }
+    }
+    (true, clear)
+}
+
+/// What one filled shape paints, ready for point queries: inside its outline
+/// under its fill rule and inside every clip it is painted through.
+pub(crate) struct PaintTest {
+    rule: FillRule,
+    outline: Outline,
+    clips: Vec<ClipTest>,
+}
+
+impl PaintTest {
+    /// The test of `shape`'s fill (its clips included).
+    pub(crate) fn new(shape: &Shape) -> PaintTest {
+        PaintTest {
+            rule: shape.fill_rule,
+            outline: Outline::of_shape(shape),
+            clips: shape.paint.clips.iter().map(|c| ClipTest::new(c)).collect(),
+        }
+    }
+
+    /// Bounding box of the outline, `None` for an empty outline.
+    pub(crate) fn bbox(&self) -> Option<Rect> {
+        self.outline.bbox()
+    }
+
+    /// Whether the shape paints `p`, and whether that answer is certain (`p`
+    /// clear of every outline that decided it).
+    pub(crate) fn paints(&self, p: Point, eps_abs: f64) -> (bool, bool) {
+        let w = self.outline.winding(p, eps_abs);
+        if !w.inside(self.rule) {
+            return (false, w.is_clear());
+        }
+        let (inside, clip_clear) = all_contain(&self.clips, p, eps_abs);
+        (inside, w.is_clear() && clip_clear)
+    }
 }
 
 #[derive(Default)]

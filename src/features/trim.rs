@@ -1,0 +1,210 @@
+//! Trimming derived outlines to where they bound what is painted.
+//!
+//! The loader's paint model adds outlines that are not all boundary of the
+//! picture: a stroke's painted area is kurbo's stroke outline filled by the
+//! nonzero rule, and its inner joins (and a dashed or self-overlapping path's
+//! overlaps) loop back inside the area; a clipped fill's outline runs on
+//! outside its clip; a clip's outline runs on outside what it clips. Kept whole,
+//! those pieces are features the mesh must conform to: needles where an inner
+//! join loop nearly touches the outline, triangles spent on geometry nobody
+//! sees.
+//!
+//! After the crossing splits every piece of such an outline lies, between two
+//! consecutive crossings, either on the boundary of what its shape paints or
+//! not (the paint test changes only across the outlines that define it, and
+//! those cross the piece only at its split points). A piece is judged at three
+//! inner points: at each, the shape's paint test (fill rule and clips, the
+//! regions stage's own test, [`PaintTest`]) is evaluated a small step to
+//! either side. The piece is dropped only when every test is certain and no
+//! side differs: anything uncertain keeps it, so trimming can cost at most an
+//! unneeded feature, never a region boundary.
+//!
+//! What is judged:
+//! - a stroke area ([`ShapeKind::Stroke`]) and a clipped fill: by its own test;
+//! - a clip or mask outline ([`ShapeKind::ClipOutline`]): by the tests of the
+//!   filled shapes painted through that clip (kept where any of them changes);
+//! - a clipped centre line (an unfilled element): kept where it lies inside its
+//!   clips.
+//!
+//! Unclipped fills and centre lines are never trimmed: every input curve of
+//! the drawing stays a feature, as in TriWild.
+
+use super::Parent;
+use crate::svg::drawing::ShapeKind;
+use crate::svg::winding::{ClipTest, PaintTest, all_contain};
+use crate::svg::{Clip, Drawing, ShapeId};
+use kurbo::{ParamCurve, ParamCurveDeriv, Rect, Vec2};
+use std::sync::Arc;
+
+/// Fractions of a piece where it is judged.
+const SAMPLES: [f64; 3] = [0.5, 0.25, 0.75];
+/// The side step, as a fraction of the drawing's diagonal d (at most; a tenth
+/// of the narrowest stroke meshed as an area, l_min = 1e-4·d).
+const STEP_REL: f64 = 1e-5;
+/// The side step as a fraction of the piece's chord (at most).
+const STEP_CHORD: f64 = 1e-3;
+
+/// How one shape's pieces are judged.
+enum Judge {
+    /// Never trimmed.
+    Keep,
+    /// Kept where the test differs across the piece.
+    Boundary(Vec<u32>),
+    /// Kept where the piece lies inside these clips (a clipped centre line).
+    Inside(Vec<ClipTest>),
+}
+
+/// The trimming tests of a drawing's shapes.
+pub(super) struct Trimmer {
+    judges: Vec<Judge>,
+    tests: Vec<(PaintTest, Rect)>,
+    eps_abs: f64,
+    step: f64,
+}
+
+impl Trimmer {
+    /// The tests for `drawing`; `None` when no shape can be trimmed (no stroke
+    /// area, no clip: the common case costs nothing).
+    pub(super) fn new(drawing: &Drawing, d: f64, eps_abs: f64) -> Option<Trimmer> {
+        let trimmable = drawing
+            .shapes
+            .iter()
+            .any(|s| s.paint.kind != ShapeKind::Element || !s.paint.clips.is_empty());
+        if !trimmable {
+            return None;
+        }
+        let mut tests: Vec<(PaintTest, Rect)> = Vec::new();
+        let mut own: Vec<Option<u32>> = vec![None; drawing.shapes.len()];
+        // The filled shapes painted through each clip (by pointer), for clip outlines.
+        let mut through: Vec<(*const Clip, Vec<u32>)> = Vec::new();
+        for (i, s) in drawing.shapes.iter().enumerate() {
+            if !s.filled {
+                continue;
+            }
+            let needs_own = s.paint.kind == ShapeKind::Stroke || !s.paint.clips.is_empty();
+            if !needs_own {
+                continue;
+            }
+            let test = PaintTest::new(s);
+            let Some(bbox) = test.bbox() else { continue };
+            let k = u32::try_from(tests.len()).expect("internal: shape count fits u32");
+            tests.push((test, bbox));
+            own[i] = Some(k);
+            let mut clips = Vec::new();
+            for c in &s.paint.clips {
+                collect(c, &mut clips);
+            }
+            for c in clips {
+                let ptr = Arc::as_ptr(&c);
+                match through.iter_mut().find(|e| e.0 == ptr) {
+                    Some(e) => e.1.push(k),
+                    None => through.push((ptr, vec![k])),
+                }
+            }
+        }
+        let judges = drawing
+            .shapes
+            .iter()
+            .zip(&own)
+            .map(|(s, own)| match (s.paint.kind, own) {
+                (ShapeKind::ClipOutline, _) => {
+                    let shapes = s
+                        .paint
+                        .outlined_clip
+                        .as_ref()
+                        .and_then(|c| through.iter().find(|e| e.0 == Arc::as_ptr(c)))
+                        .map(|e| e.1.clone());
+                    // A clip outline whose clip paints nothing here bounds nothing
+                    // (an empty list drops it); one with no known clip is kept.
+                    match shapes {
+                        Some(list) => Judge::Boundary(list),
+                        None if s.paint.outlined_clip.is_some() => Judge::Boundary(Vec::new()),
+                        None => Judge::Keep,
+                    }
+                }
+                (_, Some(k)) => Judge::Boundary(vec![*k]),
+                (_, None) if !s.filled && !s.paint.clips.is_empty() => {
+                    Judge::Inside(s.paint.clips.iter().map(|c| ClipTest::new(c)).collect())
+                }
+                _ => Judge::Keep,
+            })
+            .collect();
+        Some(Trimmer {
+            judges,
+            tests,
+            eps_abs,
+            step: STEP_REL * d,
+        })
+    }
+
+    /// Whether pieces of `shape` may be trimmed.
+    pub(super) fn trims(&self, shape: ShapeId) -> bool {
+        !matches!(self.judges.get(shape.index()), None | Some(Judge::Keep))
+    }
+
+    /// Whether the piece `[t0, t1]` of `parent` (a feature of shape `shape`)
+    /// is to be kept.
+    pub(super) fn keeps(&self, shape: ShapeId, parent: &Parent, t0: f64, t1: f64) -> bool {
+        let Some(judge) = self.judges.get(shape.index()) else {
+            return true;
+        };
+        let chord = (parent.eval(t1) - parent.eval(t0)).hypot();
+        let step = self.step.min(STEP_CHORD * chord);
+        // Too short to step off clear of its own ends: keep.
+        if step.is_nan() || step <= 8.0 * self.eps_abs {
+            return true;
+        }
+        match judge {
+            Judge::Keep => true,
+            Judge::Inside(clips) => SAMPLES.iter().any(|&f| {
+                let p = parent.eval(t0 + f * (t1 - t0));
+                let (inside, clear) = all_contain(clips, p, self.eps_abs);
+                inside || !clear
+            }),
+            Judge::Boundary(list) => SAMPLES.iter().any(|&f| {
+                let t = t0 + f * (t1 - t0);
+                let Some(n) = normal(parent, t) else {
+                    return true;
+                };
+                let p = parent.eval(t);
+                let (a, b) = (p + n * step, p - n * step);
+                list.iter().any(|&k| {
+                    let (test, bbox) = &self.tests[k as usize];
+                    let grown = bbox.inflate(2.0 * step, 2.0 * step);
+                    if !grown.contains(a) && !grown.contains(b) {
+                        return false;
+                    }
+                    let (ia, ca) = test.paints(a, self.eps_abs);
+                    let (ib, cb) = test.paints(b, self.eps_abs);
+                    !(ca && cb) || ia != ib
+                })
+            }),
+        }
+    }
+}
+
+/// The unit normal of `parent` at `t`, `None` where its tangent vanishes.
+fn normal(parent: &Parent, t: f64) -> Option<Vec2> {
+    let d = match parent {
+        Parent::Cubic(c) => c.deriv().eval(t).to_vec2(),
+        Parent::Line(l) => l.p1 - l.p0,
+        Parent::Conic(c) => c.deriv(t),
+    };
+    let len = d.hypot();
+    (len > 0.0 && len.is_finite()).then(|| Vec2::new(-d.y, d.x) / len)
+}
+
+/// `c` and every clip inside it (its own clips and its parts'), once each.
+fn collect(c: &Arc<Clip>, all: &mut Vec<Arc<Clip>>) {
+    if all.iter().any(|e| Arc::ptr_eq(e, c)) {
+        return;
+    }
+    all.push(c.clone());
+    for inner in c
+        .within
+        .iter()
+        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+    {
+        collect(inner, all);
+    }
+}
