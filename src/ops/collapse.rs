@@ -38,6 +38,35 @@ pub(crate) struct CollapsePlan {
     old_max_energy: f64,
 }
 
+/// The refusal of collapsing `v` into `u` that depends on the vertex tags and
+/// the feature tags of v's edges alone (never on a position): `v` fixed, or
+/// on a primary section that the edge `u v` does not follow. Nothing but an
+/// operation that changes the faces around `v` can lift it.
+fn role_refusal(mesh: &TriMesh, u: VertexId, v: VertexId, role_v: Role) -> Option<Reject> {
+    match role_v {
+        Role::Fixed => Some(Reject::FixedVertex),
+        Role::Primary { section, .. } => {
+            let on_section = mesh
+                .edge_tags(u, v)
+                .iter()
+                .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section));
+            (!on_section).then_some(Reject::FeatureRule)
+        }
+        _ => None,
+    }
+}
+
+/// Whether collapsing `v` into `u` (an edge) is refused by the role rules alone
+/// (see `role_refusal`): a refusal the caller may remember until the faces
+/// around `v` change.
+pub(crate) fn refused_by_role(mesh: &TriMesh, u: VertexId, v: VertexId) -> bool {
+    if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
+        return false;
+    }
+    let rv = mesh.vertex_ring(v);
+    rv.neighbours.contains(&u) && role_refusal(mesh, u, v, role(mesh, v, &rv)).is_some()
+}
+
 impl CollapsePlan {
     /// Plan the collapse of `v` into `u`.
     ///
@@ -59,6 +88,12 @@ impl CollapsePlan {
         if !rv.neighbours.contains(&u) {
             return Err(Reject::NotAnEdge);
         }
+        // The role rules first: they need v's ring only, and they refuse most of
+        // the collapses the schedule tries.
+        let role_v = role(mesh, v, &rv);
+        if let Some(r) = role_refusal(mesh, u, v, role_v) {
+            return Err(r);
+        }
         let ru = mesh.vertex_ring(u);
         let mut edge_faces = Vec::new();
         mesh.faces_on_edge(v, u, &mut edge_faces);
@@ -67,7 +102,6 @@ impl CollapsePlan {
             .map(|&f| mesh.opposite(f, u, v).expect("internal: third vertex"))
             .collect();
         let boundary_edge = edge_faces.len() == 1;
-        let role_v = role(mesh, v, &rv);
         match role_v {
             Role::Fixed => return Err(Reject::FixedVertex),
             Role::Boundary => {

@@ -39,7 +39,7 @@ mod swap;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub(crate) use collapse::try_collapse;
+pub(crate) use collapse::{refused_by_role, try_collapse};
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;
 pub(crate) use smooth::{Objective, try_smooth, try_smooth_with};

@@ -420,6 +420,13 @@ pub(crate) struct Schedule<'a> {
     failed_collapse: rustc_hash::FxHashMap<EdgeKey, u64>,
     /// Smoothing refused, by vertex slot, with the clock then.
     failed_smooth: Vec<u64>,
+    /// By vertex slot: the clock when the faces around the vertex last changed
+    /// (split, collapse, swap; not a move).
+    topo_stamp: Vec<u64>,
+    /// Collapses of `.1` into `.0` refused by the role rules alone
+    /// ([`crate::ops::refused_by_role`]), with the clock then and the reason: they
+    /// stay refused until the faces around `.1` change.
+    role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
     /// Longest edge a collapse may create, relative to its mean target.
     max_stretch: f64,
 }
@@ -464,6 +471,8 @@ impl<'a> Schedule<'a> {
             stamp: Vec::new(),
             failed_collapse: rustc_hash::FxHashMap::default(),
             failed_smooth: Vec::new(),
+            topo_stamp: Vec::new(),
+            role_refused: rustc_hash::FxHashMap::default(),
             max_stretch: SPLIT_ABOVE,
         }
     }
@@ -497,6 +506,30 @@ impl<'a> Schedule<'a> {
                 self.stamp[i] = self.clock;
             }
         }
+    }
+
+    /// Record an applied split, collapse or swap: every vertex of the faces it
+    /// created gets the clock as its topology stamp too.
+    fn touch_topology(&mut self, outcome: &Outcome) {
+        let Outcome::Applied(ch) = outcome else {
+            return;
+        };
+        for &f in &ch.created {
+            if !self.mesh.is_face_alive(f) {
+                continue;
+            }
+            for v in self.mesh.face(f) {
+                let i = v.index();
+                if i >= self.topo_stamp.len() {
+                    self.topo_stamp.resize(i + 1, 0);
+                }
+                self.topo_stamp[i] = self.clock;
+            }
+        }
+    }
+
+    fn topo_stamp_of(&self, v: VertexId) -> u64 {
+        self.topo_stamp.get(v.index()).copied().unwrap_or(0)
     }
 
     fn stamp_of(&self, v: VertexId) -> u64 {
@@ -645,6 +678,7 @@ impl<'a> Schedule<'a> {
             let on_cap = self.capped && self.on_capped_feature(k);
             let out = try_split(self.mesh, self.ctx, k.lo, k.hi);
             self.touch(&out);
+            self.touch_topology(&out);
             if let Outcome::Applied(ch) = &out {
                 if let Some(m) = ch.new_vertex {
                     self.set_target(m, t);
@@ -771,12 +805,27 @@ impl<'a> Schedule<'a> {
             let mut applied_now = false;
             let mut tried = false;
             for (u, v) in [(k.lo, k.hi), (k.hi, k.lo)] {
+                // Refused by the role rules, and v's faces unchanged since: the
+                // same refusal, without planning it (or measuring lengths) again.
+                if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
+                    && self.topo_stamp_of(v) <= at
+                {
+                    tried = true;
+                    self.stats.collapse.record(&Outcome::Rejected(reason));
+                    continue;
+                }
                 if !self.keeps_lengths(u, v) {
                     continue;
                 }
                 tried = true;
                 let out = try_collapse(self.mesh, self.ctx, u, v);
                 self.touch(&out);
+                self.touch_topology(&out);
+                if let Outcome::Rejected(reason @ (Reject::FixedVertex | Reject::FeatureRule)) = out
+                    && ops::refused_by_role(self.mesh, u, v)
+                {
+                    self.role_refused.insert((u, v), (self.clock, reason));
+                }
                 if self.stats.collapse.record(&out) {
                     applied_now = true;
                     break;
@@ -868,6 +917,7 @@ impl<'a> Schedule<'a> {
             };
             let counted = tally.record(&out);
             self.touch(&out);
+            self.touch_topology(&out);
             if counted {
                 applied += 1;
             }
