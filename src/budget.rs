@@ -90,6 +90,24 @@ impl Deadline {
     }
 }
 
+/// The process's peak resident memory so far, in MiB (`VmHWM` of
+/// `/proc/self/status`); `None` where the system does not report it (not
+/// Linux). For `--stats` and the benches: a whole process's high-water mark,
+/// the Python interpreter's own included when triwild runs inside it.
+pub(crate) fn peak_memory_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    parse_vm_hwm(&status)
+}
+
+/// `VmHWM` (kB) of a `/proc/<pid>/status` text, in MiB.
+fn parse_vm_hwm(status: &str) -> Option<f64> {
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let mut words = line["VmHWM:".len()..].split_whitespace();
+    let kb: f64 = words.next()?.parse().ok()?;
+    (words.next() == Some("kB") && kb.is_finite()).then_some(kb / 1024.0)
+}
+
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -115,5 +133,17 @@ mod tests {
             Limits::estimate_mb(u64::MAX, u64::MAX, u64::MAX),
             u64::MAX.div_ceil(1 << 20)
         );
+    }
+
+    #[test]
+    fn vm_hwm_is_read_in_mib() {
+        let status = "Name:\ttriwild\nVmPeak:\t  300000 kB\nVmHWM:\t   10240 kB\nVmRSS:\t 5000 kB\n";
+        assert_eq!(parse_vm_hwm(status), Some(10.0));
+        assert_eq!(parse_vm_hwm("VmHWM:\t 12 MB\n"), None);
+        assert_eq!(parse_vm_hwm("Name: x\n"), None);
+        if cfg!(target_os = "linux") {
+            let mb = peak_memory_mb().expect("Linux reports VmHWM");
+            assert!(mb > 0.1 && mb < 1e6, "{mb}");
+        }
     }
 }

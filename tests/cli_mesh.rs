@@ -167,6 +167,11 @@ fn the_readme_command_writes_mesh_preview_and_stats() {
         stats["optimize"]
     );
     assert_eq!(stats["optimize"]["off_curve_left"], 0);
+    // the process's peak memory, read after the mesh was written (Linux)
+    if cfg!(target_os = "linux") {
+        let mb = stats["peak_memory_mb"].as_f64().expect("peak_memory_mb");
+        assert!(mb > 1.0 && mb < 4096.0, "peak memory {mb} MiB");
+    }
 }
 
 #[test]

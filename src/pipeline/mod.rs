@@ -196,6 +196,10 @@ pub struct Report {
     pub curve: Option<CurveStats>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
+    /// The process's peak resident memory in MiB when the report was made
+    /// (`run_file`: after the mesh was written), `None` where the system does
+    /// not report it ([`crate::budget::peak_memory_mb`]).
+    pub peak_memory_mb: Option<f64>,
 }
 
 /// Stage timer.
@@ -448,6 +452,7 @@ fn mesh_within(
         optimize,
         curve,
         warnings,
+        peak_memory_mb: crate::budget::peak_memory_mb(),
     };
     Ok(Meshed { mesh, report })
 }
@@ -671,6 +676,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     report.times.insert("load", t_load);
     report.times.insert("output", t.elapsed().as_secs_f64());
     report.times.insert("total", t0.elapsed().as_secs_f64());
+    report.peak_memory_mb = crate::budget::peak_memory_mb();
     Ok(report)
 }
 
