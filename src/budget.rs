@@ -107,7 +107,6 @@ fn parse_vm_hwm(status: &str) -> Option<f64> {
     (words.next() == Some("kB") && kb.is_finite()).then_some(kb / 1024.0)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,7 +136,8 @@ mod tests {
 
     #[test]
     fn vm_hwm_is_read_in_mib() {
-        let status = "Name:\ttriwild\nVmPeak:\t  300000 kB\nVmHWM:\t   10240 kB\nVmRSS:\t 5000 kB\n";
+        let status =
+            "Name:\ttriwild\nVmPeak:\t  300000 kB\nVmHWM:\t   10240 kB\nVmRSS:\t 5000 kB\n";
         assert_eq!(parse_vm_hwm(status), Some(10.0));
         assert_eq!(parse_vm_hwm("VmHWM:\t 12 MB\n"), None);
         assert_eq!(parse_vm_hwm("Name: x\n"), None);

@@ -88,6 +88,9 @@ pub mod defaults {
     /// the slowest held-out one 95 s; a run that would take hours stops
     /// cleanly instead, exit 3): `--time-limit`.
     pub const TIME_LIMIT: Option<f64> = Some(600.0);
+    /// Worker threads of the stages that run in parallel: 0, one per core
+    /// (ours; `triwild batch` gives each child 1): `--threads`.
+    pub const THREADS: usize = 0;
 }
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
@@ -201,6 +204,10 @@ pub struct Params {
     /// loops: past it the run stops with [`Error::TimeLimit`] and writes
     /// nothing. Default [`defaults::TIME_LIMIT`] (none).
     pub time_limit: Option<f64>,
+    /// Worker threads of the stages that run in parallel (region
+    /// classification); 0: one per core. The output is the same for every
+    /// count. Default [`defaults::THREADS`].
+    pub threads: usize,
 }
 
 impl Params {
@@ -241,6 +248,7 @@ impl Params {
         max_shapes: defaults::MAX_SHAPES,
         max_memory_mb: defaults::MAX_MEMORY_MB,
         time_limit: defaults::TIME_LIMIT,
+        threads: defaults::THREADS,
     };
 
     /// Set the feature envelope μ.
@@ -337,6 +345,12 @@ impl Params {
     /// Set the wall-clock limit, seconds (`None`: no limit).
     pub fn with_time_limit(mut self, seconds: Option<f64>) -> Self {
         self.time_limit = seconds;
+        self
+    }
+
+    /// Set the worker threads (0: one per core).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = threads;
         self
     }
 

@@ -390,3 +390,34 @@ fn units_and_scale_flags_reach_the_mesh_and_the_stats() {
     let help = String::from_utf8_lossy(&help.stdout);
     assert!(help.contains("--units") && help.contains("viewBox") && help.contains("--scale"));
 }
+
+#[test]
+fn the_mesh_is_the_same_for_every_thread_count() {
+    // `--threads` changes who does the work, never the result: byte for byte,
+    // on a drawing with strokes, clip paths and many shapes to classify.
+    let out = support::out_dir("cli_threads");
+    for svg in drawings() {
+        let stem = svg.file_stem().unwrap().to_string_lossy().into_owned();
+        let mut first: Option<Vec<u8>> = None;
+        for threads in ["1", "2", "4", "0"] {
+            let msh = out.join(format!("{stem}-t{threads}.msh"));
+            let run = bin()
+                .arg(&svg)
+                .arg("-o")
+                .arg(&msh)
+                .args(["--threads", threads])
+                .output()
+                .unwrap();
+            assert!(
+                run.status.success(),
+                "{stem} --threads {threads}: {}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            let bytes = std::fs::read(&msh).unwrap();
+            match &first {
+                None => first = Some(bytes),
+                Some(b) => assert!(*b == bytes, "{stem}: --threads {threads} differs from 1"),
+            }
+        }
+    }
+}

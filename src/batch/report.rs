@@ -136,6 +136,7 @@ impl Row {
         if let Some(serde_json::Value::Object(m)) = &mut r.stats {
             m.remove("times");
             m.remove("t_core");
+            m.remove("peak_memory_mb");
         }
         if let Some(stats) = &mut r.stats {
             strip_seconds(stats);

@@ -322,6 +322,11 @@ pub(crate) struct ParamArgs {
     /// between and inside the stages; nothing is written); `none` for no limit.
     #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIME_LIMIT, value_parser = parse_seconds)]
     time_limit: f64,
+    /// Worker threads of the stages that run in parallel (0: one per core); the
+    /// output is the same for every count. `triwild batch` gives each child 1
+    /// unless this is given.
+    #[arg(long, default_value_t = defaults::THREADS, value_name = "N")]
+    threads: usize,
 }
 
 /// `--time-limit`'s default from [`defaults::TIME_LIMIT`]; infinite for none.
@@ -399,6 +404,7 @@ impl ParamArgs {
             .with_paranoid(self.paranoid)
             .with_limits(self.max_segments, self.max_shapes, self.max_memory)
             .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))
+            .with_threads(self.threads)
     }
 
     /// `--max-memory` in bytes.

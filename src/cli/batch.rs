@@ -121,6 +121,10 @@ fn child_args(matches: &ArgMatches) -> Vec<OsString> {
             out.push(OsString::from(format!("--{long}")));
         }
     }
+    // The batch runs its children side by side: one thread each, unless told.
+    if matches.value_source("threads") != Some(clap::parser::ValueSource::CommandLine) {
+        out.push(OsString::from("--threads=1"));
+    }
     out
 }
 

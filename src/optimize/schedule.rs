@@ -631,9 +631,12 @@ impl<'a> Schedule<'a> {
     }
 
     /// The target length of edge `k`: its ends' mean target; off a capped
-    /// outline, an edge from a capped vertex grows with its length (grading
-    /// [`CAP_GRADING`] away from the thin stroke, up to `l`), so the stroke's
-    /// small sizes do not spread over the plain parts of the drawing.
+    /// outline, for an edge from a capped vertex, the size at its midpoint:
+    /// the smaller end's target grown by [`CAP_GRADING`] times the distance,
+    /// at most the ends' mean with capped ends counted at `l`. The sizes grade
+    /// away from a thin stroke instead of spreading its small size over the
+    /// plain parts of the drawing, and no fan of needles joins the stroke to
+    /// the coarse mesh.
     fn edge_target(&mut self, k: EdgeKey) -> f64 {
         let t = self.mean_target(k);
         if !self.capped || self.base_of(k.lo).min(self.base_of(k.hi)) >= self.opts.l {
@@ -642,8 +645,17 @@ impl<'a> Schedule<'a> {
         if self.on_capped_feature(k) {
             return t;
         }
+        // Off the outline a capped vertex counts at the plain size `l`, and the
+        // stroke's size grows with the distance from it: the size at the edge's
+        // midpoint, seen from its smaller end.
+        let l = self.opts.l;
+        let free = |s: &mut Self, v: VertexId| {
+            if s.base_of(v) < l { l } else { s.target_of(v) }
+        };
+        let mean_free = 0.5 * (free(self, k.lo) + free(self, k.hi));
+        let small = self.target_of(k.lo).min(self.target_of(k.hi));
         let len = self.mesh.distance(k.lo, k.hi);
-        (t + CAP_GRADING * 0.5 * len).min(self.opts.l).max(t)
+        mean_free.min(small + CAP_GRADING * 0.5 * len).min(l)
     }
 
     fn set_target(&mut self, v: VertexId, t: f64) {

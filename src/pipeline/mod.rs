@@ -341,6 +341,34 @@ fn mesh_within(
     regions: &RegionOptions,
     deadline: Deadline,
 ) -> Result<Meshed> {
+    with_threads(params.threads, || {
+        mesh_stages(drawing, params, regions, deadline)
+    })
+}
+
+/// Run `f` on a pool of `threads` workers (0: rayon's global pool, one per
+/// core). A pool that cannot be made runs `f` on the global pool: the result
+/// is the same either way.
+fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    if threads == 0 {
+        return f();
+    }
+    match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+        Ok(pool) => pool.install(f),
+        Err(e) => {
+            tracing::warn!("cannot start {threads} worker threads ({e}); using the global pool");
+            f()
+        }
+    }
+}
+
+/// The stages of [`mesh_within`], on the current thread pool.
+fn mesh_stages(
+    drawing: &Drawing,
+    params: &Params,
+    regions: &RegionOptions,
+    deadline: Deadline,
+) -> Result<Meshed> {
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
