@@ -28,6 +28,7 @@ import json
 import math
 import os
 import random
+import resource
 import subprocess
 import sys
 import tempfile
@@ -98,15 +99,18 @@ def run(binary, svg_text, name, keep, time_limit):
     cmd = [binary, src, "-o", os.path.join(d, name + ".msh"), "--stats", "-q"]
     cmd += ["--time-limit", str(time_limit)]
     t0 = time.monotonic()
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.monotonic() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
     stats = {}
     if p.returncode == 0:
         try:
             stats = json.loads(p.stdout)
         except json.JSONDecodeError:
             pass
-    return p.returncode, wall, stats
+    return p.returncode, wall, cpu, stats
 
 
 def exponent(rows):
@@ -133,8 +137,9 @@ def main():
     if a.keep:
         os.makedirs(a.keep, exist_ok=True)
     gens = {"soup": soup, "zigzag": zigzag, "serpentine": serpentine}
-    print("| input | segments | exit | wall s | features s | bsp s | optimize s | curve s | triangles | merged dups |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    stages = ["load", "features", "bsp", "optimize", "curve", "regions"]
+    print("| input | segments | exit | wall s | cpu s | " + " | ".join(f"{k} s" for k in stages) + " | triangles | merged dups |")
+    print("|---|---|---|---|---|" + "---|" * len(stages) + "---|---|")
     series = {}
     todo = [(c, n) for c in cases if c in gens for n in sizes]
     if "duplicates" in cases:
@@ -142,7 +147,7 @@ def main():
     for case, n in todo:
         text = duplicates(n) if case == "duplicates" else gens[case](n)
         name = f"{case}-{n}"
-        code, wall, st = run(a.bin, text, name, a.keep, a.time_limit)
+        code, wall, cpu, st = run(a.bin, text, name, a.keep, a.time_limit)
         inp = st.get("input", {})
         segs = inp.get("lines", 0) + inp.get("cubics", 0) + inp.get("conics", 0)
         times = st.get("times", {})
@@ -151,14 +156,20 @@ def main():
         f = lambda k: f"{times[k]:.2f}" if k in times else ""
         label = f"{case} x{n}" if case == "duplicates" else case
         print(
-            f"| {label} | {segs or n} | {code} | {wall:.2f} | {f('features')} | {f('bsp')} "
-            f"| {f('optimize')} | {f('curve')} | {tris} | {merged} |",
+            f"| {label} | {segs or n} | {code} | {wall:.2f} | {cpu:.2f} | "
+            + " | ".join(f(k) for k in stages)
+            + f" | {tris} | {merged} |",
             flush=True,
         )
         if code == 0 and case != "duplicates":
-            series.setdefault(case, []).append((n, wall))
+            series.setdefault(case, []).append((segs or n, wall, cpu))
     for case, rows in series.items():
-        print(f"exponent ({case}, {rows[0][0]}..{rows[-1][0]}): {exponent(rows):.2f}")
+        k_wall = exponent([(n, w) for n, w, _ in rows])
+        k_cpu = exponent([(n, c) for n, _, c in rows])
+        print(
+            f"exponent ({case}, {rows[0][0]}..{rows[-1][0]} segments): "
+            f"wall {k_wall:.2f}, cpu {k_cpu:.2f}"
+        )
     return 0
 
 

@@ -218,6 +218,11 @@ pub(super) fn separate(
         .chain(points.iter().map(|p| Rect::from_points(p.pos, p.pos)));
     let grid = grid_for(boxes, n + points.len(), mu);
     let mut primary: Vec<bool> = sections.iter().map(|s| s.eligible).collect();
+    // The section that made the previous one fail: its successor along its curve
+    // (or itself) usually makes this one fail too, next to a parallel curve. Tried
+    // first, it spares the grid search; any violating section is one the search
+    // would report, so the answer is the same.
+    let mut hint: Option<usize> = None;
     for (i, s) in sections.iter().enumerate() {
         if !s.eligible {
             continue;
@@ -225,21 +230,37 @@ pub(super) fn separate(
         if i % 64 == 0 && deadline.expired() {
             break;
         }
+        let hinted = hint.is_some_and(|h| {
+            [h + 1, h]
+                .into_iter()
+                .any(|j| j != i && j < n && violates(&s.ctrl, &sections[j].ctrl, mu, alpha))
+        });
+        if hinted {
+            primary[i] = false;
+            hint = hint.map(|h| h + 1);
+            continue;
+        }
         let hull = ctrl_points(&s.ctrl);
         // Boxes farther than μ apart cannot violate: the grid reports only boxes
         // that overlap this one grown by μ (and a hair, for the rounding of the
         // growth), and the first violation ends the search.
         let reach = mu * (1.0 + 1e-9);
+        let mut culprit = None;
         let bad = grid.any(ctrl_box(&s.ctrl).inflate(reach, reach), |j| {
             let j = j as usize;
-            if j == i {
+            let bad = if j == i {
                 false
             } else if j < n {
                 violates(&s.ctrl, &sections[j].ctrl, mu, alpha)
             } else {
                 point_hull_distance(points[j - n].pos, &hull) < mu
+            };
+            if bad && j < n {
+                culprit = Some(j);
             }
+            bad
         });
+        hint = culprit;
         if bad {
             primary[i] = false;
         }

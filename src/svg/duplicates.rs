@@ -18,7 +18,7 @@
 //! full only with the kept shapes in the 3×3 cells around its own, at most
 //! [`MAX_CANDIDATES`] of them.
 
-use super::drawing::{Segment, Shape};
+use super::drawing::{Segment, Shape, ShapePaint};
 use kurbo::Point;
 use std::collections::HashMap;
 use std::hash::{DefaultHasher, Hash, Hasher};
@@ -79,18 +79,30 @@ fn signature(s: &Shape) -> Signature {
 }
 
 /// Whether `upper`, painted above `lower`, stands for the same thing in the
-/// picture (see the module doc); the geometry is compared apart.
+/// picture (see the module doc); the geometry is compared apart. Every part of
+/// the paint counts but what only colours the region the topmost copy owns
+/// (opacity, paint server, average colour) and the filter flag.
 fn same_role(upper: &Shape, lower: &Shape) -> bool {
-    upper.filled == lower.filled
-        && (!upper.filled || upper.fill_rule == lower.fill_rule)
-        && upper.paint.kind == lower.paint.kind
-        && upper.paint.clips.len() == lower.paint.clips.len()
+    let same_clips = upper.paint.clips.len() == lower.paint.clips.len()
         && upper
             .paint
             .clips
             .iter()
             .zip(&lower.paint.clips)
-            .all(|(a, b)| std::sync::Arc::ptr_eq(a, b) || a == b)
+            .all(|(a, b)| std::sync::Arc::ptr_eq(a, b) || a == b);
+    if !(same_clips
+        && upper.filled == lower.filled
+        && (!upper.filled || upper.fill_rule == lower.fill_rule))
+    {
+        return false;
+    }
+    let mut paint: ShapePaint = upper.paint.clone();
+    paint.alpha = lower.paint.alpha;
+    paint.server.clone_from(&lower.paint.server);
+    paint.average_colour = lower.paint.average_colour;
+    paint.filtered = lower.paint.filtered;
+    paint.clips.clone_from(&lower.paint.clips);
+    paint == lower.paint
 }
 
 /// Whether two signatures agree to `tol` (per coordinate).
@@ -181,7 +193,7 @@ pub(super) fn merge(shapes: Vec<Shape>, tol: f64) -> (Vec<Shape>, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::svg::drawing::{FillRule, ShapePaint, Subpath};
+    use crate::svg::drawing::{FillRule, Subpath};
     use kurbo::CubicBez;
     use proptest::prelude::*;
 
