@@ -6,11 +6,12 @@
 //! control point (and conic weight) of one is within `tol` of the other's in
 //! each coordinate, and when the upper copy stands for the same thing in the
 //! picture: the same kind (fill, stroke area, clip outline), both filled or
-//! neither, the same fill rule, the same clips. The upper copy then covers the
-//! lower one exactly (to `tol`): wherever the lower copy paints, the upper
-//! paints on top of it (and of anything painted in between), so no point of the
-//! picture changes owner; and its outline is the lower's, so the feature soup
-//! loses only coincident curves. The topmost copy keeps its own paint (colour,
+//! neither, the same fill rule, the same clips (and the rest of the paint but
+//! what only colours the region: opacity, paint server). The upper copy then
+//! covers the lower one exactly (to `tol`): wherever the lower copy paints, the
+//! upper paints on top of it (and of anything painted in between), so no point
+//! of the picture changes owner; and its outline is the lower's, so the feature
+//! soup loses only coincident curves. The topmost copy keeps its own paint (colour,
 //! id, opacity) and place in the paint order.
 //!
 //! Linear in the input: shapes are bucketed by a hash of their structure and
