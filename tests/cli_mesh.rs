@@ -420,4 +420,46 @@ fn the_mesh_is_the_same_for_every_thread_count() {
             }
         }
     }
+
+fn a_path_painted_many_times_meshes_as_one_and_the_stats_count_the_copies() {
+    // 200 copies of one filled blob, the topmost red; a rect between the first
+    // two stays (issue 20: duplicates merge at load).
+    let out = support::out_dir("cli_duplicates");
+    let blob = "M30 30C40 20 60 20 70 30C80 40 80 60 70 70C60 80 40 80 30 70Z";
+    let mut body = format!(r##"<path fill="#0000ff" d="{blob}"/><rect width="40" height="40"/>"##);
+    for k in 1..200 {
+        let colour = if k == 199 { "#ff0000" } else { "#0000ff" };
+        body.push_str(&format!(r#"<path fill="{colour}" d="{blob}"/>"#));
+    }
+    let svg = out.join("duplicates.svg");
+    std::fs::write(
+        &svg,
+        format!(r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">{body}</svg>"#),
+    )
+    .unwrap();
+    let msh = out.join("duplicates.msh");
+    let run = bin()
+        .arg(&svg)
+        .arg("-o")
+        .arg(&msh)
+        .args(["--stats", "--regions", "colour"])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    support::check_msh(&msh).assert_valid("duplicates");
+    let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(stats["input"]["shapes"], 2);
+    assert_eq!(stats["input"]["paint"]["duplicates_merged"], 199);
+    let names: Vec<&str> = stats["regions"]["surfaces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert!(names.contains(&"fill-#ff0000"), "{names:?}");
+    assert!(!names.contains(&"fill-#0000ff"), "{names:?}");
 }

@@ -218,6 +218,11 @@ pub(super) fn separate(
         .chain(points.iter().map(|p| Rect::from_points(p.pos, p.pos)));
     let grid = grid_for(boxes, n + points.len(), mu);
     let mut primary: Vec<bool> = sections.iter().map(|s| s.eligible).collect();
+    // The section that made the previous one fail: its successor along its curve
+    // (or itself) usually makes this one fail too, next to a parallel curve. Tried
+    // first, it spares the grid search; any violating section is one the search
+    // would report, so the answer is the same.
+    let mut hint: Option<usize> = None;
     for (i, s) in sections.iter().enumerate() {
         if !s.eligible {
             continue;
@@ -225,18 +230,37 @@ pub(super) fn separate(
         if i % 64 == 0 && deadline.expired() {
             break;
         }
+        let hinted = hint.is_some_and(|h| {
+            [h + 1, h]
+                .into_iter()
+                .any(|j| j != i && j < n && violates(&s.ctrl, &sections[j].ctrl, mu, alpha))
+        });
+        if hinted {
+            primary[i] = false;
+            hint = hint.map(|h| h + 1);
+            continue;
+        }
         let hull = ctrl_points(&s.ctrl);
-        let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
-        let bad = near.into_iter().any(|j| {
+        // Boxes farther than μ apart cannot violate: the grid reports only boxes
+        // that overlap this one grown by μ (and a hair, for the rounding of the
+        // growth), and the first violation ends the search.
+        let reach = mu * (1.0 + 1e-9);
+        let mut culprit = None;
+        let bad = grid.any(ctrl_box(&s.ctrl).inflate(reach, reach), |j| {
             let j = j as usize;
-            if j == i {
+            let bad = if j == i {
                 false
             } else if j < n {
                 violates(&s.ctrl, &sections[j].ctrl, mu, alpha)
             } else {
                 point_hull_distance(points[j - n].pos, &hull) < mu
+            };
+            if bad && j < n {
+                culprit = Some(j);
             }
+            bad
         });
+        hint = culprit;
         if bad {
             primary[i] = false;
         }
@@ -280,8 +304,10 @@ fn cluster(pos: &[Point], fixed: &[bool], mu: f64) -> Clusters {
         if done[i] {
             continue;
         }
+        // (a hair beyond μ for the rounding of the box's growth)
+        let reach = mu * (1.0 + 1e-9);
         let members: Vec<usize> = grid
-            .query(Rect::from_points(pos[i], pos[i]).inflate(mu, mu))
+            .query(Rect::from_points(pos[i], pos[i]).inflate(reach, reach))
             .into_iter()
             .map(|j| j as usize)
             .filter(|&j| !done[j] && pos[j].distance(pos[i]) < mu)
@@ -370,8 +396,8 @@ pub(super) fn simplify(
             if !primary[i] {
                 continue;
             }
-            let near = grid.query(ctrl_box(&s.ctrl).inflate(mu, mu));
-            let bad = near.into_iter().any(|j| {
+            let reach = mu * (1.0 + 1e-9);
+            let bad = grid.any(ctrl_box(&s.ctrl).inflate(reach, reach), |j| {
                 let l = segs[j as usize];
                 let c = CubicBez::new(
                     l.p0,
@@ -390,11 +416,14 @@ pub(super) fn simplify(
     }
     // Output: drop repeated vertices; single points become isolated points.
     let mut polylines = Vec::new();
+    // The points so far, by value (+0.0 makes −0.0 and 0.0, equal points, one key).
+    let point_key = |p: Point| key(Point::new(p.x + 0.0, p.y + 0.0));
+    let mut known: HashSet<(u64, u64)> = points.iter().map(|p| point_key(p.pos)).collect();
     for (feature, mut pts) in runs {
         pts.dedup();
         let source = drawing.features[feature as usize].source;
         if pts.len() < 2 {
-            if !points.iter().any(|p| p.pos == pts[0]) {
+            if known.insert(point_key(pts[0])) {
                 points.push(FeaturePoint {
                     pos: pts[0],
                     source,

@@ -35,9 +35,18 @@ pub(crate) fn orient_lines(drawing: &Drawing, mesh: &mut FemMesh, line_shape: &[
     }
     let mut shapes: Vec<ShapeId> = by_shape.keys().copied().collect();
     shapes.sort_unstable_by_key(|s| s.index());
+    // Each shape's features, in drawing order, found once (not per chain: a
+    // drawing of many small shapes would scan all features per chain).
+    let mut own: HashMap<ShapeId, Vec<FeatureGeom>> = HashMap::new();
+    for f in &drawing.features {
+        if by_shape.contains_key(&f.source.shape) {
+            own.entry(f.source.shape).or_default().push(f.geom);
+        }
+    }
     for s in shapes {
+        let own = own.get(&s).map_or(&[][..], Vec::as_slice);
         for chain in chains(mesh, &by_shape[&s]) {
-            orient_chain(drawing, mesh, s, &chain);
+            orient_chain(drawing, mesh, own, &chain);
         }
     }
 }
@@ -115,7 +124,8 @@ fn chains(mesh: &FemMesh, lines: &[usize]) -> Vec<Chain> {
 
 /// Make the elements of `chain` run one way, in the direction the module docs
 /// give.
-fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, shape: ShapeId, chain: &Chain) {
+/// `own`: the features of the chain's shape.
+fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, own: &[FeatureGeom], chain: &Chain) {
     let lines = &chain.lines;
     // Consecutive: each element starts where the previous one ends.
     for k in 0..lines.len() {
@@ -146,7 +156,7 @@ fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, shape: ShapeId, chain: &C
             .sum();
         area2 < 0.0
     } else {
-        runs_backwards(drawing, mesh, shape, lines)
+        runs_backwards(drawing, mesh, own, lines)
     };
     if reverse {
         for &l in lines {
@@ -159,12 +169,12 @@ fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, shape: ShapeId, chain: &C
 /// ones nearest its middle); the chain follows their majority.
 const DIRECTION_VOTES: usize = 5;
 
-/// Whether the element `a → b` runs along `shape`'s source: on the feature
-/// of the shape nearest the element's midpoint (the branch the element lies
-/// on, even next to a place where the source crosses itself), the parameter
+/// Whether the element `a → b` runs along its shape's source (`own`, the
+/// shape's features): on the feature of the shape nearest the element's
+/// midpoint (the branch the element lies on, even next to a place where the source crosses itself), the parameter
 /// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
 /// feature or the projections coincide.
-fn runs_along(drawing: &Drawing, shape: ShapeId, a: Point, b: Point) -> Option<bool> {
+fn runs_along(drawing: &Drawing, own: &[FeatureGeom], a: Point, b: Point) -> Option<bool> {
     let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
     let mid = a.midpoint(b);
     let t = |f: &FeatureGeom, p: Point| match *f {
@@ -173,20 +183,18 @@ fn runs_along(drawing: &Drawing, shape: ShapeId, a: Point, b: Point) -> Option<b
         FeatureGeom::Cubic(c) => Some(c.nearest(p, accuracy)),
         FeatureGeom::Conic(c) => Some(c.approx_cubic().nearest(p, accuracy)),
     };
-    let (_, f) = drawing
-        .features
+    let (_, f) = own
         .iter()
-        .filter(|f| f.source.shape == shape)
-        .filter_map(|f| Some((t(&f.geom, mid)?.distance_sq, f)))
+        .filter_map(|f| Some((t(f, mid)?.distance_sq, f)))
         .min_by(|x, y| x.0.total_cmp(&y.0))?;
-    let (ta, tb) = (t(&f.geom, a)?.t, t(&f.geom, b)?.t);
+    let (ta, tb) = (t(f, a)?.t, t(f, b)?.t);
     (ta != tb).then_some(ta < tb)
 }
 
 /// Whether the consecutive open chain `lines` runs against its source's
 /// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
 /// elements nearest the chain's middle (no verdict: as it is).
-fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, shape: ShapeId, lines: &[usize]) -> bool {
+fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, own: &[FeatureGeom], lines: &[usize]) -> bool {
     let mid = lines.len() / 2;
     let mut order: Vec<usize> = (0..lines.len()).collect();
     order.sort_by_key(|&k| k.abs_diff(mid));
@@ -194,7 +202,7 @@ fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, shape: ShapeId, lines: &[us
     for k in order.into_iter().take(DIRECTION_VOTES) {
         let v = mesh.line(lines[k]);
         let (a, b) = (mesh.nodes[v[0] as usize], mesh.nodes[v[1] as usize]);
-        match runs_along(drawing, shape, a, b) {
+        match runs_along(drawing, own, a, b) {
             Some(true) => along += 1,
             Some(false) => against += 1,
             None => {}

@@ -332,6 +332,9 @@ pub struct PaintCounts {
     pub dropped_decoration: usize,
     /// Shapes under a filter (meshed by their outline).
     pub filtered_shapes: usize,
+    /// Shapes dropped because a copy of them (the same outline to 1e-10·d, the
+    /// same role: fill rule, kind, clips) is painted on top and covers them.
+    pub duplicates_merged: usize,
 }
 
 impl Drawing {

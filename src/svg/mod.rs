@@ -64,6 +64,7 @@
 mod budget;
 mod conic;
 pub(crate) mod drawing;
+mod duplicates;
 mod geometry;
 mod load;
 mod outline;
@@ -287,8 +288,11 @@ pub(crate) fn load_limited(
         outline::collect(parsed, &frame, map, paint)
     })
     .map_err(|e| blame_scale(e, scale))?;
-    let mut drawing = soup::assemble(outlines.shapes, outlines.warnings)?;
+    let tol = duplicates::DUPLICATE_TOL_REL * soup::diagonal(&outlines.shapes);
+    let (shapes, merged) = duplicates::merge(outlines.shapes, tol);
+    let mut drawing = soup::assemble(shapes, outlines.warnings)?;
     drawing.paint = outlines.paint;
+    drawing.paint.duplicates_merged = merged;
     let d = drawing.diagonal();
     if d < Drawing::MIN_DIAGONAL {
         let cause = format!(

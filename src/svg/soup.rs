@@ -62,6 +62,20 @@ pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Draw
     })
 }
 
+/// The diagonal of the bounding box of every control point of `shapes` (the
+/// drawing's `d` before assembly; 0 without any point).
+pub(super) fn diagonal(shapes: &[Shape]) -> f64 {
+    let mut bbox: Option<Rect> = None;
+    for sub in shapes.iter().flat_map(|s| &s.subpaths) {
+        let points =
+            std::iter::once(sub.start).chain(sub.segments.iter().flat_map(Segment::control_points));
+        for p in points {
+            bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
+        }
+    }
+    bbox.map_or(0.0, |b| b.width().hypot(b.height()))
+}
+
 /// Control points of a feature.
 fn control_points(g: &FeatureGeom) -> impl Iterator<Item = kurbo::Point> {
     let (pts, n) = match *g {

@@ -981,6 +981,7 @@ fn coordinates_are_checked_after_units_and_scale() {
     assert_eq!(px.bbox.area(), 0.0);
 }
 
+mod duplicates;
 mod exact;
 
 #[test]

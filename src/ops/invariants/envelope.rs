@@ -13,7 +13,7 @@
 
 use crate::mesh::point_segment_distance;
 use kurbo::{Line, Point, Rect};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The ε-envelope of a set of polylines (by index), with its search grid.
 #[derive(Clone, Debug)]
@@ -22,8 +22,18 @@ pub(crate) struct Envelope {
     spacing: f64,
     cell: f64,
     segments: Vec<(Line, u32)>,
-    grid: HashMap<(i64, i64), Vec<u32>>,
+    /// The segments of each polyline by the cells they pass: (cell x, cell y,
+    /// polyline) → segment indices, in order (a query reads only its own
+    /// polyline's segments, however many others pass the same cells).
+    grid: HashMap<(i64, i64, u32), Vec<u32>>,
+    /// Each polyline's segments: a range of `segments` (they are added polyline
+    /// by polyline).
+    ranges: Vec<std::ops::Range<u32>>,
 }
+
+/// A polyline with at most this many segments is searched whole, without the
+/// grid (most polylines are the sections of one input curve).
+const SCAN_WHOLE: u32 = 8;
 
 impl Envelope {
     /// The envelope of `polylines` (polyline `i` is the tags' `polyline: i`)
@@ -31,10 +41,19 @@ impl Envelope {
     /// `(0, 2 eps_abs)`), both in user units.
     pub(crate) fn new(polylines: &[Vec<Point>], eps_abs: f64, sample_abs: f64) -> Envelope {
         let mut segments = Vec::new();
+        // A polyline that runs over one segment again (a dense zigzag after the
+        // secondary simplification: back and forth between two clusters) has it
+        // once here: the distance to a set of segments does not change, and the
+        // grid's cells stay as full as the drawing is dense, not as its input.
+        let mut seen: HashSet<(u32, [u64; 4])> = HashSet::new();
+        let bits =
+            |a: Point, b: Point| [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()];
         for (i, pl) in polylines.iter().enumerate() {
             let id = u32::try_from(i).expect("internal: polyline count fits u32");
             for w in pl.windows(2) {
-                segments.push((Line::new(w[0], w[1]), id));
+                if seen.insert((id, bits(w[0], w[1]))) && !seen.contains(&(id, bits(w[1], w[0]))) {
+                    segments.push((Line::new(w[0], w[1]), id));
+                }
             }
         }
         Envelope::from_segments(segments, eps_abs, sample_abs)
@@ -74,12 +93,23 @@ impl Envelope {
         if !(cell.is_finite() && cell > 0.0) {
             cell = 1.0;
         }
+        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+        for (k, &(_, polyline)) in segments.iter().enumerate() {
+            let k = u32::try_from(k).expect("internal: segment count fits u32");
+            let polyline = polyline as usize;
+            if ranges.len() <= polyline {
+                ranges.resize(polyline + 1, k..k);
+            }
+            debug_assert!(ranges[polyline].end == k, "internal: segments by polyline");
+            ranges[polyline].end = k + 1;
+        }
         let mut env = Envelope {
             eps,
             spacing,
             cell,
             segments,
             grid: HashMap::new(),
+            ranges,
         };
         for k in 0..env.segments.len() {
             let (l, _) = env.segments[k];
@@ -101,8 +131,9 @@ impl Envelope {
             cells.sort_unstable();
             cells.dedup();
             let id = u32::try_from(k).expect("internal: segment count fits u32");
-            for c in cells {
-                env.grid.entry(c).or_default().push(id);
+            let polyline = env.segments[k].1;
+            for (x, y) in cells {
+                env.grid.entry((x, y, polyline)).or_default().push(id);
             }
         }
         env
@@ -127,15 +158,25 @@ impl Envelope {
         let (x0, y0) = self.key(Point::new(p.x - self.eps, p.y - self.eps));
         let (x1, y1) = self.key(Point::new(p.x + self.eps, p.y + self.eps));
         let mut best: Option<f64> = None;
+        // Every segment within ε of `p` is in a cell this box meets, so the grid
+        // and a scan of the whole polyline find the same nearest distance.
+        let range = self.ranges.get(polyline as usize).cloned().unwrap_or(0..0);
+        if range.len() <= SCAN_WHOLE as usize {
+            for (l, _) in &self.segments[range.start as usize..range.end as usize] {
+                let d = point_segment_distance(p, *l);
+                if d <= self.eps && best.is_none_or(|b| d < b) {
+                    best = Some(d);
+                }
+            }
+            return best;
+        }
         for x in x0..=x1.min(x0.saturating_add(4)) {
             for y in y0..=y1.min(y0.saturating_add(4)) {
-                for &k in self.grid.get(&(x, y)).map_or(&[][..], Vec::as_slice) {
-                    let (l, id) = self.segments[k as usize];
-                    if id == polyline {
-                        let d = point_segment_distance(p, l);
-                        if d <= self.eps && best.is_none_or(|b| d < b) {
-                            best = Some(d);
-                        }
+                let bucket = self.grid.get(&(x, y, polyline));
+                for &k in bucket.map_or(&[][..], Vec::as_slice) {
+                    let d = point_segment_distance(p, self.segments[k as usize].0);
+                    if d <= self.eps && best.is_none_or(|b| d < b) {
+                        best = Some(d);
                     }
                 }
             }
@@ -234,5 +275,60 @@ mod tests {
             }
         }
         assert!(accepted > 20, "{accepted}");
+    }
+
+    /// The nearest distance within ε to polyline `k`, by brute force.
+    fn brute(pls: &[Vec<Point>], k: usize, p: Point, eps: f64) -> Option<f64> {
+        pls[k]
+            .windows(2)
+            .map(|w| point_segment_distance(p, Line::new(w[0], w[1])))
+            .filter(|&d| d <= eps)
+            .fold(None, |b: Option<f64>, d| Some(b.map_or(d, |b| b.min(d))))
+    }
+
+    #[test]
+    fn short_and_long_polylines_find_the_nearest_distance() {
+        // A long wavy polyline (searched through the grid), a short one (scanned
+        // whole), and a zigzag running back and forth over the same segments
+        // (kept once).
+        let long: Vec<Point> = (0..200)
+            .map(|i| {
+                let t = f64::from(i) * 0.05;
+                Point::new(t, (2.0 * t).sin())
+            })
+            .collect();
+        let short = vec![
+            Point::new(0.0, 0.5),
+            Point::new(3.0, 0.6),
+            Point::new(6.0, 0.4),
+        ];
+        let zigzag: Vec<Point> = (0..100)
+            .map(|i| Point::new(f64::from(i % 2) * 2.0, 1.0 + f64::from(i % 4 / 2) * 0.5))
+            .collect();
+        let pls = vec![long, short, zigzag];
+        let eps = 0.2;
+        let env = Envelope::new(&pls, eps, eps);
+        assert!(
+            env.segments.len() < 199 + 2 + 99,
+            "repeated segments are kept once"
+        );
+        let mut x: u64 = 3;
+        let mut r = || {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..3000 {
+            let p = Point::new(11.0 * r() - 0.5, 3.0 * r() - 1.5);
+            for k in 0..3 {
+                let got = env.distance_within(p, k as u32);
+                let want = brute(&pls, k, p, eps);
+                assert_eq!(got.is_some(), want.is_some(), "{p:?} polyline {k}");
+                if let (Some(g), Some(w)) = (got, want) {
+                    assert!((g - w).abs() <= 1e-12, "{p:?} polyline {k}: {g} vs {w}");
+                }
+            }
+        }
     }
 }
