@@ -420,7 +420,9 @@ fn the_mesh_is_the_same_for_every_thread_count() {
             }
         }
     }
+}
 
+#[test]
 fn a_path_painted_many_times_meshes_as_one_and_the_stats_count_the_copies() {
     // 200 copies of one filled blob, the topmost red; a rect between the first
     // two stays (issue 20: duplicates merge at load).

@@ -198,7 +198,7 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// The process's peak resident memory in MiB when the report was made
     /// (`run_file`: after the mesh was written), `None` where the system does
-    /// not report it ([`crate::budget::peak_memory_mb`]).
+    /// not report it (`VmHWM` of `/proc/self/status`).
     pub peak_memory_mb: Option<f64>,
 }
 
