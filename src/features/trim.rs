@@ -30,7 +30,7 @@
 //! the drawing stays a feature, as in TriWild.
 
 use super::Parent;
-use crate::svg::drawing::ShapeKind;
+use crate::svg::drawing::{ShapeKind, collect_clips};
 use crate::svg::winding::{ClipTest, PaintTest, all_contain};
 use crate::svg::{Clip, Drawing, ShapeId};
 use kurbo::{ParamCurve, ParamCurveDeriv, Rect, Vec2};
@@ -92,7 +92,7 @@ impl Trimmer {
             own[i] = Some(k);
             let mut clips = Vec::new();
             for c in &s.paint.clips {
-                collect(c, &mut clips);
+                collect_clips(c, &mut clips);
             }
             for c in clips {
                 let ptr = Arc::as_ptr(&c);
@@ -192,19 +192,4 @@ fn normal(parent: &Parent, t: f64) -> Option<Vec2> {
     };
     let len = d.hypot();
     (len > 0.0 && len.is_finite()).then(|| Vec2::new(-d.y, d.x) / len)
-}
-
-/// `c` and every clip inside it (its own clips and its parts'), once each.
-fn collect(c: &Arc<Clip>, all: &mut Vec<Arc<Clip>>) {
-    if all.iter().any(|e| Arc::ptr_eq(e, c)) {
-        return;
-    }
-    all.push(c.clone());
-    for inner in c
-        .within
-        .iter()
-        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
-    {
-        collect(inner, all);
-    }
 }

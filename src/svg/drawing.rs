@@ -137,6 +137,21 @@ pub struct ClipPart {
     pub clips: Vec<std::sync::Arc<Clip>>,
 }
 
+/// `c` and every clip inside it, once each.
+pub(crate) fn collect_clips(c: &std::sync::Arc<Clip>, all: &mut Vec<std::sync::Arc<Clip>>) {
+    if all.iter().any(|e| std::sync::Arc::ptr_eq(e, c)) {
+        return;
+    }
+    all.push(c.clone());
+    for inner in c
+        .within
+        .iter()
+        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
+    {
+        collect_clips(inner, all);
+    }
+}
+
 impl Shape {
     /// The name used for physical groups: the SVG id, else `shape-N` (N = element index).
     pub fn name(&self) -> String {

@@ -669,7 +669,7 @@ fn add_clip_outlines(shapes: &mut Vec<Shape>, paths: usize) {
         };
         for c in &s.paint.clips {
             visit(c, bb, &mut seen);
-            collect_clips(c, &mut all);
+            super::drawing::collect_clips(c, &mut all);
         }
     }
     let mut index = paths;
@@ -703,21 +703,6 @@ fn add_clip_outlines(shapes: &mut Vec<Shape>, paths: usize) {
             },
         });
         index += 1;
-    }
-}
-
-/// `c` and every clip inside it, once each.
-fn collect_clips(c: &Arc<Clip>, all: &mut Vec<Arc<Clip>>) {
-    if all.iter().any(|e| Arc::ptr_eq(e, c)) {
-        return;
-    }
-    all.push(c.clone());
-    for inner in c
-        .within
-        .iter()
-        .chain(c.parts.iter().flat_map(|p| p.clips.iter()))
-    {
-        collect_clips(inner, all);
     }
 }
 
