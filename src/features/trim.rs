@@ -33,7 +33,7 @@ use super::Parent;
 use crate::svg::drawing::{ShapeKind, collect_clips};
 use crate::svg::winding::{ClipTest, PaintTest, all_contain};
 use crate::svg::{Clip, Drawing, ShapeId};
-use kurbo::{ParamCurve, ParamCurveDeriv, Rect, Vec2};
+use kurbo::Vec2;
 use std::sync::Arc;
 
 /// Fractions of a piece where it is judged.
@@ -57,7 +57,7 @@ enum Judge {
 /// The trimming tests of a drawing's shapes.
 pub(super) struct Trimmer {
     judges: Vec<Judge>,
-    tests: Vec<(PaintTest, Rect)>,
+    tests: Vec<PaintTest>,
     eps_abs: f64,
     step: f64,
 }
@@ -73,7 +73,7 @@ impl Trimmer {
         if !trimmable {
             return None;
         }
-        let mut tests: Vec<(PaintTest, Rect)> = Vec::new();
+        let mut tests: Vec<PaintTest> = Vec::new();
         let mut own: Vec<Option<u32>> = vec![None; drawing.shapes.len()];
         // The filled shapes painted through each clip (by pointer), for clip outlines.
         let mut through: Vec<(*const Clip, Vec<u32>)> = Vec::new();
@@ -86,9 +86,11 @@ impl Trimmer {
                 continue;
             }
             let test = PaintTest::new(s);
-            let Some(bbox) = test.bbox() else { continue };
+            if test.bbox().is_none() {
+                continue;
+            }
             let k = u32::try_from(tests.len()).expect("internal: shape count fits u32");
-            tests.push((test, bbox));
+            tests.push(test);
             own[i] = Some(k);
             let mut clips = Vec::new();
             for c in &s.paint.clips {
@@ -169,9 +171,9 @@ impl Trimmer {
                 let p = parent.eval(t);
                 let (a, b) = (p + n * step, p - n * step);
                 list.iter().any(|&k| {
-                    let (test, bbox) = &self.tests[k as usize];
-                    let grown = bbox.inflate(2.0 * step, 2.0 * step);
-                    if !grown.contains(a) && !grown.contains(b) {
+                    let test = &self.tests[k as usize];
+                    let grown = test.bbox().map(|b| b.inflate(2.0 * step, 2.0 * step));
+                    if grown.is_none_or(|g| !g.contains(a) && !g.contains(b)) {
                         return false;
                     }
                     let (ia, ca) = test.paints(a, self.eps_abs);
@@ -185,11 +187,7 @@ impl Trimmer {
 
 /// The unit normal of `parent` at `t`, `None` where its tangent vanishes.
 fn normal(parent: &Parent, t: f64) -> Option<Vec2> {
-    let d = match parent {
-        Parent::Cubic(c) => c.deriv().eval(t).to_vec2(),
-        Parent::Line(l) => l.p1 - l.p0,
-        Parent::Conic(c) => c.deriv(t),
-    };
+    let d = parent.deriv(t);
     let len = d.hypot();
     (len > 0.0 && len.is_finite()).then(|| Vec2::new(-d.y, d.x) / len)
 }

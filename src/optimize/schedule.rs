@@ -407,8 +407,9 @@ pub(crate) struct Schedule<'a> {
     base: Vec<f64>,
     /// Whether some vertex has a base below `l`.
     capped: bool,
-    /// Size cap by shape index (see [`optimize_with_caps`]).
-    caps: Vec<f64>,
+    /// By primary section: whether its shape has a size cap below `l` (see
+    /// [`optimize_with_caps`]).
+    capped_section: Vec<bool>,
     stats: OptimizeStats,
     rng: Shuffle,
     /// Operation clock: advanced by every applied operation.
@@ -431,6 +432,15 @@ pub(crate) struct Schedule<'a> {
     max_stretch: f64,
 }
 
+/// The entry of `v` in a per-vertex-slot array, grown with `fill` as needed.
+fn slot<T: Copy>(values: &mut Vec<T>, v: VertexId, fill: T) -> &mut T {
+    let i = v.index();
+    if i >= values.len() {
+        values.resize(i + 1, fill);
+    }
+    &mut values[i]
+}
+
 impl<'a> Schedule<'a> {
     /// A schedule over `mesh` with every target at `opts.l`, collapses that
     /// make no edge longer than 4/3 of its target, and the smoothing order
@@ -445,7 +455,7 @@ impl<'a> Schedule<'a> {
             target: vec![opts.l; mesh.vertex_capacity()],
             base: vec![opts.l; mesh.vertex_capacity()],
             capped: false,
-            caps: Vec::new(),
+            capped_section: Vec::new(),
             mesh,
             ctx,
             opts: *opts,
@@ -488,8 +498,9 @@ impl<'a> Schedule<'a> {
     }
 
     /// Record an applied operation: every vertex of the faces it created (or
-    /// moved) gets the new clock.
-    fn touch(&mut self, outcome: &Outcome) {
+    /// moved) gets the new clock, and with `topology` (a split, collapse or
+    /// swap, not a move) the new clock as its topology stamp too.
+    fn touch(&mut self, outcome: &Outcome, topology: bool) {
         let Outcome::Applied(ch) = outcome else {
             return;
         };
@@ -499,31 +510,10 @@ impl<'a> Schedule<'a> {
                 continue;
             }
             for v in self.mesh.face(f) {
-                let i = v.index();
-                if i >= self.stamp.len() {
-                    self.stamp.resize(i + 1, 0);
+                *slot(&mut self.stamp, v, 0) = self.clock;
+                if topology {
+                    *slot(&mut self.topo_stamp, v, 0) = self.clock;
                 }
-                self.stamp[i] = self.clock;
-            }
-        }
-    }
-
-    /// Record an applied split, collapse or swap: every vertex of the faces it
-    /// created gets the clock as its topology stamp too.
-    fn touch_topology(&mut self, outcome: &Outcome) {
-        let Outcome::Applied(ch) = outcome else {
-            return;
-        };
-        for &f in &ch.created {
-            if !self.mesh.is_face_alive(f) {
-                continue;
-            }
-            for v in self.mesh.face(f) {
-                let i = v.index();
-                if i >= self.topo_stamp.len() {
-                    self.topo_stamp.resize(i + 1, 0);
-                }
-                self.topo_stamp[i] = self.clock;
             }
         }
     }
@@ -537,53 +527,37 @@ impl<'a> Schedule<'a> {
     }
 
     fn target_of(&mut self, v: VertexId) -> f64 {
-        let i = v.index();
-        if i >= self.target.len() {
-            self.target.resize(i + 1, self.opts.l);
-        }
-        self.target[i]
+        *slot(&mut self.target, v, self.opts.l)
     }
 
     fn base_of(&mut self, v: VertexId) -> f64 {
-        let i = v.index();
-        if i >= self.base.len() {
-            self.base.resize(i + 1, self.opts.l);
-        }
-        self.base[i]
+        *slot(&mut self.base, v, self.opts.l)
     }
 
     fn set_base(&mut self, v: VertexId, t: f64) {
-        let i = v.index();
-        if i >= self.base.len() {
-            self.base.resize(i + 1, self.opts.l);
-        }
-        self.base[i] = t;
+        *slot(&mut self.base, v, self.opts.l) = t;
     }
 
     /// Cap the base (and target) of every vertex on a primary edge whose shape
     /// has a size cap (`caps` by shape index; `∞` or missing: none). Caps are
     /// kept within `[l_floor, l]`.
     fn apply_caps(&mut self, caps: &[f64]) {
-        if !caps.iter().any(|&c| c < self.opts.l) {
+        let l = self.opts.l;
+        let cap_of = |c: &crate::ops::CurveSection| {
+            c.source
+                .and_then(|src| caps.get(src.shape.index()).copied())
+                .filter(|&cap| cap < l)
+        };
+        let section_caps: Vec<Option<f64>> = self.ctx.sections.iter().map(cap_of).collect();
+        if section_caps.iter().all(Option::is_none) {
             return;
         }
-        self.caps = caps.to_vec();
+        self.capped_section = section_caps.iter().map(Option::is_some).collect();
         let mut edges: Vec<(EdgeKey, f64)> = Vec::new();
         for (k, tags) in self.mesh.tagged_edges() {
             for tag in tags {
-                let FeatureOn::Primary { section, .. } = *tag else {
-                    continue;
-                };
-                let Some(src) = self
-                    .ctx
-                    .sections
-                    .get(section as usize)
-                    .and_then(|c| c.source)
-                else {
-                    continue;
-                };
-                if let Some(&cap) = caps.get(src.shape.index())
-                    && cap < self.opts.l
+                if let FeatureOn::Primary { section, .. } = *tag
+                    && let Some(Some(cap)) = section_caps.get(section as usize)
                 {
                     edges.push((k, cap.max(self.opts.l_floor)));
                 }
@@ -603,15 +577,8 @@ impl<'a> Schedule<'a> {
     /// Whether the edge lies on a primary section of a capped shape.
     fn on_capped_feature(&self, k: EdgeKey) -> bool {
         self.mesh.edge_tags(k.lo, k.hi).iter().any(|tag| {
-            let FeatureOn::Primary { section, .. } = *tag else {
-                return false;
-            };
-            self.ctx
-                .sections
-                .get(section as usize)
-                .and_then(|c| c.source)
-                .and_then(|src| self.caps.get(src.shape.index()))
-                .is_some_and(|&cap| cap < self.opts.l)
+            matches!(*tag, FeatureOn::Primary { section, .. }
+                if self.capped_section.get(section as usize).copied().unwrap_or(false))
         })
     }
 
@@ -659,11 +626,7 @@ impl<'a> Schedule<'a> {
     }
 
     fn set_target(&mut self, v: VertexId, t: f64) {
-        let i = v.index();
-        if i >= self.target.len() {
-            self.target.resize(i + 1, self.opts.l);
-        }
-        self.target[i] = t;
+        *slot(&mut self.target, v, self.opts.l) = t;
     }
 
     fn mean_target(&mut self, k: EdgeKey) -> f64 {
@@ -689,8 +652,7 @@ impl<'a> Schedule<'a> {
             }
             let on_cap = self.capped && self.on_capped_feature(k);
             let out = try_split(self.mesh, self.ctx, k.lo, k.hi);
-            self.touch(&out);
-            self.touch_topology(&out);
+            self.touch(&out, true);
             if let Outcome::Applied(ch) = &out {
                 if let Some(m) = ch.new_vertex {
                     self.set_target(m, t);
@@ -831,8 +793,7 @@ impl<'a> Schedule<'a> {
                 }
                 tried = true;
                 let out = try_collapse(self.mesh, self.ctx, u, v);
-                self.touch(&out);
-                self.touch_topology(&out);
+                self.touch(&out, true);
                 if let Outcome::Rejected(reason @ (Reject::FixedVertex | Reject::FeatureRule)) = out
                     && ops::refused_by_role(self.mesh, u, v)
                 {
@@ -928,8 +889,7 @@ impl<'a> Schedule<'a> {
                 continue;
             };
             let counted = tally.record(&out);
-            self.touch(&out);
-            self.touch_topology(&out);
+            self.touch(&out, true);
             if counted {
                 applied += 1;
             }
@@ -957,7 +917,7 @@ impl<'a> Schedule<'a> {
                 continue;
             }
             let out = try_smooth_with(self.mesh, self.ctx, v, objective);
-            self.touch(&out);
+            self.touch(&out, false);
             self.failed_smooth[i] = if out.is_applied() {
                 u64::MAX
             } else {
@@ -986,7 +946,7 @@ impl<'a> Schedule<'a> {
         let mut left = 0;
         for v in rational {
             let out = try_round(self.mesh, self.ctx, v);
-            self.touch(&out);
+            self.touch(&out, false);
             if !self.stats.round.record(&out) {
                 left += 1;
             }
@@ -1003,7 +963,7 @@ impl<'a> Schedule<'a> {
                 ever_off.push(v);
             }
             let out = try_project(self.mesh, self.ctx, v);
-            self.touch(&out);
+            self.touch(&out, false);
             self.stats.project.record(&out);
             if on_curve::off_curve(self.mesh, self.ctx, v).unwrap_or(0.0) > self.ctx.on_curve_abs {
                 left += 1;
@@ -1063,8 +1023,8 @@ pub(crate) fn optimize(
 /// [`optimize`] with a size cap per shape (`caps[shape index]`, user units;
 /// `∞` or missing: none): the vertices on a capped shape's primary edges target
 /// at most its cap (within `[l_floor, l]`), from the start through the final
-/// coarsening, and the quality goal also asks that edges between them be
-/// resolved to it. The pipeline caps the area of a thin stroke at a small
+/// coarsening; split passes resolve those outlines to their caps before the
+/// main passes, and the sizes grade away from them (see `edge_target`). The pipeline caps the area of a thin stroke at a small
 /// multiple of its width ([`stroke_size_caps`]): a strip meshed at the global
 /// size is a row of needles.
 pub(crate) fn optimize_with_caps(
