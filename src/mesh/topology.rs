@@ -263,6 +263,18 @@ pub(crate) struct VertexRing {
     pub boundary: bool,
 }
 
+impl VertexRing {
+    /// A ring of nothing: a buffer for [`TriMesh::vertex_ring_into`].
+    pub(crate) fn empty() -> Self {
+        VertexRing {
+            vertex: VertexId::from_index(0),
+            faces: Vec::new(),
+            neighbours: Vec::new(),
+            boundary: false,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::mesh::{EdgeKey, TriMesh, VertexTag};

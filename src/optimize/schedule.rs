@@ -45,7 +45,7 @@
 
 use crate::budget::Deadline;
 use crate::element::energy::amips;
-use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, min_angle_deg};
+use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
     try_reroute, try_round, try_smooth_with, try_split, try_swap,
@@ -430,6 +430,39 @@ pub(crate) struct Schedule<'a> {
     role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
     /// Longest edge a collapse may create, relative to its mean target.
     max_stretch: f64,
+    /// A one-ring buffer reused by the collapse pass's length checks.
+    ring: VertexRing,
+}
+
+/// The collapse round's queue: edges by the bits of their length (which order
+/// like the lengths), then by key. The edges short at the start of the round
+/// are sorted once (cheaper than a heap of all of them); the edges queued
+/// again after a collapse go to a small heap; `pop` takes the smaller of the
+/// two heads, so the order is that of one heap holding both.
+#[derive(Default)]
+struct ShortestFirst {
+    sorted: Vec<(u64, EdgeKey)>,
+    next: usize,
+    again: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>>,
+}
+
+impl ShortestFirst {
+    fn sort(&mut self) {
+        self.sorted.sort_unstable();
+        self.next = 0;
+    }
+
+    fn pop(&mut self) -> Option<(u64, EdgeKey)> {
+        let head = self.sorted.get(self.next).copied();
+        match (head, self.again.peek()) {
+            (Some(s), Some(std::cmp::Reverse(a))) if *a < s => self.again.pop().map(|r| r.0),
+            (Some(s), _) => {
+                self.next += 1;
+                Some(s)
+            }
+            (None, _) => self.again.pop().map(|r| r.0),
+        }
+    }
 }
 
 /// The entry of `v` in a per-vertex-slot array, grown with `fill` as needed.
@@ -484,6 +517,7 @@ impl<'a> Schedule<'a> {
             topo_stamp: Vec::new(),
             role_refused: rustc_hash::FxHashMap::default(),
             max_stretch: SPLIT_ABOVE,
+            ring: VertexRing::empty(),
         }
     }
 
@@ -748,18 +782,21 @@ impl<'a> Schedule<'a> {
 
     /// One round of [`Self::collapse_pass`]: every short edge once, shortest first.
     fn collapse_round(&mut self, factor: f64) -> u64 {
-        // Min-heap on length through reversed ordering of the bits of a
-        // non-negative f64 (monotone for non-negative values).
-        let mut heap: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>> = BinaryHeap::new();
+        // Shortest first, by the bits of the (non-negative) length, which
+        // order like the lengths: the short edges sorted once, and a min-heap
+        // for the edges queued again during the round, popped together in
+        // one order.
+        let mut queue = ShortestFirst::default();
         for k in self.mesh.edges().collect::<Vec<_>>() {
             let len = self.mesh.distance(k.lo, k.hi);
             if len < factor * self.edge_target(k) {
-                heap.push(std::cmp::Reverse((len.to_bits(), k)));
+                queue.sorted.push((len.to_bits(), k));
             }
         }
-        let mut budget = COLLAPSE_BUDGET_PER_EDGE * heap.len() + COLLAPSE_BUDGET_EXTRA;
+        queue.sort();
+        let mut budget = COLLAPSE_BUDGET_PER_EDGE * queue.sorted.len() + COLLAPSE_BUDGET_EXTRA;
         let mut applied = 0;
-        while let Some(std::cmp::Reverse((bits, k))) = heap.pop() {
+        while let Some((bits, k)) = queue.pop() {
             if budget == 0 {
                 break;
             }
@@ -819,13 +856,16 @@ impl<'a> Schedule<'a> {
                 } else {
                     k.hi
                 };
-                for w in self.mesh.vertex_ring(u).neighbours {
+                let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
+                self.mesh.vertex_ring_into(u, &mut ring);
+                for &w in &ring.neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
                     if len < factor * self.edge_target(e) {
-                        heap.push(std::cmp::Reverse((len.to_bits(), e)));
+                        queue.again.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
                 }
+                self.ring = ring;
             }
         }
         applied
@@ -837,16 +877,21 @@ impl<'a> Schedule<'a> {
     fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
         let pu = self.mesh.position(u);
         let tu = self.target_of(u);
-        for w in self.mesh.vertex_ring(v).neighbours {
+        let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
+        self.mesh.vertex_ring_into(v, &mut ring);
+        let mut keeps = true;
+        for &w in &ring.neighbours {
             if w == u {
                 continue;
             }
             let t = 0.5 * (tu + self.target_of(w));
             if pu.distance(self.mesh.position(w)) > self.max_stretch * t {
-                return false;
+                keeps = false;
+                break;
             }
         }
-        true
+        self.ring = ring;
+        keeps
     }
 
     /// Swap edges where that lowers the larger energy of their two triangles;
