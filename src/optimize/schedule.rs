@@ -1346,3 +1346,46 @@ impl Schedule<'_> {
         self.stats
     }
 }
+
+#[cfg(test)]
+mod queue_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn key(a: usize, b: usize) -> EdgeKey {
+        EdgeKey::new(VertexId::from_index(a), VertexId::from_index(b + 100))
+    }
+
+    proptest! {
+        /// The collapse round's queue pops what one min-heap holding both its
+        /// parts would, pushes during the pops included (duplicates too).
+        #[test]
+        fn the_queue_pops_like_one_heap(
+            start in prop::collection::vec((0u64..20, 0usize..5, 0usize..5), 0..40),
+            pushes in prop::collection::vec((0usize..60, 0u64..20, 0usize..5, 0usize..5), 0..30),
+        ) {
+            let mut q = ShortestFirst::default();
+            let mut heap = BinaryHeap::new();
+            for &(bits, a, b) in &start {
+                q.sorted.push((bits, key(a, b)));
+                heap.push(std::cmp::Reverse((bits, key(a, b))));
+            }
+            q.sort();
+            let mut step = 0;
+            loop {
+                for &(at, bits, a, b) in &pushes {
+                    if at == step {
+                        q.again.push(std::cmp::Reverse((bits, key(a, b))));
+                        heap.push(std::cmp::Reverse((bits, key(a, b))));
+                    }
+                }
+                let (x, y) = (q.pop(), heap.pop().map(|r| r.0));
+                prop_assert_eq!(x, y);
+                if x.is_none() && step > 60 {
+                    break;
+                }
+                step += 1;
+            }
+        }
+    }
+}
