@@ -12,6 +12,17 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_triwild"))
 }
 
+/// Run `cmd` and assert it succeeded (`what` and its stderr in the message).
+fn succeeds(cmd: &mut Command, what: &str) -> std::process::Output {
+    let run = cmd.output().unwrap();
+    assert!(
+        run.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    run
+}
+
 fn drawings() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg");
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -39,18 +50,14 @@ fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
         let mut first: Option<support::Msh> = None;
         for (name, flags) in FORMATS {
             let msh = out.join(format!("{stem}-{name}.msh"));
-            let run = bin()
-                .arg(&svg)
-                .arg("-o")
-                .arg(&msh)
-                .args(flags)
-                .arg("--stats")
-                .output()
-                .unwrap();
-            assert!(
-                run.status.success(),
-                "{stem} {name}: {}",
-                String::from_utf8_lossy(&run.stderr)
+            let run = succeeds(
+                bin()
+                    .arg(&svg)
+                    .arg("-o")
+                    .arg(&msh)
+                    .args(flags)
+                    .arg("--stats"),
+                &format!("{stem} {name}"),
             );
             let stats: serde_json::Value =
                 serde_json::from_slice(&run.stdout).expect("--stats is one JSON object");
@@ -131,19 +138,15 @@ fn the_readme_command_writes_mesh_preview_and_stats() {
     let out = support::out_dir("cli_readme");
     let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/ello.svg");
     let (msh, preview) = (out.join("ello.msh"), out.join("ello.svg"));
-    let run = bin()
-        .arg(&svg)
-        .arg("-o")
-        .arg(&msh)
-        .arg("--preview")
-        .arg(&preview)
-        .arg("--stats")
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    let run = succeeds(
+        bin()
+            .arg(&svg)
+            .arg("-o")
+            .arg(&msh)
+            .arg("--preview")
+            .arg(&preview)
+            .arg("--stats"),
+        "triwild",
     );
     support::check_msh(&msh).assert_valid("ello");
     let svg_text = std::fs::read_to_string(&preview).unwrap();
@@ -185,12 +188,7 @@ fn the_default_output_sits_beside_the_input() {
         &svg,
     )
     .unwrap();
-    let run = bin().arg(&svg).arg("-q").output().unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = succeeds(bin().arg(&svg).arg("-q"), "triwild -q");
     assert!(
         run.stderr.is_empty() && run.stdout.is_empty(),
         "-q and no --stats: silent"
@@ -240,18 +238,14 @@ fn the_strokes_flag_makes_areas_lines_or_nothing_and_the_stats_count_them() {
     let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg");
     let run = |flags: &[&str]| {
         let msh = out.join(format!("star{}.msh", flags.join("")));
-        let run = bin()
-            .arg(&svg)
-            .arg("-o")
-            .arg(&msh)
-            .arg("--stats")
-            .args(flags)
-            .output()
-            .unwrap();
-        assert!(
-            run.status.success(),
-            "{flags:?}: {}",
-            String::from_utf8_lossy(&run.stderr)
+        let run = succeeds(
+            bin()
+                .arg(&svg)
+                .arg("-o")
+                .arg(&msh)
+                .arg("--stats")
+                .args(flags),
+            &format!("{flags:?}"),
         );
         support::check_msh(&msh).assert_valid(&format!("{flags:?}"));
         let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
@@ -322,18 +316,14 @@ fn units_and_scale_flags_reach_the_mesh_and_the_stats() {
     ];
     for (i, (flags, units, scale, area)) in cases.into_iter().enumerate() {
         let msh = out.join(format!("a4-{i}.msh"));
-        let run = bin()
-            .arg(&svg)
-            .arg("-o")
-            .arg(&msh)
-            .args(["--linear", "--cut-outside", "--stats"])
-            .args(flags)
-            .output()
-            .unwrap();
-        assert!(
-            run.status.success(),
-            "{flags:?}: {}",
-            String::from_utf8_lossy(&run.stderr)
+        let run = succeeds(
+            bin()
+                .arg(&svg)
+                .arg("-o")
+                .arg(&msh)
+                .args(["--linear", "--cut-outside", "--stats"])
+                .args(flags),
+            &format!("{flags:?}"),
         );
         let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
         assert_eq!(stats["params"]["units"], units, "{flags:?}");
@@ -354,18 +344,14 @@ fn units_and_scale_flags_reach_the_mesh_and_the_stats() {
     // `features` shares the flags: its d is in the output units
     let features = |flags: &[&str]| {
         let json = out.join("a4.features.json");
-        let run = bin()
-            .args(["features"])
-            .arg(&svg)
-            .arg("-o")
-            .arg(&json)
-            .args(flags)
-            .output()
-            .unwrap();
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
+        let run = succeeds(
+            bin()
+                .args(["features"])
+                .arg(&svg)
+                .arg("-o")
+                .arg(&json)
+                .args(flags),
+            "triwild",
         );
         let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
         v["d"].as_f64().unwrap()
@@ -401,17 +387,13 @@ fn the_mesh_is_the_same_for_every_thread_count() {
         let mut first: Option<Vec<u8>> = None;
         for threads in ["1", "2", "4", "0"] {
             let msh = out.join(format!("{stem}-t{threads}.msh"));
-            let run = bin()
-                .arg(&svg)
-                .arg("-o")
-                .arg(&msh)
-                .args(["--threads", threads])
-                .output()
-                .unwrap();
-            assert!(
-                run.status.success(),
-                "{stem} --threads {threads}: {}",
-                String::from_utf8_lossy(&run.stderr)
+            let run = succeeds(
+                bin()
+                    .arg(&svg)
+                    .arg("-o")
+                    .arg(&msh)
+                    .args(["--threads", threads]),
+                &format!("{stem} --threads {threads}"),
             );
             let bytes = std::fs::read(&msh).unwrap();
             match &first {
@@ -440,17 +422,13 @@ fn a_path_painted_many_times_meshes_as_one_and_the_stats_count_the_copies() {
     )
     .unwrap();
     let msh = out.join("duplicates.msh");
-    let run = bin()
-        .arg(&svg)
-        .arg("-o")
-        .arg(&msh)
-        .args(["--stats", "--regions", "colour"])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    let run = succeeds(
+        bin()
+            .arg(&svg)
+            .arg("-o")
+            .arg(&msh)
+            .args(["--stats", "--regions", "colour"]),
+        "triwild",
     );
     support::check_msh(&msh).assert_valid("duplicates");
     let stats: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
