@@ -344,7 +344,7 @@ fn units_and_scale_flags_reach_the_mesh_and_the_stats() {
     // `features` shares the flags: its d is in the output units
     let features = |flags: &[&str]| {
         let json = out.join("a4.features.json");
-        let run = succeeds(
+        succeeds(
             bin()
                 .args(["features"])
                 .arg(&svg)
@@ -387,7 +387,7 @@ fn the_mesh_is_the_same_for_every_thread_count() {
         let mut first: Option<Vec<u8>> = None;
         for threads in ["1", "2", "4", "0"] {
             let msh = out.join(format!("{stem}-t{threads}.msh"));
-            let run = succeeds(
+            succeeds(
                 bin()
                     .arg(&svg)
                     .arg("-o")
