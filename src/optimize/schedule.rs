@@ -416,9 +416,11 @@ pub(crate) struct Schedule<'a> {
     clock: u64,
     /// By vertex slot: the clock when a face around the vertex last changed.
     stamp: Vec<u64>,
-    /// Collapses refused, with the clock then: retried only once a face
-    /// around either end has changed (the outcome depends on nothing else).
-    failed_collapse: rustc_hash::FxHashMap<EdgeKey, u64>,
+    /// Collapses refused, with the clock then and whether the length rule
+    /// refused some direction: retried only once a face around either end has
+    /// changed (the outcome depends on nothing else), or, for a length
+    /// refusal, once the sizing field changed.
+    failed_collapse: rustc_hash::FxHashMap<EdgeKey, FailedCollapse>,
     /// Smoothing refused, by vertex slot, with the clock then.
     failed_smooth: Vec<u64>,
     /// By vertex slot: the clock when the faces around the vertex last changed
@@ -432,6 +434,16 @@ pub(crate) struct Schedule<'a> {
     max_stretch: f64,
     /// A one-ring buffer reused by the collapse pass's length checks.
     ring: VertexRing,
+}
+
+/// A refused collapse in [`Schedule::failed_collapse`].
+#[derive(Clone, Copy)]
+struct FailedCollapse {
+    /// The operation clock when it was refused.
+    at: u64,
+    /// Whether the length rule (`keeps_lengths`, which reads the sizing
+    /// field) refused a direction.
+    by_length: bool,
 }
 
 /// The collapse round's queue: edges by the bits of their length (which order
@@ -711,8 +723,10 @@ impl<'a> Schedule<'a> {
     /// target grows by 1.5. Targets stay in `[l_floor, l]`. Returns whether some
     /// target hit the floor.
     fn update_sizing(&mut self, worst: f64) -> bool {
-        // Collapses refused under the old sizes may pass under the new ones.
-        self.failed_collapse.clear();
+        // Collapses refused by the length rule under the old sizes may pass
+        // under the new ones; every other refusal depends on the faces around
+        // the edge alone.
+        self.failed_collapse.retain(|_, f| !f.by_length);
         let threshold =
             (worst / SIZING_WORST_DIVISOR).max(SIZING_STOP_FRACTION * self.opts.stop_energy);
         let mut seeds: Vec<VertexId> = Vec::new();
@@ -808,13 +822,14 @@ impl<'a> Schedule<'a> {
             if len.to_bits() != bits || len >= factor * self.edge_target(k) {
                 continue;
             }
-            if let Some(&at) = self.failed_collapse.get(&k) {
+            if let Some(&FailedCollapse { at, .. }) = self.failed_collapse.get(&k) {
                 if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at {
                     continue;
                 }
             }
             let mut applied_now = false;
             let mut tried = false;
+            let mut by_length = false;
             for (u, v) in [(k.lo, k.hi), (k.hi, k.lo)] {
                 // Refused by the role rules, and v's faces unchanged since: the
                 // same refusal, without planning it (or measuring lengths) again.
@@ -826,6 +841,7 @@ impl<'a> Schedule<'a> {
                     continue;
                 }
                 if !self.keeps_lengths(u, v) {
+                    by_length = true;
                     continue;
                 }
                 tried = true;
@@ -847,7 +863,9 @@ impl<'a> Schedule<'a> {
                     .record(&Outcome::Rejected(Reject::EdgeLength));
             }
             if !applied_now {
-                self.failed_collapse.insert(k, self.clock);
+                let at = self.clock;
+                self.failed_collapse
+                    .insert(k, FailedCollapse { at, by_length });
             }
             if applied_now {
                 applied += 1;
