@@ -31,10 +31,15 @@ fn curving_never_makes_needles_on_a_flag_of_albania() {
         q.min_angle_deg
     );
     assert!(q.max_amips < 10.0, "max AMIPS {}", q.max_amips);
-    // The flag is still followed: no curved edge was left straight.
+    // The flag is still followed: no curved edge was left straight. The
+    // largest distance is a fitted element's (4 here: its curved edge is
+    // pulled off the curve to be certified), so it moves with the linear
+    // mesh: measured 8.7e-5 (8b28e63) and 1.2e-4 (the smoothing's Newton
+    // decrement), against 1.4e-3 for the quadratic mesh and 1.6e-3 for the
+    // straight one.
     assert_eq!(curve.straight_triangles, 0);
     assert!(
-        curve.max_curve_distance_rel < 1e-4,
+        curve.max_curve_distance_rel < 2.5e-4,
         "{}",
         curve.max_curve_distance_rel
     );

@@ -21,6 +21,11 @@ use std::cmp::Ordering;
 const NEWTON_ITERATIONS: usize = 10;
 /// Halvings of the line search.
 const LINE_SEARCH_STEPS: usize = 30;
+/// Newton stops once the decrease its step predicts (the Newton decrement,
+/// `-∇E·d`) is below this fraction of the energy: about what `f64` can still
+/// resolve in a sum of a few energies, so further steps would only halve
+/// their way through the line search to nothing.
+const NEWTON_DECREMENT: f64 = 1e-12;
 
 /// The planned move of one vertex.
 #[derive(Clone, Debug)]
@@ -147,6 +152,14 @@ impl SmoothPlan {
                         .cholesky()
                         .map(|ch| ch.solve(&(-e.grad)))
                         .unwrap_or_else(|| -e.grad / e.hess.trace().max(1e-300));
+                    // Converged: the step's predicted decrease is below what
+                    // f64 can still see in the ring's energy (the line search
+                    // would halve its way to nothing).
+                    if (-e.grad.dot(&dir)).partial_cmp(&(NEWTON_DECREMENT * e.value))
+                        != Some(Ordering::Greater)
+                    {
+                        break;
+                    }
                     let Some((q, eq)) = line_search(p, dir, e.value, &energy) else {
                         break;
                     };
@@ -275,6 +288,12 @@ fn minimize_1d(
     for _ in 0..NEWTON_ITERATIONS {
         let (value, d1, d2) = e;
         let dx = if d2 > 0.0 {
+            // Converged: see NEWTON_DECREMENT.
+            if (d1 * d1 / d2).partial_cmp(&(NEWTON_DECREMENT * value.abs()))
+                != Some(Ordering::Greater)
+            {
+                break;
+            }
             -d1 / d2
         } else {
             -d1.signum() * 0.25 * (hi - lo)
