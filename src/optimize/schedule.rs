@@ -784,24 +784,51 @@ impl<'a> Schedule<'a> {
         // Refused collapses are retried (in a new round) once a collapse has
         // changed their neighbourhood, as long as rounds make progress.
         let mut total = 0;
+        let mut since = None;
         for _ in 0..COLLAPSE_ROUNDS {
-            let n = self.collapse_round(factor);
+            let start = self.clock;
+            let n = self.collapse_round(factor, since);
             total += n;
             if n == 0 {
                 break;
             }
+            since = Some(start);
         }
         total
     }
 
-    /// One round of [`Self::collapse_pass`]: every short edge once, shortest first.
-    fn collapse_round(&mut self, factor: f64) -> u64 {
+    /// One round of [`Self::collapse_pass`]: every short edge once, shortest
+    /// first. With `since`, only the edges at a vertex whose faces changed
+    /// after that clock: a refused collapse elsewhere would be refused again
+    /// (its memo in `failed_collapse` still holds, and a collapse pass changes
+    /// no length or target), so the round skips the scan of the whole mesh.
+    fn collapse_round(&mut self, factor: f64, since: Option<u64>) -> u64 {
         // Shortest first, by the bits of the (non-negative) length, which
         // order like the lengths: the short edges sorted once, and a min-heap
         // for the edges queued again during the round, popped together in
         // one order.
         let mut queue = ShortestFirst::default();
-        for k in self.mesh.edges().collect::<Vec<_>>() {
+        let edges: Vec<EdgeKey> = match since {
+            None => self.mesh.edges().collect(),
+            Some(at) => {
+                let touched: Vec<VertexId> = self
+                    .mesh
+                    .vertices()
+                    .filter(|&v| self.stamp_of(v) > at)
+                    .collect();
+                let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
+                let mut edges = Vec::new();
+                for v in touched {
+                    self.mesh.vertex_ring_into(v, &mut ring);
+                    edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
+                }
+                self.ring = ring;
+                edges.sort_unstable();
+                edges.dedup();
+                edges
+            }
+        };
+        for k in edges {
             let len = self.mesh.distance(k.lo, k.hi);
             if len < factor * self.edge_target(k) {
                 queue.sorted.push((len.to_bits(), k));
