@@ -77,8 +77,9 @@ impl EdgeKey {
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct VertexData {
     pub(super) pos: Point,
-    /// The exact position while it is not an `f64` point.
-    pub(super) exact: Option<PointQ>,
+    /// The exact position while it is not an `f64` point (boxed: rare, and
+    /// large beside the rest, which every position lookup walks over).
+    pub(super) exact: Option<Box<PointQ>>,
     pub(super) tag: VertexTag,
     /// Some live incident face, if any.
     pub(super) face: Option<FaceId>,
@@ -133,7 +134,7 @@ impl TriMesh {
         let (pos, exact) = p.to_f64();
         self.insert_vertex(VertexData {
             pos,
-            exact: (!exact).then_some(p),
+            exact: (!exact).then(|| Box::new(p)),
             tag,
             face: None,
         })
@@ -208,7 +209,7 @@ impl TriMesh {
 
     /// The exact position, if the vertex is not an `f64` point.
     pub(crate) fn exact(&self, v: VertexId) -> Option<&PointQ> {
-        self.vdata(v).exact.as_ref()
+        self.vdata(v).exact.as_deref()
     }
 
     /// Whether the vertex has a rational (not yet rounded) position.
@@ -219,7 +220,10 @@ impl TriMesh {
     /// The exact position as a rational point.
     pub(crate) fn point_q(&self, v: VertexId) -> PointQ {
         let d = self.vdata(v);
-        d.exact.clone().unwrap_or_else(|| PointQ::from_point(d.pos))
+        d.exact
+            .as_deref()
+            .cloned()
+            .unwrap_or_else(|| PointQ::from_point(d.pos))
     }
 
     /// The exact position, borrowed when the vertex is rational.
