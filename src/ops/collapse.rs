@@ -94,6 +94,41 @@ impl CollapsePlan {
         if let Some(r) = role_refusal(mesh, u, v, role_v) {
             return Err(r);
         }
+        // A vertex without features may go where its faces get as bad as the
+        // context's floor; near features the plain rule keeps their
+        // neighbourhood (and the secondary geometry) as it is.
+        let floor = if role_v == Role::Free {
+            ctx.energy_floor
+        } else {
+            0.0
+        };
+        // Linear mode: the energy rule needs v's ring and positions only (u
+        // does not move), so it refuses here, before u's ring, the link
+        // condition and the tags, what it would refuse anyway: most refused
+        // collapses stop here. An infinite energy (inverted or degenerate in
+        // f64) is left to the exact inversion test. Curved energies depend on
+        // the moved tags (and reshape faces outside the star): left to the
+        // invariants.
+        let linear_max = if ctx.curved.is_none() {
+            let old = max_energy(mesh, ctx, &rv.faces).max(floor);
+            if ctx.energy == EnergyRule::NoWorseMax {
+                let new_max = max_energy_of(
+                    mesh,
+                    ctx,
+                    rv.faces
+                        .iter()
+                        .map(|&f| mesh.face(f))
+                        .filter(|t| !t.contains(&u))
+                        .map(|t| t.map(|x| if x == v { u } else { x })),
+                );
+                if new_max.is_finite() && new_max > old {
+                    return Err(Reject::Energy);
+                }
+            }
+            Some(old)
+        } else {
+            None
+        };
         let ru = mesh.vertex_ring(u);
         let mut edge_faces = Vec::new();
         mesh.faces_on_edge(v, u, &mut edge_faces);
@@ -212,18 +247,14 @@ impl CollapsePlan {
                 }
             }
         }
-        let old: Vec<FaceId> = rv.faces.iter().chain(&reshaped).copied().collect();
+        let old_max_energy = linear_max.unwrap_or_else(|| {
+            let old: Vec<FaceId> = rv.faces.iter().chain(&reshaped).copied().collect();
+            max_energy(mesh, ctx, &old).max(floor)
+        });
         Ok(CollapsePlan {
             u,
             v,
-            // A vertex without features may go where its faces get as bad as
-            // the context's floor; near features the plain rule keeps their
-            // neighbourhood (and the secondary geometry) as it is.
-            old_max_energy: if role_v == Role::Free {
-                max_energy(mesh, ctx, &old).max(ctx.energy_floor)
-            } else {
-                max_energy(mesh, ctx, &old)
-            },
+            old_max_energy,
             reshaped,
             star: rv.faces,
             new,
@@ -239,16 +270,6 @@ pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: Ve
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
-    // The energy rule needs positions only (u does not move): refuse early,
-    // without a transaction, what it would refuse anyway. An infinite energy
-    // (inverted or degenerate in f64) is left to the exact inversion test.
-    // Curved energies depend on the moved tags: left to the invariants.
-    if ctx.energy == EnergyRule::NoWorseMax && ctx.curved.is_none() {
-        let new_max = max_energy_of(mesh, ctx, plan.new.iter().copied());
-        if new_max.is_finite() && new_max > plan.old_max_energy {
-            return Outcome::Rejected(Reject::Energy);
-        }
-    }
     let mut tx = Transaction::new(mesh);
     for &w in &plan.drop_tags {
         tx.take_edge_tags(plan.v, w);
