@@ -50,6 +50,7 @@ use crate::ops::{
     self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
     try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
+use rustc_hash::FxHashSet;
 use std::collections::{BTreeMap, BinaryHeap};
 
 /// Edges longer than this multiple of their mean target are split, and a
@@ -434,6 +435,10 @@ pub(crate) struct Schedule<'a> {
     max_stretch: f64,
     /// A one-ring buffer reused by the collapse pass's length checks.
     ring: VertexRing,
+    /// The clock when the last swap pass scanned the edges, and the edges it
+    /// found a gain on: an edge whose ends' faces have not changed since
+    /// (so neither has its quad) and that had no gain then has none now.
+    swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
 }
 
 /// A refused collapse in [`Schedule::failed_collapse`].
@@ -530,6 +535,7 @@ impl<'a> Schedule<'a> {
             role_refused: rustc_hash::FxHashMap::default(),
             max_stretch: SPLIT_ABOVE,
             ring: VertexRing::empty(),
+            swap_scan: None,
         }
     }
 
@@ -942,18 +948,10 @@ impl<'a> Schedule<'a> {
     /// Swap edges where that lowers the larger energy of their two triangles;
     /// on secondary feature edges, the same change is a reroute (`ops::swap`).
     pub(crate) fn swap_pass(&mut self) -> u64 {
-        let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
-        for k in self.mesh.edges().collect::<Vec<_>>() {
-            let primary = self
-                .mesh
-                .edge_tags(k.lo, k.hi)
-                .iter()
-                .any(|t| matches!(t, FeatureOn::Primary { .. }));
-            if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
-                cands.push((self.mesh.distance(k.lo, k.hi), k));
-            }
-        }
-        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let scanned_at = self.clock;
+        let last = self.swap_scan.take();
+        let cands = self.swap_candidates(last.as_ref());
+        self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
         let mut applied = 0;
         for (_, k) in cands {
             // Earlier swaps may have changed the quad.
@@ -985,6 +983,36 @@ impl<'a> Schedule<'a> {
             }
         }
         applied
+    }
+
+    /// The swap pass's candidates, longest first: the edges off primary
+    /// features where a swap lowers the larger energy of their two triangles.
+    /// With `last` (the clock of the previous scan and the edges it found),
+    /// an edge whose ends' faces have not changed since and that was not
+    /// found then is not evaluated again: its quad is the same (a change of
+    /// either face, or a move of any of its four vertices, stamps both ends),
+    /// and so is the answer.
+    fn swap_candidates(&self, last: Option<&(u64, FxHashSet<EdgeKey>)>) -> Vec<(f64, EdgeKey)> {
+        let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
+        for k in self.mesh.edges() {
+            if let Some((at, found)) = last
+                && self.stamp_of(k.lo) <= *at
+                && self.stamp_of(k.hi) <= *at
+                && !found.contains(&k)
+            {
+                continue;
+            }
+            let primary = self
+                .mesh
+                .edge_tags(k.lo, k.hi)
+                .iter()
+                .any(|t| matches!(t, FeatureOn::Primary { .. }));
+            if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
+                cands.push((self.mesh.distance(k.lo, k.hi), k));
+            }
+        }
+        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        cands
     }
 
     /// Smooth every vertex that may move, in a fixed pseudo-random order.
@@ -1432,5 +1460,61 @@ mod queue_tests {
                 step += 1;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod swap_memo_tests {
+    use super::*;
+    use crate::ops::EnergyRule;
+    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
+
+    /// Between the passes of a schedule, the swap pass's memo (edges not
+    /// evaluated again) yields exactly the candidates of a full evaluation.
+    #[test]
+    fn the_swap_memo_finds_what_a_full_scan_finds() {
+        let meshes = (0..3)
+            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
+            .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)));
+        let (mut checked, mut skipped) = (0, 0);
+        for (i, (mut mesh, mut ctx)) in meshes.enumerate() {
+            let opts = OptimizeOptions {
+                l: 0.1,
+                l_floor: 0.01,
+                stop_energy: 5.0,
+                alpha_deg: 10.0,
+                max_passes: 40,
+                max_vertices: 20_000,
+                deadline: Deadline::NONE,
+            };
+            let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7);
+            for pass in 0..8 {
+                s.split_pass();
+                s.collapse_pass(0.8);
+                // A full scan, then the memo's, against the state the last
+                // swap pass left (none before the first).
+                let full = s.swap_candidates(None);
+                let memo = s.swap_candidates(s.swap_scan.as_ref());
+                assert_eq!(full, memo, "mesh {i}, pass {pass}");
+                checked += full.len();
+                if let Some((at, found)) = &s.swap_scan {
+                    skipped += s
+                        .mesh
+                        .edges()
+                        .filter(|k| {
+                            s.stamp_of(k.lo) <= *at && s.stamp_of(k.hi) <= *at && !found.contains(k)
+                        })
+                        .count();
+                }
+                s.swap_pass();
+                s.smooth_pass();
+            }
+        }
+        // The check saw candidates and skipped edges (it would pass vacuously
+        // on none).
+        assert!(
+            checked > 50 && skipped > 50,
+            "{checked} candidates, {skipped} skipped"
+        );
     }
 }
