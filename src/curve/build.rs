@@ -89,6 +89,10 @@ pub(crate) struct CurveOptions {
     pub stop_energy: f64,
     /// Passes of the curved optimization after its preliminary one; 0 skips it.
     pub max_passes: u32,
+    /// The curved optimization's corner rule ([`CurvedRule::corner_floor`]): no
+    /// operation makes a straight (corner) AMIPS energy larger than this and the
+    /// worst of the faces it replaces. Default: the linear stop energy.
+    pub corner_floor: f64,
     /// Bound on the turn of a primary edge's curve piece in the curved
     /// optimization, radians (strict; less than π).
     pub curved_alpha: f64,
@@ -129,6 +133,7 @@ impl CurveOptions {
             l_abs: defaults.l.resolve(d),
             stop_energy: defaults.stop_energy_curved,
             max_passes: defaults.max_passes_curved,
+            corner_floor: rule.corner_floor,
             curved_alpha: rule.alpha,
             deadline: Deadline::NONE,
         }
@@ -146,6 +151,11 @@ impl CurveOptions {
     /// Set the target edge length `l` (user units) of the curved optimization.
     pub(crate) fn with_l_abs(mut self, l: f64) -> Self {
         self.l_abs = l;
+        self
+    }
+    /// Set the corner rule's floor (normally the linear stage's stop energy).
+    pub(crate) fn with_corner_floor(mut self, energy: f64) -> Self {
+        self.corner_floor = energy;
         self
     }
     /// Set the curved optimization's stop energy and pass limit (0 skips it).
@@ -264,6 +274,7 @@ fn curved_optimization(
         order: opts.order,
         certify: opts.certify,
         alpha: opts.curved_alpha,
+        corner_floor: opts.corner_floor,
     };
     let curved_opts = CurvedOptimizeOptions {
         l: opts.l_abs,

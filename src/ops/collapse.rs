@@ -15,7 +15,8 @@
 
 use super::invariants::{self, Check};
 use super::{
-    Context, EnergyRule, LocalChange, Outcome, Reject, Role, max_energy, max_energy_of, role, t_at,
+    Context, EnergyRule, LocalChange, Outcome, Reject, Role, corner_energy, max_energy,
+    max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -36,6 +37,7 @@ pub(crate) struct CollapsePlan {
     /// Curved mode: faces outside the star whose edge `u w` gets a primary tag.
     reshaped: Vec<FaceId>,
     old_max_energy: f64,
+    old_corner_energy: Option<f64>,
 }
 
 /// The refusal of collapsing `v` into `u` that depends on the vertex tags and
@@ -247,14 +249,21 @@ impl CollapsePlan {
                 }
             }
         }
-        let old_max_energy = linear_max.unwrap_or_else(|| {
-            let old: Vec<FaceId> = rv.faces.iter().chain(&reshaped).copied().collect();
-            max_energy(mesh, ctx, &old).max(floor)
-        });
+        let (old_max_energy, old_corner_energy) = match linear_max {
+            Some(old) => (old, None),
+            None => {
+                let old: Vec<FaceId> = rv.faces.iter().chain(&reshaped).copied().collect();
+                (
+                    max_energy(mesh, ctx, &old).max(floor),
+                    corner_energy(mesh, ctx, &old),
+                )
+            }
+        };
         Ok(CollapsePlan {
             u,
             v,
             old_max_energy,
+            old_corner_energy,
             reshaped,
             star: rv.faces,
             new,
@@ -286,6 +295,7 @@ pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: Ve
         changed: &[plan.u],
         budgets: &[],
         old_max_energy: Some(plan.old_max_energy),
+        old_corner_energy: plan.old_corner_energy,
     };
     if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);

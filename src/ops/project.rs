@@ -62,6 +62,7 @@ pub(crate) fn try_project(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Out
             changed: &[v],
             budgets: &budgets,
             old_max_energy: None,
+            old_corner_energy: None,
         };
         match invariants::validate(&tx, ctx, &check) {
             Ok(()) => {

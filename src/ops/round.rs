@@ -24,6 +24,7 @@ pub(crate) fn try_round(mesh: &mut TriMesh, ctx: &Context, v: VertexId) -> Outco
         changed: &[v],
         budgets: &budget,
         old_max_energy: None,
+        old_corner_energy: None,
     };
     if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);

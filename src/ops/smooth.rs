@@ -9,7 +9,7 @@
 //! kept only if it lowers the ring's energy.
 
 use super::invariants::{self, Check, on_curve};
-use super::{Context, LocalChange, Outcome, Reject, Role, max_energy, role};
+use super::{Context, LocalChange, Outcome, Reject, Role, corner_energy, max_energy, role};
 use crate::element::energy::{Amips2, CurveJet, along_curve, amips_free};
 use crate::features::Parent;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
@@ -36,6 +36,7 @@ pub(crate) struct SmoothPlan {
     /// New parameter, for a primary vertex.
     t: Option<(u32, f64)>,
     old_max_energy: f64,
+    old_corner_energy: Option<f64>,
 }
 
 /// What smoothing minimises over the one-ring.
@@ -210,6 +211,7 @@ impl SmoothPlan {
         Ok(SmoothPlan {
             v,
             old_max_energy: max_energy(mesh, ctx, &faces),
+            old_corner_energy: corner_energy(mesh, ctx, &faces),
             faces,
             pos,
             t,
@@ -399,6 +401,7 @@ pub(crate) fn try_smooth_with(
         changed: &[v],
         budgets: &budget,
         old_max_energy: Some(plan.old_max_energy),
+        old_corner_energy: plan.old_corner_energy,
     };
     if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);

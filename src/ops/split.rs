@@ -158,6 +158,7 @@ impl SplitPlan {
             changed: &[m],
             budgets: &budgets,
             old_max_energy: None,
+            old_corner_energy: None,
         };
         if let Err(r) = invariants::validate(&tx, ctx, &check) {
             return Outcome::Rejected(r);

@@ -12,7 +12,7 @@
 //! decides on `a k` and `k b` as for any operation.
 
 use super::invariants::{self, Check};
-use super::{Context, LocalChange, Outcome, Reject, max_energy};
+use super::{Context, LocalChange, Outcome, Reject, corner_energy, max_energy};
 use crate::mesh::{
     EdgeQuad, FaceId, FeatureOn, Transaction, TriMesh, VertexId, point_segment_distance,
 };
@@ -26,6 +26,7 @@ pub(crate) struct SwapPlan {
     c: VertexId,
     d: VertexId,
     old_max_energy: f64,
+    old_corner_energy: Option<f64>,
 }
 
 impl SwapPlan {
@@ -58,6 +59,7 @@ impl SwapPlan {
             c,
             d,
             old_max_energy: max_energy(mesh, ctx, &[f, g]),
+            old_corner_energy: corner_energy(mesh, ctx, &[f, g]),
         })
     }
 }
@@ -112,6 +114,7 @@ fn validate_and_commit(
         changed: &[plan.c, plan.d],
         budgets: &[],
         old_max_energy: Some(plan.old_max_energy),
+        old_corner_energy: plan.old_corner_energy,
     };
     if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);
@@ -181,6 +184,7 @@ impl ReroutePlan {
                 c,
                 d,
                 old_max_energy: max_energy(mesh, ctx, &[f, g]),
+                old_corner_energy: corner_energy(mesh, ctx, &[f, g]),
             },
             a,
             b,

@@ -433,6 +433,7 @@ fn mesh_stages(
                             .with_l_min_abs(resolved.l_min)
                             .with_l_abs(resolved.l)
                             .with_stop_curved(params.stop_energy_curved, params.max_passes_curved)
+                            .with_corner_floor(params.stop_energy)
                             .with_deadline(deadline);
                         curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;

@@ -32,6 +32,9 @@ pub(crate) struct Check<'a> {
     /// Largest energy of the faces replaced, when the energy rule applies
     /// (curved energies in curved mode, `+∞` for an uncertified element).
     pub(crate) old_max_energy: Option<f64>,
+    /// In curved mode, the largest straight (corner) energy of the faces
+    /// replaced, for the corner rule ([`super::CurvedRule::corner_floor`]).
+    pub(crate) old_corner_energy: Option<f64>,
 }
 
 /// Run every invariant; the first that fails names the rejection.
@@ -74,6 +77,15 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
     let old_max = check.old_max_energy;
     if let (EnergyRule::NoWorseMax, Some(old), Some(new)) = (ctx.energy, old_max, new_max) {
         if new > old {
+            return Err(Reject::Energy);
+        }
+    }
+    if let (EnergyRule::NoWorseMax, Some(rule), Some(old)) =
+        (ctx.energy, &ctx.curved, check.old_corner_energy)
+    {
+        if super::corner_energy(mesh, ctx, check.faces)
+            .is_some_and(|new| new > old.max(rule.corner_floor))
+        {
             return Err(Reject::Energy);
         }
     }
