@@ -25,7 +25,7 @@
 //! sit. `+∞` where `det J ≤ 0` at a sample.
 
 use super::Order;
-use super::bernstein::{BernsteinTri, lattice};
+use super::bernstein::lattice;
 use super::jacobian::{self, CertifyOptions};
 use super::lagrange;
 use kurbo::{Point, Vec2};
@@ -134,30 +134,71 @@ pub fn amips(order: Order, nodes: &[Point]) -> f64 {
         };
         return amips_of_jacobian(c[1] - c[0], c[2] - c[0]);
     }
-    let Some(net) = lagrange::relative_bezier_net(order, nodes) else {
-        return f64::INFINITY;
-    };
-    // Derivative nets (degree n − 1, lattice order) of the Bézier form.
-    let n = order as usize;
-    let m = n - 1;
+    match order {
+        Order::Linear => f64::INFINITY,
+        Order::Quadratic => match <[Point; 6]>::try_from(nodes) {
+            Ok(n) => {
+                let o = n[0].to_vec2();
+                amips_of_net(2, &lagrange::quadratic_to_bezier(&n.map(|p| p - o)))
+            }
+            Err(_) => f64::INFINITY,
+        },
+        Order::Cubic => match <[Point; 10]>::try_from(nodes) {
+            Ok(n) => {
+                let o = n[0].to_vec2();
+                amips_of_net(3, &lagrange::cubic_to_bezier(&n.map(|p| p - o)))
+            }
+            Err(_) => f64::INFINITY,
+        },
+    }
+}
+
+/// Sample points of [`amips`]: the degree-4 lattice.
+const SAMPLES: usize = super::bernstein::len(4);
+
+/// The Bernstein basis of degree `m` (1 or 2; lattice order, padded to 6) at
+/// the samples: `BASIS[m - 1][s][i]`.
+static BASIS: std::sync::LazyLock<[[[f64; 6]; SAMPLES]; 2]> = std::sync::LazyLock::new(|| {
+    const FACT: [f64; 3] = [1.0, 1.0, 2.0];
+    let mut t = [[[0.0; 6]; SAMPLES]; 2];
+    for (m, table) in [1usize, 2].into_iter().zip(&mut t) {
+        for (row, b) in table.iter_mut().zip(lattice(4)) {
+            let l = b.map(|x| x as f64 / 4.0);
+            for (v, a) in row.iter_mut().zip(lattice(m)) {
+                let coeff = FACT[m] / (FACT[a[0]] * FACT[a[1]] * FACT[a[2]]);
+                *v = coeff
+                    * l[0].powi(a[0] as i32)
+                    * l[1].powi(a[1] as i32)
+                    * l[2].powi(a[2] as i32);
+            }
+        }
+    }
+    t
+});
+
+/// [`amips`] of the Bézier triangle `net` of degree `n` (2 or 3; lattice
+/// order, relative to its first node): the derivative nets along the two
+/// reference axes (degree `n − 1`) evaluated at the samples from [`BASIS`].
+fn amips_of_net(n: usize, net: &[Point]) -> f64 {
     let idx = super::bernstein::index;
-    let mut dx = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
-    for b in lattice(m) {
+    let m = n - 1;
+    let mut da = [Vec2::ZERO; 6];
+    let mut dc = [Vec2::ZERO; 6];
+    for (i, b) in lattice(m).enumerate() {
         let (j, k) = (b[1], b[2]);
         let base = net[idx(n, j, k)];
-        let a = n as f64 * (net[idx(n, j + 1, k)] - base);
-        let c = n as f64 * (net[idx(n, j, k + 1)] - base);
-        dx[0].push(a.x);
-        dx[1].push(a.y);
-        dx[2].push(c.x);
-        dx[3].push(c.y);
+        da[i] = n as f64 * (net[idx(n, j + 1, k)] - base);
+        dc[i] = n as f64 * (net[idx(n, j, k + 1)] - base);
     }
-    let polys = dx.map(|c| BernsteinTri::new(&c));
+    let count = super::bernstein::len(m);
     let mut worst: f64 = 0.0;
-    for b in lattice(4) {
-        let l = b.map(|x| x as f64 / 4.0);
-        let [ax, ay, cx, cy] = polys.each_ref().map(|p| p.eval(l));
-        worst = worst.max(amips_of_jacobian(Vec2::new(ax, ay), Vec2::new(cx, cy)));
+    for row in &BASIS[m - 1] {
+        let (mut a, mut c) = (Vec2::ZERO, Vec2::ZERO);
+        for i in 0..count {
+            a += row[i] * da[i];
+            c += row[i] * dc[i];
+        }
+        worst = worst.max(amips_of_jacobian(a, c));
     }
     worst
 }

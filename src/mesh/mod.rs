@@ -24,5 +24,5 @@ mod transaction;
 pub(crate) use geometry::{angle_between, corner_angles, min_angle_deg, point_segment_distance};
 pub(crate) use ids::{FaceId, VertexId};
 pub(crate) use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
-pub(crate) use topology::{EdgeQuad, VertexRing};
+pub(crate) use topology::{EdgeQuad, ScratchRing, VertexRing};
 pub(crate) use transaction::Transaction;

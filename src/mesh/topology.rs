@@ -275,6 +275,41 @@ impl VertexRing {
     }
 }
 
+thread_local! {
+    /// Spare ring buffers for [`ScratchRing`].
+    static SPARE_RINGS: std::cell::RefCell<Vec<VertexRing>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// A vertex ring in a reused buffer (one of a per-thread stack of spares,
+/// given back on drop): for the hot paths that need a ring only for a while.
+#[derive(Debug)]
+pub(crate) struct ScratchRing(VertexRing);
+
+impl ScratchRing {
+    /// The ring of `v` ([`TriMesh::vertex_ring`]).
+    pub(crate) fn of(mesh: &TriMesh, v: VertexId) -> Self {
+        let mut ring = SPARE_RINGS
+            .with_borrow_mut(Vec::pop)
+            .unwrap_or_else(VertexRing::empty);
+        mesh.vertex_ring_into(v, &mut ring);
+        ScratchRing(ring)
+    }
+}
+
+impl std::ops::Deref for ScratchRing {
+    type Target = VertexRing;
+    fn deref(&self) -> &VertexRing {
+        &self.0
+    }
+}
+
+impl Drop for ScratchRing {
+    fn drop(&mut self) {
+        let ring = std::mem::replace(&mut self.0, VertexRing::empty());
+        SPARE_RINGS.with_borrow_mut(|s| s.push(ring));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::mesh::{EdgeKey, TriMesh, VertexTag};

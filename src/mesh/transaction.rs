@@ -21,6 +21,25 @@ enum FreeOp {
     PopF(FaceId),
 }
 
+/// The journal's buffers, kept between transactions (one spare set per thread)
+/// so that the millions of operations an optimization tries do not allocate
+/// them afresh each time.
+#[derive(Debug, Default)]
+struct Journal {
+    old_vertices: Vec<(VertexId, Option<VertexData>)>,
+    old_faces: Vec<(FaceId, Option<FaceData>)>,
+    old_tags: Vec<(EdgeKey, Option<Vec<FeatureOn>>)>,
+    free_log: Vec<FreeOp>,
+    /// Scratch of [`Transaction::replace_faces`]: the faces outside the region
+    /// by their shared edge, and the new faces' unmatched edges.
+    outside: Vec<(EdgeKey, FaceId)>,
+    inner: Vec<(EdgeKey, FaceId, usize)>,
+}
+
+thread_local! {
+    static SPARE: std::cell::Cell<Option<Journal>> = const { std::cell::Cell::new(None) };
+}
+
 /// A guard over a mesh: changes made through it are undone on drop unless
 /// [`Transaction::commit`] is called.
 #[derive(Debug)]
@@ -30,6 +49,8 @@ pub(crate) struct Transaction<'a> {
     old_faces: Vec<(FaceId, Option<FaceData>)>,
     old_tags: Vec<(EdgeKey, Option<Vec<FeatureOn>>)>,
     free_log: Vec<FreeOp>,
+    outside: Vec<(EdgeKey, FaceId)>,
+    inner: Vec<(EdgeKey, FaceId, usize)>,
     vertex_len: usize,
     face_len: usize,
     live: (usize, usize),
@@ -48,12 +69,22 @@ impl<'a> Transaction<'a> {
     pub(crate) fn new(mesh: &'a mut TriMesh) -> Self {
         let (vertex_len, face_len) = (mesh.vertices.len(), mesh.faces.len());
         let live = (mesh.live_vertices, mesh.live_faces);
+        let Journal {
+            old_vertices,
+            old_faces,
+            old_tags,
+            free_log,
+            outside,
+            inner,
+        } = SPARE.with(std::cell::Cell::take).unwrap_or_default();
         Transaction {
             mesh,
-            old_vertices: Vec::new(),
-            old_faces: Vec::new(),
-            old_tags: Vec::new(),
-            free_log: Vec::new(),
+            old_vertices,
+            old_faces,
+            old_tags,
+            free_log,
+            outside,
+            inner,
             vertex_len,
             face_len,
             live,
@@ -182,7 +213,8 @@ impl<'a> Transaction<'a> {
     pub(crate) fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
         // The faces outside the region, by the edge they share with it.
         // Regions are a few faces: linear scans beat hashing here.
-        let mut outside: Vec<(EdgeKey, FaceId)> = Vec::with_capacity(old.len() + 2);
+        let mut outside = std::mem::take(&mut self.outside);
+        outside.clear();
         for &f in old {
             for (i, g) in self.mesh.neighbours(f).into_iter().enumerate() {
                 if let Some(g) = g.filter(|g| !old.contains(g)) {
@@ -195,7 +227,8 @@ impl<'a> Transaction<'a> {
             self.remove_face(f);
         }
         let ids: Vec<FaceId> = new.iter().map(|&v| self.add_face(v)).collect();
-        let mut inner: Vec<(EdgeKey, FaceId, usize)> = Vec::with_capacity(new.len() * 2);
+        let mut inner = std::mem::take(&mut self.inner);
+        inner.clear();
         for &f in &ids {
             for i in 0..3 {
                 let (a, b) = self.mesh.edge(f, i);
@@ -214,6 +247,8 @@ impl<'a> Transaction<'a> {
                 }
             }
         }
+        self.outside = outside;
+        self.inner = inner;
         ids
     }
 
@@ -262,6 +297,19 @@ impl Drop for Transaction<'_> {
         if !self.committed {
             self.rollback();
         }
+        let mut spare = Journal {
+            old_vertices: std::mem::take(&mut self.old_vertices),
+            old_faces: std::mem::take(&mut self.old_faces),
+            old_tags: std::mem::take(&mut self.old_tags),
+            free_log: std::mem::take(&mut self.free_log),
+            outside: std::mem::take(&mut self.outside),
+            inner: std::mem::take(&mut self.inner),
+        };
+        spare.old_vertices.clear();
+        spare.old_faces.clear();
+        spare.old_tags.clear();
+        spare.free_log.clear();
+        SPARE.with(|s| s.set(Some(spare)));
     }
 }
 

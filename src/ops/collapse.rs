@@ -65,7 +65,7 @@ pub(crate) fn refused_by_role(mesh: &TriMesh, u: VertexId, v: VertexId) -> bool 
     if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
         return false;
     }
-    let rv = mesh.vertex_ring(v);
+    let rv = crate::mesh::ScratchRing::of(mesh, v);
     rv.neighbours.contains(&u) && role_refusal(mesh, u, v, role(mesh, v, &rv)).is_some()
 }
 
@@ -86,7 +86,7 @@ impl CollapsePlan {
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let rv = mesh.vertex_ring(v);
+        let rv = crate::mesh::ScratchRing::of(mesh, v);
         if !rv.neighbours.contains(&u) {
             return Err(Reject::NotAnEdge);
         }
@@ -131,7 +131,7 @@ impl CollapsePlan {
         } else {
             None
         };
-        let ru = mesh.vertex_ring(u);
+        let ru = crate::mesh::ScratchRing::of(mesh, u);
         let mut edge_faces = Vec::new();
         mesh.faces_on_edge(v, u, &mut edge_faces);
         let opposite: Vec<VertexId> = edge_faces
@@ -265,7 +265,7 @@ impl CollapsePlan {
             old_max_energy,
             old_corner_energy,
             reshaped,
-            star: rv.faces,
+            star: rv.faces.clone(),
             new,
             retag,
             drop_tags,

@@ -324,7 +324,9 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) 
     if tag.box_corner || tag.feature_point || tag.section_endpoint {
         return Role::Fixed;
     }
-    let mut primary: Vec<(VertexId, u32, f64, f64)> = Vec::new();
+    // The first two primary tags (a third makes the vertex fixed anyway).
+    let mut primary = [(v, 0u32, 0.0f64, 0.0f64); 2];
+    let mut n_primary = 0usize;
     let mut secondary = 0;
     for &w in &ring.neighbours {
         let key = EdgeKey::new(v, w);
@@ -337,11 +339,14 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) 
         }
         for t in tags {
             if let FeatureOn::Primary { section, t } = *t {
-                primary.push((w, section, t_at(key, t, v), t_at(key, t, w)));
+                if let Some(slot) = primary.get_mut(n_primary) {
+                    *slot = (w, section, t_at(key, t, v), t_at(key, t, w));
+                }
+                n_primary += 1;
             }
         }
     }
-    let featured = secondary > 0 || !primary.is_empty();
+    let featured = secondary > 0 || n_primary > 0;
     if ring.boundary {
         return if featured {
             Role::Fixed
@@ -349,7 +354,7 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) 
             Role::Boundary
         };
     }
-    match (primary.len(), secondary) {
+    match (n_primary, secondary) {
         (0, 0) => Role::Free,
         (0, 2) => Role::Secondary,
         (0, _) => Role::SecondaryJunction,

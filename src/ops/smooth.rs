@@ -117,7 +117,7 @@ impl SmoothPlan {
         if !mesh.is_vertex_alive(v) {
             return Err(Reject::NotAnEdge);
         }
-        let r = mesh.vertex_ring(v);
+        let r = crate::mesh::ScratchRing::of(mesh, v);
         let faces = r.faces.clone();
         let scale = match objective {
             Objective::Sum => 1.0,
@@ -361,11 +361,14 @@ pub(crate) fn try_smooth_with(
     let v = plan.v;
     if ctx.max_new_edge < f64::INFINITY {
         let old = mesh.position(v);
-        let stretches = mesh.vertex_ring(v).neighbours.iter().any(|&w| {
-            let q = mesh.position(w);
-            let len = plan.pos.distance(q);
-            len > ctx.max_new_edge && len > old.distance(q)
-        });
+        let stretches = crate::mesh::ScratchRing::of(mesh, v)
+            .neighbours
+            .iter()
+            .any(|&w| {
+                let q = mesh.position(w);
+                let len = plan.pos.distance(q);
+                len > ctx.max_new_edge && len > old.distance(q)
+            });
         if stretches {
             return Outcome::Rejected(Reject::EdgeLength);
         }

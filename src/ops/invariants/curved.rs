@@ -12,7 +12,7 @@
 //! most one curved edge and its element is certified
 //! ([`crate::element::jacobian::certify_element`]).
 
-use super::super::{Context, CurvedRule};
+use super::super::{Context, CurvedRule, Reject};
 use crate::element::triangle as element;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};
 use kurbo::{Point, Vec2};
@@ -102,6 +102,20 @@ pub(crate) fn energy(
     rule: &CurvedRule,
     tri: [VertexId; 3],
 ) -> Option<f64> {
+    energy_within(mesh, ctx, rule, tri, f64::INFINITY).ok()
+}
+
+/// [`energy`], but energy first: a curved element whose sampled energy exceeds
+/// `bound` is refused ([`Reject::Energy`]) before it is certified, since either
+/// it is valid and its energy (at least the sampled one) exceeds `bound`, or it
+/// is not valid; an element that is not valid is [`Reject::Jacobian`].
+fn energy_within(
+    mesh: &TriMesh,
+    ctx: &Context,
+    rule: &CurvedRule,
+    tri: [VertexId; 3],
+    bound: f64,
+) -> Result<f64, Reject> {
     let straight = element::EDGES
         .iter()
         .all(|&[i, j]| curved_tag(mesh, ctx, EdgeKey::new(tri[i], tri[j])).is_none());
@@ -110,12 +124,23 @@ pub(crate) fn energy(
         let det = (b - a).cross(c - a);
         let zero = crate::element::jacobian::zero_abs(&[a, b, c], rule.certify.zero_rel);
         if det > 2.0 * zero {
-            return Some(crate::element::energy::amips(a, b, c));
+            return Ok(crate::element::energy::amips(a, b, c));
         }
     }
-    let nodes = exact_nodes(mesh, ctx, rule.order, tri)?;
-    element::is_certified(rule.order, &nodes, &rule.certify)
-        .then(|| element::amips(rule.order, &nodes))
+    let nodes = exact_nodes(mesh, ctx, rule.order, tri).ok_or(Reject::Jacobian)?;
+    let e = element::amips(rule.order, &nodes);
+    if e == f64::INFINITY {
+        // `det J ≤ 0` at a sample point: not valid.
+        return Err(Reject::Jacobian);
+    }
+    if e > bound {
+        return Err(Reject::Energy);
+    }
+    if element::is_certified(rule.order, &nodes, &rule.certify) {
+        Ok(e)
+    } else {
+        Err(Reject::Jacobian)
+    }
 }
 
 /// The largest curved energy of `faces`, or `None` when one of them is not a
@@ -126,7 +151,26 @@ pub(crate) fn holds(
     rule: &CurvedRule,
     faces: &[FaceId],
 ) -> Option<f64> {
+    holds_within(mesh, ctx, rule, faces, f64::INFINITY).ok()
+}
+
+/// [`holds`] under the energy rule with the faces' old largest energy
+/// `bound`: [`Reject::Jacobian`] when a face is not a valid curved element,
+/// [`Reject::Energy`] when one's energy exceeds `bound` (judged from the
+/// sampled energy before certifying, which saves most certifications: most
+/// refused curved operations fail the energy rule).
+pub(crate) fn holds_within(
+    mesh: &TriMesh,
+    ctx: &Context,
+    rule: &CurvedRule,
+    faces: &[FaceId],
+    bound: f64,
+) -> Result<f64, Reject> {
     faces.iter().try_fold(0.0f64, |m, &f| {
-        energy(mesh, ctx, rule, mesh.face(f)).map(|e| m.max(e))
+        let e = energy_within(mesh, ctx, rule, mesh.face(f), bound)?;
+        if e > bound {
+            return Err(Reject::Energy);
+        }
+        Ok(m.max(e))
     })
 }

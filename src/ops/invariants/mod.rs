@@ -45,7 +45,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
     if !on_curve::holds(mesh, ctx, check.budgets) {
         return Err(Reject::OnCurve);
     }
-    let mut edges: Vec<(EdgeKey, Vec<FeatureOn>)> = Vec::new();
+    let mut edges: Vec<(EdgeKey, &[FeatureOn])> = Vec::new();
     for &f in check.faces {
         let v = mesh.face(f);
         for i in 0..3 {
@@ -56,12 +56,12 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
             let key = EdgeKey::new(a, b);
             let tags = mesh.edge_tags(a, b);
             if !tags.is_empty() && !edges.iter().any(|(k, _)| *k == key) {
-                edges.push((key, tags.to_vec()));
+                edges.push((key, tags));
             }
         }
     }
     for (_, tags) in &edges {
-        for t in tags {
+        for t in *tags {
             if let FeatureOn::Primary { section, t } = *t {
                 if !curvature::holds(ctx, section, t) {
                     return Err(Reject::Curvature);
@@ -70,16 +70,18 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
         }
     }
     // Curved mode: the elements first (cheaper than the envelope sampling).
-    let new_max = match &ctx.curved {
-        None => None,
-        Some(rule) => Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?),
-    };
     let old_max = check.old_max_energy;
-    if let (EnergyRule::NoWorseMax, Some(old), Some(new)) = (ctx.energy, old_max, new_max) {
-        if new > old {
-            return Err(Reject::Energy);
+    let new_max = match (&ctx.curved, ctx.energy, old_max) {
+        (None, ..) => None,
+        // Energy first: most refused curved operations fail the energy rule,
+        // which the sampled energy decides before the certification.
+        (Some(rule), EnergyRule::NoWorseMax, Some(old)) => {
+            Some(curved::holds_within(mesh, ctx, rule, check.faces, old)?)
         }
-    }
+        (Some(rule), ..) => {
+            Some(curved::holds(mesh, ctx, rule, check.faces).ok_or(Reject::Jacobian)?)
+        }
+    };
     if let (EnergyRule::NoWorseMax, Some(rule), Some(old)) =
         (ctx.energy, &ctx.curved, check.old_corner_energy)
     {
@@ -91,7 +93,7 @@ pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Resu
     }
     for (key, tags) in &edges {
         let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
-        for t in tags {
+        for t in *tags {
             if let FeatureOn::Secondary { polyline } = *t {
                 if !ctx.envelope.contains_segment(a, b, polyline) {
                     return Err(Reject::Envelope);
