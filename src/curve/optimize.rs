@@ -110,16 +110,6 @@ fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> EnergyMeasu
     })
 }
 
-/// The largest straight (corner) AMIPS energy of the mesh's triangles.
-fn max_corner_energy(mesh: &TriMesh) -> f64 {
-    mesh.faces()
-        .map(|f| {
-            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
-            crate::element::energy::amips(a, b, c)
-        })
-        .fold(0.0, f64::max)
-}
-
 /// Optimize `mesh` in curved mode (see the module doc). `ctx` must be in curved
 /// mode (`ctx.curved` set); without it, or with `max_passes == 0` or a linear
 /// order, nothing is done.
@@ -141,7 +131,7 @@ pub(crate) fn optimize_curved(
     let start = measure(mesh, ctx, &rule);
     let mut stats = CurvedOptimizeStats {
         max_amips_before: start.max_all,
-        max_corner_amips_before: max_corner_energy(mesh),
+        max_corner_amips_before: ops::max_corner_energy(mesh, mesh.faces()),
         triangles_before: mesh.num_faces(),
         uncertified_before: start.unmeasured,
         ..CurvedOptimizeStats::default()
@@ -195,6 +185,6 @@ pub(crate) fn optimize_curved(
     stats.max_amips_after = last.max_all;
     stats.uncertified_after = last.unmeasured;
     stats.triangles_after = s.mesh().num_faces();
-    stats.max_corner_amips_after = max_corner_energy(s.mesh());
+    stats.max_corner_amips_after = ops::max_corner_energy(s.mesh(), s.mesh().faces());
     stats
 }

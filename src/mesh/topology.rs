@@ -76,42 +76,50 @@ impl TriMesh {
         let Some(start) = self.vertex_face(v) else {
             return;
         };
-        if !self.is_face_alive(start) || self.local_index(start, v).is_none() {
+        // The walk reads the face slots directly: it is the hottest loop of the
+        // optimizer (one call per ring, a few faces each).
+        let slot = |f: FaceId| self.faces.get(f.index()).and_then(Option::as_ref);
+        let at = |d: &super::storage::FaceData| d.v.iter().position(|&x| x == v);
+        let Some(start_data) = slot(start) else {
             return;
-        }
+        };
+        let Some(start_i) = at(start_data) else {
+            return;
+        };
         let budget = self.face_capacity() + 1;
         out.push(start);
-        // Counter-clockwise: cross the edge v → next, i.e. the edge opposite prev.
-        let step = |f: FaceId, forward: bool| -> Option<FaceId> {
-            let i = self.local_index(f, v)?;
-            let e = if forward { (i + 2) % 3 } else { (i + 1) % 3 };
-            self.neighbours(f)[e].filter(|&g| self.is_face_alive(g))
-        };
-        let mut f = start;
+        // Counter-clockwise: cross the edge v → next, i.e. the edge opposite
+        // prev; a dead face (or one without v) ends the walk like a border.
+        let (mut data, mut i) = (start_data, start_i);
         let mut closed = false;
         for _ in 0..budget {
-            match step(f, true) {
-                Some(g) if g == start => {
-                    closed = true;
-                    break;
-                }
-                Some(g) => {
-                    out.push(g);
-                    f = g;
-                }
-                None => break,
+            let Some(g) = data.adj[(i + 2) % 3] else {
+                break;
+            };
+            if g == start {
+                closed = true;
+                break;
             }
+            let Some((gd, j)) = slot(g).and_then(|gd| Some((gd, at(gd)?))) else {
+                break;
+            };
+            out.push(g);
+            (data, i) = (gd, j);
         }
         if !closed {
-            let mut f = start;
+            let (mut data, mut i) = (start_data, start_i);
             for _ in 0..budget {
-                match step(f, false) {
-                    Some(g) if g != start && !out.contains(&g) => {
-                        out.push(g);
-                        f = g;
-                    }
-                    _ => break,
+                let Some(g) = data.adj[(i + 1) % 3] else {
+                    break;
+                };
+                if g == start || out.contains(&g) {
+                    break;
                 }
+                let Some((gd, j)) = slot(g).and_then(|gd| Some((gd, at(gd)?))) else {
+                    break;
+                };
+                out.push(g);
+                (data, i) = (gd, j);
             }
         }
     }
@@ -201,10 +209,12 @@ impl TriMesh {
         ring.neighbours.clear();
         ring.boundary = false;
         for &f in &ring.faces {
-            let i = self
-                .local_index(f, v)
+            let d = self.fdata(f);
+            let (face, adj) = (d.v, d.adj);
+            let i = face
+                .iter()
+                .position(|&x| x == v)
                 .expect("internal: incident face has v");
-            let (face, adj) = (self.face(f), self.neighbours(f));
             for k in [1, 2] {
                 let w = face[(i + k) % 3];
                 if !ring.neighbours.contains(&w) {

@@ -34,6 +34,22 @@ struct Journal {
     /// by their shared edge, and the new faces' unmatched edges.
     outside: Vec<(EdgeKey, FaceId)>,
     inner: Vec<(EdgeKey, FaceId, usize)>,
+    /// This transaction's number (never 0), and by slot index the number of the
+    /// last transaction that journaled the face / vertex: a slot is journaled
+    /// once per transaction without searching the journal.
+    generation: u32,
+    face_mark: Vec<u32>,
+    vertex_mark: Vec<u32>,
+}
+
+/// Mark slot `i` as journaled in `generation`; whether it was not yet.
+fn mark(marks: &mut Vec<u32>, i: usize, generation: u32) -> bool {
+    if i >= marks.len() {
+        marks.resize(i + 1, 0);
+    }
+    let fresh = marks[i] != generation;
+    marks[i] = generation;
+    fresh
 }
 
 thread_local! {
@@ -45,12 +61,7 @@ thread_local! {
 #[derive(Debug)]
 pub(crate) struct Transaction<'a> {
     mesh: &'a mut TriMesh,
-    old_vertices: Vec<(VertexId, Option<VertexData>)>,
-    old_faces: Vec<(FaceId, Option<FaceData>)>,
-    old_tags: Vec<(EdgeKey, Option<Vec<FeatureOn>>)>,
-    free_log: Vec<FreeOp>,
-    outside: Vec<(EdgeKey, FaceId)>,
-    inner: Vec<(EdgeKey, FaceId, usize)>,
+    j: Journal,
     vertex_len: usize,
     face_len: usize,
     live: (usize, usize),
@@ -69,22 +80,17 @@ impl<'a> Transaction<'a> {
     pub(crate) fn new(mesh: &'a mut TriMesh) -> Self {
         let (vertex_len, face_len) = (mesh.vertices.len(), mesh.faces.len());
         let live = (mesh.live_vertices, mesh.live_faces);
-        let Journal {
-            old_vertices,
-            old_faces,
-            old_tags,
-            free_log,
-            outside,
-            inner,
-        } = SPARE.with(std::cell::Cell::take).unwrap_or_default();
+        let mut j = SPARE.with(std::cell::Cell::take).unwrap_or_default();
+        j.generation = j.generation.wrapping_add(1);
+        if j.generation == 0 {
+            // Wrapped: forget every mark (0 is never a live generation).
+            j.face_mark.fill(0);
+            j.vertex_mark.fill(0);
+            j.generation = 1;
+        }
         Transaction {
             mesh,
-            old_vertices,
-            old_faces,
-            old_tags,
-            free_log,
-            outside,
-            inner,
+            j,
             vertex_len,
             face_len,
             live,
@@ -98,29 +104,29 @@ impl<'a> Transaction<'a> {
     }
 
     fn touch_v(&mut self, v: VertexId) {
-        if !self.old_vertices.iter().any(|(x, _)| *x == v) {
+        if mark(&mut self.j.vertex_mark, v.index(), self.j.generation) {
             let old = self.mesh.vertices.get(v.index()).cloned().flatten();
-            self.old_vertices.push((v, old));
+            self.j.old_vertices.push((v, old));
         }
     }
 
     fn touch_f(&mut self, f: FaceId) {
-        if !self.old_faces.iter().any(|(x, _)| *x == f) {
+        if mark(&mut self.j.face_mark, f.index(), self.j.generation) {
             let old = self.mesh.faces.get(f.index()).cloned().flatten();
-            self.old_faces.push((f, old));
+            self.j.old_faces.push((f, old));
         }
     }
 
     fn touch_tag(&mut self, key: EdgeKey) {
-        if !self.old_tags.iter().any(|(k, _)| *k == key) {
+        if !self.j.old_tags.iter().any(|(k, _)| *k == key) {
             let old = self.mesh.edge_tags.get(&key).cloned();
-            self.old_tags.push((key, old));
+            self.j.old_tags.push((key, old));
         }
     }
 
     fn before_vertex_insert(&mut self) {
         if let Some(&v) = self.mesh.free_vertices.last() {
-            self.free_log.push(FreeOp::PopV(v));
+            self.j.free_log.push(FreeOp::PopV(v));
             self.touch_v(v);
         } else {
             self.touch_v(VertexId::from_index(self.mesh.vertices.len()));
@@ -145,7 +151,7 @@ impl<'a> Transaction<'a> {
     pub(crate) fn remove_vertex(&mut self, v: VertexId) {
         if self.mesh.is_vertex_alive(v) {
             self.touch_v(v);
-            self.free_log.push(FreeOp::PushV);
+            self.j.free_log.push(FreeOp::PushV);
             self.mesh.remove_vertex(v);
         }
     }
@@ -159,7 +165,7 @@ impl<'a> Transaction<'a> {
     /// Add a face (vertices counter-clockwise), with no adjacency yet, journaled.
     pub(crate) fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         if let Some(&f) = self.mesh.free_faces.last() {
-            self.free_log.push(FreeOp::PopF(f));
+            self.j.free_log.push(FreeOp::PopF(f));
             self.touch_f(f);
         } else {
             self.touch_f(FaceId::from_index(self.mesh.faces.len()));
@@ -183,7 +189,7 @@ impl<'a> Transaction<'a> {
         for x in self.mesh.face(f) {
             self.touch_v(x);
         }
-        self.free_log.push(FreeOp::PushF);
+        self.j.free_log.push(FreeOp::PushF);
         self.mesh.remove_face(f);
     }
 
@@ -213,7 +219,7 @@ impl<'a> Transaction<'a> {
     pub(crate) fn replace_faces(&mut self, old: &[FaceId], new: &[[VertexId; 3]]) -> Vec<FaceId> {
         // The faces outside the region, by the edge they share with it.
         // Regions are a few faces: linear scans beat hashing here.
-        let mut outside = std::mem::take(&mut self.outside);
+        let mut outside = std::mem::take(&mut self.j.outside);
         outside.clear();
         for &f in old {
             for (i, g) in self.mesh.neighbours(f).into_iter().enumerate() {
@@ -227,7 +233,7 @@ impl<'a> Transaction<'a> {
             self.remove_face(f);
         }
         let ids: Vec<FaceId> = new.iter().map(|&v| self.add_face(v)).collect();
-        let mut inner = std::mem::take(&mut self.inner);
+        let mut inner = std::mem::take(&mut self.j.inner);
         inner.clear();
         for &f in &ids {
             for i in 0..3 {
@@ -247,14 +253,14 @@ impl<'a> Transaction<'a> {
                 }
             }
         }
-        self.outside = outside;
-        self.inner = inner;
+        self.j.outside = outside;
+        self.j.inner = inner;
         ids
     }
 
     fn rollback(&mut self) {
         let m = &mut *self.mesh;
-        for op in self.free_log.drain(..).rev() {
+        for op in self.j.free_log.drain(..).rev() {
             match op {
                 FreeOp::PushV => {
                     m.free_vertices.pop();
@@ -268,17 +274,17 @@ impl<'a> Transaction<'a> {
         }
         m.vertices.truncate(self.vertex_len);
         m.faces.truncate(self.face_len);
-        for (v, old) in self.old_vertices.drain(..) {
+        for (v, old) in self.j.old_vertices.drain(..) {
             if let Some(slot) = m.vertices.get_mut(v.index()) {
                 *slot = old;
             }
         }
-        for (f, old) in self.old_faces.drain(..) {
+        for (f, old) in self.j.old_faces.drain(..) {
             if let Some(slot) = m.faces.get_mut(f.index()) {
                 *slot = old;
             }
         }
-        for (key, old) in self.old_tags.drain(..) {
+        for (key, old) in self.j.old_tags.drain(..) {
             match old {
                 Some(list) => {
                     m.edge_tags.insert(key, list);
@@ -297,14 +303,7 @@ impl Drop for Transaction<'_> {
         if !self.committed {
             self.rollback();
         }
-        let mut spare = Journal {
-            old_vertices: std::mem::take(&mut self.old_vertices),
-            old_faces: std::mem::take(&mut self.old_faces),
-            old_tags: std::mem::take(&mut self.old_tags),
-            free_log: std::mem::take(&mut self.free_log),
-            outside: std::mem::take(&mut self.outside),
-            inner: std::mem::take(&mut self.inner),
-        };
+        let mut spare = std::mem::take(&mut self.j);
         spare.old_vertices.clear();
         spare.old_faces.clear();
         spare.old_tags.clear();

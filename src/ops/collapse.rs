@@ -58,43 +58,34 @@ fn role_refusal(mesh: &TriMesh, u: VertexId, v: VertexId, role_v: Role) -> Optio
     }
 }
 
-/// Whether collapsing `v` into `u` (an edge) is refused by the role rules alone
-/// (see `role_refusal`): a refusal the caller may remember until the faces
-/// around `v` change.
-pub(crate) fn refused_by_role(mesh: &TriMesh, u: VertexId, v: VertexId) -> bool {
-    if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
-        return false;
-    }
-    let rv = crate::mesh::ScratchRing::of(mesh, v);
-    rv.neighbours.contains(&u) && role_refusal(mesh, u, v, role(mesh, v, &rv)).is_some()
-}
-
 impl CollapsePlan {
     /// Plan the collapse of `v` into `u`.
     ///
     /// # Errors
     /// The rule that forbids it: [`Reject::NotAnEdge`], [`Reject::FixedVertex`],
-    /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`].
+    /// [`Reject::Boundary`], [`Reject::FeatureRule`], [`Reject::Topology`],
+    /// [`Reject::Energy`] (linear mode), with whether the role rules alone
+    /// refused it.
     /// `ctx.envelope.eps()` bounds how far a secondary junction may move.
     pub(crate) fn new(
         mesh: &TriMesh,
         ctx: &Context,
         u: VertexId,
         v: VertexId,
-    ) -> Result<Self, Reject> {
+    ) -> Result<Self, (Reject, bool)> {
         let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
-            return Err(Reject::NotAnEdge);
+            return Err((Reject::NotAnEdge, false));
         }
         let rv = crate::mesh::ScratchRing::of(mesh, v);
         if !rv.neighbours.contains(&u) {
-            return Err(Reject::NotAnEdge);
+            return Err((Reject::NotAnEdge, false));
         }
         // The role rules first: they need v's ring only, and they refuse most of
         // the collapses the schedule tries.
         let role_v = role(mesh, v, &rv);
         if let Some(r) = role_refusal(mesh, u, v, role_v) {
-            return Err(r);
+            return Err((r, true));
         }
         // A vertex without features may go where its faces get as bad as the
         // context's floor; near features the plain rule keeps their
@@ -124,7 +115,7 @@ impl CollapsePlan {
                         .map(|t| t.map(|x| if x == v { u } else { x })),
                 );
                 if new_max.is_finite() && new_max > old {
-                    return Err(Reject::Energy);
+                    return Err((Reject::Energy, false));
                 }
             }
             Some(old)
@@ -140,10 +131,10 @@ impl CollapsePlan {
             .collect();
         let boundary_edge = edge_faces.len() == 1;
         match role_v {
-            Role::Fixed => return Err(Reject::FixedVertex),
+            Role::Fixed => return Err((Reject::FixedVertex, false)),
             Role::Boundary => {
                 if !boundary_edge {
-                    return Err(Reject::Boundary);
+                    return Err((Reject::Boundary, false));
                 }
                 // v's other boundary neighbour must be on the line u v.
                 let others: Vec<VertexId> = rv
@@ -153,10 +144,10 @@ impl CollapsePlan {
                     .filter(|&w| w != u && mesh.is_boundary_edge(&rv, w))
                     .collect();
                 let [w] = others[..] else {
-                    return Err(Reject::Boundary);
+                    return Err((Reject::Boundary, false));
                 };
                 if mesh.orientation_of(u, v, w) != Orientation::Collinear {
-                    return Err(Reject::Boundary);
+                    return Err((Reject::Boundary, false));
                 }
             }
             Role::Primary { section, .. } => {
@@ -165,7 +156,7 @@ impl CollapsePlan {
                     .iter()
                     .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section));
                 if !on_section {
-                    return Err(Reject::FeatureRule);
+                    return Err((Reject::FeatureRule, false));
                 }
             }
             Role::Free | Role::Secondary => {}
@@ -173,7 +164,7 @@ impl CollapsePlan {
                 // The features' ends and crossings move by at most ε, so the
                 // input stays within ε of the mesh there too.
                 if mesh.distance(u, v) > eps {
-                    return Err(Reject::FeatureRule);
+                    return Err((Reject::FeatureRule, false));
                 }
             }
         }
@@ -185,10 +176,10 @@ impl CollapsePlan {
             .filter(|w| ru.neighbours.contains(w))
             .count();
         if common != opposite.len() || opposite.iter().any(|w| !ru.neighbours.contains(w)) {
-            return Err(Reject::Topology);
+            return Err((Reject::Topology, false));
         }
         if rv.boundary && ru.boundary && !boundary_edge {
-            return Err(Reject::Topology);
+            return Err((Reject::Topology, false));
         }
         let new: Vec<[VertexId; 3]> = rv
             .faces
@@ -197,7 +188,7 @@ impl CollapsePlan {
             .map(|&f| mesh.face(f).map(|x| if x == v { u } else { x }))
             .collect();
         if new.is_empty() {
-            return Err(Reject::Topology);
+            return Err((Reject::Topology, false));
         }
         // Features on v's edges move to u.
         let key_uv = EdgeKey::new(u, v);
@@ -219,7 +210,7 @@ impl CollapsePlan {
                 match *tag {
                     FeatureOn::Primary { section, t } => {
                         let Some(tu) = t_u_on(section) else {
-                            return Err(Reject::FeatureRule);
+                            return Err((Reject::FeatureRule, false));
                         };
                         retag.push((
                             u,
@@ -275,10 +266,27 @@ impl CollapsePlan {
 
 /// Collapse `v` into `u` (see the module doc).
 pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
+    try_collapse_noting_role(mesh, ctx, u, v).0
+}
+
+/// [`try_collapse`], and whether the refusal (if any) came from the role rules
+/// alone (`role_refusal`: they depend on the tags around `v`, never on a
+/// position): the caller may remember it until the faces around `v` change.
+pub(crate) fn try_collapse_noting_role(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    u: VertexId,
+    v: VertexId,
+) -> (Outcome, bool) {
     let plan = match CollapsePlan::new(mesh, ctx, u, v) {
         Ok(p) => p,
-        Err(r) => return Outcome::Rejected(r),
+        Err((r, by_role)) => return (Outcome::Rejected(r), by_role),
     };
+    (apply(mesh, ctx, plan), false)
+}
+
+/// The tentative change of `plan`, its invariants, then commit or roll back.
+fn apply(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan) -> Outcome {
     let mut tx = Transaction::new(mesh);
     for &w in &plan.drop_tags {
         tx.take_edge_tags(plan.v, w);

@@ -39,7 +39,7 @@ mod swap;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub(crate) use collapse::{refused_by_role, try_collapse};
+pub(crate) use collapse::{try_collapse, try_collapse_noting_role};
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;
 pub(crate) use smooth::{Objective, try_smooth, try_smooth_with};
@@ -400,15 +400,19 @@ pub(crate) fn max_energy_of(
 /// the corner rule ([`CurvedRule::corner_floor`]); `None` in linear mode, where
 /// the energy rule compares these energies already.
 pub(crate) fn corner_energy(mesh: &TriMesh, ctx: &Context, faces: &[FaceId]) -> Option<f64> {
-    ctx.curved.map(|_| {
-        faces
-            .iter()
-            .map(|&f| {
-                let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
-                crate::element::energy::amips(a, b, c)
-            })
-            .fold(0.0, f64::max)
-    })
+    ctx.curved
+        .map(|_| max_corner_energy(mesh, faces.iter().copied()))
+}
+
+/// The largest straight (corner) AMIPS energy of the faces, whatever the mode.
+pub(crate) fn max_corner_energy(mesh: &TriMesh, faces: impl IntoIterator<Item = FaceId>) -> f64 {
+    faces
+        .into_iter()
+        .map(|f| {
+            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
+            crate::element::energy::amips(a, b, c)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Off-curve distance a primary vertex may have after an operation.

@@ -47,8 +47,8 @@ use crate::budget::Deadline;
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
-    self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse, try_project,
-    try_reroute, try_round, try_smooth_with, try_split, try_swap,
+    self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse_noting_role,
+    try_project, try_reroute, try_round, try_smooth_with, try_split, try_swap,
 };
 use rustc_hash::FxHashSet;
 use std::collections::{BTreeMap, BinaryHeap};
@@ -428,7 +428,7 @@ pub(crate) struct Schedule<'a> {
     /// (split, collapse, swap; not a move).
     topo_stamp: Vec<u64>,
     /// Collapses of `.1` into `.0` refused by the role rules alone
-    /// ([`crate::ops::refused_by_role`]), with the clock then and the reason: they
+    /// ([`crate::ops::try_collapse_noting_role`]), with the clock then and the reason: they
     /// stay refused until the faces around `.1` change.
     role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
     /// Longest edge a collapse may create, relative to its mean target.
@@ -878,10 +878,10 @@ impl<'a> Schedule<'a> {
                     continue;
                 }
                 tried = true;
-                let out = try_collapse(self.mesh, self.ctx, u, v);
+                let (out, by_role) = try_collapse_noting_role(self.mesh, self.ctx, u, v);
                 self.touch(&out, true);
-                if let Outcome::Rejected(reason @ (Reject::FixedVertex | Reject::FeatureRule)) = out
-                    && ops::refused_by_role(self.mesh, u, v)
+                if let Outcome::Rejected(reason) = out
+                    && by_role
                 {
                     self.role_refused.insert((u, v), (self.clock, reason));
                 }

@@ -73,16 +73,6 @@ fn random_ops_in_curved_mode_on_exact_conics_keep_every_element_certified() {
     ]);
 }
 
-/// The largest straight (corner) AMIPS energy of the mesh's triangles.
-fn worst_corner(mesh: &TriMesh) -> f64 {
-    mesh.faces()
-        .map(|f| {
-            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
-            crate::element::energy::amips(a, b, c)
-        })
-        .fold(0.0, f64::max)
-}
-
 /// Random collapses, swaps and smoothings in curved mode on the drawings of
 /// `cases` (the SVG cases below when empty), each checked.
 fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
@@ -137,7 +127,8 @@ fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
                     // the larger of its value before and the floor.
                     if energy == EnergyRule::NoWorseMax {
                         let floor = ctx.curved.expect("curved mode").corner_floor;
-                        let (old, new) = (worst_corner(&before), worst_corner(&mesh));
+                        let old = crate::ops::max_corner_energy(&before, before.faces());
+                        let new = crate::ops::max_corner_energy(&mesh, mesh.faces());
                         assert!(
                             new <= old.max(floor),
                             "{what}: corner energy {old} -> {new}"
