@@ -123,8 +123,13 @@ impl CollapsePlan {
             None
         };
         let ru = crate::mesh::ScratchRing::of(mesh, u);
-        let mut edge_faces = Vec::new();
-        mesh.faces_on_edge(v, u, &mut edge_faces);
+        // The faces on the edge, from v's ring (as `faces_on_edge` finds them).
+        let edge_faces: Vec<FaceId> = rv
+            .faces
+            .iter()
+            .copied()
+            .filter(|&f| mesh.face(f).contains(&u))
+            .collect();
         let opposite: Vec<VertexId> = edge_faces
             .iter()
             .map(|&f| mesh.opposite(f, u, v).expect("internal: third vertex"))

@@ -1106,6 +1106,12 @@ pub(crate) fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId>
         .collect()
 }
 
+thread_local! {
+    /// The face buffer of [`swap_gain`]'s quad lookups.
+    static QUAD_BUF: std::cell::RefCell<Vec<crate::mesh::FaceId>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// The energy gain of swapping `k` (old max minus new max) when positive
 /// (curved energies in curved mode).
 fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
@@ -1115,7 +1121,7 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
         b,
         c,
         d,
-    } = mesh.edge_quad(k.lo, k.hi, &mut Vec::new())?;
+    } = QUAD_BUF.with_borrow_mut(|buf| mesh.edge_quad(k.lo, k.hi, buf))?;
     // No edge longer than the context's bound (unless the old one was).
     let new_len = mesh.distance(c, d);
     if new_len > ctx.max_new_edge && new_len > mesh.distance(a, b) {

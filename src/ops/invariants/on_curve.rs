@@ -14,21 +14,16 @@ use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId};
 /// edge. `Some(∞)` when an edge names an unknown section.
 pub(crate) fn off_curve(mesh: &TriMesh, ctx: &Context, v: VertexId) -> Option<f64> {
     let mut seen: Vec<(u32, f64)> = Vec::new();
-    for f in mesh.incident_faces(v) {
-        let i = mesh
-            .local_index(f, v)
-            .expect("internal: incident face has v");
-        for k in [1, 2] {
-            let w = mesh.face(f)[(i + k) % 3];
-            let key = EdgeKey::new(v, w);
-            for tag in mesh.edge_tags(v, w) {
-                if let FeatureOn::Primary { section, t } = *tag {
-                    let tv = t_at(key, t, v);
-                    // A curve through the vertex twice (a self-crossing split
-                    // there) carries two parameters: both must map to it.
-                    if !seen.contains(&(section, tv)) {
-                        seen.push((section, tv));
-                    }
+    let ring = crate::mesh::ScratchRing::of(mesh, v);
+    for &w in &ring.neighbours {
+        let key = EdgeKey::new(v, w);
+        for tag in mesh.edge_tags(v, w) {
+            if let FeatureOn::Primary { section, t } = *tag {
+                let tv = t_at(key, t, v);
+                // A curve through the vertex twice (a self-crossing split
+                // there) carries two parameters: both must map to it.
+                if !seen.contains(&(section, tv)) {
+                    seen.push((section, tv));
                 }
             }
         }
