@@ -373,7 +373,13 @@ pub(crate) fn try_smooth_with(
             return Outcome::Rejected(Reject::EdgeLength);
         }
     }
-    let budget: Vec<_> = on_curve::budget_now(mesh, ctx, v).into_iter().collect();
+    // Only a primary vertex (the plan gave it a parameter) is on a curve: any
+    // other has no primary edge, so no budget (and nothing to walk for one).
+    let budget: Vec<_> = if plan.t.is_some() {
+        on_curve::budget_now(mesh, ctx, v).into_iter().collect()
+    } else {
+        Vec::new()
+    };
     let mut tx = Transaction::new(mesh);
     tx.set_position(v, plan.pos);
     if let Some((section, tn)) = plan.t {
