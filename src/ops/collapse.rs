@@ -19,7 +19,7 @@ use super::{
     max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
-use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId};
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId, VertexRing};
 
 /// Everything a collapse of `v` into `u` needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
@@ -72,18 +72,29 @@ impl CollapsePlan {
         ctx: &Context,
         u: VertexId,
         v: VertexId,
+        ring_v: Option<&VertexRing>,
     ) -> Result<Self, (Reject, bool)> {
         let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err((Reject::NotAnEdge, false));
         }
-        let rv = crate::mesh::ScratchRing::of(mesh, v);
+        let scratch;
+        let rv: &VertexRing = match ring_v {
+            Some(r) => {
+                debug_assert!(r.vertex == v, "the ring given is v's");
+                r
+            }
+            None => {
+                scratch = crate::mesh::ScratchRing::of(mesh, v);
+                &scratch
+            }
+        };
         if !rv.neighbours.contains(&u) {
             return Err((Reject::NotAnEdge, false));
         }
         // The role rules first: they need v's ring only, and they refuse most of
         // the collapses the schedule tries.
-        let role_v = role(mesh, v, &rv);
+        let role_v = role(mesh, v, rv);
         if let Some(r) = role_refusal(mesh, u, v, role_v) {
             return Err((r, true));
         }
@@ -146,7 +157,7 @@ impl CollapsePlan {
                     .neighbours
                     .iter()
                     .copied()
-                    .filter(|&w| w != u && mesh.is_boundary_edge(&rv, w))
+                    .filter(|&w| w != u && mesh.is_boundary_edge(rv, w))
                     .collect();
                 let [w] = others[..] else {
                     return Err((Reject::Boundary, false));
@@ -271,10 +282,11 @@ impl CollapsePlan {
 
 /// Collapse `v` into `u` (see the module doc).
 pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
-    try_collapse_noting_role(mesh, ctx, u, v).0
+    try_collapse_noting_role(mesh, ctx, u, v, None).0
 }
 
-/// [`try_collapse`], and whether the refusal (if any) came from the role rules
+/// [`try_collapse`] (with `v`'s ring when the caller has it: [`TriMesh::vertex_ring`]
+/// of the mesh as it is), and whether the refusal (if any) came from the role rules
 /// alone (`role_refusal`: they depend on the tags around `v`, never on a
 /// position): the caller may remember it until the faces around `v` change.
 pub(crate) fn try_collapse_noting_role(
@@ -282,8 +294,9 @@ pub(crate) fn try_collapse_noting_role(
     ctx: &Context,
     u: VertexId,
     v: VertexId,
+    ring_v: Option<&VertexRing>,
 ) -> (Outcome, bool) {
-    let plan = match CollapsePlan::new(mesh, ctx, u, v) {
+    let plan = match CollapsePlan::new(mesh, ctx, u, v, ring_v) {
         Ok(p) => p,
         Err((r, by_role)) => return (Outcome::Rejected(r), by_role),
     };

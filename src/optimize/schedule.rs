@@ -878,7 +878,9 @@ impl<'a> Schedule<'a> {
                     continue;
                 }
                 tried = true;
-                let (out, by_role) = try_collapse_noting_role(self.mesh, self.ctx, u, v);
+                // `keeps_lengths` left v's ring in `self.ring`.
+                let (out, by_role) =
+                    try_collapse_noting_role(self.mesh, self.ctx, u, v, Some(&self.ring));
                 self.touch(&out, true);
                 if let Outcome::Rejected(reason) = out
                     && by_role
