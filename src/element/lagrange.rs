@@ -216,18 +216,32 @@ pub fn relative_bezier_net(
     order: crate::element::Order,
     nodes: &[Point],
 ) -> Option<Vec<kurbo::Vec2>> {
+    let (net, len) = relative_bezier_array(order, nodes)?;
+    Some(net[..len].iter().map(|p| p.to_vec2()).collect())
+}
+
+/// [`relative_bezier_net`] without allocating: the net in the first `len`
+/// entries (6 quadratic, 10 cubic) of a fixed array.
+pub(crate) fn relative_bezier_array(
+    order: crate::element::Order,
+    nodes: &[Point],
+) -> Option<([Point; 10], usize)> {
     use crate::element::Order;
     let o = nodes.first()?.to_vec2();
-    let net: Vec<Point> = match order {
+    let mut net = [Point::ZERO; 10];
+    let len = match order {
         Order::Linear => return None,
         Order::Quadratic => {
-            quadratic_to_bezier(&<[Point; 6]>::try_from(nodes).ok()?.map(|p| p - o)).to_vec()
+            let q = quadratic_to_bezier(&<[Point; 6]>::try_from(nodes).ok()?.map(|p| p - o));
+            net[..6].copy_from_slice(&q);
+            6
         }
         Order::Cubic => {
-            cubic_to_bezier(&<[Point; 10]>::try_from(nodes).ok()?.map(|p| p - o)).to_vec()
+            net = cubic_to_bezier(&<[Point; 10]>::try_from(nodes).ok()?.map(|p| p - o));
+            10
         }
     };
-    Some(net.into_iter().map(|p| p.to_vec2()).collect())
+    Some((net, len))
 }
 
 /// The quadratic Bézier control net (lattice order) of the quadratic Lagrange triangle `nodes`.

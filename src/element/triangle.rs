@@ -134,23 +134,10 @@ pub fn amips(order: Order, nodes: &[Point]) -> f64 {
         };
         return amips_of_jacobian(c[1] - c[0], c[2] - c[0]);
     }
-    match order {
-        Order::Linear => f64::INFINITY,
-        Order::Quadratic => match <[Point; 6]>::try_from(nodes) {
-            Ok(n) => {
-                let o = n[0].to_vec2();
-                amips_of_net(2, &lagrange::quadratic_to_bezier(&n.map(|p| p - o)))
-            }
-            Err(_) => f64::INFINITY,
-        },
-        Order::Cubic => match <[Point; 10]>::try_from(nodes) {
-            Ok(n) => {
-                let o = n[0].to_vec2();
-                amips_of_net(3, &lagrange::cubic_to_bezier(&n.map(|p| p - o)))
-            }
-            Err(_) => f64::INFINITY,
-        },
-    }
+    let Some((net, _)) = lagrange::relative_bezier_array(order, nodes) else {
+        return f64::INFINITY;
+    };
+    amips_of_net(order as usize, &net)
 }
 
 /// Sample points of [`amips`]: the degree-4 lattice.

@@ -147,7 +147,9 @@ impl CollapsePlan {
             .collect();
         let boundary_edge = edge_faces.len() == 1;
         match role_v {
-            Role::Fixed => return Err((Reject::FixedVertex, false)),
+            // A fixed vertex, and a primary one off the edge's section, were
+            // refused above (`role_refusal`); free and secondary vertices go.
+            Role::Fixed | Role::Primary { .. } | Role::Free | Role::Secondary => {}
             Role::Boundary => {
                 if !boundary_edge {
                     return Err((Reject::Boundary, false));
@@ -166,16 +168,6 @@ impl CollapsePlan {
                     return Err((Reject::Boundary, false));
                 }
             }
-            Role::Primary { section, .. } => {
-                let on_section = mesh
-                    .edge_tags(u, v)
-                    .iter()
-                    .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section));
-                if !on_section {
-                    return Err((Reject::FeatureRule, false));
-                }
-            }
-            Role::Free | Role::Secondary => {}
             Role::SecondaryJunction => {
                 // The features' ends and crossings move by at most ε, so the
                 // input stays within ε of the mesh there too.

@@ -124,7 +124,12 @@ fn energy_within(
         let det = (b - a).cross(c - a);
         let zero = crate::element::jacobian::zero_abs(&[a, b, c], rule.certify.zero_rel);
         if det > 2.0 * zero {
-            return Ok(crate::element::energy::amips(a, b, c));
+            let e = crate::element::energy::amips(a, b, c);
+            return if e > bound {
+                Err(Reject::Energy)
+            } else {
+                Ok(e)
+            };
         }
     }
     let nodes = exact_nodes(mesh, ctx, rule.order, tri).ok_or(Reject::Jacobian)?;
@@ -167,10 +172,6 @@ pub(crate) fn holds_within(
     bound: f64,
 ) -> Result<f64, Reject> {
     faces.iter().try_fold(0.0f64, |m, &f| {
-        let e = energy_within(mesh, ctx, rule, mesh.face(f), bound)?;
-        if e > bound {
-            return Err(Reject::Energy);
-        }
-        Ok(m.max(e))
+        energy_within(mesh, ctx, rule, mesh.face(f), bound).map(|e| m.max(e))
     })
 }
