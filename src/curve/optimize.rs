@@ -105,7 +105,7 @@ pub struct CurvedOptimizeStats {
 /// Curved energies of a mesh, for the stop rules: triangles that are not
 /// certified curved elements are `unmeasured`.
 fn measure(mesh: &TriMesh, ctx: &Context, rule: &ops::CurvedRule) -> EnergyMeasure {
-    measure_energy(mesh, |v, _| {
+    measure_energy(mesh, |v| {
         curved::energy(mesh, ctx, rule, v).filter(|e| e.is_finite())
     })
 }

@@ -295,6 +295,21 @@ pub(crate) fn try_collapse_noting_role(
     (apply(mesh, ctx, plan), false)
 }
 
+/// The rest of [`try_collapse_noting_role`] once its plan is made: `planned` is
+/// [`CollapsePlan::new`] of the mesh as it is now (the schedule plans ahead,
+/// in parallel, and hands the plan over while the faces around both ends are
+/// unchanged), so the outcome is the one `try_collapse_noting_role` gives.
+pub(crate) fn try_collapse_planned(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    planned: Result<CollapsePlan, (Reject, bool)>,
+) -> (Outcome, bool) {
+    match planned {
+        Ok(plan) => (apply(mesh, ctx, plan), false),
+        Err((r, by_role)) => (Outcome::Rejected(r), by_role),
+    }
+}
+
 /// The tentative change of `plan`, its invariants, then commit or roll back.
 fn apply(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan) -> Outcome {
     let mut tx = Transaction::new(mesh);

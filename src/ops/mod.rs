@@ -39,10 +39,12 @@ mod swap;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub(crate) use collapse::{try_collapse, try_collapse_noting_role};
+pub(crate) use collapse::{
+    CollapsePlan, try_collapse, try_collapse_noting_role, try_collapse_planned,
+};
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;
-pub(crate) use smooth::{Objective, try_smooth, try_smooth_with};
+pub(crate) use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_planned, try_smooth_with};
 pub(crate) use split::{try_split, try_split_bounded};
 pub(crate) use swap::{try_reroute, try_swap};
 

@@ -354,7 +354,24 @@ pub(crate) fn try_smooth_with(
     v: VertexId,
     objective: Objective,
 ) -> Outcome {
-    let plan = match SmoothPlan::with_objective(mesh, ctx, v, objective) {
+    try_smooth_planned(
+        mesh,
+        ctx,
+        SmoothPlan::with_objective(mesh, ctx, v, objective),
+    )
+}
+
+/// The rest of [`try_smooth_with`] once its plan is made: `planned` is
+/// [`SmoothPlan::with_objective`] of the mesh as it is now (the schedule plans
+/// ahead, in parallel, and hands the plan over while the faces around the
+/// vertex and its neighbours' positions are unchanged), so the outcome is the
+/// one `try_smooth_with` gives.
+pub(crate) fn try_smooth_planned(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    planned: Result<SmoothPlan, Reject>,
+) -> Outcome {
+    let plan = match planned {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };

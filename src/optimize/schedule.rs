@@ -47,9 +47,11 @@ use crate::budget::Deadline;
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
-    self, Context, Objective, Outcome, Reject, invariants::on_curve, try_collapse_noting_role,
-    try_project, try_reroute, try_round, try_smooth_with, try_split, try_swap,
+    self, CollapsePlan, Context, Objective, Outcome, Reject, SmoothPlan, invariants::on_curve,
+    try_collapse_noting_role, try_collapse_planned, try_project, try_reroute, try_round,
+    try_smooth_planned, try_smooth_with, try_split, try_swap,
 };
+use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 use std::collections::{BTreeMap, BinaryHeap};
 
@@ -148,6 +150,11 @@ const COLLAPSE_BUDGET_EXTRA: usize = 16;
 /// fraction, so equal configurations never flip back and forth. Empirical,
 /// introduced in 020a590.
 const SWAP_MIN_GAIN: f64 = 1e-9;
+/// With more than one worker thread, the collapse and smoothing passes plan
+/// this many upcoming operations at a time in parallel (see
+/// [`Schedule::collapse_round`]); the plans are then applied one by one in the
+/// sequential order, so the mesh is the same for any number of threads.
+const PLAN_AHEAD: usize = 256;
 /// The envelope stages for vertices left rational (after §2.3.4's, which
 /// sample denser and then widen ε): ε multiplied by each of these in turn,
 /// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, introduced
@@ -300,15 +307,30 @@ pub(crate) struct EnergyMeasure {
     pub(crate) unmeasured: usize,
 }
 
-/// Measure the energies of `mesh`'s triangles: `energy(v, locked)` gives the
-/// energy of the triangle `v`, or `None` to leave it out (counted in
-/// `unmeasured`). A triangle whose three edges are feature edges is locked
-/// ([`locked`]): its shape is the input's (no swap, split or collapse can
-/// change it), so it is left out of `max`, though not out of `max_all`.
+/// Measure the energies of `mesh`'s triangles: `energy(v)` gives the energy
+/// of the triangle `v`, or `None` to leave it out (counted in `unmeasured`).
+/// A triangle whose three edges are feature edges is locked ([`locked`]): its
+/// shape is the input's (no swap, split or collapse can change it), so it is
+/// left out of `max`, though not out of `max_all`. The energies are computed
+/// in parallel and summed in face order (the same sum for any number of
+/// threads).
 pub(crate) fn measure_energy(
     mesh: &TriMesh,
-    mut energy: impl FnMut([VertexId; 3], bool) -> Option<f64>,
+    energy: impl Fn([VertexId; 3]) -> Option<f64> + Sync,
 ) -> EnergyMeasure {
+    let faces: Vec<_> = mesh.faces().collect();
+    let values: Vec<(bool, Option<f64>)> = faces
+        .par_iter()
+        .map(|&f| {
+            let v = mesh.face(f);
+            (locked(mesh, v), energy(v))
+        })
+        .collect();
+    fold_energies(&values)
+}
+
+/// [`measure_energy`]'s tally of `(locked, energy)` by face, in face order.
+fn fold_energies(values: &[(bool, Option<f64>)]) -> EnergyMeasure {
     let mut m = EnergyMeasure {
         max: 0.0,
         max_all: 0.0,
@@ -316,10 +338,8 @@ pub(crate) fn measure_energy(
         unmeasured: 0,
     };
     let (mut sum, mut n) = (0.0, 0usize);
-    for f in mesh.faces() {
-        let v = mesh.face(f);
-        let locked = locked(mesh, v);
-        match energy(v, locked) {
+    for &(locked, e) in values {
+        match e {
             None => m.unmeasured += 1,
             Some(e) => {
                 sum += e;
@@ -349,20 +369,32 @@ fn measure(mesh: &TriMesh) -> Measure {
             longest: 0.0,
         };
     }
+    // Per face, in parallel: (locked, energy), min angle, longest edge; then
+    // folded in face order.
+    let faces: Vec<_> = mesh.faces().collect();
+    let per_face: Vec<((bool, Option<f64>), f64, f64)> = faces
+        .par_iter()
+        .map(|&f| {
+            let v = mesh.face(f);
+            let [a, b, c] = v.map(|x| mesh.position(x));
+            let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+            (
+                (locked(mesh, v), Some(amips(a, b, c))),
+                min_angle_deg([a, b, c]),
+                longest,
+            )
+        })
+        .collect();
     let (mut min_angle, mut min_angle_all, mut longest) = (180.0f64, 180.0f64, 0.0f64);
-    let e = measure_energy(mesh, |v, locked| {
-        let [a, b, c] = v.map(|x| mesh.position(x));
-        let angle = min_angle_deg([a, b, c]);
+    for &((locked, _), angle, long) in &per_face {
         min_angle_all = min_angle_all.min(angle);
-        longest = longest
-            .max(a.distance(b))
-            .max(b.distance(c))
-            .max(c.distance(a));
+        longest = longest.max(long);
         if !locked {
             min_angle = min_angle.min(angle);
         }
-        Some(amips(a, b, c))
-    });
+    }
+    let values: Vec<(bool, Option<f64>)> = per_face.iter().map(|p| p.0).collect();
+    let e = fold_energies(&values);
     Measure {
         min_angle,
         max_energy: e.max,
@@ -439,6 +471,9 @@ pub(crate) struct Schedule<'a> {
     /// found a gain on: an edge whose ends' faces have not changed since
     /// (so neither has its quad) and that had no gain then has none now.
     swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
+    /// Tests: the plans made ahead that were used, and those found stale.
+    #[cfg(test)]
+    ahead_tally: (usize, usize),
 }
 
 /// A refused collapse in [`Schedule::failed_collapse`].
@@ -469,17 +504,73 @@ impl ShortestFirst {
         self.next = 0;
     }
 
+    #[cfg(test)]
     fn pop(&mut self) -> Option<(u64, EdgeKey)> {
+        self.pop_indexed().map(|(bits, k, _)| (bits, k))
+    }
+
+    /// The next edge, with its index in `sorted` when it comes from there.
+    fn pop_indexed(&mut self) -> Option<(u64, EdgeKey, Option<usize>)> {
         let head = self.sorted.get(self.next).copied();
         match (head, self.again.peek()) {
-            (Some(s), Some(std::cmp::Reverse(a))) if *a < s => self.again.pop().map(|r| r.0),
+            (Some(s), Some(std::cmp::Reverse(a))) if *a < s => {
+                self.again.pop().map(|r| (r.0.0, r.0.1, None))
+            }
             (Some(s), _) => {
                 self.next += 1;
-                Some(s)
+                Some((s.0, s.1, Some(self.next - 1)))
             }
-            (None, _) => self.again.pop().map(|r| r.0),
+            (None, _) => self.again.pop().map(|r| (r.0.0, r.0.1, None)),
         }
     }
+}
+
+/// One direction of a collapse planned ahead ([`Schedule::plan_collapse`]).
+enum CollapseDirection {
+    /// Left to the sequential pass (its role refusal was remembered).
+    Unplanned,
+    /// The length rule refused it.
+    Length,
+    /// [`CollapsePlan::new`] on v's ring.
+    Plan(Result<CollapsePlan, (Reject, bool)>),
+}
+
+/// A collapse of an edge planned ahead at clock `at`, both directions in the
+/// collapse round's order: it stands while neither end's stamp has passed
+/// `at` (no face around either end changed, no neighbour of either moved; the
+/// plans read nothing else that a pass changes, the reasoning of
+/// [`Schedule::failed_collapse`]).
+struct CollapseAhead {
+    at: u64,
+    /// `None`: the round skips the edge (an end is dead, its length changed
+    /// or is long enough, or its refusal is remembered).
+    directions: Option<[CollapseDirection; 2]>,
+}
+
+/// A smoothing planned ahead at clock `at`: it stands while the vertex's stamp
+/// has not passed `at`.
+struct SmoothAhead {
+    at: u64,
+    plan: Result<SmoothPlan, Reject>,
+}
+
+/// Whether collapsing `v` into `u` makes no edge longer than `max_stretch`
+/// times the mean target of its ends (`target` by vertex slot, `l` past its
+/// end), `ring_v` being v's ring: see [`Schedule::keeps_lengths`].
+fn lengths_kept(
+    mesh: &TriMesh,
+    target: &[f64],
+    l: f64,
+    max_stretch: f64,
+    u: VertexId,
+    ring_v: &VertexRing,
+) -> bool {
+    let target_of = |w: VertexId| target.get(w.index()).copied().unwrap_or(l);
+    let pu = mesh.position(u);
+    let tu = target_of(u);
+    ring_v.neighbours.iter().all(|&w| {
+        w == u || pu.distance(mesh.position(w)) <= max_stretch * 0.5 * (tu + target_of(w))
+    })
 }
 
 /// The entry of `v` in a per-vertex-slot array, grown with `fill` as needed.
@@ -536,6 +627,8 @@ impl<'a> Schedule<'a> {
             max_stretch: SPLIT_ABOVE,
             ring: VertexRing::empty(),
             swap_scan: None,
+            #[cfg(test)]
+            ahead_tally: (0, 0),
         }
     }
 
@@ -578,12 +671,12 @@ impl<'a> Schedule<'a> {
         self.stamp.get(v.index()).copied().unwrap_or(0)
     }
 
-    fn target_of(&mut self, v: VertexId) -> f64 {
-        *slot(&mut self.target, v, self.opts.l)
+    fn target_of(&self, v: VertexId) -> f64 {
+        self.target.get(v.index()).copied().unwrap_or(self.opts.l)
     }
 
-    fn base_of(&mut self, v: VertexId) -> f64 {
-        *slot(&mut self.base, v, self.opts.l)
+    fn base_of(&self, v: VertexId) -> f64 {
+        self.base.get(v.index()).copied().unwrap_or(self.opts.l)
     }
 
     fn set_base(&mut self, v: VertexId, t: f64) {
@@ -656,7 +749,7 @@ impl<'a> Schedule<'a> {
     /// away from a thin stroke instead of spreading its small size over the
     /// plain parts of the drawing, and no fan of needles joins the stroke to
     /// the coarse mesh.
-    fn edge_target(&mut self, k: EdgeKey) -> f64 {
+    fn edge_target(&self, k: EdgeKey) -> f64 {
         let t = self.mean_target(k);
         if !self.capped || self.base_of(k.lo).min(self.base_of(k.hi)) >= self.opts.l {
             return t;
@@ -668,7 +761,7 @@ impl<'a> Schedule<'a> {
         // stroke's size grows with the distance from it: the size at the edge's
         // midpoint, seen from its smaller end.
         let l = self.opts.l;
-        let free = |s: &mut Self, v: VertexId| {
+        let free = |s: &Self, v: VertexId| {
             if s.base_of(v) < l { l } else { s.target_of(v) }
         };
         let mean_free = 0.5 * (free(self, k.lo) + free(self, k.hi));
@@ -681,20 +774,21 @@ impl<'a> Schedule<'a> {
         *slot(&mut self.target, v, self.opts.l) = t;
     }
 
-    fn mean_target(&mut self, k: EdgeKey) -> f64 {
+    fn mean_target(&self, k: EdgeKey) -> f64 {
         0.5 * (self.target_of(k.lo) + self.target_of(k.hi))
     }
 
     /// Split every edge longer than 4/3 of its mean target once, longest first.
     /// Returns the number of candidates and of splits applied.
     fn split_pass(&mut self) -> (usize, u64) {
-        let mut cands: Vec<(f64, EdgeKey, f64)> = Vec::new();
-        for k in self.mesh.edges().collect::<Vec<_>>() {
-            let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
-            if len > SPLIT_ABOVE * t {
-                cands.push((len, k, t));
-            }
-        }
+        let edges: Vec<EdgeKey> = self.mesh.edges().collect();
+        let mut cands: Vec<(f64, EdgeKey, f64)> = edges
+            .into_par_iter()
+            .filter_map(|k| {
+                let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
+                (len > SPLIT_ABOVE * t).then_some((len, k, t))
+            })
+            .collect();
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let n = cands.len();
         let mut applied = 0;
@@ -735,14 +829,17 @@ impl<'a> Schedule<'a> {
         self.failed_collapse.retain(|_, f| !f.by_length);
         let threshold =
             (worst / SIZING_WORST_DIVISOR).max(SIZING_STOP_FRACTION * self.opts.stop_energy);
-        let mut seeds: Vec<VertexId> = Vec::new();
-        for f in self.mesh.faces() {
-            let v = self.mesh.face(f);
-            let [a, b, c] = v.map(|x| self.mesh.position(x));
-            if amips(a, b, c) > threshold && !locked(self.mesh, v) {
-                seeds.extend(v);
-            }
-        }
+        let faces: Vec<_> = self.mesh.faces().collect();
+        let mesh: &TriMesh = self.mesh;
+        let mut seeds: Vec<VertexId> = faces
+            .into_par_iter()
+            .filter_map(|f| {
+                let v = mesh.face(f);
+                let [a, b, c] = v.map(|x| mesh.position(x));
+                (amips(a, b, c) > threshold && !locked(mesh, v)).then_some(v)
+            })
+            .flatten_iter()
+            .collect();
         seeds.sort_unstable();
         seeds.dedup();
         let cap = self.mesh.vertex_capacity();
@@ -834,36 +931,61 @@ impl<'a> Schedule<'a> {
                 edges
             }
         };
-        for k in edges {
-            let len = self.mesh.distance(k.lo, k.hi);
-            if len < factor * self.edge_target(k) {
-                queue.sorted.push((len.to_bits(), k));
-            }
-        }
+        queue.sorted = edges
+            .into_par_iter()
+            .filter_map(|k| {
+                let len = self.mesh.distance(k.lo, k.hi);
+                (len < factor * self.edge_target(k)).then_some((len.to_bits(), k))
+            })
+            .collect();
         queue.sort();
         let mut budget = COLLAPSE_BUDGET_PER_EDGE * queue.sorted.len() + COLLAPSE_BUDGET_EXTRA;
         let mut applied = 0;
-        while let Some((bits, k)) = queue.pop() {
+        // With more than one thread, the next `PLAN_AHEAD` edges of the sorted
+        // queue are planned at once in parallel; a plan is used below only
+        // while neither end has changed since, so the round does exactly what
+        // it does planning each collapse when it gets to it.
+        let parallel = rayon::current_num_threads() > 1;
+        let mut ahead: Vec<Option<CollapseAhead>> = Vec::new();
+        let mut ahead_from = 0;
+        while let Some((bits, k, index)) = queue.pop_indexed() {
             if budget == 0 {
                 break;
             }
             budget -= 1;
-            if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
-                continue;
-            }
-            let len = self.mesh.distance(k.lo, k.hi);
-            if len.to_bits() != bits || len >= factor * self.edge_target(k) {
-                continue;
-            }
-            if let Some(&FailedCollapse { at, .. }) = self.failed_collapse.get(&k) {
-                if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at {
-                    continue;
+            let planned = match index {
+                Some(i) if parallel => {
+                    if i >= ahead_from + ahead.len() {
+                        let end = (i + PLAN_AHEAD).min(queue.sorted.len());
+                        let this = &*self;
+                        ahead = queue.sorted[i..end]
+                            .par_iter()
+                            .map(|&(b, e)| Some(this.plan_collapse(b, e, factor)))
+                            .collect();
+                        ahead_from = i;
+                    }
+                    let a = ahead[i - ahead_from].take();
+                    let fresh =
+                        a.filter(|a| self.stamp_of(k.lo) <= a.at && self.stamp_of(k.hi) <= a.at);
+                    #[cfg(test)]
+                    self.tally_ahead(fresh.is_some());
+                    fresh
                 }
-            }
+                _ => None,
+            };
+            // A plan that stands already made the round's checks.
+            let mut planned = match planned {
+                Some(a) => match a.directions {
+                    None => continue,
+                    Some(d) => Some(d),
+                },
+                None if !self.collapse_due(bits, k, factor) => continue,
+                None => None,
+            };
             let mut applied_now = false;
             let mut tried = false;
             let mut by_length = false;
-            for (u, v) in [(k.lo, k.hi), (k.hi, k.lo)] {
+            for (d, (u, v)) in [(k.lo, k.hi), (k.hi, k.lo)].into_iter().enumerate() {
                 // Refused by the role rules, and v's faces unchanged since: the
                 // same refusal, without planning it (or measuring lengths) again.
                 if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
@@ -873,14 +995,28 @@ impl<'a> Schedule<'a> {
                     self.stats.collapse.record(&Outcome::Rejected(reason));
                     continue;
                 }
-                if !self.keeps_lengths(u, v) {
-                    by_length = true;
-                    continue;
-                }
-                tried = true;
-                // `keeps_lengths` left v's ring in `self.ring`.
-                let (out, by_role) =
-                    try_collapse_noting_role(self.mesh, self.ctx, u, v, Some(&self.ring));
+                let direction = planned.as_mut().map_or(CollapseDirection::Unplanned, |a| {
+                    std::mem::replace(&mut a[d], CollapseDirection::Unplanned)
+                });
+                let (out, by_role) = match direction {
+                    CollapseDirection::Length => {
+                        by_length = true;
+                        continue;
+                    }
+                    CollapseDirection::Plan(plan) => {
+                        tried = true;
+                        try_collapse_planned(self.mesh, self.ctx, plan)
+                    }
+                    CollapseDirection::Unplanned => {
+                        if !self.keeps_lengths(u, v) {
+                            by_length = true;
+                            continue;
+                        }
+                        tried = true;
+                        // `keeps_lengths` left v's ring in `self.ring`.
+                        try_collapse_noting_role(self.mesh, self.ctx, u, v, Some(&self.ring))
+                    }
+                };
                 self.touch(&out, true);
                 if let Outcome::Rejected(reason) = out
                     && by_role
@@ -928,23 +1064,73 @@ impl<'a> Schedule<'a> {
     /// mean target (else the split pass would cut it again: the two passes
     /// would undo each other forever).
     fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
-        let pu = self.mesh.position(u);
-        let tu = self.target_of(u);
-        let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
-        self.mesh.vertex_ring_into(v, &mut ring);
-        let mut keeps = true;
-        for &w in &ring.neighbours {
-            if w == u {
-                continue;
-            }
-            let t = 0.5 * (tu + self.target_of(w));
-            if pu.distance(self.mesh.position(w)) > self.max_stretch * t {
-                keeps = false;
-                break;
-            }
+        self.mesh.vertex_ring_into(v, &mut self.ring);
+        lengths_kept(
+            self.mesh,
+            &self.target,
+            self.opts.l,
+            self.max_stretch,
+            u,
+            &self.ring,
+        )
+    }
+
+    /// Plan the collapse of `k` (popped with `bits`) ahead, on the mesh as it
+    /// is: what the collapse round would do with it now, short of applying it.
+    fn plan_collapse(&self, bits: u64, k: EdgeKey, factor: f64) -> CollapseAhead {
+        CollapseAhead {
+            at: self.clock,
+            directions: self.plan_directions(bits, k, factor),
         }
-        self.ring = ring;
-        keeps
+    }
+
+    /// [`Self::plan_collapse`]'s two directions, or `None` where the round
+    /// skips the edge.
+    fn plan_directions(
+        &self,
+        bits: u64,
+        k: EdgeKey,
+        factor: f64,
+    ) -> Option<[CollapseDirection; 2]> {
+        let mesh: &TriMesh = self.mesh;
+        if !self.collapse_due(bits, k, factor) {
+            return None;
+        }
+        let direction = |u: VertexId, v: VertexId| {
+            if let Some(&(at, _)) = self.role_refused.get(&(u, v))
+                && self.topo_stamp_of(v) <= at
+            {
+                return CollapseDirection::Unplanned;
+            }
+            let ring_v = crate::mesh::ScratchRing::of(mesh, v);
+            if !lengths_kept(
+                mesh,
+                &self.target,
+                self.opts.l,
+                self.max_stretch,
+                u,
+                &ring_v,
+            ) {
+                return CollapseDirection::Length;
+            }
+            CollapseDirection::Plan(CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v)))
+        };
+        Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
+    }
+
+    /// Whether the collapse round tries `k` (popped with `bits`) now: both
+    /// ends alive, the length as queued and still short, no refusal of it
+    /// remembered.
+    fn collapse_due(&self, bits: u64, k: EdgeKey, factor: f64) -> bool {
+        if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
+            return false;
+        }
+        let len = self.mesh.distance(k.lo, k.hi);
+        if len.to_bits() != bits || len >= factor * self.edge_target(k) {
+            return false;
+        }
+        !matches!(self.failed_collapse.get(&k), Some(&FailedCollapse { at, .. })
+            if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at)
     }
 
     /// Swap edges where that lowers the larger energy of their two triangles;
@@ -956,8 +1142,11 @@ impl<'a> Schedule<'a> {
         self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
         let mut applied = 0;
         for (_, k) in cands {
-            // Earlier swaps may have changed the quad.
-            if swap_gain(self.mesh, self.ctx, k).is_none() {
+            // Earlier swaps may have changed the quad (else it still has the
+            // gain the scan found: a change of either face, or a move of any
+            // of its four vertices, stamps both ends).
+            let changed = self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
+            if changed && swap_gain(self.mesh, self.ctx, k).is_none() {
                 continue;
             }
             let tags = self.mesh.edge_tags(k.lo, k.hi);
@@ -995,24 +1184,26 @@ impl<'a> Schedule<'a> {
     /// either face, or a move of any of its four vertices, stamps both ends),
     /// and so is the answer.
     fn swap_candidates(&self, last: Option<&(u64, FxHashSet<EdgeKey>)>) -> Vec<(f64, EdgeKey)> {
-        let mut cands: Vec<(f64, EdgeKey)> = Vec::new();
-        for k in self.mesh.edges() {
-            if let Some((at, found)) = last
-                && self.stamp_of(k.lo) <= *at
-                && self.stamp_of(k.hi) <= *at
-                && !found.contains(&k)
-            {
-                continue;
-            }
-            let primary = self
-                .mesh
-                .edge_tags(k.lo, k.hi)
-                .iter()
-                .any(|t| matches!(t, FeatureOn::Primary { .. }));
-            if !primary && swap_gain(self.mesh, self.ctx, k).is_some() {
-                cands.push((self.mesh.distance(k.lo, k.hi), k));
-            }
-        }
+        let edges: Vec<EdgeKey> = self.mesh.edges().collect();
+        let mut cands: Vec<(f64, EdgeKey)> = edges
+            .into_par_iter()
+            .filter(|&k| {
+                if let Some((at, found)) = last
+                    && self.stamp_of(k.lo) <= *at
+                    && self.stamp_of(k.hi) <= *at
+                    && !found.contains(&k)
+                {
+                    return false;
+                }
+                let primary = self
+                    .mesh
+                    .edge_tags(k.lo, k.hi)
+                    .iter()
+                    .any(|t| matches!(t, FeatureOn::Primary { .. }));
+                !primary && swap_gain(self.mesh, self.ctx, k).is_some()
+            })
+            .map(|k| (self.mesh.distance(k.lo, k.hi), k))
+            .collect();
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         cands
     }
@@ -1027,7 +1218,13 @@ impl<'a> Schedule<'a> {
         let mut verts: Vec<VertexId> = self.mesh.vertices().collect();
         self.rng.shuffle(&mut verts);
         let mut applied = 0;
-        for v in verts {
+        // As in the collapse round: with more than one thread the next
+        // `PLAN_AHEAD` moves are planned at once in parallel, and a plan is
+        // used only while its vertex is unchanged since.
+        let parallel = rayon::current_num_threads() > 1;
+        let mut ahead: Vec<Option<SmoothAhead>> = Vec::new();
+        let mut ahead_from = 0;
+        for (n, &v) in verts.iter().enumerate() {
             let i = v.index();
             if i >= self.failed_smooth.len() {
                 self.failed_smooth.resize(i + 1, u64::MAX);
@@ -1036,7 +1233,32 @@ impl<'a> Schedule<'a> {
             if at != u64::MAX && self.stamp_of(v) <= at {
                 continue;
             }
-            let out = try_smooth_with(self.mesh, self.ctx, v, objective);
+            let planned = if parallel {
+                if n >= ahead_from + ahead.len() {
+                    let end = (n + PLAN_AHEAD).min(verts.len());
+                    let this = &*self;
+                    ahead = verts[n..end]
+                        .par_iter()
+                        .map(|&w| this.plan_smooth(w, objective))
+                        .collect();
+                    ahead_from = n;
+                }
+                let a = ahead[n - ahead_from].take();
+                #[cfg(test)]
+                let had = a.is_some();
+                let fresh = a.filter(|a| self.stamp_of(v) <= a.at);
+                #[cfg(test)]
+                if had {
+                    self.tally_ahead(fresh.is_some());
+                }
+                fresh
+            } else {
+                None
+            };
+            let out = match planned {
+                Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan),
+                None => try_smooth_with(self.mesh, self.ctx, v, objective),
+            };
             self.touch(&out, false);
             self.failed_smooth[i] = if out.is_applied() {
                 u64::MAX
@@ -1054,6 +1276,30 @@ impl<'a> Schedule<'a> {
             }
         }
         applied
+    }
+
+    #[cfg(test)]
+    fn tally_ahead(&mut self, fresh: bool) {
+        if fresh {
+            self.ahead_tally.0 += 1;
+        } else {
+            self.ahead_tally.1 += 1;
+        }
+    }
+
+    /// Plan the smoothing of `v` ahead, on the mesh as it is: `None` where the
+    /// pass would skip it (its refusal is remembered).
+    fn plan_smooth(&self, v: VertexId, objective: Objective) -> Option<SmoothAhead> {
+        if let Some(&at) = self.failed_smooth.get(v.index())
+            && at != u64::MAX
+            && self.stamp_of(v) <= at
+        {
+            return None;
+        }
+        Some(SmoothAhead {
+            at: self.clock,
+            plan: SmoothPlan::with_objective(self.mesh, self.ctx, v, objective),
+        })
     }
 
     /// Round every rational vertex that can be; returns how many stay rational.
@@ -1103,7 +1349,7 @@ pub(crate) fn off_curve_vertices(mesh: &TriMesh, ctx: &Context) -> Vec<VertexId>
     primary.sort_unstable();
     primary.dedup();
     primary
-        .into_iter()
+        .into_par_iter()
         .filter(|&v| on_curve::off_curve(mesh, ctx, v).unwrap_or(0.0) > ctx.on_curve_abs)
         .collect()
 }
@@ -1523,6 +1769,72 @@ mod swap_memo_tests {
         assert!(
             checked > 50 && skipped > 50,
             "{checked} candidates, {skipped} skipped"
+        );
+    }
+}
+
+#[cfg(test)]
+mod plan_ahead_tests {
+    use super::*;
+    use crate::ops::EnergyRule;
+    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
+
+    /// The passes with their plans made ahead on two threads do exactly what
+    /// they do on one (same mesh, same tallies), and the plans were used and
+    /// some found stale (else the check would be vacuous).
+    #[test]
+    fn planning_ahead_on_two_threads_changes_nothing() {
+        let meshes: Vec<_> = (0..3)
+            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
+            .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)))
+            .collect();
+        let opts = OptimizeOptions {
+            l: 0.1,
+            l_floor: 0.01,
+            stop_energy: 5.0,
+            alpha_deg: 10.0,
+            max_passes: 40,
+            max_vertices: 20_000,
+            deadline: Deadline::NONE,
+        };
+        let run = |threads: usize, mesh: &TriMesh, ctx: &Context| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool");
+            pool.install(|| {
+                let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
+                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7);
+                for pass in 0..6 {
+                    s.split_pass();
+                    s.collapse_pass(if pass < 3 { 0.8 } else { COARSEN_FACTOR });
+                    s.swap_pass();
+                    s.smooth_pass();
+                    s.smooth_pass_with(Objective::MinMax);
+                    let worst = measure(s.mesh).max_energy;
+                    s.update_sizing(worst);
+                }
+                let (stats, tally) = (s.stats().clone(), s.ahead_tally);
+                (mesh, stats, tally)
+            })
+        };
+        let (mut used, mut stale) = (0, 0);
+        for (i, (mesh, ctx)) in meshes.iter().enumerate() {
+            let (one, stats_one, tally_one) = run(1, mesh, ctx);
+            let (two, stats_two, tally_two) = run(2, mesh, ctx);
+            assert!(one == two, "mesh {i}: two threads made another mesh");
+            assert_eq!(stats_one, stats_two, "mesh {i}");
+            assert_eq!(
+                tally_one,
+                (0, 0),
+                "mesh {i}: one thread plans nothing ahead"
+            );
+            used += tally_two.0;
+            stale += tally_two.1;
+        }
+        assert!(
+            used > 1000 && stale > 10,
+            "{used} plans used, {stale} stale"
         );
     }
 }
