@@ -7,7 +7,7 @@ use crate::mesh::{TriMesh, VertexId};
 use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::{Point, Rect};
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// A uniform grid over the box holding, per cell, the segments whose
 /// bounding box meets it. Cell indices are monotone in the coordinate, so two
@@ -153,15 +153,94 @@ fn split(cell: &Cell, lines: &[Line], lid: usize) -> Option<(Cell, Cell)> {
     Some((finish(pos), finish(neg)))
 }
 
-/// Cut every seed triangle and triangulate every cell into `mesh`.
+/// Seed triangles cut at once, in parallel, before their cells go into the
+/// mesh in order (bounds the cells held at a time).
+const CUT_CHUNK: usize = 1024;
+
+/// A seed triangle after cutting: whole, or its convex cells (vertices
+/// counter-clockwise) each with the way [`fan::emit_cell`] triangulates it.
+enum CutTriangle {
+    Whole,
+    Cells(Vec<(Vec<PointQ>, fan::CellFan)>),
+}
+
+/// Cut one seed triangle `tri` (corners `tp`) by the lines of the segments
+/// that meet its interior, in segment order, each line once. Reads the mesh
+/// nowhere, so the seed triangles are cut in parallel.
+fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
+    let mut candidates: Vec<u32> = Vec::new();
+    let (cx0, cx1, cy0, cy1) = grid.range(tp[0], tp[1], tp[2]);
+    for cy in cy0..=cy1 {
+        for cx in cx0..=cx1 {
+            candidates.extend_from_slice(&grid.cells[cy * grid.nx + cx]);
+        }
+    }
+    // Deterministic order, each segment once, duplicates of the same line cut
+    // only once.
+    candidates.sort_unstable();
+    candidates.dedup();
+    candidates.retain(|&s| {
+        let seg = &input.segments[s as usize];
+        crosses_interior(tp, seg.a, seg.b)
+    });
+    if candidates.is_empty() {
+        return CutTriangle::Whole;
+    }
+    let mut lines: Vec<Line> = (0..3)
+        .map(|k| Line {
+            p: PointQ::from_point(tp[k]),
+            q: PointQ::from_point(tp[(k + 1) % 3]),
+        })
+        .collect();
+    let mut cells: Vec<Cell> = vec![(0..3).map(|k| (PointQ::from_point(tp[k]), k)).collect()];
+    let mut seen_lines: Vec<(Point, Point)> = Vec::new();
+    for &s in &candidates {
+        let seg = &input.segments[s as usize];
+        if seen_lines.contains(&(seg.a, seg.b)) || seen_lines.contains(&(seg.b, seg.a)) {
+            continue;
+        }
+        seen_lines.push((seg.a, seg.b));
+        lines.push(Line {
+            p: PointQ::from_point(seg.a),
+            q: PointQ::from_point(seg.b),
+        });
+        let lid = lines.len() - 1;
+        let mut next = Vec::with_capacity(cells.len() + 4);
+        for cell in cells.drain(..) {
+            match split(&cell, &lines, lid) {
+                Some((a, b)) => {
+                    next.push(a);
+                    next.push(b);
+                }
+                None => next.push(cell),
+            }
+        }
+        cells = next;
+    }
+    CutTriangle::Cells(
+        cells
+            .into_iter()
+            .map(|cell| {
+                let pts: Vec<PointQ> = cell.into_iter().map(|(p, _)| p).collect();
+                let how = fan::plan_cell(&pts);
+                (pts, how)
+            })
+            .collect(),
+    )
+}
+
+/// Cut every seed triangle and triangulate every cell into `mesh`. The seed
+/// triangles are cut in parallel, a chunk at a time; their cells go into the
+/// mesh in seed order, so the mesh is the same for any number of threads.
 pub(super) fn cut_all(
     input: &BspInput,
     seed: &Seed,
     opts: &BspOptions,
     stats: &mut BspStats,
 ) -> Result<TriMesh> {
+    use rayon::prelude::*;
     let mut mesh = TriMesh::new();
-    let mut vmap: HashMap<PointQ, VertexId> = HashMap::new();
+    let mut vmap: HashMap<PointQ, VertexId> = HashMap::default();
     let seed_ids: Vec<VertexId> = seed
         .points
         .iter()
@@ -176,84 +255,39 @@ pub(super) fn cut_all(
         |r, (p, _)| r.union_pt(*p),
     );
     let grid = Grid::new(bbox, &input.segments);
-    let mut stamp = vec![u32::MAX; input.segments.len()];
-    let mut candidates: Vec<u32> = Vec::new();
-    for (ti, tri) in seed.triangles.iter().enumerate() {
-        let tp = tri.map(|i| seed.points[i as usize].0);
-        let tag = u32::try_from(ti).expect("internal: fewer than 2^32 triangles");
-        if ti % 256 == 0 {
-            crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
-        }
-        candidates.clear();
-        let (cx0, cx1, cy0, cy1) = grid.range(tp[0], tp[1], tp[2]);
-        for cy in cy0..=cy1 {
-            for cx in cx0..=cx1 {
-                for &s in &grid.cells[cy * grid.nx + cx] {
-                    if stamp[s as usize] != tag {
-                        stamp[s as usize] = tag;
-                        let seg = &input.segments[s as usize];
-                        if crosses_interior(tp, seg.a, seg.b) {
-                            candidates.push(s);
-                        }
-                    }
-                }
-            }
-        }
-        let ids = tri.map(|i| seed_ids[i as usize]);
-        if candidates.is_empty() {
-            mesh.add_face(ids);
-            stats.cells += 1;
-            continue;
-        }
-        stats.cut_triangles += 1;
-        // Deterministic order, duplicates of the same line cut only once.
-        candidates.sort_unstable();
-        let mut lines: Vec<Line> = (0..3)
-            .map(|k| Line {
-                p: PointQ::from_point(tp[k]),
-                q: PointQ::from_point(tp[(k + 1) % 3]),
-            })
+    for (c, chunk) in seed.triangles.chunks(CUT_CHUNK).enumerate() {
+        crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
+        let cut: Vec<CutTriangle> = chunk
+            .par_iter()
+            .map(|tri| cut_one(input, &grid, tri.map(|i| seed.points[i as usize].0)))
             .collect();
-        let mut cells: Vec<Cell> = vec![(0..3).map(|k| (PointQ::from_point(tp[k]), k)).collect()];
-        let mut seen_lines: Vec<(Point, Point)> = Vec::new();
-        for &s in &candidates {
-            let seg = &input.segments[s as usize];
-            if seen_lines.contains(&(seg.a, seg.b)) || seen_lines.contains(&(seg.b, seg.a)) {
-                continue;
-            }
-            seen_lines.push((seg.a, seg.b));
-            lines.push(Line {
-                p: PointQ::from_point(seg.a),
-                q: PointQ::from_point(seg.b),
-            });
-            let lid = lines.len() - 1;
-            let mut next = Vec::with_capacity(cells.len() + 4);
-            for cell in cells.drain(..) {
-                match split(&cell, &lines, lid) {
-                    Some((a, b)) => {
-                        next.push(a);
-                        next.push(b);
-                    }
-                    None => next.push(cell),
+        for (k, (tri, cut)) in chunk.iter().zip(cut).enumerate() {
+            let ids = tri.map(|i| seed_ids[i as usize]);
+            let cells = match cut {
+                CutTriangle::Whole => {
+                    mesh.add_face(ids);
+                    stats.cells += 1;
+                    continue;
                 }
+                CutTriangle::Cells(cells) => cells,
+            };
+            stats.cut_triangles += 1;
+            for (pts, how) in cells {
+                if fan::emit_cell(&mut mesh, &mut vmap, pts, how) {
+                    stats.barycentre_vertices += 1;
+                }
+                stats.cells += 1;
             }
-            cells = next;
-        }
-        for cell in &cells {
-            let pts: Vec<PointQ> = cell.iter().map(|(p, _)| p.clone()).collect();
-            if fan::emit_cell(&mut mesh, &mut vmap, &pts) {
-                stats.barycentre_vertices += 1;
+            if mesh.num_vertices() > opts.max_vertices as usize {
+                tracing::debug!(seed_triangle = c * CUT_CHUNK + k, "vertex budget exceeded");
+                return Err(Error::meshing(
+                    Stage::Bsp,
+                    format!(
+                        "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
+                        opts.max_vertices
+                    ),
+                ));
             }
-            stats.cells += 1;
-        }
-        if mesh.num_vertices() > opts.max_vertices as usize {
-            return Err(Error::meshing(
-                Stage::Bsp,
-                format!(
-                    "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
-                    opts.max_vertices
-                ),
-            ));
         }
     }
     mesh.link_all();

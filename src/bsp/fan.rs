@@ -1,53 +1,80 @@
 //! Triangulating convex cells, tagging segment edges, rounding vertices.
 
-use super::{BspInput, SegmentTag};
+use super::{BspInput, BspSegment, SegmentTag};
 use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
 use crate::stage::Stage;
 use crate::{Error, Result};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap as HashMap;
 use std::cmp::Ordering;
-use std::collections::HashMap;
 
-/// Triangulate one convex cell (vertices counter-clockwise, possibly with
-/// collinear runs) into `mesh`: a fan from the first corner whose fan has no
-/// degenerate triangle, else a fan from the exact barycentre. Returns whether
-/// a barycentre vertex was added.
-pub(super) fn emit_cell(
-    mesh: &mut TriMesh,
-    vmap: &mut HashMap<PointQ, VertexId>,
-    pts: &[PointQ],
-) -> bool {
-    let ids: Vec<VertexId> = pts
-        .iter()
-        .map(|p| {
-            *vmap
-                .entry(p.clone())
-                .or_insert_with(|| mesh.add_vertex_q(p.clone(), VertexTag::default()))
-        })
-        .collect();
-    let n = ids.len();
+/// How [`emit_cell`] triangulates a convex cell (vertices counter-clockwise,
+/// possibly with collinear runs): a fan from the first corner whose fan has
+/// no degenerate triangle, else a fan from the exact barycentre.
+pub(super) enum CellFan {
+    /// A fan from this corner.
+    Corner(usize),
+    /// A fan from the barycentre.
+    Barycentre(PointQ),
+}
+
+/// Decide how to triangulate the convex cell `pts` ([`CellFan`]), from its
+/// points alone (exact orientations), so cells are planned in parallel.
+pub(super) fn plan_cell(pts: &[PointQ]) -> CellFan {
+    let n = pts.len();
     if n == 3 {
-        mesh.add_face([ids[0], ids[1], ids[2]]);
-        return false;
+        return CellFan::Corner(0);
     }
     let fan_ok = |k: usize| {
         (1..n - 1).all(|i| {
-            let (b, c) = (ids[(k + i) % n], ids[(k + i + 1) % n]);
-            mesh.orientation_of(ids[k], b, c) == Orientation::CounterClockwise
+            let (b, c) = (&pts[(k + i) % n], &pts[(k + i + 1) % n]);
+            orient2d_q(&pts[k], b, c) == Orientation::CounterClockwise
         })
     };
-    if let Some(k) = (0..n).find(|&k| fan_ok(k)) {
-        for i in 1..n - 1 {
-            mesh.add_face([ids[k], ids[(k + i) % n], ids[(k + i + 1) % n]]);
+    match (0..n).find(|&k| fan_ok(k)) {
+        Some(k) => CellFan::Corner(k),
+        None => {
+            CellFan::Barycentre(PointQ::barycentre(pts).expect("internal: a cell has vertices"))
         }
-        return false;
     }
-    let c = PointQ::barycentre(pts).expect("internal: a cell has vertices");
-    let cid = mesh.add_vertex_q(c, VertexTag::default());
-    for i in 0..n {
-        mesh.add_face([cid, ids[i], ids[(i + 1) % n]]);
+}
+
+/// Triangulate one convex cell `pts` into `mesh` as `how` says
+/// ([`plan_cell`]), its corners shared through `vmap`. Returns whether a
+/// barycentre vertex was added.
+pub(super) fn emit_cell(
+    mesh: &mut TriMesh,
+    vmap: &mut HashMap<PointQ, VertexId>,
+    pts: Vec<PointQ>,
+    how: CellFan,
+) -> bool {
+    let ids: Vec<VertexId> = pts
+        .into_iter()
+        .map(|p| match vmap.entry(p) {
+            std::collections::hash_map::Entry::Occupied(e) => *e.get(),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                let id = mesh.add_vertex_q(e.key().clone(), VertexTag::default());
+                *e.insert(id)
+            }
+        })
+        .collect();
+    let n = ids.len();
+    match how {
+        CellFan::Corner(k) => {
+            for i in 1..n - 1 {
+                mesh.add_face([ids[k], ids[(k + i) % n], ids[(k + i + 1) % n]]);
+            }
+            false
+        }
+        CellFan::Barycentre(c) => {
+            let cid = mesh.add_vertex_q(c, VertexTag::default());
+            for i in 0..n {
+                mesh.add_face([cid, ids[i], ids[(i + 1) % n]]);
+            }
+            true
+        }
     }
-    true
 }
 
 /// `-0.0` and `0.0` are the same point.
@@ -87,12 +114,17 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
             format!("internal: segment is not a chain of mesh edges ({what})"),
         )
     };
-    for seg in &input.segments {
+    // Each segment's walk reads the mesh only (tags play no part in it): the
+    // walks run in parallel, and their tags go on in segment order.
+    let mesh_ref: &TriMesh = mesh;
+    let walk = |seg: &BspSegment| -> Result<Vec<(VertexId, VertexId, FeatureOn)>> {
+        let mesh = mesh_ref;
+        let mut tags = Vec::new();
         let (Some(&va), Some(&vb)) = (by_pos.get(&key(seg.a)), by_pos.get(&key(seg.b))) else {
             return Err(not_conforming("missing endpoint vertex"));
         };
         if va == vb {
-            continue;
+            return Ok(tags);
         }
         let qa = PointQ::from_point(seg.a);
         let qb = PointQ::from_point(seg.b);
@@ -158,12 +190,19 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
                 },
                 SegmentTag::Secondary { polyline } => FeatureOn::Secondary { polyline },
             };
-            mesh.add_edge_tag(u, w, tag);
+            tags.push((u, w, tag));
             u = w;
             s_u = s_w;
         }
         if u != vb {
             return Err(not_conforming("walk budget exhausted"));
+        }
+        Ok(tags)
+    };
+    let walks: Vec<_> = input.segments.par_iter().map(walk).collect();
+    for tags in walks {
+        for (u, w, tag) in tags? {
+            mesh.add_edge_tag(u, w, tag);
         }
     }
     Ok(())

@@ -19,6 +19,7 @@ use super::grid::Grid;
 use crate::budget::Deadline;
 use crate::params::Resolved;
 use kurbo::{Point, Rect, Vec2};
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Chords per piece for the search.
@@ -152,15 +153,12 @@ pub(super) fn find(
     };
     // (piece, s, piece, t, point, nearness bound, split the first, the second)
     type Found = (usize, f64, usize, f64, Point, f64, bool, bool);
-    let mut found: Vec<Found> = Vec::new();
-    for i in 0..n {
-        if i % 64 == 0 && deadline.expired() {
-            break;
-        }
+    // The crossings of piece i with the pieces after it that it overlaps.
+    let crossings_of = |i: usize, found: &mut Vec<Found>| {
         let mut near = grid.query(boxes[i]);
         near.retain(|&j| (j as usize) > i && boxes[j as usize].overlaps(boxes[i]));
         if near.is_empty() {
-            continue;
+            return;
         }
         let ci = chords(&pieces[i]);
         for j in near {
@@ -223,7 +221,22 @@ pub(super) fn find(
                 }
             }
         }
-    }
+    };
+    // Per piece i, in parallel, its crossings with the pieces after it; then
+    // in piece order, as one pass over i would find them. Past the deadline
+    // the pieces left find nothing.
+    let by_piece: Vec<Vec<Found>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut found: Vec<Found> = Vec::new();
+            if deadline.expired() {
+                return found;
+            }
+            crossings_of(i, &mut found);
+            found
+        })
+        .collect();
+    let found: Vec<Found> = by_piece.into_iter().flatten().collect();
     // Crossings within μ of each other on one piece would make tiny sections:
     // keep the first of such a cluster (by order found) and drop its partners.
     let mut kept: Vec<Found> = Vec::new();

@@ -272,6 +272,87 @@ impl CollapsePlan {
     }
 }
 
+impl CollapsePlan {
+    /// What [`apply`] would decide on this plan, decided on the mesh as it is,
+    /// without the tentative change, in linear mode (`None` in curved mode):
+    /// the exact orientation of the new faces, then the curvature and the
+    /// envelope of the feature edges at `u` with the tags they would have,
+    /// then the energy rule, in the order of [`invariants::validate`] (so the
+    /// same refusal). The schedule decides these ahead, in parallel, with the
+    /// plan.
+    pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
+        if ctx.curved.is_some() {
+            return None;
+        }
+        let u = self.u;
+        let ccw = self
+            .new
+            .iter()
+            .all(|t| mesh.orientation_of(t[0], t[1], t[2]) == Orientation::CounterClockwise);
+        if !ccw {
+            return Some(Err(Reject::Inversion));
+        }
+        // The edges at u of the new faces, with the tags they would have: the
+        // ones they have, then those moved from v's edges (as `add_edge_tag`
+        // orients and dedups them).
+        let mut edges: Vec<(EdgeKey, Vec<FeatureOn>)> = Vec::new();
+        for t in &self.new {
+            for i in 0..3 {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                if a != u && b != u {
+                    continue;
+                }
+                let key = EdgeKey::new(a, b);
+                if edges.iter().any(|(k, _)| *k == key) {
+                    continue;
+                }
+                let mut tags = mesh.edge_tags(a, b).to_vec();
+                for &(x, y, tag) in &self.retag {
+                    if EdgeKey::new(x, y) != key {
+                        continue;
+                    }
+                    let tag = match tag {
+                        FeatureOn::Primary { section, t } if key.lo != x => FeatureOn::Primary {
+                            section,
+                            t: [t[1], t[0]],
+                        },
+                        other => other,
+                    };
+                    if !tags.contains(&tag) {
+                        tags.push(tag);
+                    }
+                }
+                if !tags.is_empty() {
+                    edges.push((key, tags));
+                }
+            }
+        }
+        let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
+            matches!(*tag, FeatureOn::Primary { section, t }
+                if !invariants::curvature::holds(ctx, section, t))
+        });
+        if bent {
+            return Some(Err(Reject::Curvature));
+        }
+        for (key, tags) in &edges {
+            let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
+            for tag in tags {
+                if let FeatureOn::Secondary { polyline } = *tag
+                    && !ctx.envelope.contains_segment(a, b, polyline)
+                {
+                    return Some(Err(Reject::Envelope));
+                }
+            }
+        }
+        if ctx.energy == super::EnergyRule::NoWorseMax
+            && max_energy_of(mesh, ctx, self.new.iter().copied()) > self.old_max_energy
+        {
+            return Some(Err(Reject::Energy));
+        }
+        Some(Ok(()))
+    }
+}
+
 /// Collapse `v` into `u` (see the module doc).
 pub(crate) fn try_collapse(mesh: &mut TriMesh, ctx: &Context, u: VertexId, v: VertexId) -> Outcome {
     try_collapse_noting_role(mesh, ctx, u, v, None).0
@@ -299,19 +380,32 @@ pub(crate) fn try_collapse_noting_role(
 /// [`CollapsePlan::new`] of the mesh as it is now (the schedule plans ahead,
 /// in parallel, and hands the plan over while the faces around both ends are
 /// unchanged), so the outcome is the one `try_collapse_noting_role` gives.
+///
+/// With `verdict` ([`CollapsePlan::verdict`] of the mesh as it is), the
+/// collapse is refused or committed as it says, without checking the
+/// invariants again.
 pub(crate) fn try_collapse_planned(
     mesh: &mut TriMesh,
     ctx: &Context,
     planned: Result<CollapsePlan, (Reject, bool)>,
+    verdict: Option<Result<(), Reject>>,
 ) -> (Outcome, bool) {
-    match planned {
-        Ok(plan) => (apply(mesh, ctx, plan), false),
-        Err((r, by_role)) => (Outcome::Rejected(r), by_role),
+    match (planned, verdict) {
+        (Err((r, by_role)), _) => (Outcome::Rejected(r), by_role),
+        (Ok(_), Some(Err(r))) => (Outcome::Rejected(r), false),
+        (Ok(plan), Some(Ok(()))) => (apply_decided(mesh, ctx, plan, true), false),
+        (Ok(plan), None) => (apply(mesh, ctx, plan), false),
     }
 }
 
 /// The tentative change of `plan`, its invariants, then commit or roll back.
 fn apply(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan) -> Outcome {
+    apply_decided(mesh, ctx, plan, false)
+}
+
+/// [`apply`]; with `decided` (the invariants hold by [`CollapsePlan::verdict`])
+/// the change is committed without checking them again (debug builds do).
+fn apply_decided(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan, decided: bool) -> Outcome {
     let mut tx = Transaction::new(mesh);
     for &w in &plan.drop_tags {
         tx.take_edge_tags(plan.v, w);
@@ -330,7 +424,12 @@ fn apply(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan) -> Outcome {
         old_max_energy: Some(plan.old_max_energy),
         old_corner_energy: plan.old_corner_energy,
     };
-    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+    if decided {
+        debug_assert!(
+            invariants::validate(&tx, ctx, &check).is_ok(),
+            "a collapse decided ahead fails the invariants"
+        );
+    } else if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);
     }
     tx.commit();

@@ -102,6 +102,89 @@ fn jet(parent: &Parent, t: f64) -> CurveJet {
 }
 
 impl SmoothPlan {
+    /// The invariants' check of the move, with the curve `budgets`.
+    fn check<'a>(&'a self, budgets: &'a [super::CurveBudget]) -> Check<'a> {
+        Check {
+            faces: &self.faces,
+            changed: std::slice::from_ref(&self.v),
+            budgets,
+            old_max_energy: Some(self.old_max_energy),
+            old_corner_energy: self.old_corner_energy,
+        }
+    }
+
+    /// What [`try_smooth_planned`] would decide on this plan (the length rule,
+    /// then the invariants), decided on the mesh as it is, without the
+    /// tentative move, where that is simple: in linear mode, for a vertex
+    /// whose feature edges (if any) are secondary (no curve budget, no
+    /// curvature check): the exact orientation of the ring with the vertex
+    /// moved, the envelope of its secondary edges, then the energy rule, in
+    /// the order of [`invariants::validate`]. `None` elsewhere. The schedule
+    /// decides these ahead, in parallel, with the plan.
+    pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
+        if ctx.curved.is_some() || self.t.is_some() {
+            return None;
+        }
+        let v = self.v;
+        let ring = crate::mesh::ScratchRing::of(mesh, v);
+        let primary = ring.neighbours.iter().any(|&w| {
+            mesh.edge_tags(v, w)
+                .iter()
+                .any(|t| matches!(t, FeatureOn::Primary { .. }))
+        });
+        if primary {
+            return None;
+        }
+        if ctx.max_new_edge < f64::INFINITY {
+            let old = mesh.position(v);
+            let stretches = ring.neighbours.iter().any(|&w| {
+                let q = mesh.position(w);
+                let len = self.pos.distance(q);
+                len > ctx.max_new_edge && len > old.distance(q)
+            });
+            if stretches {
+                return Some(Err(Reject::EdgeLength));
+            }
+        }
+        let ccw = self.faces.iter().all(|&f| {
+            mesh.orientation_if_moved(f, v, self.pos) == crate::exact::Orientation::CounterClockwise
+        });
+        if !ccw {
+            return Some(Err(Reject::Inversion));
+        }
+        // The secondary edges at v (the ring's faces' edges that v changes),
+        // with v moved.
+        let at = |x: VertexId| if x == v { self.pos } else { mesh.position(x) };
+        for &w in &ring.neighbours {
+            let key = EdgeKey::new(v, w);
+            for tag in mesh.edge_tags(v, w) {
+                if let FeatureOn::Secondary { polyline } = *tag
+                    && !ctx
+                        .envelope
+                        .contains_segment(at(key.lo), at(key.hi), polyline)
+                {
+                    return Some(Err(Reject::Envelope));
+                }
+            }
+        }
+        if ctx.energy == super::EnergyRule::NoWorseMax {
+            let new_max = self
+                .faces
+                .iter()
+                .map(|&f| {
+                    let [a, b, c] = mesh
+                        .face(f)
+                        .map(|x| if x == v { self.pos } else { mesh.position(x) });
+                    crate::element::energy::amips(a, b, c)
+                })
+                .fold(0.0, f64::max);
+            if new_max > self.old_max_energy {
+                return Some(Err(Reject::Energy));
+            }
+        }
+        Some(Ok(()))
+    }
+
     /// Find a better position for `v` under `objective`.
     ///
     /// # Errors
@@ -358,6 +441,7 @@ pub(crate) fn try_smooth_with(
         mesh,
         ctx,
         SmoothPlan::with_objective(mesh, ctx, v, objective),
+        None,
     )
 }
 
@@ -366,16 +450,38 @@ pub(crate) fn try_smooth_with(
 /// ahead, in parallel, and hands the plan over while the faces around the
 /// vertex and its neighbours' positions are unchanged), so the outcome is the
 /// one `try_smooth_with` gives.
+///
+/// With `verdict` ([`SmoothPlan::verdict`] of the mesh as it is), the move is
+/// refused or committed as it says, without checking the invariants again.
 pub(crate) fn try_smooth_planned(
     mesh: &mut TriMesh,
     ctx: &Context,
     planned: Result<SmoothPlan, Reject>,
+    verdict: Option<Result<(), Reject>>,
 ) -> Outcome {
     let plan = match planned {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
     let v = plan.v;
+    match verdict {
+        Some(Err(r)) => return Outcome::Rejected(r),
+        Some(Ok(())) => {
+            let mut tx = Transaction::new(mesh);
+            tx.set_position(v, plan.pos);
+            debug_assert!(
+                invariants::validate(&tx, ctx, &plan.check(&[])).is_ok(),
+                "a move decided ahead fails the invariants"
+            );
+            tx.commit();
+            return Outcome::Applied(LocalChange {
+                created: plan.faces,
+                moved_vertex: Some(v),
+                ..LocalChange::default()
+            });
+        }
+        None => {}
+    }
     if ctx.max_new_edge < f64::INFINITY {
         let old = mesh.position(v);
         let stretches = crate::mesh::ScratchRing::of(mesh, v)
@@ -422,14 +528,7 @@ pub(crate) fn try_smooth_planned(
             }
         }
     }
-    let check = Check {
-        faces: &plan.faces,
-        changed: &[v],
-        budgets: &budget,
-        old_max_energy: Some(plan.old_max_energy),
-        old_corner_energy: plan.old_corner_energy,
-    };
-    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+    if let Err(r) = invariants::validate(&tx, ctx, &plan.check(&budget)) {
         return Outcome::Rejected(r);
     }
     tx.commit();

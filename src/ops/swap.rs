@@ -92,13 +92,102 @@ fn other_diagonal_free(mesh: &TriMesh, q: &EdgeQuad) -> Result<(), Reject> {
 
 /// Swap the edge `a b` (see the module doc).
 pub(crate) fn try_swap(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
-    let plan = match SwapPlan::new(mesh, ctx, a, b) {
+    try_swap_planned(mesh, ctx, SwapPlan::new(mesh, ctx, a, b), None)
+}
+
+/// The rest of [`try_swap`] once its plan is made on the mesh as it is now;
+/// with `verdict` ([`SwapPlan::verdict`]), the swap is refused or committed
+/// as it says, without checking the invariants again.
+pub(crate) fn try_swap_planned(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    planned: Result<SwapPlan, Reject>,
+    verdict: Option<Result<(), Reject>>,
+) -> Outcome {
+    let plan = match planned {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
+    if let Some(Err(r)) = verdict {
+        return Outcome::Rejected(r);
+    }
     let mut tx = Transaction::new(mesh);
     let created = tx.replace_faces(&plan.faces, &plan.new);
-    validate_and_commit(tx, ctx, &plan, created)
+    validate_and_commit(tx, ctx, &plan, created, verdict.is_some())
+}
+
+impl SwapPlan {
+    /// The two vertices of the new diagonal.
+    pub(crate) fn diagonal(&self) -> [VertexId; 2] {
+        [self.c, self.d]
+    }
+
+    /// What the swap's invariants would decide, on the mesh as it is, without
+    /// the tentative change, in linear mode (`None` in curved mode), with the
+    /// tags `moved` added to the new faces' edges (a reroute's): the exact
+    /// orientation of the new faces, the curvature and the envelope of their
+    /// feature edges, the energy rule, in the order of
+    /// [`invariants::validate`]. The schedule decides these ahead, in
+    /// parallel.
+    pub(crate) fn verdict(
+        &self,
+        mesh: &TriMesh,
+        ctx: &Context,
+        moved: &[(VertexId, VertexId, FeatureOn)],
+    ) -> Option<Result<(), Reject>> {
+        if ctx.curved.is_some() {
+            return None;
+        }
+        let ccw = self.new.iter().all(|t| {
+            mesh.orientation_of(t[0], t[1], t[2]) == crate::exact::Orientation::CounterClockwise
+        });
+        if !ccw {
+            return Some(Err(Reject::Inversion));
+        }
+        // Every edge of the new faces has c or d as an end.
+        let mut edges: Vec<(crate::mesh::EdgeKey, Vec<FeatureOn>)> = Vec::new();
+        for t in &self.new {
+            for i in 0..3 {
+                let (x, y) = (t[i], t[(i + 1) % 3]);
+                let key = crate::mesh::EdgeKey::new(x, y);
+                if edges.iter().any(|(k, _)| *k == key) {
+                    continue;
+                }
+                let mut tags = mesh.edge_tags(x, y).to_vec();
+                for &(p, q, tag) in moved {
+                    if crate::mesh::EdgeKey::new(p, q) == key && !tags.contains(&tag) {
+                        tags.push(tag);
+                    }
+                }
+                if !tags.is_empty() {
+                    edges.push((key, tags));
+                }
+            }
+        }
+        let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
+            matches!(*tag, FeatureOn::Primary { section, t }
+                if !invariants::curvature::holds(ctx, section, t))
+        });
+        if bent {
+            return Some(Err(Reject::Curvature));
+        }
+        for (key, tags) in &edges {
+            let (p, q) = (mesh.position(key.lo), mesh.position(key.hi));
+            for tag in tags {
+                if let FeatureOn::Secondary { polyline } = *tag
+                    && !ctx.envelope.contains_segment(p, q, polyline)
+                {
+                    return Some(Err(Reject::Envelope));
+                }
+            }
+        }
+        if ctx.energy == super::EnergyRule::NoWorseMax
+            && super::max_energy_of(mesh, ctx, self.new) > self.old_max_energy
+        {
+            return Some(Err(Reject::Energy));
+        }
+        Some(Ok(()))
+    }
 }
 
 /// The invariants on the faces a swap (or reroute) created in `tx`, then commit,
@@ -108,6 +197,7 @@ fn validate_and_commit(
     ctx: &Context,
     plan: &SwapPlan,
     created: Vec<FaceId>,
+    decided: bool,
 ) -> Outcome {
     let check = Check {
         faces: &created,
@@ -116,7 +206,12 @@ fn validate_and_commit(
         old_max_energy: Some(plan.old_max_energy),
         old_corner_energy: plan.old_corner_energy,
     };
-    if let Err(r) = invariants::validate(&tx, ctx, &check) {
+    if decided {
+        debug_assert!(
+            invariants::validate(&tx, ctx, &check).is_ok(),
+            "a swap decided ahead fails the invariants"
+        );
+    } else if let Err(r) = invariants::validate(&tx, ctx, &check) {
         return Outcome::Rejected(r);
     }
     tx.commit();
@@ -197,10 +292,42 @@ impl ReroutePlan {
 /// Reroute the secondary edge `a b` through the nearer opposite vertex (see the
 /// module doc).
 pub(crate) fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
-    let plan = match ReroutePlan::new(mesh, ctx, a, b) {
+    try_reroute_planned(mesh, ctx, ReroutePlan::new(mesh, ctx, a, b), None)
+}
+
+impl ReroutePlan {
+    /// The swap under the reroute.
+    pub(crate) fn swap(&self) -> &SwapPlan {
+        &self.swap
+    }
+
+    /// [`SwapPlan::verdict`] with the tags that move to `a k` and `k b`.
+    pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
+        let moved: Vec<(VertexId, VertexId, FeatureOn)> = self
+            .tags
+            .iter()
+            .flat_map(|&tag| [(self.a, self.k, tag), (self.k, self.b, tag)])
+            .collect();
+        self.swap.verdict(mesh, ctx, &moved)
+    }
+}
+
+/// The rest of [`try_reroute`] once its plan is made on the mesh as it is
+/// now; with `verdict` ([`ReroutePlan::verdict`]), the reroute is refused or
+/// committed as it says, without checking the invariants again.
+pub(crate) fn try_reroute_planned(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    planned: Result<ReroutePlan, Reject>,
+    verdict: Option<Result<(), Reject>>,
+) -> Outcome {
+    let plan = match planned {
         Ok(p) => p,
         Err(r) => return Outcome::Rejected(r),
     };
+    if let Some(Err(r)) = verdict {
+        return Outcome::Rejected(r);
+    }
     let mut tx = Transaction::new(mesh);
     let created = tx.replace_faces(&plan.swap.faces, &plan.swap.new);
     tx.take_edge_tags(plan.a, plan.b);
@@ -211,5 +338,5 @@ pub(crate) fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: Ver
             }
         }
     }
-    validate_and_commit(tx, ctx, &plan.swap, created)
+    validate_and_commit(tx, ctx, &plan.swap, created, verdict.is_some())
 }

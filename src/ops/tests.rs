@@ -895,3 +895,73 @@ fn a_bounded_split_refuses_to_make_a_needle() {
     assert!(max_energy(&mesh, &ctx, &change.created) <= 4.0 * old);
     assert!(mesh.check().is_empty(), "{:?}", mesh.check());
 }
+
+/// The verdicts decided on the mesh as it is (`CollapsePlan::verdict`,
+/// `SmoothPlan::verdict`, `SwapPlan::verdict`, `ReroutePlan::verdict`, which the
+/// schedule computes ahead in parallel) are the outcomes of the tentative
+/// change and its invariants: the same refusal, or applied. Random plans on
+/// random meshes, the meshes moving on between them.
+#[test]
+fn verdicts_decided_ahead_match_the_tentative_changes() {
+    let mut meshes: Vec<(TriMesh, Context)> = (0..3)
+        .map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax))
+        .chain((0..3).map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax)))
+        .collect();
+    // (decided, of which refused) by operation.
+    let mut seen = [(0usize, 0usize); 4];
+    for (i, (mesh, ctx)) in meshes.iter_mut().enumerate() {
+        let mut rng = Rng(100 + i as u64);
+        for step in 0..1500 {
+            let verts: Vec<VertexId> = mesh.vertices().collect();
+            let v = verts[rng.below(verts.len())];
+            let ring = mesh.vertex_ring(v);
+            let Some(&u) = ring.neighbours.get(rng.below(ring.neighbours.len().max(1))) else {
+                continue;
+            };
+            let what = format!("mesh {i} step {step}");
+            let (verdict, outcome, op) = match step % 4 {
+                0 => {
+                    let Ok(plan) = CollapsePlan::new(mesh, ctx, u, v, None) else {
+                        continue;
+                    };
+                    (plan.verdict(mesh, ctx), try_collapse(mesh, ctx, u, v), 0)
+                }
+                1 => {
+                    let Ok(plan) = SmoothPlan::with_objective(mesh, ctx, v, Objective::Sum) else {
+                        continue;
+                    };
+                    (plan.verdict(mesh, ctx), try_smooth(mesh, ctx, v), 1)
+                }
+                2 => {
+                    let Ok(plan) = SwapPlan::new(mesh, ctx, u, v) else {
+                        continue;
+                    };
+                    (plan.verdict(mesh, ctx, &[]), try_swap(mesh, ctx, u, v), 2)
+                }
+                _ => {
+                    let Ok(plan) = ReroutePlan::new(mesh, ctx, u, v) else {
+                        continue;
+                    };
+                    (plan.verdict(mesh, ctx), try_reroute(mesh, ctx, u, v), 3)
+                }
+            };
+            let Some(verdict) = verdict else {
+                continue;
+            };
+            seen[op].0 += 1;
+            match (&verdict, &outcome) {
+                (Ok(()), Outcome::Applied(_)) => {}
+                (Err(r), Outcome::Rejected(s)) if r == s => seen[op].1 += 1,
+                _ => panic!("{what}, op {op}: verdict {verdict:?}, outcome {outcome:?}"),
+            }
+        }
+    }
+    // Every kind was decided ahead, both ways (else the check is vacuous);
+    // reroutes are rare on these meshes.
+    for (op, &(decided, refused)) in seen.iter().enumerate() {
+        assert!(decided >= 5, "op {op}: {decided} decided ({seen:?})");
+        if op < 3 {
+            assert!(refused >= 1 && refused < decided, "op {op}: {seen:?}");
+        }
+    }
+}

@@ -47,9 +47,10 @@ use crate::budget::Deadline;
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
-    self, CollapsePlan, Context, Objective, Outcome, Reject, SmoothPlan, invariants::on_curve,
-    try_collapse_noting_role, try_collapse_planned, try_project, try_reroute, try_round,
-    try_smooth_planned, try_smooth_with, try_split, try_swap,
+    self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SwapPlan,
+    invariants::on_curve, try_collapse_noting_role, try_collapse_planned, try_project, try_reroute,
+    try_reroute_planned, try_round, try_smooth_planned, try_smooth_with, try_split, try_swap,
+    try_swap_planned,
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
@@ -531,8 +532,11 @@ enum CollapseDirection {
     Unplanned,
     /// The length rule refused it.
     Length,
-    /// [`CollapsePlan::new`] on v's ring.
-    Plan(Result<CollapsePlan, (Reject, bool)>),
+    /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`].
+    Plan(
+        Result<CollapsePlan, (Reject, bool)>,
+        Option<Result<(), Reject>>,
+    ),
 }
 
 /// A collapse of an edge planned ahead at clock `at`, both directions in the
@@ -552,6 +556,47 @@ struct CollapseAhead {
 struct SmoothAhead {
     at: u64,
     plan: Result<SmoothPlan, Reject>,
+    /// [`SmoothPlan::verdict`].
+    verdict: Option<Result<(), Reject>>,
+}
+
+/// What the swap pass does with an edge, by its tags: swap an untagged edge,
+/// reroute a secondary one, leave a primary one.
+enum SwapKind {
+    Swap,
+    Reroute,
+    Neither,
+}
+
+fn swap_kind(mesh: &TriMesh, k: EdgeKey) -> SwapKind {
+    let tags = mesh.edge_tags(k.lo, k.hi);
+    if tags.is_empty() {
+        SwapKind::Swap
+    } else if tags
+        .iter()
+        .all(|t| matches!(t, FeatureOn::Secondary { .. }))
+    {
+        SwapKind::Reroute
+    } else {
+        SwapKind::Neither
+    }
+}
+
+/// A swap pass candidate planned ahead at clock `at` ([`Schedule::plan_swap`]):
+/// it stands while no vertex of `quad` has a stamp past `at`.
+struct SwapAhead {
+    at: u64,
+    quad: [VertexId; 4],
+    what: SwapWhat,
+}
+
+enum SwapWhat {
+    /// The pass skips it (no gain left, or a primary edge).
+    Skip,
+    /// A swap, with [`SwapPlan::verdict`].
+    Swap(SwapPlan, Option<Result<(), Reject>>),
+    /// A reroute, with [`ReroutePlan::verdict`].
+    Reroute(ReroutePlan, Option<Result<(), Reject>>),
 }
 
 /// Whether collapsing `v` into `u` makes no edge longer than `max_stretch`
@@ -1003,9 +1048,9 @@ impl<'a> Schedule<'a> {
                         by_length = true;
                         continue;
                     }
-                    CollapseDirection::Plan(plan) => {
+                    CollapseDirection::Plan(plan, verdict) => {
                         tried = true;
-                        try_collapse_planned(self.mesh, self.ctx, plan)
+                        try_collapse_planned(self.mesh, self.ctx, plan, verdict)
                     }
                     CollapseDirection::Unplanned => {
                         if !self.keeps_lengths(u, v) {
@@ -1113,7 +1158,9 @@ impl<'a> Schedule<'a> {
             ) {
                 return CollapseDirection::Length;
             }
-            CollapseDirection::Plan(CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v)))
+            let plan = CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v));
+            let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
+            CollapseDirection::Plan(plan, verdict)
         };
         Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
     }
@@ -1141,31 +1188,67 @@ impl<'a> Schedule<'a> {
         let cands = self.swap_candidates(last.as_ref());
         self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
         let mut applied = 0;
-        for (_, k) in cands {
-            // Earlier swaps may have changed the quad (else it still has the
-            // gain the scan found: a change of either face, or a move of any
-            // of its four vertices, stamps both ends).
-            let changed = self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
-            if changed && swap_gain(self.mesh, self.ctx, k).is_none() {
-                continue;
-            }
-            let tags = self.mesh.edge_tags(k.lo, k.hi);
-            let secondary = !tags.is_empty()
-                && tags
-                    .iter()
-                    .all(|t| matches!(t, FeatureOn::Secondary { .. }));
-            let (out, tally) = if tags.is_empty() {
-                (
-                    try_swap(self.mesh, self.ctx, k.lo, k.hi),
-                    &mut self.stats.swap,
-                )
-            } else if secondary {
-                (
-                    try_reroute(self.mesh, self.ctx, k.lo, k.hi),
-                    &mut self.stats.reroute,
-                )
+        // As in the collapse round: with more than one thread the next
+        // `PLAN_AHEAD` swaps are planned (and their invariants decided) at
+        // once in parallel; a plan is used only while the four vertices of
+        // its quad are unchanged since.
+        let parallel = rayon::current_num_threads() > 1;
+        let mut ahead: Vec<Option<SwapAhead>> = Vec::new();
+        let mut ahead_from = 0;
+        for (n, &(_, k)) in cands.iter().enumerate() {
+            let planned = if parallel {
+                if n >= ahead_from + ahead.len() {
+                    let end = (n + PLAN_AHEAD).min(cands.len());
+                    let this = &*self;
+                    ahead = cands[n..end]
+                        .par_iter()
+                        .map(|&(_, e)| this.plan_swap(e, scanned_at))
+                        .collect();
+                    ahead_from = n;
+                }
+                let a = ahead[n - ahead_from].take();
+                #[cfg(test)]
+                let had = a.is_some();
+                let fresh = a.filter(|a| a.quad.iter().all(|&x| self.stamp_of(x) <= a.at));
+                #[cfg(test)]
+                if had {
+                    self.tally_ahead(fresh.is_some());
+                }
+                fresh
             } else {
-                continue;
+                None
+            };
+            let (out, tally) = match planned.map(|a| a.what) {
+                Some(SwapWhat::Skip) => continue,
+                Some(SwapWhat::Swap(plan, verdict)) => (
+                    try_swap_planned(self.mesh, self.ctx, Ok(plan), verdict),
+                    &mut self.stats.swap,
+                ),
+                Some(SwapWhat::Reroute(plan, verdict)) => (
+                    try_reroute_planned(self.mesh, self.ctx, Ok(plan), verdict),
+                    &mut self.stats.reroute,
+                ),
+                None => {
+                    // Earlier swaps may have changed the quad (else it still
+                    // has the gain the scan found: a change of either face, or
+                    // a move of any of its four vertices, stamps both ends).
+                    let changed =
+                        self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
+                    if changed && swap_gain(self.mesh, self.ctx, k).is_none() {
+                        continue;
+                    }
+                    match swap_kind(self.mesh, k) {
+                        SwapKind::Swap => (
+                            try_swap(self.mesh, self.ctx, k.lo, k.hi),
+                            &mut self.stats.swap,
+                        ),
+                        SwapKind::Reroute => (
+                            try_reroute(self.mesh, self.ctx, k.lo, k.hi),
+                            &mut self.stats.reroute,
+                        ),
+                        SwapKind::Neither => continue,
+                    }
+                }
             };
             let counted = tally.record(&out);
             self.touch(&out, true);
@@ -1174,6 +1257,50 @@ impl<'a> Schedule<'a> {
             }
         }
         applied
+    }
+
+    /// Plan the swap (or reroute) of the candidate `k` ahead, on the mesh as
+    /// it is: what the swap pass would do with it now, short of applying it.
+    /// `None` where that is left to the pass (the plan refused it: cheap).
+    fn plan_swap(&self, k: EdgeKey, scanned_at: u64) -> Option<SwapAhead> {
+        let (mesh, ctx): (&TriMesh, &Context) = (self.mesh, self.ctx);
+        let at = self.clock;
+        let changed = self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
+        if changed && swap_gain(mesh, ctx, k).is_none() {
+            // The gain depends on the quad alone: both ends are stamped when
+            // it changes.
+            return Some(SwapAhead {
+                at,
+                quad: [k.lo, k.hi, k.lo, k.hi],
+                what: SwapWhat::Skip,
+            });
+        }
+        let quad = |[c, d]: [VertexId; 2]| [k.lo, k.hi, c, d];
+        match swap_kind(mesh, k) {
+            SwapKind::Neither => Some(SwapAhead {
+                at,
+                quad: [k.lo, k.hi, k.lo, k.hi],
+                what: SwapWhat::Skip,
+            }),
+            SwapKind::Swap => {
+                let plan = SwapPlan::new(mesh, ctx, k.lo, k.hi).ok()?;
+                let verdict = plan.verdict(mesh, ctx, &[]);
+                Some(SwapAhead {
+                    at,
+                    quad: quad(plan.diagonal()),
+                    what: SwapWhat::Swap(plan, verdict),
+                })
+            }
+            SwapKind::Reroute => {
+                let plan = ReroutePlan::new(mesh, ctx, k.lo, k.hi).ok()?;
+                let verdict = plan.verdict(mesh, ctx);
+                Some(SwapAhead {
+                    at,
+                    quad: quad(plan.swap().diagonal()),
+                    what: SwapWhat::Reroute(plan, verdict),
+                })
+            }
+        }
     }
 
     /// The swap pass's candidates, longest first: the edges off primary
@@ -1256,7 +1383,7 @@ impl<'a> Schedule<'a> {
                 None
             };
             let out = match planned {
-                Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan),
+                Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan, a.verdict),
                 None => try_smooth_with(self.mesh, self.ctx, v, objective),
             };
             self.touch(&out, false);
@@ -1296,9 +1423,15 @@ impl<'a> Schedule<'a> {
         {
             return None;
         }
+        let plan = SmoothPlan::with_objective(self.mesh, self.ctx, v, objective);
+        let verdict = plan
+            .as_ref()
+            .ok()
+            .and_then(|p| p.verdict(self.mesh, self.ctx));
         Some(SmoothAhead {
             at: self.clock,
-            plan: SmoothPlan::with_objective(self.mesh, self.ctx, v, objective),
+            plan,
+            verdict,
         })
     }
 
