@@ -115,26 +115,30 @@ impl SmoothPlan {
 
     /// What [`try_smooth_planned`] would decide on this plan (the length rule,
     /// then the invariants), decided on the mesh as it is, without the
-    /// tentative move, where that is simple: in linear mode, for a vertex
-    /// whose feature edges (if any) are secondary (no curve budget, no
-    /// curvature check): the exact orientation of the ring with the vertex
-    /// moved, the envelope of its secondary edges, then the energy rule, in
-    /// the order of [`invariants::validate`]. `None` elsewhere. The schedule
-    /// decides these ahead, in parallel, with the plan.
+    /// tentative move, in linear mode (`None` in curved mode): the exact
+    /// orientation of the ring with the vertex moved, its distance to its
+    /// curve against its budget (a primary vertex, with its new parameter),
+    /// the curvature and the envelope of its feature edges with the tags they
+    /// would have, then the energy rule, in the order of
+    /// [`invariants::validate`]. The schedule decides these ahead, in
+    /// parallel, with the plan.
     pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
-        if ctx.curved.is_some() || self.t.is_some() {
+        if ctx.curved.is_some() {
             return None;
         }
         let v = self.v;
         let ring = crate::mesh::ScratchRing::of(mesh, v);
-        let primary = ring.neighbours.iter().any(|&w| {
-            mesh.edge_tags(v, w)
-                .iter()
-                .any(|t| matches!(t, FeatureOn::Primary { .. }))
-        });
-        if primary {
-            return None;
-        }
+        // A tag of v's edges as the move leaves it: the plan's section gets
+        // the new parameter at v's end (as `try_smooth_planned` retags it).
+        let moved_tag = |key: EdgeKey, tag: FeatureOn| match (tag, self.t) {
+            (FeatureOn::Primary { section, t }, Some((s, tn))) if section == s => {
+                FeatureOn::Primary {
+                    section,
+                    t: if key.lo == v { [tn, t[1]] } else { [t[0], tn] },
+                }
+            }
+            (other, _) => other,
+        };
         if ctx.max_new_edge < f64::INFINITY {
             let old = mesh.position(v);
             let stretches = ring.neighbours.iter().any(|&w| {
@@ -152,8 +156,40 @@ impl SmoothPlan {
         if !ccw {
             return Some(Err(Reject::Inversion));
         }
-        // The secondary edges at v (the ring's faces' edges that v changes),
-        // with v moved.
+        // The curve budget (a primary vertex only): its distance to its curve
+        // after the move, against the one before (`on_curve::holds`).
+        if self.t.is_some()
+            && let Some(before) = on_curve::off_curve(mesh, ctx, v)
+        {
+            let mut after: Option<f64> = None;
+            for &w in &ring.neighbours {
+                let key = EdgeKey::new(v, w);
+                for &tag in mesh.edge_tags(v, w) {
+                    if let FeatureOn::Primary { section, t } = moved_tag(key, tag) {
+                        let d = ctx.section(section).map_or(f64::INFINITY, |s| {
+                            self.pos.distance(s.parent.eval(super::t_at(key, t, v)))
+                        });
+                        after = Some(after.unwrap_or(0.0).max(d));
+                    }
+                }
+            }
+            // Refused unless within the allowed distance (a NaN distance too).
+            let allowed = ctx.on_curve_abs.max(before);
+            if after.is_some_and(|d| d.partial_cmp(&allowed).is_none_or(|o| o.is_gt())) {
+                return Some(Err(Reject::OnCurve));
+            }
+        }
+        let bent = ring.neighbours.iter().any(|&w| {
+            let key = EdgeKey::new(v, w);
+            mesh.edge_tags(v, w).iter().any(|&tag| {
+                matches!(moved_tag(key, tag), FeatureOn::Primary { section, t }
+                    if !invariants::curvature::holds(ctx, section, t))
+            })
+        });
+        if bent {
+            return Some(Err(Reject::Curvature));
+        }
+        // The secondary edges at v, with v moved.
         let at = |x: VertexId| if x == v { self.pos } else { mesh.position(x) };
         for &w in &ring.neighbours {
             let key = EdgeKey::new(v, w);
@@ -172,9 +208,7 @@ impl SmoothPlan {
                 .faces
                 .iter()
                 .map(|&f| {
-                    let [a, b, c] = mesh
-                        .face(f)
-                        .map(|x| if x == v { self.pos } else { mesh.position(x) });
+                    let [a, b, c] = mesh.face(f).map(at);
                     crate::element::energy::amips(a, b, c)
                 })
                 .fold(0.0, f64::max);
@@ -464,25 +498,11 @@ pub(crate) fn try_smooth_planned(
         Err(r) => return Outcome::Rejected(r),
     };
     let v = plan.v;
-    match verdict {
-        Some(Err(r)) => return Outcome::Rejected(r),
-        Some(Ok(())) => {
-            let mut tx = Transaction::new(mesh);
-            tx.set_position(v, plan.pos);
-            debug_assert!(
-                invariants::validate(&tx, ctx, &plan.check(&[])).is_ok(),
-                "a move decided ahead fails the invariants"
-            );
-            tx.commit();
-            return Outcome::Applied(LocalChange {
-                created: plan.faces,
-                moved_vertex: Some(v),
-                ..LocalChange::default()
-            });
-        }
-        None => {}
+    if let Some(Err(r)) = verdict {
+        return Outcome::Rejected(r);
     }
-    if ctx.max_new_edge < f64::INFINITY {
+    let decided = verdict.is_some();
+    if !decided && ctx.max_new_edge < f64::INFINITY {
         let old = mesh.position(v);
         let stretches = crate::mesh::ScratchRing::of(mesh, v)
             .neighbours
@@ -498,7 +518,7 @@ pub(crate) fn try_smooth_planned(
     }
     // Only a primary vertex (the plan gave it a parameter) is on a curve: any
     // other has no primary edge, so no budget (and nothing to walk for one).
-    let budget: Vec<_> = if plan.t.is_some() {
+    let budget: Vec<_> = if plan.t.is_some() && !decided {
         on_curve::budget_now(mesh, ctx, v).into_iter().collect()
     } else {
         Vec::new()
@@ -528,7 +548,14 @@ pub(crate) fn try_smooth_planned(
             }
         }
     }
-    if let Err(r) = invariants::validate(&tx, ctx, &plan.check(&budget)) {
+    if decided {
+        // `plan.verdict` decided the invariants (with the curve budget of the
+        // mesh before the move): debug builds check them again.
+        debug_assert!(
+            invariants::validate(&tx, ctx, &plan.check(&[])).is_ok(),
+            "a move decided ahead fails the invariants"
+        );
+    } else if let Err(r) = invariants::validate(&tx, ctx, &plan.check(&budget)) {
         return Outcome::Rejected(r);
     }
     tx.commit();

@@ -919,32 +919,48 @@ fn verdicts_decided_ahead_match_the_tentative_changes() {
                 continue;
             };
             let what = format!("mesh {i} step {step}");
-            let (verdict, outcome, op) = match step % 4 {
+            // The tentative path on `mesh`; the decided one (the plan and its
+            // verdict handed over) on a copy: the same outcome, the same mesh.
+            let mut decided = mesh.clone();
+            let (verdict, outcome, by_verdict, op) = match step % 4 {
                 0 => {
                     let Ok(plan) = CollapsePlan::new(mesh, ctx, u, v, None) else {
                         continue;
                     };
-                    (plan.verdict(mesh, ctx), try_collapse(mesh, ctx, u, v), 0)
+                    let verdict = plan.verdict(mesh, ctx);
+                    let d = try_collapse_planned(&mut decided, ctx, Ok(plan), verdict).0;
+                    (verdict, try_collapse(mesh, ctx, u, v), d, 0)
                 }
                 1 => {
                     let Ok(plan) = SmoothPlan::with_objective(mesh, ctx, v, Objective::Sum) else {
                         continue;
                     };
-                    (plan.verdict(mesh, ctx), try_smooth(mesh, ctx, v), 1)
+                    let verdict = plan.verdict(mesh, ctx);
+                    let d = try_smooth_planned(&mut decided, ctx, Ok(plan), verdict);
+                    (verdict, try_smooth(mesh, ctx, v), d, 1)
                 }
                 2 => {
                     let Ok(plan) = SwapPlan::new(mesh, ctx, u, v) else {
                         continue;
                     };
-                    (plan.verdict(mesh, ctx, &[]), try_swap(mesh, ctx, u, v), 2)
+                    let verdict = plan.verdict(mesh, ctx, &[]);
+                    let d = try_swap_planned(&mut decided, ctx, Ok(plan), verdict);
+                    (verdict, try_swap(mesh, ctx, u, v), d, 2)
                 }
                 _ => {
                     let Ok(plan) = ReroutePlan::new(mesh, ctx, u, v) else {
                         continue;
                     };
-                    (plan.verdict(mesh, ctx), try_reroute(mesh, ctx, u, v), 3)
+                    let verdict = plan.verdict(mesh, ctx);
+                    let d = try_reroute_planned(&mut decided, ctx, Ok(plan), verdict);
+                    (verdict, try_reroute(mesh, ctx, u, v), d, 3)
                 }
             };
+            assert!(
+                *mesh == decided,
+                "{what}, op {op}: the decided path made another mesh"
+            );
+            assert_eq!(outcome, by_verdict, "{what}, op {op}");
             let Some(verdict) = verdict else {
                 continue;
             };

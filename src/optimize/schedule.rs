@@ -1031,18 +1031,22 @@ impl<'a> Schedule<'a> {
             let mut tried = false;
             let mut by_length = false;
             for (d, (u, v)) in [(k.lo, k.hi), (k.hi, k.lo)].into_iter().enumerate() {
+                let direction = planned.as_mut().map_or(CollapseDirection::Unplanned, |a| {
+                    std::mem::replace(&mut a[d], CollapseDirection::Unplanned)
+                });
                 // Refused by the role rules, and v's faces unchanged since: the
                 // same refusal, without planning it (or measuring lengths) again.
-                if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
+                // (A direction planned ahead found no such refusal then, and
+                // none can have come since: v is unchanged, and only this edge
+                // makes one.)
+                if matches!(direction, CollapseDirection::Unplanned)
+                    && let Some(&(at, reason)) = self.role_refused.get(&(u, v))
                     && self.topo_stamp_of(v) <= at
                 {
                     tried = true;
                     self.stats.collapse.record(&Outcome::Rejected(reason));
                     continue;
                 }
-                let direction = planned.as_mut().map_or(CollapseDirection::Unplanned, |a| {
-                    std::mem::replace(&mut a[d], CollapseDirection::Unplanned)
-                });
                 let (out, by_role) = match direction {
                     CollapseDirection::Length => {
                         by_length = true;
