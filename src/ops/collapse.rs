@@ -327,22 +327,8 @@ impl CollapsePlan {
                 }
             }
         }
-        let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
-            matches!(*tag, FeatureOn::Primary { section, t }
-                if !invariants::curvature::holds(ctx, section, t))
-        });
-        if bent {
-            return Some(Err(Reject::Curvature));
-        }
-        for (key, tags) in &edges {
-            let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
-            for tag in tags {
-                if let FeatureOn::Secondary { polyline } = *tag
-                    && !ctx.envelope.contains_segment(a, b, polyline)
-                {
-                    return Some(Err(Reject::Envelope));
-                }
-            }
+        if let Err(r) = invariants::feature_edges_hold(ctx, &edges, |x| mesh.position(x)) {
+            return Some(Err(r));
         }
         if ctx.energy == super::EnergyRule::NoWorseMax
             && max_energy_of(mesh, ctx, self.new.iter().copied()) > self.old_max_energy

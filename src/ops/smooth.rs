@@ -179,29 +179,20 @@ impl SmoothPlan {
                 return Some(Err(Reject::OnCurve));
             }
         }
-        let bent = ring.neighbours.iter().any(|&w| {
-            let key = EdgeKey::new(v, w);
-            mesh.edge_tags(v, w).iter().any(|&tag| {
-                matches!(moved_tag(key, tag), FeatureOn::Primary { section, t }
-                    if !invariants::curvature::holds(ctx, section, t))
+        // v's feature edges with the tags the move leaves, v moved.
+        let edges: Vec<(EdgeKey, Vec<FeatureOn>)> = ring
+            .neighbours
+            .iter()
+            .map(|&w| {
+                let key = EdgeKey::new(v, w);
+                let tags = mesh.edge_tags(v, w).iter().map(|&t| moved_tag(key, t));
+                (key, tags.collect::<Vec<_>>())
             })
-        });
-        if bent {
-            return Some(Err(Reject::Curvature));
-        }
-        // The secondary edges at v, with v moved.
+            .filter(|(_, tags)| !tags.is_empty())
+            .collect();
         let at = |x: VertexId| if x == v { self.pos } else { mesh.position(x) };
-        for &w in &ring.neighbours {
-            let key = EdgeKey::new(v, w);
-            for tag in mesh.edge_tags(v, w) {
-                if let FeatureOn::Secondary { polyline } = *tag
-                    && !ctx
-                        .envelope
-                        .contains_segment(at(key.lo), at(key.hi), polyline)
-                {
-                    return Some(Err(Reject::Envelope));
-                }
-            }
+        if let Err(r) = invariants::feature_edges_hold(ctx, &edges, at) {
+            return Some(Err(r));
         }
         if ctx.energy == super::EnergyRule::NoWorseMax {
             let new_max = self

@@ -164,22 +164,8 @@ impl SwapPlan {
                 }
             }
         }
-        let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
-            matches!(*tag, FeatureOn::Primary { section, t }
-                if !invariants::curvature::holds(ctx, section, t))
-        });
-        if bent {
-            return Some(Err(Reject::Curvature));
-        }
-        for (key, tags) in &edges {
-            let (p, q) = (mesh.position(key.lo), mesh.position(key.hi));
-            for tag in tags {
-                if let FeatureOn::Secondary { polyline } = *tag
-                    && !ctx.envelope.contains_segment(p, q, polyline)
-                {
-                    return Some(Err(Reject::Envelope));
-                }
-            }
+        if let Err(r) = invariants::feature_edges_hold(ctx, &edges, |x| mesh.position(x)) {
+            return Some(Err(r));
         }
         if ctx.energy == super::EnergyRule::NoWorseMax
             && super::max_energy_of(mesh, ctx, self.new) > self.old_max_energy

@@ -526,6 +526,45 @@ impl ShortestFirst {
     }
 }
 
+/// Plans made ahead, in parallel, for the next [`PLAN_AHEAD`] items of a
+/// pass's queue (see [`Schedule::collapse_round`]); none with one thread.
+struct PlanAhead<T> {
+    parallel: bool,
+    /// The queue index of `plans[0]`.
+    from: usize,
+    plans: Vec<Option<T>>,
+}
+
+impl<T: Send> PlanAhead<T> {
+    fn new() -> Self {
+        PlanAhead {
+            parallel: rayon::current_num_threads() > 1,
+            from: 0,
+            plans: Vec::new(),
+        }
+    }
+
+    /// The plan of `items[n]`, planning `items[n..n + PLAN_AHEAD]` at once
+    /// first when `n` is past the window planned; `None` with one thread
+    /// (and where `plan` made none).
+    fn take<I: Sync>(
+        &mut self,
+        n: usize,
+        items: &[I],
+        plan: impl Fn(&I) -> Option<T> + Sync + Send,
+    ) -> Option<T> {
+        if !self.parallel {
+            return None;
+        }
+        if n >= self.from + self.plans.len() {
+            let end = (n + PLAN_AHEAD).min(items.len());
+            self.plans = items[n..end].par_iter().map(plan).collect();
+            self.from = n;
+        }
+        self.plans.get_mut(n - self.from).and_then(Option::take)
+    }
+}
+
 /// One direction of a collapse planned ahead ([`Schedule::plan_collapse`]).
 enum CollapseDirection {
     /// Left to the sequential pass (its role refusal was remembered).
@@ -990,34 +1029,20 @@ impl<'a> Schedule<'a> {
         // queue are planned at once in parallel; a plan is used below only
         // while neither end has changed since, so the round does exactly what
         // it does planning each collapse when it gets to it.
-        let parallel = rayon::current_num_threads() > 1;
-        let mut ahead: Vec<Option<CollapseAhead>> = Vec::new();
-        let mut ahead_from = 0;
+        let mut ahead = PlanAhead::new();
         while let Some((bits, k, index)) = queue.pop_indexed() {
             if budget == 0 {
                 break;
             }
             budget -= 1;
-            let planned = match index {
-                Some(i) if parallel => {
-                    if i >= ahead_from + ahead.len() {
-                        let end = (i + PLAN_AHEAD).min(queue.sorted.len());
-                        let this = &*self;
-                        ahead = queue.sorted[i..end]
-                            .par_iter()
-                            .map(|&(b, e)| Some(this.plan_collapse(b, e, factor)))
-                            .collect();
-                        ahead_from = i;
-                    }
-                    let a = ahead[i - ahead_from].take();
-                    let fresh =
-                        a.filter(|a| self.stamp_of(k.lo) <= a.at && self.stamp_of(k.hi) <= a.at);
-                    #[cfg(test)]
-                    self.tally_ahead(fresh.is_some());
-                    fresh
-                }
-                _ => None,
-            };
+            let this = &*self;
+            let planned = index
+                .and_then(|i| {
+                    ahead.take(i, &queue.sorted, |&(b, e)| {
+                        Some(this.plan_collapse(b, e, factor))
+                    })
+                })
+                .filter(|a: &CollapseAhead| self.fresh(a.at, &[k.lo, k.hi]));
             // A plan that stands already made the round's checks.
             let mut planned = match planned {
                 Some(a) => match a.directions {
@@ -1196,32 +1221,12 @@ impl<'a> Schedule<'a> {
         // `PLAN_AHEAD` swaps are planned (and their invariants decided) at
         // once in parallel; a plan is used only while the four vertices of
         // its quad are unchanged since.
-        let parallel = rayon::current_num_threads() > 1;
-        let mut ahead: Vec<Option<SwapAhead>> = Vec::new();
-        let mut ahead_from = 0;
+        let mut ahead = PlanAhead::new();
         for (n, &(_, k)) in cands.iter().enumerate() {
-            let planned = if parallel {
-                if n >= ahead_from + ahead.len() {
-                    let end = (n + PLAN_AHEAD).min(cands.len());
-                    let this = &*self;
-                    ahead = cands[n..end]
-                        .par_iter()
-                        .map(|&(_, e)| this.plan_swap(e, scanned_at))
-                        .collect();
-                    ahead_from = n;
-                }
-                let a = ahead[n - ahead_from].take();
-                #[cfg(test)]
-                let had = a.is_some();
-                let fresh = a.filter(|a| a.quad.iter().all(|&x| self.stamp_of(x) <= a.at));
-                #[cfg(test)]
-                if had {
-                    self.tally_ahead(fresh.is_some());
-                }
-                fresh
-            } else {
-                None
-            };
+            let this = &*self;
+            let planned = ahead
+                .take(n, &cands, |&(_, e)| this.plan_swap(e, scanned_at))
+                .filter(|a: &SwapAhead| self.fresh(a.at, &a.quad));
             let (out, tally) = match planned.map(|a| a.what) {
                 Some(SwapWhat::Skip) => continue,
                 Some(SwapWhat::Swap(plan, verdict)) => (
@@ -1352,9 +1357,7 @@ impl<'a> Schedule<'a> {
         // As in the collapse round: with more than one thread the next
         // `PLAN_AHEAD` moves are planned at once in parallel, and a plan is
         // used only while its vertex is unchanged since.
-        let parallel = rayon::current_num_threads() > 1;
-        let mut ahead: Vec<Option<SmoothAhead>> = Vec::new();
-        let mut ahead_from = 0;
+        let mut ahead = PlanAhead::new();
         for (n, &v) in verts.iter().enumerate() {
             let i = v.index();
             if i >= self.failed_smooth.len() {
@@ -1364,28 +1367,10 @@ impl<'a> Schedule<'a> {
             if at != u64::MAX && self.stamp_of(v) <= at {
                 continue;
             }
-            let planned = if parallel {
-                if n >= ahead_from + ahead.len() {
-                    let end = (n + PLAN_AHEAD).min(verts.len());
-                    let this = &*self;
-                    ahead = verts[n..end]
-                        .par_iter()
-                        .map(|&w| this.plan_smooth(w, objective))
-                        .collect();
-                    ahead_from = n;
-                }
-                let a = ahead[n - ahead_from].take();
-                #[cfg(test)]
-                let had = a.is_some();
-                let fresh = a.filter(|a| self.stamp_of(v) <= a.at);
-                #[cfg(test)]
-                if had {
-                    self.tally_ahead(fresh.is_some());
-                }
-                fresh
-            } else {
-                None
-            };
+            let this = &*self;
+            let planned = ahead
+                .take(n, &verts, |&w| this.plan_smooth(w, objective))
+                .filter(|a: &SmoothAhead| self.fresh(a.at, &[v]));
             let out = match planned {
                 Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan, a.verdict),
                 None => try_smooth_with(self.mesh, self.ctx, v, objective),
@@ -1409,13 +1394,17 @@ impl<'a> Schedule<'a> {
         applied
     }
 
-    #[cfg(test)]
-    fn tally_ahead(&mut self, fresh: bool) {
+    /// Whether a plan made ahead at clock `at`, which read the vertices
+    /// `read` (and their rings), still stands: none of them changed since.
+    fn fresh(&mut self, at: u64, read: &[VertexId]) -> bool {
+        let fresh = read.iter().all(|&x| self.stamp_of(x) <= at);
+        #[cfg(test)]
         if fresh {
             self.ahead_tally.0 += 1;
         } else {
             self.ahead_tally.1 += 1;
         }
+        fresh
     }
 
     /// Plan the smoothing of `v` ahead, on the mesh as it is: `None` where the
@@ -1854,6 +1843,20 @@ mod queue_tests {
     }
 }
 
+/// The options of the schedule's whole-pass tests: `l` 0.1 on the unit box.
+#[cfg(test)]
+fn test_options() -> OptimizeOptions {
+    OptimizeOptions {
+        l: 0.1,
+        l_floor: 0.01,
+        stop_energy: 5.0,
+        alpha_deg: 10.0,
+        max_passes: 40,
+        max_vertices: 20_000,
+        deadline: Deadline::NONE,
+    }
+}
+
 #[cfg(test)]
 mod swap_memo_tests {
     use super::*;
@@ -1869,15 +1872,7 @@ mod swap_memo_tests {
             .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)));
         let (mut checked, mut skipped) = (0, 0);
         for (i, (mut mesh, mut ctx)) in meshes.enumerate() {
-            let opts = OptimizeOptions {
-                l: 0.1,
-                l_floor: 0.01,
-                stop_energy: 5.0,
-                alpha_deg: 10.0,
-                max_passes: 40,
-                max_vertices: 20_000,
-                deadline: Deadline::NONE,
-            };
+            let opts = test_options();
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7);
             for pass in 0..8 {
                 s.split_pass();
@@ -1925,15 +1920,7 @@ mod plan_ahead_tests {
             .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
             .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)))
             .collect();
-        let opts = OptimizeOptions {
-            l: 0.1,
-            l_floor: 0.01,
-            stop_energy: 5.0,
-            alpha_deg: 10.0,
-            max_passes: 40,
-            max_vertices: 20_000,
-            deadline: Deadline::NONE,
-        };
+        let opts = test_options();
         let run = |threads: usize, mesh: &TriMesh, ctx: &Context| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

@@ -37,6 +37,36 @@ pub(crate) struct Check<'a> {
     pub(crate) old_corner_energy: Option<f64>,
 }
 
+/// The feature rules of [`validate`] on edges given with the tags they
+/// would have after a change, in its order: the turn of every primary piece
+/// ([`Reject::Curvature`]), then every secondary edge, its ends at `at`, in
+/// the envelope ([`Reject::Envelope`]). The verdicts the schedule decides
+/// ahead, without the tentative change, use it (linear mode: `validate`
+/// checks the curved elements between the two).
+pub(crate) fn feature_edges_hold(
+    ctx: &Context,
+    edges: &[(EdgeKey, Vec<FeatureOn>)],
+    at: impl Fn(VertexId) -> kurbo::Point,
+) -> Result<(), Reject> {
+    let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
+        matches!(*tag, FeatureOn::Primary { section, t } if !curvature::holds(ctx, section, t))
+    });
+    if bent {
+        return Err(Reject::Curvature);
+    }
+    for (key, tags) in edges {
+        let (a, b) = (at(key.lo), at(key.hi));
+        for tag in tags {
+            if let FeatureOn::Secondary { polyline } = *tag
+                && !ctx.envelope.contains_segment(a, b, polyline)
+            {
+                return Err(Reject::Envelope);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Run every invariant; the first that fails names the rejection.
 pub(crate) fn validate(mesh: &TriMesh, ctx: &Context, check: &Check<'_>) -> Result<(), Reject> {
     if !inversion::holds(mesh, check.faces) {
