@@ -7,7 +7,6 @@ use crate::mesh::{TriMesh, VertexId};
 use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::{Point, Rect};
-use rustc_hash::FxHashMap as HashMap;
 
 /// A uniform grid over the box holding, per cell, the segments whose
 /// bounding box meets it. Cell indices are monotone in the coordinate, so two
@@ -161,7 +160,7 @@ const CUT_CHUNK: usize = 1024;
 /// counter-clockwise) each with the way [`fan::emit_cell`] triangulates it.
 enum CutTriangle {
     Whole,
-    Cells(Vec<(Vec<PointQ>, fan::CellFan)>),
+    Cells(Vec<(Vec<fan::Corner>, fan::CellFan)>),
 }
 
 /// Cut one seed triangle `tri` (corners `tp`) by the lines of the segments
@@ -223,7 +222,7 @@ fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
             .map(|cell| {
                 let pts: Vec<PointQ> = cell.into_iter().map(|(p, _)| p).collect();
                 let how = fan::plan_cell(&pts);
-                (pts, how)
+                (pts.into_iter().map(fan::Corner::new).collect(), how)
             })
             .collect(),
     )
@@ -240,13 +239,13 @@ pub(super) fn cut_all(
 ) -> Result<TriMesh> {
     use rayon::prelude::*;
     let mut mesh = TriMesh::new();
-    let mut vmap: HashMap<PointQ, VertexId> = HashMap::default();
+    let mut vmap = fan::VertexMap::default();
     let seed_ids: Vec<VertexId> = seed
         .points
         .iter()
         .map(|&(p, tag)| {
             let id = mesh.add_vertex(p, tag);
-            vmap.insert(PointQ::from_point(p), id);
+            vmap.insert_f64(p, id);
             id
         })
         .collect();

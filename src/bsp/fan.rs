@@ -40,25 +40,79 @@ pub(super) fn plan_cell(pts: &[PointQ]) -> CellFan {
     }
 }
 
+/// A cell's corner with its nearest `f64` point and whether that is the
+/// corner exactly, rounded where the cell is cut (in parallel), so that
+/// [`VertexMap`] looks corners up by the bits of that point.
+pub(super) struct Corner {
+    q: PointQ,
+    pos: kurbo::Point,
+    exact: bool,
+}
+
+impl Corner {
+    pub(super) fn new(q: PointQ) -> Self {
+        let (pos, exact) = q.to_f64();
+        Corner { q, pos, exact }
+    }
+}
+
+/// The BSP's vertices by exact position. A corner is looked up by the bits of
+/// its nearest `f64` point, which equal points share, so hashing reads no
+/// rational; the exact values are compared only to tell apart points that
+/// round alike, and the rare point that rounds like another one goes to
+/// `others`, by its exact value.
+#[derive(Default)]
+pub(super) struct VertexMap {
+    by_bits: HashMap<(u64, u64), VertexId>,
+    others: HashMap<PointQ, VertexId>,
+}
+
+impl VertexMap {
+    /// Record the `f64` vertex `id` at `p`.
+    pub(super) fn insert_f64(&mut self, p: kurbo::Point, id: VertexId) {
+        self.by_bits.insert(key(p), id);
+    }
+
+    /// The vertex at `c`, added to `mesh` if there is none yet.
+    fn get_or_add(&mut self, mesh: &mut TriMesh, c: Corner) -> VertexId {
+        let add = |mesh: &mut TriMesh, c: Corner| {
+            mesh.add_vertex_rounded(c.q, c.pos, c.exact, VertexTag::default())
+        };
+        match self.by_bits.entry(key(c.pos)) {
+            std::collections::hash_map::Entry::Vacant(e) => *e.insert(add(mesh, c)),
+            std::collections::hash_map::Entry::Occupied(e) => {
+                let id = *e.get();
+                // A vertex with no rational is exactly its point, which is
+                // `c.pos`: the same point when `c` is exactly that.
+                let same = match mesh.exact(id) {
+                    Some(x) => *x == c.q,
+                    None => c.exact,
+                };
+                if same {
+                    return id;
+                }
+                if let Some(&id) = self.others.get(&c.q) {
+                    return id;
+                }
+                let q = c.q.clone();
+                let id = add(mesh, c);
+                self.others.insert(q, id);
+                id
+            }
+        }
+    }
+}
+
 /// Triangulate one convex cell `pts` into `mesh` as `how` says
 /// ([`plan_cell`]), its corners shared through `vmap`. Returns whether a
 /// barycentre vertex was added.
 pub(super) fn emit_cell(
     mesh: &mut TriMesh,
-    vmap: &mut HashMap<PointQ, VertexId>,
-    pts: Vec<PointQ>,
+    vmap: &mut VertexMap,
+    pts: Vec<Corner>,
     how: CellFan,
 ) -> bool {
-    let ids: Vec<VertexId> = pts
-        .into_iter()
-        .map(|p| match vmap.entry(p) {
-            std::collections::hash_map::Entry::Occupied(e) => *e.get(),
-            std::collections::hash_map::Entry::Vacant(e) => {
-                let id = mesh.add_vertex_q(e.key().clone(), VertexTag::default());
-                *e.insert(id)
-            }
-        })
-        .collect();
+    let ids: Vec<VertexId> = pts.into_iter().map(|c| vmap.get_or_add(mesh, c)).collect();
     let n = ids.len();
     match how {
         CellFan::Corner(k) => {
@@ -300,6 +354,40 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The vertex map keys on the nearest `f64` point but keeps apart exact
+    /// points that round alike, and finds an `f64` vertex from an exact corner.
+    #[test]
+    fn the_vertex_map_tells_apart_points_that_round_alike() {
+        let bary = |pts: [(f64, f64); 3]| {
+            PointQ::barycentre(&pts.map(|(x, y)| PointQ::from_point(kurbo::Point::new(x, y))))
+                .expect("three points")
+        };
+        let mut mesh = TriMesh::new();
+        let mut vmap = VertexMap::default();
+        let p = kurbo::Point::new(1.0, 2.0);
+        let seed = mesh.add_vertex(p, VertexTag::default());
+        vmap.insert_f64(p, seed);
+        let third = bary([(0.0, 0.0), (3.0, 0.0), (0.0, 1.0)]);
+        let near = bary([(0.0, 0.0), (3.0, 2f64.powi(-60)), (0.0, 1.0)]);
+        let near_p = bary([(0.0, 2.0), (3.0, 2f64.powi(-55)), (0.0, 4.0)]);
+        assert!(third != near);
+        assert_eq!(third.to_f64(), (near.to_f64().0, false));
+        assert_eq!(near_p.to_f64(), (p, false));
+        let a = vmap.get_or_add(&mut mesh, Corner::new(third.clone()));
+        let b = vmap.get_or_add(&mut mesh, Corner::new(near.clone()));
+        let c = vmap.get_or_add(&mut mesh, Corner::new(near_p.clone()));
+        assert!(a != b && a != c && b != c && c != seed);
+        assert_eq!(vmap.get_or_add(&mut mesh, Corner::new(third.clone())), a);
+        assert_eq!(vmap.get_or_add(&mut mesh, Corner::new(near.clone())), b);
+        assert_eq!(vmap.get_or_add(&mut mesh, Corner::new(near_p)), c);
+        assert_eq!(
+            vmap.get_or_add(&mut mesh, Corner::new(PointQ::from_point(p))),
+            seed
+        );
+        assert_eq!(mesh.num_vertices(), 4);
+        assert!(mesh.exact(a) == Some(&third) && mesh.exact(b) == Some(&near));
+    }
 
     #[test]
     fn candidates_start_at_the_nearest_point_and_keep_exact_coordinates() {

@@ -140,6 +140,25 @@ impl TriMesh {
         })
     }
 
+    /// [`Self::add_vertex_q`] with `p`'s nearest `f64` point `pos` and whether
+    /// that is `p` exactly, as [`PointQ::to_f64`] gives them (computed
+    /// elsewhere, in parallel).
+    pub(crate) fn add_vertex_rounded(
+        &mut self,
+        p: PointQ,
+        pos: Point,
+        exact: bool,
+        tag: VertexTag,
+    ) -> VertexId {
+        debug_assert!(p.to_f64() == (pos, exact), "internal: not p's rounding");
+        self.insert_vertex(VertexData {
+            pos,
+            exact: (!exact).then(|| Box::new(p)),
+            tag,
+            face: None,
+        })
+    }
+
     fn insert_vertex(&mut self, data: VertexData) -> VertexId {
         self.live_vertices += 1;
         if let Some(v) = self.free_vertices.pop() {

@@ -2,7 +2,6 @@
 
 use super::ids::{FaceId, VertexId};
 use super::storage::{EdgeKey, TriMesh};
-use std::collections::HashMap;
 
 impl TriMesh {
     /// The directed edge `i` of `f`: from `v[i+1]` to `v[i+2]` (opposite `v[i]`).
@@ -42,20 +41,28 @@ impl TriMesh {
     /// by more than two faces (non-manifold) links none of them; `check`
     /// reports it.
     pub(crate) fn link_all(&mut self) {
-        let mut by_edge: HashMap<(VertexId, VertexId), Vec<(FaceId, usize)>> = HashMap::new();
-        let faces: Vec<FaceId> = self.faces().collect();
-        for &f in &faces {
-            for i in 0..3 {
-                let (a, b) = self.edge(f, i);
-                let key = if a < b { (a, b) } else { (b, a) };
-                by_edge.entry(key).or_default().push((f, i));
-                self.set_neighbour(f, i, None);
-            }
-        }
-        for sides in by_edge.values() {
-            if let [(f, i), (g, j)] = sides[..] {
-                self.set_neighbour(f, i, Some(g));
-                self.set_neighbour(g, j, Some(f));
+        use rayon::prelude::*;
+        // Every side of every face by its undirected edge, sorted (in
+        // parallel): the sides of one edge are then next to each other.
+        let mut sides: Vec<((VertexId, VertexId), FaceId, u8)> = self
+            .faces
+            .par_iter_mut()
+            .enumerate()
+            .filter_map(|(k, d)| d.as_mut().map(|d| (FaceId::from_index(k), d)))
+            .flat_map_iter(|(f, d)| {
+                d.adj = [None; 3];
+                let v = d.v;
+                (0..3u8).map(move |i| {
+                    let (a, b) = (v[(i as usize + 1) % 3], v[(i as usize + 2) % 3]);
+                    (if a < b { (a, b) } else { (b, a) }, f, i)
+                })
+            })
+            .collect();
+        sides.par_sort_unstable_by_key(|&(key, _, _)| key);
+        for run in sides.chunk_by(|x, y| x.0 == y.0) {
+            if let [(_, f, i), (_, g, j)] = *run {
+                self.set_neighbour(f, i as usize, Some(g));
+                self.set_neighbour(g, j as usize, Some(f));
             }
         }
     }

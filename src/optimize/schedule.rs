@@ -54,7 +54,7 @@ use crate::ops::{
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
-use std::collections::{BTreeMap, BinaryHeap};
+use std::collections::{BTreeMap, BinaryHeap, VecDeque};
 
 /// Edges longer than this multiple of their mean target are split, and a
 /// collapse may not create an edge longer than this multiple (else splits and
@@ -156,6 +156,10 @@ const SWAP_MIN_GAIN: f64 = 1e-9;
 /// [`Schedule::collapse_round`]); the plans are then applied one by one in the
 /// sequential order, so the mesh is the same for any number of threads.
 const PLAN_AHEAD: usize = 256;
+
+/// The fewest edges queued again worth staging to plan in parallel (fewer are
+/// planned one by one when popped: a parallel call costs more).
+const STAGE_MIN: usize = 16;
 /// The envelope stages for vertices left rational (after §2.3.4's, which
 /// sample denser and then widen ε): ε multiplied by each of these in turn,
 /// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, introduced
@@ -475,6 +479,9 @@ pub(crate) struct Schedule<'a> {
     /// Tests: the plans made ahead that were used, and those found stale.
     #[cfg(test)]
     ahead_tally: (usize, usize),
+    /// Tests: the plans of edges queued again and staged that were popped.
+    #[cfg(test)]
+    staged_tally: usize,
 }
 
 /// A refused collapse in [`Schedule::failed_collapse`].
@@ -490,38 +497,92 @@ struct FailedCollapse {
 /// The collapse round's queue: edges by the bits of their length (which order
 /// like the lengths), then by key. The edges short at the start of the round
 /// are sorted once (cheaper than a heap of all of them); the edges queued
-/// again after a collapse go to a small heap; `pop` takes the smaller of the
-/// two heads, so the order is that of one heap holding both.
-#[derive(Default)]
-struct ShortestFirst {
+/// again after a collapse go to a heap; with more than one thread, the
+/// smallest of those are taken from the heap a batch at a time
+/// ([`ShortestFirst::stage`]) to be planned together, each batch kept in order
+/// with its plans. `pop` takes the smallest of the three heads, so the order
+/// is that of one heap holding them all.
+struct ShortestFirst<P = ()> {
     sorted: Vec<(u64, EdgeKey)>,
     next: usize,
     again: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>>,
+    /// Edges taken from `again` in order, each with its plan made ahead.
+    staged: VecDeque<(u64, EdgeKey, Option<P>)>,
 }
 
-impl ShortestFirst {
+impl<P> Default for ShortestFirst<P> {
+    fn default() -> Self {
+        ShortestFirst {
+            sorted: Vec::new(),
+            next: 0,
+            again: BinaryHeap::new(),
+            staged: VecDeque::new(),
+        }
+    }
+}
+
+/// Where [`ShortestFirst::pop_indexed`] took an edge from.
+enum Popped<P> {
+    /// `sorted`, at this index.
+    Sorted(usize),
+    /// `staged`, with its plan.
+    Staged(Option<P>),
+    /// `again`: not planned.
+    Again,
+}
+
+impl<P> ShortestFirst<P> {
     fn sort(&mut self) {
         self.sorted.sort_unstable();
         self.next = 0;
     }
 
-    #[cfg(test)]
-    fn pop(&mut self) -> Option<(u64, EdgeKey)> {
-        self.pop_indexed().map(|(bits, k, _)| (bits, k))
+    /// Which head is the smallest: 0 `sorted`, 1 `staged`, 2 `again` (on a tie
+    /// the first; equal heads are the same edge).
+    fn smallest(&self) -> Option<usize> {
+        let heads = [
+            self.sorted.get(self.next).copied(),
+            self.staged.front().map(|&(b, k, _)| (b, k)),
+            self.again.peek().map(|r| r.0),
+        ];
+        (0..3)
+            .filter(|&i| heads[i].is_some())
+            .min_by_key(|&i| heads[i])
     }
 
-    /// The next edge, with its index in `sorted` when it comes from there.
-    fn pop_indexed(&mut self) -> Option<(u64, EdgeKey, Option<usize>)> {
-        let head = self.sorted.get(self.next).copied();
-        match (head, self.again.peek()) {
-            (Some(s), Some(std::cmp::Reverse(a))) if *a < s => {
-                self.again.pop().map(|r| (r.0.0, r.0.1, None))
-            }
-            (Some(s), _) => {
+    /// Whether the next edge comes from `again` with nothing staged: the
+    /// moment to [`Self::stage`] a batch.
+    fn next_is_unstaged(&self) -> bool {
+        self.staged.is_empty() && self.smallest() == Some(2)
+    }
+
+    /// Take the `n` smallest edges of `again` (fewer if it holds fewer), in
+    /// order, for the caller to plan and [`Self::push_staged`].
+    fn stage(&mut self, n: usize) -> Vec<(u64, EdgeKey)> {
+        std::iter::from_fn(|| self.again.pop().map(|r| r.0))
+            .take(n)
+            .collect()
+    }
+
+    /// Append staged edges (the output of [`Self::stage`], in its order) with
+    /// their plans.
+    fn push_staged(&mut self, batch: impl IntoIterator<Item = (u64, EdgeKey, Option<P>)>) {
+        self.staged.extend(batch);
+    }
+
+    /// The next edge, with where it came from.
+    fn pop_indexed(&mut self) -> Option<(u64, EdgeKey, Popped<P>)> {
+        match self.smallest()? {
+            0 => {
                 self.next += 1;
-                Some((s.0, s.1, Some(self.next - 1)))
+                let (b, k) = self.sorted[self.next - 1];
+                Some((b, k, Popped::Sorted(self.next - 1)))
             }
-            (None, _) => self.again.pop().map(|r| (r.0.0, r.0.1, None)),
+            1 => self
+                .staged
+                .pop_front()
+                .map(|(b, k, plan)| (b, k, Popped::Staged(plan))),
+            _ => self.again.pop().map(|r| (r.0.0, r.0.1, Popped::Again)),
         }
     }
 }
@@ -713,6 +774,8 @@ impl<'a> Schedule<'a> {
             swap_scan: None,
             #[cfg(test)]
             ahead_tally: (0, 0),
+            #[cfg(test)]
+            staged_tally: 0,
         }
     }
 
@@ -1029,20 +1092,50 @@ impl<'a> Schedule<'a> {
         // queue are planned at once in parallel; a plan is used below only
         // while neither end has changed since, so the round does exactly what
         // it does planning each collapse when it gets to it.
+        // The edges queued again are planned ahead too, a batch of the
+        // smallest at a time (`ShortestFirst::stage`), under the same rule.
         let mut ahead = PlanAhead::new();
-        while let Some((bits, k, index)) = queue.pop_indexed() {
+        loop {
+            if ahead.parallel && queue.next_is_unstaged() && queue.again.len() >= STAGE_MIN {
+                let batch = queue.stage(PLAN_AHEAD);
+                let this = &*self;
+                let plans: Vec<CollapseAhead> = batch
+                    .par_iter()
+                    .map(|&(b, e)| this.plan_collapse(b, e, factor))
+                    .collect();
+                queue.push_staged(
+                    batch
+                        .into_iter()
+                        .zip(plans)
+                        .map(|((b, e), plan)| (b, e, Some(plan))),
+                );
+            }
+            let Some((bits, k, popped)) = queue.pop_indexed() else {
+                break;
+            };
             if budget == 0 {
                 break;
             }
             budget -= 1;
             let this = &*self;
-            let planned = index
-                .and_then(|i| {
-                    ahead.take(i, &queue.sorted, |&(b, e)| {
-                        Some(this.plan_collapse(b, e, factor))
-                    })
-                })
-                .filter(|a: &CollapseAhead| self.fresh(a.at, &[k.lo, k.hi]));
+            let planned = match popped {
+                Popped::Sorted(i) => ahead.take(i, &queue.sorted, |&(b, e)| {
+                    Some(this.plan_collapse(b, e, factor))
+                }),
+                Popped::Staged(plan) => {
+                    #[cfg(test)]
+                    {
+                        self.staged_tally += usize::from(plan.is_some());
+                    }
+                    plan
+                }
+                Popped::Again => None,
+            }
+            .filter(|a: &CollapseAhead| {
+                // (An edge queued twice may have been refused since its plan.)
+                !matches!(self.failed_collapse.get(&k), Some(f) if f.at >= a.at)
+                    && self.fresh(a.at, &[k.lo, k.hi])
+            });
             // A plan that stands already made the round's checks.
             let mut planned = match planned {
                 Some(a) => match a.directions {
@@ -1810,14 +1903,16 @@ mod queue_tests {
     }
 
     proptest! {
-        /// The collapse round's queue pops what one min-heap holding both its
-        /// parts would, pushes during the pops included (duplicates too).
+        /// The collapse round's queue pops what one min-heap holding all its
+        /// parts would, pushes during the pops included (duplicates too), and
+        /// batches staged from the heap at any step.
         #[test]
         fn the_queue_pops_like_one_heap(
             start in prop::collection::vec((0u64..20, 0usize..5, 0usize..5), 0..40),
             pushes in prop::collection::vec((0usize..60, 0u64..20, 0usize..5, 0usize..5), 0..30),
+            stages in prop::collection::vec((0usize..60, 1usize..6), 0..10),
         ) {
-            let mut q = ShortestFirst::default();
+            let mut q = ShortestFirst::<u64>::default();
             let mut heap = BinaryHeap::new();
             for &(bits, a, b) in &start {
                 q.sorted.push((bits, key(a, b)));
@@ -1832,7 +1927,19 @@ mod queue_tests {
                         heap.push(std::cmp::Reverse((bits, key(a, b))));
                     }
                 }
-                let (x, y) = (q.pop(), heap.pop().map(|r| r.0));
+                for &(at, n) in &stages {
+                    if at == step && q.next_is_unstaged() {
+                        // The plan of a staged edge is its bits: it must come
+                        // back with its own edge.
+                        let batch = q.stage(n);
+                        q.push_staged(batch.into_iter().map(|(b, k)| (b, k, Some(b))));
+                    }
+                }
+                let popped = q.pop_indexed();
+                if let Some((b, _, Popped::Staged(plan))) = &popped {
+                    prop_assert_eq!(*plan, Some(*b));
+                }
+                let (x, y) = (popped.map(|(b, k, _)| (b, k)), heap.pop().map(|r| r.0));
                 prop_assert_eq!(x, y);
                 if x.is_none() && step > 60 {
                     break;
@@ -1938,11 +2045,11 @@ mod plan_ahead_tests {
                     let worst = measure(s.mesh).max_energy;
                     s.update_sizing(worst);
                 }
-                let (stats, tally) = (s.stats().clone(), s.ahead_tally);
+                let (stats, tally) = (s.stats().clone(), (s.ahead_tally, s.staged_tally));
                 (mesh, stats, tally)
             })
         };
-        let (mut used, mut stale) = (0, 0);
+        let (mut used, mut stale, mut staged) = (0, 0, 0);
         for (i, (mesh, ctx)) in meshes.iter().enumerate() {
             let (one, stats_one, tally_one) = run(1, mesh, ctx);
             let (two, stats_two, tally_two) = run(2, mesh, ctx);
@@ -1950,15 +2057,16 @@ mod plan_ahead_tests {
             assert_eq!(stats_one, stats_two, "mesh {i}");
             assert_eq!(
                 tally_one,
-                (0, 0),
+                ((0, 0), 0),
                 "mesh {i}: one thread plans nothing ahead"
             );
-            used += tally_two.0;
-            stale += tally_two.1;
+            used += tally_two.0.0;
+            stale += tally_two.0.1;
+            staged += tally_two.1;
         }
         assert!(
-            used > 1000 && stale > 10,
-            "{used} plans used, {stale} stale"
+            used > 1000 && stale > 10 && staged > 100,
+            "{used} plans used, {stale} stale, {staged} staged"
         );
     }
 }
