@@ -318,6 +318,12 @@ pub fn run_child(
         MemoryGuard::Prlimit { prlimit, bytes } => {
             let mut c = Command::new(prlimit);
             c.arg(format!("--as={bytes}")).arg("--").arg(spec.exe);
+            // glibc reserves 64-128 MiB of address space for each thread's
+            // malloc arena: under an address-space cap the child's few
+            // threads (mesher, rayon worker, parent watcher) would spend the
+            // cap on reservations and fail a small allocation. One arena
+            // keeps the cap for what the child really allocates.
+            c.env("MALLOC_ARENA_MAX", "1");
             c
         }
         _ => Command::new(spec.exe),
