@@ -533,7 +533,7 @@ enum Popped<P> {
 
 impl<P> ShortestFirst<P> {
     fn sort(&mut self) {
-        self.sorted.sort_unstable();
+        self.sorted.par_sort_unstable();
         self.next = 0;
     }
 
@@ -632,12 +632,16 @@ enum CollapseDirection {
     Unplanned,
     /// The length rule refused it.
     Length,
-    /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`].
-    Plan(
-        Result<CollapsePlan, (Reject, bool)>,
-        Option<Result<(), Reject>>,
-    ),
+    /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`]
+    /// (boxed: plans are moved through the window and the round).
+    Plan(Box<PlannedCollapse>),
 }
+
+/// [`CollapseDirection::Plan`]'s plan and verdict.
+type PlannedCollapse = (
+    Result<CollapsePlan, (Reject, bool)>,
+    Option<Result<(), Reject>>,
+);
 
 /// A collapse of an edge planned ahead at clock `at`, both directions in the
 /// collapse round's order: it stands while neither end's stamp has passed
@@ -1061,19 +1065,25 @@ impl<'a> Schedule<'a> {
         let edges: Vec<EdgeKey> = match since {
             None => self.mesh.edges().collect(),
             Some(at) => {
-                let touched: Vec<VertexId> = self
-                    .mesh
-                    .vertices()
-                    .filter(|&v| self.stamp_of(v) > at)
+                // The edges at the vertices stamped since `at`, found in
+                // parallel and sorted (the queue's order does not depend on
+                // how they were found).
+                let mesh: &TriMesh = self.mesh;
+                let touched: Vec<VertexId> =
+                    mesh.vertices().filter(|&v| self.stamp_of(v) > at).collect();
+                let mut edges: Vec<EdgeKey> = touched
+                    .into_par_iter()
+                    .flat_map_iter(|v| {
+                        let ring = crate::mesh::ScratchRing::of(mesh, v);
+                        let edges: Vec<EdgeKey> = ring
+                            .neighbours
+                            .iter()
+                            .map(|&w| EdgeKey::new(v, w))
+                            .collect();
+                        edges
+                    })
                     .collect();
-                let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
-                let mut edges = Vec::new();
-                for v in touched {
-                    self.mesh.vertex_ring_into(v, &mut ring);
-                    edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
-                }
-                self.ring = ring;
-                edges.sort_unstable();
+                edges.par_sort_unstable();
                 edges.dedup();
                 edges
             }
@@ -1170,8 +1180,9 @@ impl<'a> Schedule<'a> {
                         by_length = true;
                         continue;
                     }
-                    CollapseDirection::Plan(plan, verdict) => {
+                    CollapseDirection::Plan(planned) => {
                         tried = true;
+                        let (plan, verdict) = *planned;
                         try_collapse_planned(self.mesh, self.ctx, plan, verdict)
                     }
                     CollapseDirection::Unplanned => {
@@ -1282,7 +1293,7 @@ impl<'a> Schedule<'a> {
             }
             let plan = CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v));
             let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
-            CollapseDirection::Plan(plan, verdict)
+            CollapseDirection::Plan(Box::new((plan, verdict)))
         };
         Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
     }
