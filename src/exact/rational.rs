@@ -169,6 +169,10 @@ impl PointQ {
     /// The nearest `f64` point (coordinate-wise nearest) and whether it is
     /// exactly this point.
     pub fn to_f64(&self) -> (Point, bool) {
+        // A point enclosure is the exact value (`+ 0.0`: zero has no sign).
+        if let Some(p) = self.as_f64() {
+            return (Point::new(p.x + 0.0, p.y + 0.0), true);
+        }
         let (x, ex) = nearest_f64(&self.x);
         let (y, ey) = nearest_f64(&self.y);
         (Point::new(x, y), ex && ey)
@@ -275,6 +279,22 @@ impl From<Point> for PointQ {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An `f64` point rounds to itself without a rational division, and a
+    /// negative zero to the zero a rational has (no sign), as the division
+    /// would give it.
+    #[test]
+    fn an_f64_point_rounds_to_itself_with_unsigned_zero() {
+        let (p, exact) = PointQ::from_point(Point::new(-0.0, 0.1)).to_f64();
+        assert!(exact && p == Point::new(0.0, 0.1));
+        assert!(p.x.is_sign_positive());
+        let sum = PointQ::from_point(Point::new(0.1, 0.0)).lerp_ratio(
+            &PointQ::from_point(Point::new(0.1, 0.0)),
+            1.0,
+            2.0,
+        );
+        assert_eq!(sum.to_f64(), (Point::new(0.1, 0.0), true));
+    }
 
     #[test]
     fn roundtrip_f64_is_exact() {
