@@ -132,12 +132,7 @@ impl TriMesh {
     /// Add a vertex at an exact position (kept rational unless it is an `f64` point).
     pub(crate) fn add_vertex_q(&mut self, p: PointQ, tag: VertexTag) -> VertexId {
         let (pos, exact) = p.to_f64();
-        self.insert_vertex(VertexData {
-            pos,
-            exact: (!exact).then(|| Box::new(p)),
-            tag,
-            face: None,
-        })
+        self.add_vertex_rounded(p, pos, exact, tag)
     }
 
     /// [`Self::add_vertex_q`] with `p`'s nearest `f64` point `pos` and whether

@@ -521,6 +521,16 @@ impl<P> Default for ShortestFirst<P> {
     }
 }
 
+/// Sort `v`, in parallel when the pool has more than one thread (a
+/// parallel sort on one thread only costs more).
+fn sort_unstable<T: Ord + Send>(v: &mut [T]) {
+    if rayon::current_num_threads() > 1 {
+        v.par_sort_unstable();
+    } else {
+        v.sort_unstable();
+    }
+}
+
 /// Where [`ShortestFirst::pop_indexed`] took an edge from.
 enum Popped<P> {
     /// `sorted`, at this index.
@@ -533,7 +543,7 @@ enum Popped<P> {
 
 impl<P> ShortestFirst<P> {
     fn sort(&mut self) {
-        self.sorted.par_sort_unstable();
+        sort_unstable(&mut self.sorted);
         self.next = 0;
     }
 
@@ -1073,17 +1083,16 @@ impl<'a> Schedule<'a> {
                     mesh.vertices().filter(|&v| self.stamp_of(v) > at).collect();
                 let mut edges: Vec<EdgeKey> = touched
                     .into_par_iter()
-                    .flat_map_iter(|v| {
+                    .fold(Vec::new, |mut edges, v| {
                         let ring = crate::mesh::ScratchRing::of(mesh, v);
-                        let edges: Vec<EdgeKey> = ring
-                            .neighbours
-                            .iter()
-                            .map(|&w| EdgeKey::new(v, w))
-                            .collect();
+                        edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
                         edges
                     })
-                    .collect();
-                edges.par_sort_unstable();
+                    .reduce(Vec::new, |mut a, mut b| {
+                        a.append(&mut b);
+                        a
+                    });
+                sort_unstable(&mut edges);
                 edges.dedup();
                 edges
             }
