@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""`--threads 2` against `--threads 1` (issue 20, point 2), for one or more builds.
+
+For each drawing, runs every build at one and two threads, REPS rounds
+interleaved (build A t1, A t2, build B t1, B t2, ... then again), keeps each
+configuration's best wall time, and checks that one and two threads wrote the
+same bytes. Interleaving matters on a shared machine: its speed drifts by 10 %
+and more within minutes, so builds measured one after the other are not
+comparable. Python 3 standard library only.
+
+    cargo build --release --locked
+    python3 benches/threads.py [--reps 5] [--svg-dir ../shared/data/svg-dev]
+        [--files a.svg,b.svg] BIN [BIN ...]
+
+The default drawings are the three slowest of the dev set (issue 20's list).
+Prints a line per drawing: each build's best t1, t2 and t1/t2.
+"""
+
+import argparse
+import filecmp
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+SLOWEST = [
+    "gcompris/chronos__resource__images__renault_voiturette.svg",
+    "gcompris/instruments__resource__organ.svg",
+    "noto-emoji/emoji_u1f98e.svg",
+]
+
+
+def run(binary, svg, out, threads):
+    """Wall seconds of one run; exits on a failed run."""
+    start = time.perf_counter()
+    done = subprocess.run(
+        [binary, svg, "-o", out, "--threads", str(threads)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        sys.exit(f"{binary} {svg} --threads {threads}: exit {done.returncode}: {done.stderr.strip()}")
+    return wall
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("bins", nargs="+", help="triwild binaries to compare")
+    ap.add_argument("--reps", type=int, default=5, help="interleaved rounds (best of)")
+    ap.add_argument(
+        "--svg-dir",
+        default=os.path.join(here, "..", "..", "shared", "data", "svg-dev"),
+        help="folder the drawings are relative to",
+    )
+    ap.add_argument("--files", help="comma-separated drawings (default: the three slowest)")
+    args = ap.parse_args()
+    files = args.files.split(",") if args.files else SLOWEST
+    differ = False
+    with tempfile.TemporaryDirectory() as tmp:
+        for rel in files:
+            svg = os.path.join(args.svg_dir, rel)
+            best = {}
+            for _ in range(args.reps):
+                for b in args.bins:
+                    outs = {}
+                    for t in (1, 2):
+                        outs[t] = os.path.join(tmp, f"t{t}.msh")
+                        wall = run(b, svg, outs[t], t)
+                        best[(b, t)] = min(best.get((b, t), wall), wall)
+                    if not filecmp.cmp(outs[1], outs[2], shallow=False):
+                        print(f"OUTPUT DIFFERS: {b} {rel}", file=sys.stderr)
+                        differ = True
+            cells = [
+                f"{os.path.basename(b)} t1 {best[(b, 1)]:.2f} t2 {best[(b, 2)]:.2f} "
+                f"x{best[(b, 1)] / best[(b, 2)]:.3f}"
+                for b in args.bins
+            ]
+            print(f"{os.path.basename(rel)[:30]:30} | " + " | ".join(cells), flush=True)
+    sys.exit(1 if differ else 0)
+
+
+if __name__ == "__main__":
+    main()
