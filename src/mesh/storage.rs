@@ -54,6 +54,20 @@ pub(crate) enum FeatureOn {
     },
 }
 
+impl FeatureOn {
+    /// The tag as the edge `a b` stores it when it is given with a primary's
+    /// `t` at `a`, then `b` ([`TriMesh::add_edge_tag`]): ordered as the key.
+    pub(crate) fn keyed(self, a: VertexId, b: VertexId) -> FeatureOn {
+        match self {
+            FeatureOn::Primary { section, t } if EdgeKey::new(a, b).lo != a => FeatureOn::Primary {
+                section,
+                t: [t[1], t[0]],
+            },
+            other => other,
+        }
+    }
+}
+
 /// An undirected edge, as its two vertices with `lo < hi`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub(crate) struct EdgeKey {
@@ -425,15 +439,8 @@ impl TriMesh {
     /// Record that the edge `a b` lies on a feature (no duplicate entries).
     /// For a primary, `t_a` / `t_b` are the parameters at `a` / `b`.
     pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
-        let key = EdgeKey::new(a, b);
-        let tag = match tag {
-            FeatureOn::Primary { section, t } if key.lo != a => FeatureOn::Primary {
-                section,
-                t: [t[1], t[0]],
-            },
-            other => other,
-        };
-        let list = self.edge_tags.entry(key).or_default();
+        let tag = tag.keyed(a, b);
+        let list = self.edge_tags.entry(EdgeKey::new(a, b)).or_default();
         if !list.contains(&tag) {
             list.push(tag);
         }

@@ -293,40 +293,8 @@ impl CollapsePlan {
             return Some(Err(Reject::Inversion));
         }
         // The edges at u of the new faces, with the tags they would have: the
-        // ones they have, then those moved from v's edges (as `add_edge_tag`
-        // orients and dedups them).
-        let mut edges: Vec<(EdgeKey, Vec<FeatureOn>)> = Vec::new();
-        for t in &self.new {
-            for i in 0..3 {
-                let (a, b) = (t[i], t[(i + 1) % 3]);
-                if a != u && b != u {
-                    continue;
-                }
-                let key = EdgeKey::new(a, b);
-                if edges.iter().any(|(k, _)| *k == key) {
-                    continue;
-                }
-                let mut tags = mesh.edge_tags(a, b).to_vec();
-                for &(x, y, tag) in &self.retag {
-                    if EdgeKey::new(x, y) != key {
-                        continue;
-                    }
-                    let tag = match tag {
-                        FeatureOn::Primary { section, t } if key.lo != x => FeatureOn::Primary {
-                            section,
-                            t: [t[1], t[0]],
-                        },
-                        other => other,
-                    };
-                    if !tags.contains(&tag) {
-                        tags.push(tag);
-                    }
-                }
-                if !tags.is_empty() {
-                    edges.push((key, tags));
-                }
-            }
-        }
+        // ones they have, then those moved from v's edges.
+        let edges = invariants::tags_after(mesh, &self.new, |a, b| a == u || b == u, &self.retag);
         if let Err(r) = invariants::feature_edges_hold(ctx, &edges, |x| mesh.position(x)) {
             return Some(Err(r));
         }

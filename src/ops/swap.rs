@@ -145,25 +145,7 @@ impl SwapPlan {
             return Some(Err(Reject::Inversion));
         }
         // Every edge of the new faces has c or d as an end.
-        let mut edges: Vec<(crate::mesh::EdgeKey, Vec<FeatureOn>)> = Vec::new();
-        for t in &self.new {
-            for i in 0..3 {
-                let (x, y) = (t[i], t[(i + 1) % 3]);
-                let key = crate::mesh::EdgeKey::new(x, y);
-                if edges.iter().any(|(k, _)| *k == key) {
-                    continue;
-                }
-                let mut tags = mesh.edge_tags(x, y).to_vec();
-                for &(p, q, tag) in moved {
-                    if crate::mesh::EdgeKey::new(p, q) == key && !tags.contains(&tag) {
-                        tags.push(tag);
-                    }
-                }
-                if !tags.is_empty() {
-                    edges.push((key, tags));
-                }
-            }
-        }
+        let edges = invariants::tags_after(mesh, &self.new, |_, _| true, moved);
         if let Err(r) = invariants::feature_edges_hold(ctx, &edges, |x| mesh.position(x)) {
             return Some(Err(r));
         }

@@ -37,6 +37,39 @@ pub(crate) struct Check<'a> {
     pub(crate) old_corner_energy: Option<f64>,
 }
 
+/// The edges of the faces `new` that `keep` selects, each with the tags it
+/// would have once `added` are given to it as [`TriMesh::add_edge_tag`] gives
+/// them (ordered as the key, no duplicate), in face order, the untagged left
+/// out: what [`feature_edges_hold`] checks for a change decided ahead.
+pub(crate) fn tags_after(
+    mesh: &TriMesh,
+    new: &[[VertexId; 3]],
+    keep: impl Fn(VertexId, VertexId) -> bool,
+    added: &[(VertexId, VertexId, FeatureOn)],
+) -> Vec<(EdgeKey, Vec<FeatureOn>)> {
+    let mut edges: Vec<(EdgeKey, Vec<FeatureOn>)> = Vec::new();
+    for t in new {
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            let key = EdgeKey::new(a, b);
+            if !keep(a, b) || edges.iter().any(|(k, _)| *k == key) {
+                continue;
+            }
+            let mut tags = mesh.edge_tags(a, b).to_vec();
+            for &(x, y, tag) in added {
+                let tag = tag.keyed(x, y);
+                if EdgeKey::new(x, y) == key && !tags.contains(&tag) {
+                    tags.push(tag);
+                }
+            }
+            if !tags.is_empty() {
+                edges.push((key, tags));
+            }
+        }
+    }
+    edges
+}
+
 /// The feature rules of [`validate`] on edges given with the tags they
 /// would have after a change, in its order: the turn of every primary piece
 /// ([`Reject::Curvature`]), then every secondary edge, its ends at `at`, in
