@@ -196,6 +196,26 @@ impl TriMesh {
         })
     }
 
+    /// [`TriMesh::edges`] collected, in the same order; in parallel when the
+    /// pool has more than one thread (rayon's collect keeps the order).
+    pub(crate) fn edge_list(&self) -> Vec<EdgeKey> {
+        use rayon::prelude::*;
+        if rayon::current_num_threads() == 1 {
+            return self.edges().collect();
+        }
+        self.faces
+            .par_iter()
+            .enumerate()
+            .with_min_len(4096)
+            .filter_map(|(k, d)| d.as_ref().map(|d| (FaceId::from_index(k), d.v, d.adj)))
+            .flat_map_iter(|(f, v, adj)| {
+                (0..3)
+                    .filter(move |&i| adj[i].is_none_or(|g| g > f))
+                    .map(move |i| EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]))
+            })
+            .collect()
+    }
+
     /// The one-ring of `v`: its faces, its distinct neighbours and whether it
     /// is on the boundary.
     pub(crate) fn vertex_ring(&self, v: VertexId) -> VertexRing {

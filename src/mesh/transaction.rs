@@ -66,6 +66,8 @@ pub(crate) struct Transaction<'a> {
     face_len: usize,
     live: (usize, usize),
     committed: bool,
+    /// Whether changes are journaled (see [`Transaction::decided`]).
+    journaled: bool,
 }
 
 impl std::ops::Deref for Transaction<'_> {
@@ -95,7 +97,22 @@ impl<'a> Transaction<'a> {
             face_len,
             live,
             committed: false,
+            journaled: true,
         }
+    }
+
+    /// Open a transaction, for a change already decided when `decided`:
+    /// the plan's verdict checked its invariants on the mesh as it is, so the
+    /// change is committed, never rolled back, and keeps no journal (no copy
+    /// of the old faces, vertices and tags it changes). Debug builds check
+    /// the invariants again, which reads the mesh and needs no journal either.
+    /// Dropping a decided transaction without [`Transaction::commit`] is a
+    /// bug: the mesh keeps whatever the change did so far. `decided` false:
+    /// [`Transaction::new`].
+    pub(crate) fn decided_if(mesh: &'a mut TriMesh, decided: bool) -> Self {
+        let mut tx = Transaction::new(mesh);
+        tx.journaled = !decided;
+        tx
     }
 
     /// Keep the changes.
@@ -104,21 +121,27 @@ impl<'a> Transaction<'a> {
     }
 
     fn touch_v(&mut self, v: VertexId) {
-        if mark(&mut self.j.vertex_mark, v.index(), self.j.generation) {
+        if self.journaled && mark(&mut self.j.vertex_mark, v.index(), self.j.generation) {
             let old = self.mesh.vertices.get(v.index()).cloned().flatten();
             self.j.old_vertices.push((v, old));
         }
     }
 
     fn touch_f(&mut self, f: FaceId) {
-        if mark(&mut self.j.face_mark, f.index(), self.j.generation) {
+        if self.journaled && mark(&mut self.j.face_mark, f.index(), self.j.generation) {
             let old = self.mesh.faces.get(f.index()).cloned().flatten();
             self.j.old_faces.push((f, old));
         }
     }
 
+    fn log(&mut self, op: FreeOp) {
+        if self.journaled {
+            self.j.free_log.push(op);
+        }
+    }
+
     fn touch_tag(&mut self, key: EdgeKey) {
-        if !self.j.old_tags.iter().any(|(k, _)| *k == key) {
+        if self.journaled && !self.j.old_tags.iter().any(|(k, _)| *k == key) {
             let old = self.mesh.edge_tags.get(&key).cloned();
             self.j.old_tags.push((key, old));
         }
@@ -126,7 +149,7 @@ impl<'a> Transaction<'a> {
 
     fn before_vertex_insert(&mut self) {
         if let Some(&v) = self.mesh.free_vertices.last() {
-            self.j.free_log.push(FreeOp::PopV(v));
+            self.log(FreeOp::PopV(v));
             self.touch_v(v);
         } else {
             self.touch_v(VertexId::from_index(self.mesh.vertices.len()));
@@ -151,7 +174,7 @@ impl<'a> Transaction<'a> {
     pub(crate) fn remove_vertex(&mut self, v: VertexId) {
         if self.mesh.is_vertex_alive(v) {
             self.touch_v(v);
-            self.j.free_log.push(FreeOp::PushV);
+            self.log(FreeOp::PushV);
             self.mesh.remove_vertex(v);
         }
     }
@@ -165,7 +188,7 @@ impl<'a> Transaction<'a> {
     /// Add a face (vertices counter-clockwise), with no adjacency yet, journaled.
     pub(crate) fn add_face(&mut self, v: [VertexId; 3]) -> FaceId {
         if let Some(&f) = self.mesh.free_faces.last() {
-            self.j.free_log.push(FreeOp::PopF(f));
+            self.log(FreeOp::PopF(f));
             self.touch_f(f);
         } else {
             self.touch_f(FaceId::from_index(self.mesh.faces.len()));
@@ -189,7 +212,7 @@ impl<'a> Transaction<'a> {
         for x in self.mesh.face(f) {
             self.touch_v(x);
         }
-        self.j.free_log.push(FreeOp::PushF);
+        self.log(FreeOp::PushF);
         self.mesh.remove_face(f);
     }
 
@@ -300,7 +323,11 @@ impl<'a> Transaction<'a> {
 
 impl Drop for Transaction<'_> {
     fn drop(&mut self) {
-        if !self.committed {
+        debug_assert!(
+            self.committed || self.journaled || std::thread::panicking(),
+            "a decided transaction was dropped without a commit"
+        );
+        if !self.committed && self.journaled {
             self.rollback();
         }
         let mut spare = std::mem::take(&mut self.j);
@@ -348,5 +375,45 @@ mod tests {
         }
         assert_ne!(m, before);
         assert!(m.check().is_empty(), "{:?}", m.check());
+    }
+
+    #[test]
+    fn a_decided_transaction_makes_the_same_mesh_without_a_journal() {
+        let mut m = TriMesh::new();
+        let t = VertexTag::default();
+        let a = m.add_vertex(Point::new(0.0, 0.0), t);
+        let b = m.add_vertex(Point::new(1.0, 0.0), t);
+        let c = m.add_vertex(Point::new(1.0, 1.0), t);
+        let d = m.add_vertex(Point::new(0.0, 1.0), t);
+        let f = m.add_face([a, b, c]);
+        let g = m.add_face([a, c, d]);
+        m.link_all();
+        m.add_edge_tag(a, c, FeatureOn::Secondary { polyline: 3 });
+        let change = |tx: &mut Transaction<'_>| {
+            let e = tx.add_vertex(Point::new(0.5, 0.5), t);
+            tx.take_edge_tags(a, c);
+            tx.add_edge_tag(a, e, FeatureOn::Secondary { polyline: 3 });
+            tx.replace_faces(&[f, g], &[[a, b, e], [b, c, e], [c, d, e], [d, a, e]]);
+            tx.set_position(e, Point::new(0.4, 0.5));
+        };
+        let (mut journaled, mut decided) = (m.clone(), m.clone());
+        {
+            let mut tx = Transaction::decided_if(&mut journaled, false);
+            change(&mut tx);
+            tx.commit();
+        }
+        {
+            let mut tx = Transaction::decided_if(&mut decided, true);
+            change(&mut tx);
+            assert!(
+                tx.j.old_faces.is_empty()
+                    && tx.j.old_vertices.is_empty()
+                    && tx.j.old_tags.is_empty()
+                    && tx.j.free_log.is_empty()
+            );
+            tx.commit();
+        }
+        assert_eq!(journaled, decided);
+        assert_ne!(journaled, m);
     }
 }

@@ -360,7 +360,7 @@ fn apply(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan) -> Outcome {
 /// [`apply`]; with `decided` (the invariants hold by [`CollapsePlan::verdict`])
 /// the change is committed without checking them again (debug builds do).
 fn apply_decided(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan, decided: bool) -> Outcome {
-    let mut tx = Transaction::new(mesh);
+    let mut tx = Transaction::decided_if(mesh, decided);
     for &w in &plan.drop_tags {
         tx.take_edge_tags(plan.v, w);
     }

@@ -92,6 +92,26 @@ pub(crate) enum Reject {
 }
 
 impl Reject {
+    /// How many reasons there are.
+    pub(crate) const COUNT: usize = 13;
+
+    /// Every reason, in declaration order (`ALL[r as usize] == r`).
+    pub(crate) const ALL: [Reject; Reject::COUNT] = [
+        Reject::NotAnEdge,
+        Reject::FixedVertex,
+        Reject::FeatureRule,
+        Reject::Boundary,
+        Reject::Topology,
+        Reject::NoChange,
+        Reject::Inversion,
+        Reject::OnCurve,
+        Reject::Curvature,
+        Reject::Envelope,
+        Reject::Energy,
+        Reject::Jacobian,
+        Reject::EdgeLength,
+    ];
+
     /// A short lower-case name (for statistics).
     pub(crate) fn name(self) -> &'static str {
         match self {
@@ -111,6 +131,9 @@ impl Reject {
         }
     }
 }
+
+// A reason declared after `EdgeLength` must grow `Reject::COUNT` and `ALL`.
+const _: () = assert!(Reject::EdgeLength as usize + 1 == Reject::COUNT);
 
 /// What an applied operation changed.
 #[derive(Clone, Debug, PartialEq, Default)]

@@ -514,10 +514,10 @@ pub(crate) fn try_smooth_planned(
     } else {
         Vec::new()
     };
-    let mut tx = Transaction::new(mesh);
+    let mut tx = Transaction::decided_if(mesh, decided);
     tx.set_position(v, plan.pos);
     if let Some((section, tn)) = plan.t {
-        let r = tx.vertex_ring(v);
+        let r = crate::mesh::ScratchRing::of(&tx, v);
         for &w in &r.neighbours {
             let tags = tx.edge_tags(v, w);
             if !tags

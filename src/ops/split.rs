@@ -9,7 +9,7 @@
 
 use super::invariants::{self, Check};
 use super::{Context, CurveBudget, LocalChange, Outcome, Reject, t_at};
-use crate::exact::{Orientation, PointQ};
+use crate::exact::Orientation;
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId, VertexTag};
 use kurbo::Point;
 
@@ -18,8 +18,10 @@ use kurbo::Point;
 enum Candidate {
     /// An `f64` position, with the allowed off-curve distance if primary.
     F64(Point, f64),
-    /// The exact midpoint.
-    Exact(PointQ, f64),
+    /// The exact midpoint (computed when tried: the `f64` candidates before
+    /// it rarely fail, and rationals allocate), with the allowed off-curve
+    /// distance.
+    ExactMidpoint(f64),
 }
 
 /// Everything a split of one edge needs, gathered from `&TriMesh`.
@@ -68,7 +70,6 @@ impl SplitPlan {
         let tags = mesh.edge_tags(a, b).to_vec();
         let key = EdgeKey::new(a, b);
         let (pa, pb) = (mesh.position(a), mesh.position(b));
-        let exact = || mesh.point_q(a).lerp_ratio(&mesh.point_q(b), 1.0, 2.0);
         let mut candidates = Vec::new();
         let primary = tags.iter().find_map(|t| match *t {
             FeatureOn::Primary { section, t } => Some((section, t)),
@@ -82,7 +83,7 @@ impl SplitPlan {
             }
             // Off the curve by design: any distance is allowed for the new vertex.
             candidates.push(Candidate::F64(linear, f64::INFINITY));
-            candidates.push(Candidate::Exact(exact(), f64::INFINITY));
+            candidates.push(Candidate::ExactMidpoint(f64::INFINITY));
         } else {
             let boundary = faces.len() == 1;
             let straight = mesh.exact(a).is_none()
@@ -92,7 +93,7 @@ impl SplitPlan {
                 candidates.push(Candidate::F64(linear, f64::INFINITY));
             }
             if !straight {
-                candidates.push(Candidate::Exact(exact(), f64::INFINITY));
+                candidates.push(Candidate::ExactMidpoint(f64::INFINITY));
             }
         }
         Ok(SplitPlan {
@@ -109,7 +110,10 @@ impl SplitPlan {
         let mut tx = Transaction::new(mesh);
         let (m, max_off) = match cand {
             Candidate::F64(p, off) => (tx.add_vertex(*p, VertexTag::default()), *off),
-            Candidate::Exact(q, off) => (tx.add_vertex_q(q.clone(), VertexTag::default()), *off),
+            Candidate::ExactMidpoint(off) => {
+                let q = tx.point_q(self.a).lerp_ratio(&tx.point_q(self.b), 1.0, 2.0);
+                (tx.add_vertex_q(q, VertexTag::default()), *off)
+            }
         };
         let mut new = Vec::new();
         let mut old = Vec::new();

@@ -111,7 +111,7 @@ pub(crate) fn try_swap_planned(
     if let Some(Err(r)) = verdict {
         return Outcome::Rejected(r);
     }
-    let mut tx = Transaction::new(mesh);
+    let mut tx = Transaction::decided_if(mesh, verdict.is_some());
     let created = tx.replace_faces(&plan.faces, &plan.new);
     validate_and_commit(tx, ctx, &plan, created, verdict.is_some())
 }
@@ -296,7 +296,7 @@ pub(crate) fn try_reroute_planned(
     if let Some(Err(r)) = verdict {
         return Outcome::Rejected(r);
     }
-    let mut tx = Transaction::new(mesh);
+    let mut tx = Transaction::decided_if(mesh, verdict.is_some());
     let created = tx.replace_faces(&plan.swap.faces, &plan.swap.new);
     tx.take_edge_tags(plan.a, plan.b);
     for &tag in &plan.tags {

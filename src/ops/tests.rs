@@ -981,3 +981,13 @@ fn verdicts_decided_ahead_match_the_tentative_changes() {
         }
     }
 }
+
+#[test]
+fn every_reason_is_listed_once_at_its_own_index() {
+    let mut names = std::collections::BTreeSet::new();
+    for (i, r) in Reject::ALL.iter().enumerate() {
+        assert_eq!(*r as usize, i, "{r:?}");
+        assert!(names.insert(r.name()), "{r:?}: name used twice");
+    }
+    assert_eq!(names.len(), Reject::COUNT);
+}
