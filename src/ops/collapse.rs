@@ -344,11 +344,28 @@ pub(crate) fn try_collapse_planned(
     planned: Result<CollapsePlan, (Reject, bool)>,
     verdict: Option<Result<(), Reject>>,
 ) -> (Outcome, bool) {
+    if let Some((r, by_role)) = refusal(&planned, verdict) {
+        return (Outcome::Rejected(r), by_role);
+    }
     match (planned, verdict) {
-        (Err((r, by_role)), _) => (Outcome::Rejected(r), by_role),
-        (Ok(_), Some(Err(r))) => (Outcome::Rejected(r), false),
         (Ok(plan), Some(Ok(()))) => (apply_decided(mesh, ctx, plan, true), false),
-        (Ok(plan), None) => (apply(mesh, ctx, plan), false),
+        (Ok(plan), _) => (apply(mesh, ctx, plan), false),
+        (Err(_), _) => unreachable!("a failed plan is a refusal"),
+    }
+}
+
+/// The refusal [`try_collapse_planned`] returns for a plan and its verdict
+/// without touching the mesh (with whether the role rules refused), if it
+/// refuses: the schedule keeps only this of a plan refused ahead, and drops
+/// the plan where it was made.
+pub(crate) fn refusal(
+    planned: &Result<CollapsePlan, (Reject, bool)>,
+    verdict: Option<Result<(), Reject>>,
+) -> Option<(Reject, bool)> {
+    match (planned, verdict) {
+        (Err((r, by_role)), _) => Some((*r, *by_role)),
+        (Ok(_), Some(Err(r))) => Some((r, false)),
+        (Ok(_), _) => None,
     }
 }
 
@@ -369,21 +386,24 @@ fn apply_decided(mesh: &mut TriMesh, ctx: &Context, plan: CollapsePlan, decided:
     for &(a, b, tag) in &plan.retag {
         tx.add_edge_tag(a, b, tag);
     }
-    let mut faces = created.clone();
-    faces.extend(&plan.reshaped);
-    let check = Check {
-        faces: &faces,
-        changed: &[plan.u],
-        budgets: &[],
-        old_max_energy: Some(plan.old_max_energy),
-        old_corner_energy: plan.old_corner_energy,
+    // The new faces and the reshaped ones (gathered only to be checked).
+    let validate = |tx: &Transaction<'_>| {
+        let faces: Vec<FaceId> = created.iter().chain(&plan.reshaped).copied().collect();
+        let check = Check {
+            faces: &faces,
+            changed: &[plan.u],
+            budgets: &[],
+            old_max_energy: Some(plan.old_max_energy),
+            old_corner_energy: plan.old_corner_energy,
+        };
+        invariants::validate(tx, ctx, &check)
     };
     if decided {
         debug_assert!(
-            invariants::validate(&tx, ctx, &check).is_ok(),
+            validate(&tx).is_ok(),
             "a collapse decided ahead fails the invariants"
         );
-    } else if let Err(r) = invariants::validate(&tx, ctx, &check) {
+    } else if let Err(r) = validate(&tx) {
         return Outcome::Rejected(r);
     }
     tx.commit();

@@ -40,7 +40,8 @@ mod swap;
 pub(crate) mod tests;
 
 pub(crate) use collapse::{
-    CollapsePlan, try_collapse, try_collapse_noting_role, try_collapse_planned,
+    CollapsePlan, refusal as collapse_refusal, try_collapse, try_collapse_noting_role,
+    try_collapse_planned,
 };
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;

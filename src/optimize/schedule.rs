@@ -48,9 +48,9 @@ use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
     self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SwapPlan,
-    invariants::on_curve, try_collapse_noting_role, try_collapse_planned, try_project, try_reroute,
-    try_reroute_planned, try_round, try_smooth_planned, try_smooth_with, try_split, try_swap,
-    try_swap_planned,
+    collapse_refusal, invariants::on_curve, try_collapse_noting_role, try_collapse_planned,
+    try_project, try_reroute, try_reroute_planned, try_round, try_smooth_planned, try_smooth_with,
+    try_split, try_swap, try_swap_planned,
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
@@ -566,16 +566,24 @@ impl<P> ShortestFirst<P> {
     }
 
     /// Which head is the smallest: 0 `sorted`, 1 `staged`, 2 `again` (on a tie
-    /// the first; equal heads are the same edge).
+    /// the first; equal heads are the same edge). On every pop: compared by
+    /// hand, not through a `min_by_key` over three options.
     fn smallest(&self) -> Option<usize> {
         let heads = [
             self.sorted.get(self.next).copied(),
             self.staged.front().map(|&(b, k, _)| (b, k)),
             self.again.peek().map(|r| r.0),
         ];
-        (0..3)
-            .filter(|&i| heads[i].is_some())
-            .min_by_key(|&i| heads[i])
+        let mut which = None;
+        let mut best = None;
+        for (i, head) in heads.into_iter().enumerate() {
+            if let Some(h) = head
+                && best.is_none_or(|b| h < b)
+            {
+                (which, best) = (Some(i), Some(h));
+            }
+        }
+        which
     }
 
     /// Whether the next edge comes from `again` with nothing staged: the
@@ -647,7 +655,9 @@ impl<T: Send> PlanAhead<T> {
         }
         if n >= self.from + self.plans.len() {
             let end = (n + PLAN_AHEAD).min(items.len());
-            self.plans = items[n..end].par_iter().map(plan).collect();
+            // Into the same buffer: a window is planned thousands of times a pass.
+            self.plans.clear();
+            self.plans.par_extend(items[n..end].par_iter().map(plan));
             self.from = n;
         }
         self.plans.get_mut(n - self.from).and_then(Option::take)
@@ -663,6 +673,9 @@ enum CollapseDirection {
     /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`]
     /// (boxed: plans are moved through the window and the round).
     Plan(Box<PlannedCollapse>),
+    /// The plan or its verdict refused it (as `try_collapse_planned` would,
+    /// with whether by the role rules).
+    Refused(Reject, bool),
 }
 
 /// [`CollapseDirection::Plan`]'s plan and verdict.
@@ -1133,7 +1146,7 @@ impl<'a> Schedule<'a> {
         // smallest at a time (`ShortestFirst::stage`), under the same rule.
         let mut ahead = PlanAhead::new();
         loop {
-            if ahead.parallel && queue.next_is_unstaged() && queue.again.len() >= STAGE_MIN {
+            if ahead.parallel && queue.again.len() >= STAGE_MIN && queue.next_is_unstaged() {
                 let batch = queue.stage(PLAN_AHEAD);
                 let this = &*self;
                 let plans: Vec<CollapseAhead> = batch
@@ -1211,6 +1224,10 @@ impl<'a> Schedule<'a> {
                         tried = true;
                         let (plan, verdict) = *planned;
                         try_collapse_planned(self.mesh, self.ctx, plan, verdict)
+                    }
+                    CollapseDirection::Refused(r, by_role) => {
+                        tried = true;
+                        (Outcome::Rejected(r), by_role)
                     }
                     CollapseDirection::Unplanned => {
                         if !self.keeps_lengths(u, v) {
@@ -1320,7 +1337,12 @@ impl<'a> Schedule<'a> {
             }
             let plan = CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v));
             let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
-            CollapseDirection::Plan(Box::new((plan, verdict)))
+            // A refused plan is dropped here, in parallel, not on the
+            // pipeline's thread (most plans are refused).
+            match collapse_refusal(&plan, verdict) {
+                Some((r, by_role)) => CollapseDirection::Refused(r, by_role),
+                None => CollapseDirection::Plan(Box::new((plan, verdict))),
+            }
         };
         Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
     }
@@ -1552,6 +1574,13 @@ impl<'a> Schedule<'a> {
             .as_ref()
             .ok()
             .and_then(|p| p.verdict(self.mesh, self.ctx));
+        // A refused move keeps its reason only (`try_smooth_planned` refuses
+        // a failed plan as it refuses a refused verdict); the plan is
+        // dropped here, in parallel.
+        let (plan, verdict) = match verdict {
+            Some(Err(r)) => (Err(r), None),
+            _ => (plan, verdict),
+        };
         Some(SmoothAhead {
             at: self.clock,
             plan,
