@@ -33,8 +33,10 @@ pub(crate) struct SmoothPlan {
     v: VertexId,
     faces: Vec<FaceId>,
     pos: Point,
-    /// New parameter, for a primary vertex.
-    t: Option<(u32, f64)>,
+    /// For a primary vertex: its section, its new parameter, and its two
+    /// neighbours along the section (the ends of its only tagged edges,
+    /// [`Role::Primary`]), whose tags get the new parameter.
+    t: Option<(u32, f64, [VertexId; 2])>,
     old_max_energy: f64,
     old_corner_energy: Option<f64>,
 }
@@ -131,7 +133,7 @@ impl SmoothPlan {
         // A tag of v's edges as the move leaves it: the plan's section gets
         // the new parameter at v's end (as `try_smooth_planned` retags it).
         let moved_tag = |key: EdgeKey, tag: FeatureOn| match (tag, self.t) {
-            (FeatureOn::Primary { section, t }, Some((s, tn))) if section == s => {
+            (FeatureOn::Primary { section, t }, Some((s, tn, _))) if section == s => {
                 FeatureOn::Primary {
                     section,
                     t: if key.lo == v { [tn, t[1]] } else { [t[0], tn] },
@@ -310,7 +312,8 @@ impl SmoothPlan {
                 if value.partial_cmp(&base) != Some(Ordering::Less) {
                     return Err(Reject::NoChange);
                 }
-                (s.parent.eval(tc), Some((section, tc)))
+                let along = [along[0].0, along[1].0];
+                (s.parent.eval(tc), Some((section, tc, along)))
             }
         };
         if pos == mesh.position(v) && !mesh.is_rational(v) {
@@ -516,16 +519,12 @@ pub(crate) fn try_smooth_planned(
     };
     let mut tx = Transaction::decided_if(mesh, decided);
     tx.set_position(v, plan.pos);
-    if let Some((section, tn)) = plan.t {
-        let r = crate::mesh::ScratchRing::of(&tx, v);
-        for &w in &r.neighbours {
-            let tags = tx.edge_tags(v, w);
-            if !tags
-                .iter()
-                .any(|t| matches!(*t, FeatureOn::Primary { section: s, .. } if s == section))
-            {
-                continue;
-            }
+    if let Some((section, tn, along)) = plan.t {
+        // v's tagged edges are those to `along` alone: the plan read v's
+        // edges, and a plan made ahead stands only while no face around v
+        // changed (every change of a tag at v does that) and no neighbour
+        // of v moved.
+        for w in along {
             let key = EdgeKey::new(v, w);
             for tag in tx.take_edge_tags(v, w) {
                 let tag = match tag {

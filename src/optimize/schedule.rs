@@ -1182,9 +1182,12 @@ impl<'a> Schedule<'a> {
                 Popped::Again => None,
             }
             .filter(|a: &CollapseAhead| {
-                // (An edge queued twice may have been refused since its plan.)
-                !matches!(self.failed_collapse.get(&k), Some(f) if f.at >= a.at)
-                    && self.fresh(a.at, &[k.lo, k.hi])
+                // (An edge queued twice may have been refused since its plan;
+                // a plan that skips the edge needs no look: with both ends
+                // unchanged since, such a refusal makes the round skip it too.)
+                self.fresh(a.at, &[k.lo, k.hi])
+                    && (a.directions.is_none()
+                        || !matches!(self.failed_collapse.get(&k), Some(f) if f.at >= a.at))
             });
             // A plan that stands already made the round's checks.
             let mut planned = match planned {
