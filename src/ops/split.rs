@@ -106,6 +106,18 @@ impl SplitPlan {
         })
     }
 
+    /// Each candidate in turn, the first that the invariants accept applied.
+    fn try_candidates(&self, mesh: &mut TriMesh, ctx: &Context) -> Outcome {
+        let mut last = Reject::NoChange;
+        for cand in &self.candidates {
+            match self.apply(mesh, ctx, cand) {
+                Outcome::Rejected(r) => last = r,
+                applied => return applied,
+            }
+        }
+        Outcome::Rejected(last)
+    }
+
     fn apply(&self, mesh: &mut TriMesh, ctx: &Context, cand: &Candidate) -> Outcome {
         let mut tx = Transaction::new(mesh);
         let (m, max_off) = match cand {
@@ -186,6 +198,19 @@ pub(crate) fn try_split(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: Verte
     try_split_bounded(mesh, ctx, a, b, None)
 }
 
+/// [`try_split`] with its plan made already (ahead, on the mesh as it was:
+/// the caller knows that no face around `a` or `b` has changed since).
+pub(crate) fn try_split_planned(
+    mesh: &mut TriMesh,
+    ctx: &Context,
+    planned: Result<SplitPlan, Reject>,
+) -> Outcome {
+    match planned {
+        Ok(plan) => plan.try_candidates(mesh, ctx),
+        Err(r) => Outcome::Rejected(r),
+    }
+}
+
 /// Split the edge `a b` as [`try_split`] does, but refuse ([`Reject::Energy`])
 /// when a new triangle's energy would exceed `max_energy`: a split made for
 /// another reason than quality (the curving stage's repair) must not leave a
@@ -197,16 +222,8 @@ pub(crate) fn try_split_bounded(
     b: VertexId,
     max_energy: Option<f64>,
 ) -> Outcome {
-    let plan = match SplitPlan::new(mesh, ctx, a, b) {
-        Ok(p) => SplitPlan { max_energy, ..p },
-        Err(r) => return Outcome::Rejected(r),
-    };
-    let mut last = Reject::NoChange;
-    for cand in &plan.candidates {
-        match plan.apply(mesh, ctx, cand) {
-            Outcome::Rejected(r) => last = r,
-            applied => return applied,
-        }
+    match SplitPlan::new(mesh, ctx, a, b) {
+        Ok(p) => SplitPlan { max_energy, ..p }.try_candidates(mesh, ctx),
+        Err(r) => Outcome::Rejected(r),
     }
-    Outcome::Rejected(last)
 }

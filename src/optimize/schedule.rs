@@ -47,10 +47,10 @@ use crate::budget::Deadline;
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
-    self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SwapPlan,
-    collapse_refusal, invariants::on_curve, try_collapse_noting_role, try_collapse_planned,
-    try_project, try_reroute, try_reroute_planned, try_round, try_smooth_planned, try_smooth_with,
-    try_split, try_swap, try_swap_planned,
+    self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SplitPlan,
+    SwapPlan, collapse_refusal, invariants::on_curve, try_collapse_noting_role,
+    try_collapse_planned, try_project, try_reroute, try_reroute_planned, try_round,
+    try_smooth_planned, try_smooth_with, try_split, try_split_planned, try_swap, try_swap_planned,
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
@@ -984,12 +984,26 @@ impl<'a> Schedule<'a> {
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let n = cands.len();
         let mut applied = 0;
-        for (_, k, t) in cands {
+        // As in the collapse round: with more than one thread the next
+        // `PLAN_AHEAD` splits are planned at once in parallel (the plan reads
+        // the faces and tags of the edge), and a plan is used only while
+        // neither end has changed since.
+        let mut ahead = PlanAhead::new();
+        for (i, &(_, k, t)) in cands.iter().enumerate() {
             if self.mesh.num_vertices() >= self.opts.max_vertices {
                 break;
             }
             let on_cap = self.capped && self.on_capped_feature(k);
-            let out = try_split(self.mesh, self.ctx, k.lo, k.hi);
+            let this = &*self;
+            let planned = ahead
+                .take(i, &cands, |&(_, e, _)| {
+                    Some((this.clock, SplitPlan::new(this.mesh, this.ctx, e.lo, e.hi)))
+                })
+                .filter(|(at, _)| self.fresh(*at, &[k.lo, k.hi]));
+            let out = match planned {
+                Some((_, plan)) => try_split_planned(self.mesh, self.ctx, plan),
+                None => try_split(self.mesh, self.ctx, k.lo, k.hi),
+            };
             self.touch(&out, true);
             if let Outcome::Applied(ch) = &out {
                 if let Some(m) = ch.new_vertex {
