@@ -17,7 +17,8 @@ use crate::stage::Stage;
 use crate::svg::ShapeId;
 use crate::{Error, Result};
 use kurbo::Point;
-use std::collections::HashMap;
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
 /// Accuracy of the distance statistics ([`edge_distance`]) relative to `d`.
 /// Introduced in ac447f1.
@@ -36,29 +37,38 @@ pub(super) fn assemble(
     let next =
         |nodes: &Vec<Point>| u32::try_from(nodes.len()).expect("internal: node count fits u32");
     let inner_count = order as usize - 1;
-    // Inner node indices of each edge, from lo to hi.
-    let mut edge_nodes: HashMap<EdgeKey, Vec<u32>> = HashMap::new();
-    let mut edge_inner = |nodes: &mut Vec<Point>, key: EdgeKey| -> Vec<u32> {
-        edge_nodes
-            .entry(key)
-            .or_insert_with(|| {
-                let pts = shape.edges.get(&key).cloned().unwrap_or_else(|| {
-                    straight_inner(mesh.position(key.lo), mesh.position(key.hi), order)
-                });
-                pts.into_iter()
-                    .map(|p| {
-                        let i = next(nodes);
-                        nodes.push(p);
-                        i
-                    })
-                    .collect()
-            })
-            .clone()
+    // The index of each edge's first inner node (its inner nodes are numbered
+    // together, from lo to hi).
+    let mut edge_nodes: FxHashMap<EdgeKey, u32> = FxHashMap::default();
+    let mut edge_inner = |nodes: &mut Vec<Point>, key: EdgeKey| -> std::ops::Range<u32> {
+        let first = *edge_nodes.entry(key).or_insert_with(|| {
+            let first = next(nodes);
+            match shape.edges.get(&key) {
+                Some(pts) => nodes.extend_from_slice(pts),
+                None => nodes.extend(straight_inner(
+                    mesh.position(key.lo),
+                    mesh.position(key.hi),
+                    order,
+                )),
+            }
+            debug_assert_eq!(next(nodes) - first, inner_count as u32);
+            first
+        });
+        first..first + inner_count as u32
     };
     let mut faces: Vec<FaceId> = mesh.faces().collect();
     faces.sort_unstable();
+    // The cubic centre nodes, in parallel (each reads its face's element).
+    let centres: Vec<Point> = if order == Order::Cubic {
+        faces
+            .par_iter()
+            .map(|&f| shape.element(mesh, order, f)[9])
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut triangles = Vec::with_capacity(faces.len() * order.triangle_nodes());
-    for &f in &faces {
+    for (n, &f) in faces.iter().enumerate() {
         let v = mesh.face(f);
         triangles.extend(v.map(|x| numbers.get(x)));
         if inner_count == 0 {
@@ -70,13 +80,12 @@ pub(super) fn assemble(
             if key.lo == v[i] {
                 triangles.extend(ids);
             } else {
-                triangles.extend(ids.into_iter().rev());
+                triangles.extend(ids.rev());
             }
         }
-        if order == Order::Cubic {
-            let el = shape.element(mesh, order, f);
+        if let Some(&centre) = centres.get(n) {
             triangles.push(next(&nodes));
-            nodes.push(el[9]);
+            nodes.push(centre);
         }
     }
     let mut lines = Vec::new();
@@ -109,67 +118,77 @@ pub(super) fn finish_stats(
 ) -> Result<()> {
     let order = curved.order();
     let n = order.triangle_nodes();
-    let mut pts = Vec::with_capacity(n);
-    for (i, t) in curved.triangles.chunks_exact(n).enumerate() {
-        pts.clear();
-        pts.extend(t.iter().map(|&k| curved.nodes[k as usize]));
-        let cert = jacobian::certify_element(order, &pts, &opts.certify)
-            .expect("internal: element has its order's node count");
-        if !cert.is_certified() {
-            let mut faces: Vec<FaceId> = mesh.faces().collect();
-            faces.sort_unstable();
-            let f = faces[i];
-            let bent = face_edges(mesh, f)
-                .iter()
-                .filter(|k| shape.edges.contains_key(k))
-                .count();
-            return Err(Error::meshing(
-                Stage::Curve,
-                format!(
-                    "element {i} ({f:?}, {bent} curved edges, centre moved: {}) is not \
-                     certified valid ({:?}): a straight sliver of the linear mesh that no \
-                     local operation could remove",
-                    shape.centre.contains_key(&f),
-                    cert.validity
-                ),
-            ));
-        }
+    // Every element certified, in parallel; the first that fails (in element
+    // order) is the error.
+    let failed = curved
+        .triangles
+        .par_chunks_exact(n)
+        .enumerate()
+        .map(|(i, t)| {
+            let pts: Vec<Point> = t.iter().map(|&k| curved.nodes[k as usize]).collect();
+            let cert = jacobian::certify_element(order, &pts, &opts.certify)
+                .expect("internal: element has its order's node count");
+            (i, cert)
+        })
+        .find_first(|(_, cert)| !cert.is_certified());
+    if let Some((i, cert)) = failed {
+        let mut faces: Vec<FaceId> = mesh.faces().collect();
+        faces.sort_unstable();
+        let f = faces[i];
+        let bent = face_edges(mesh, f)
+            .iter()
+            .filter(|k| shape.edges.contains_key(k))
+            .count();
+        return Err(Error::meshing(
+            Stage::Curve,
+            format!(
+                "element {i} ({f:?}, {bent} curved edges, centre moved: {}) is not \
+                 certified valid ({:?}): a straight sliver of the linear mesh that no \
+                 local operation could remove",
+                shape.centre.contains_key(&f),
+                cert.validity
+            ),
+        ));
     }
-    // Curved elements: those with a curved edge on a cubic feature.
+    // Curved elements: those with a curved edge on a cubic feature. The
+    // distances of the primary edges are measured in parallel and summed in
+    // edge order.
+    let mut keys: Vec<EdgeKey> = mesh.tagged_edges().map(|(k, _)| k).collect();
+    keys.sort_unstable();
+    let acc = DISTANCE_ACCURACY_REL * opts.d;
+    let measured: Vec<(f64, f64, Vec<FaceId>)> = keys
+        .par_iter()
+        .filter_map(|&key| {
+            let (section, t) = primary(mesh, key)?;
+            let sec = ctx.section(section)?;
+            let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
+            let inner = shape
+                .edges
+                .get(&key)
+                .cloned()
+                .unwrap_or_else(|| straight_inner(a, b, order));
+            let off = (a - sec.parent.eval(t[0]))
+                .hypot()
+                .max((b - sec.parent.eval(t[1])).hypot());
+            let dist = edge_distance(a, b, &inner, |p| sec.parent.distance(p, t, acc));
+            let mut on_edge = Vec::new();
+            if on_curved(ctx, section) && shape.edges.contains_key(&key) && order != Order::Linear {
+                mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
+            }
+            Some((off, dist, on_edge))
+        })
+        .collect();
     let mut curved_faces: Vec<FaceId> = Vec::new();
-    let mut on_edge = Vec::new();
     let mut dist_sum = 0.0;
     let mut dist_count = 0usize;
     let mut dist_max = 0.0f64;
     let mut corner_max = 0.0f64;
-    let mut keys: Vec<EdgeKey> = mesh.tagged_edges().map(|(k, _)| k).collect();
-    keys.sort_unstable();
-    for key in keys {
-        let Some((section, t)) = primary(mesh, key) else {
-            continue;
-        };
-        let Some(sec) = ctx.section(section) else {
-            continue;
-        };
-        let (a, b) = (mesh.position(key.lo), mesh.position(key.hi));
-        let inner = shape
-            .edges
-            .get(&key)
-            .cloned()
-            .unwrap_or_else(|| straight_inner(a, b, order));
-        let off = (a - sec.parent.eval(t[0]))
-            .hypot()
-            .max((b - sec.parent.eval(t[1])).hypot());
+    for (off, dist, on_edge) in measured {
         corner_max = corner_max.max(off);
-        let acc = DISTANCE_ACCURACY_REL * opts.d;
-        let dist = edge_distance(a, b, &inner, |p| sec.parent.distance(p, t, acc));
         dist_max = dist_max.max(dist);
         dist_sum += dist;
         dist_count += 1;
-        if on_curved(ctx, section) && shape.edges.contains_key(&key) && order != Order::Linear {
-            mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
-            curved_faces.extend(&on_edge);
-        }
+        curved_faces.extend(on_edge);
     }
     curved_faces.sort_unstable();
     curved_faces.dedup();
@@ -182,11 +201,12 @@ pub(super) fn finish_stats(
     } else {
         0.0
     };
-    for f in curved_faces {
-        if let Some(c) = shape.certificate(mesh, order, f, &CertifyOptions::DEFAULT) {
-            stats.min_jacobian_ratio = stats.min_jacobian_ratio.min(c.ratio());
-        }
-    }
+    let min_ratio = curved_faces
+        .par_iter()
+        .filter_map(|&f| shape.certificate(mesh, order, f, &CertifyOptions::DEFAULT))
+        .map(|c| c.ratio())
+        .reduce(|| f64::INFINITY, f64::min);
+    stats.min_jacobian_ratio = stats.min_jacobian_ratio.min(min_ratio);
     Ok(())
 }
 
