@@ -1061,7 +1061,7 @@ impl<'a> Schedule<'a> {
         while let Some((v, seed)) = queue.pop_front() {
             let radius = SIZING_RADIUS * self.target_of(seed);
             let ps = self.mesh.position(seed);
-            for w in self.mesh.vertex_ring(v).neighbours {
+            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
                 let i = w.index();
                 if seen[i] {
                     continue;
