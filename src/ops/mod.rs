@@ -40,12 +40,11 @@ mod swap;
 pub(crate) mod tests;
 
 pub(crate) use collapse::{
-    CollapsePlan, refusal as collapse_refusal, try_collapse, try_collapse_noting_role,
-    try_collapse_planned,
+    CollapsePlan, refusal as collapse_refusal, try_collapse, try_collapse_planned,
 };
 pub(crate) use project::try_project;
 pub(crate) use round::try_round;
-pub(crate) use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_planned, try_smooth_with};
+pub(crate) use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_planned};
 pub(crate) use split::{SplitPlan, try_split, try_split_bounded, try_split_planned};
 pub(crate) use swap::{
     ReroutePlan, SwapPlan, try_reroute, try_reroute_planned, try_swap, try_swap_planned,

@@ -48,9 +48,9 @@ use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, min_angle_deg};
 use crate::ops::{
     self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SplitPlan,
-    SwapPlan, collapse_refusal, invariants::on_curve, try_collapse_noting_role,
-    try_collapse_planned, try_project, try_reroute, try_reroute_planned, try_round,
-    try_smooth_planned, try_smooth_with, try_split, try_split_planned, try_swap, try_swap_planned,
+    SwapPlan, collapse_refusal, invariants::on_curve, try_collapse_planned, try_project,
+    try_reroute, try_reroute_planned, try_round, try_smooth_planned, try_split, try_split_planned,
+    try_swap, try_swap_planned,
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
@@ -482,9 +482,9 @@ pub(crate) struct Schedule<'a> {
     /// By vertex slot: the clock when the faces around the vertex last changed
     /// (split, collapse, swap; not a move).
     topo_stamp: Vec<u64>,
-    /// Collapses of `.1` into `.0` refused by the role rules alone
-    /// ([`crate::ops::try_collapse_noting_role`]), with the clock then and the reason: they
-    /// stay refused until the faces around `.1` change.
+    /// Collapses of `.1` into `.0` refused by the role rules alone (a
+    /// [`CollapsePlan::new`] refusal that says so), with the clock then and
+    /// the reason: they stay refused until the faces around `.1` change.
     role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
     /// Longest edge a collapse may create, relative to its mean target.
     max_stretch: f64,
@@ -1252,8 +1252,17 @@ impl<'a> Schedule<'a> {
                             continue;
                         }
                         tried = true;
-                        // `keeps_lengths` left v's ring in `self.ring`.
-                        try_collapse_noting_role(self.mesh, self.ctx, u, v, Some(&self.ring))
+                        // Planned now, with its verdict, as ahead: a refusal
+                        // only reads the mesh (no tentative change to roll
+                        // back) and a decided collapse commits without a
+                        // journal. (`keeps_lengths` left v's ring in
+                        // `self.ring`.)
+                        let plan = CollapsePlan::new(self.mesh, self.ctx, u, v, Some(&self.ring));
+                        let verdict = plan
+                            .as_ref()
+                            .ok()
+                            .and_then(|p| p.verdict(self.mesh, self.ctx));
+                        try_collapse_planned(self.mesh, self.ctx, plan, verdict)
                     }
                 };
                 self.touch(&out, true);
@@ -1543,7 +1552,15 @@ impl<'a> Schedule<'a> {
                 .filter(|a: &SmoothAhead| self.fresh(a.at, &[v]));
             let out = match planned {
                 Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan, a.verdict),
-                None => try_smooth_with(self.mesh, self.ctx, v, objective),
+                // Planned now, with its verdict, as ahead.
+                None => {
+                    let plan = SmoothPlan::with_objective(self.mesh, self.ctx, v, objective);
+                    let verdict = plan
+                        .as_ref()
+                        .ok()
+                        .and_then(|p| p.verdict(self.mesh, self.ctx));
+                    try_smooth_planned(self.mesh, self.ctx, plan, verdict)
+                }
             };
             self.touch(&out, false);
             self.failed_smooth[i] = if out.is_applied() {
