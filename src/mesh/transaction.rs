@@ -66,7 +66,7 @@ pub(crate) struct Transaction<'a> {
     face_len: usize,
     live: (usize, usize),
     committed: bool,
-    /// Whether changes are journaled (see [`Transaction::decided`]).
+    /// Whether changes are journaled (see [`Transaction::decided_if`]).
     journaled: bool,
 }
 

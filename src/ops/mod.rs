@@ -46,9 +46,9 @@ pub(crate) use project::try_project;
 pub(crate) use round::try_round;
 pub(crate) use smooth::{Objective, SmoothPlan, try_smooth, try_smooth_planned};
 pub(crate) use split::{SplitPlan, try_split, try_split_bounded, try_split_planned};
-pub(crate) use swap::{
-    ReroutePlan, SwapPlan, try_reroute, try_reroute_planned, try_swap, try_swap_planned,
-};
+#[cfg(test)]
+pub(crate) use swap::try_reroute;
+pub(crate) use swap::{ReroutePlan, SwapPlan, try_reroute_planned, try_swap, try_swap_planned};
 
 use crate::features::{FeatureSet, Parent, PrimaryChains};
 use crate::mesh::{EdgeKey, FaceId, FeatureOn, TriMesh, VertexId};

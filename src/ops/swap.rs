@@ -258,7 +258,10 @@ impl ReroutePlan {
 }
 
 /// Reroute the secondary edge `a b` through the nearer opposite vertex (see the
-/// module doc).
+/// module doc), as a tentative change checked by the invariants. The schedule
+/// decides reroutes by [`ReroutePlan::verdict`] instead; the tests compare the
+/// two.
+#[cfg(test)]
 pub(crate) fn try_reroute(mesh: &mut TriMesh, ctx: &Context, a: VertexId, b: VertexId) -> Outcome {
     try_reroute_planned(mesh, ctx, ReroutePlan::new(mesh, ctx, a, b), None)
 }
@@ -280,7 +283,7 @@ impl ReroutePlan {
     }
 }
 
-/// The rest of [`try_reroute`] once its plan is made on the mesh as it is
+/// The rest of `try_reroute` once its plan is made on the mesh as it is
 /// now; with `verdict` ([`ReroutePlan::verdict`]), the reroute is refused or
 /// committed as it says, without checking the invariants again.
 pub(crate) fn try_reroute_planned(

@@ -49,8 +49,8 @@ use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId, VertexRing, m
 use crate::ops::{
     self, CollapsePlan, Context, Objective, Outcome, Reject, ReroutePlan, SmoothPlan, SplitPlan,
     SwapPlan, collapse_refusal, invariants::on_curve, try_collapse_planned, try_project,
-    try_reroute, try_reroute_planned, try_round, try_smooth_planned, try_split, try_split_planned,
-    try_swap, try_swap_planned,
+    try_reroute_planned, try_round, try_smooth_planned, try_split, try_split_planned,
+    try_swap_planned,
 };
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
@@ -1425,15 +1425,26 @@ impl<'a> Schedule<'a> {
                     if changed && swap_gain(self.mesh, self.ctx, k).is_none() {
                         continue;
                     }
-                    match swap_kind(self.mesh, k) {
-                        SwapKind::Swap => (
-                            try_swap(self.mesh, self.ctx, k.lo, k.hi),
-                            &mut self.stats.swap,
-                        ),
-                        SwapKind::Reroute => (
-                            try_reroute(self.mesh, self.ctx, k.lo, k.hi),
-                            &mut self.stats.reroute,
-                        ),
+                    // Planned now, with its verdict, as ahead.
+                    let (mesh, ctx): (&TriMesh, &Context) = (self.mesh, self.ctx);
+                    match swap_kind(mesh, k) {
+                        SwapKind::Swap => {
+                            let plan = SwapPlan::new(mesh, ctx, k.lo, k.hi);
+                            let verdict =
+                                plan.as_ref().ok().and_then(|p| p.verdict(mesh, ctx, &[]));
+                            (
+                                try_swap_planned(self.mesh, self.ctx, plan, verdict),
+                                &mut self.stats.swap,
+                            )
+                        }
+                        SwapKind::Reroute => {
+                            let plan = ReroutePlan::new(mesh, ctx, k.lo, k.hi);
+                            let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, ctx));
+                            (
+                                try_reroute_planned(self.mesh, self.ctx, plan, verdict),
+                                &mut self.stats.reroute,
+                            )
+                        }
                         SwapKind::Neither => continue,
                     }
                 }
