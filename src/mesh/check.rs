@@ -176,12 +176,13 @@ impl TriMesh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::mesh::VertexTag;
     use kurbo::Point;
 
-    fn square() -> (TriMesh, [VertexId; 4]) {
+    /// The unit square's four corners, counter-clockwise from the origin, no faces.
+    pub(in crate::mesh) fn square() -> (TriMesh, [VertexId; 4]) {
         let mut m = TriMesh::new();
         let t = VertexTag::default();
         let a = m.add_vertex(Point::new(0.0, 0.0), t);

@@ -343,18 +343,21 @@ impl Drop for Transaction<'_> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn dropped_transaction_restores_the_mesh() {
-        let mut m = TriMesh::new();
-        let t = VertexTag::default();
-        let a = m.add_vertex(Point::new(0.0, 0.0), t);
-        let b = m.add_vertex(Point::new(1.0, 0.0), t);
-        let c = m.add_vertex(Point::new(1.0, 1.0), t);
-        let d = m.add_vertex(Point::new(0.0, 1.0), t);
+    /// The unit square cut along its diagonal `a c`, which carries a
+    /// secondary tag.
+    fn split_square() -> (TriMesh, [VertexId; 4], [FaceId; 2]) {
+        let (mut m, [a, b, c, d]) = super::super::check::tests::square();
         let f = m.add_face([a, b, c]);
         let g = m.add_face([a, c, d]);
         m.link_all();
         m.add_edge_tag(a, c, FeatureOn::Secondary { polyline: 3 });
+        (m, [a, b, c, d], [f, g])
+    }
+
+    #[test]
+    fn dropped_transaction_restores_the_mesh() {
+        let (mut m, [a, b, c, d], [f, g]) = split_square();
+        let t = VertexTag::default();
         let before = m.clone();
         {
             let mut tx = Transaction::new(&mut m);
@@ -379,16 +382,8 @@ mod tests {
 
     #[test]
     fn a_decided_transaction_makes_the_same_mesh_without_a_journal() {
-        let mut m = TriMesh::new();
+        let (m, [a, b, c, d], [f, g]) = split_square();
         let t = VertexTag::default();
-        let a = m.add_vertex(Point::new(0.0, 0.0), t);
-        let b = m.add_vertex(Point::new(1.0, 0.0), t);
-        let c = m.add_vertex(Point::new(1.0, 1.0), t);
-        let d = m.add_vertex(Point::new(0.0, 1.0), t);
-        let f = m.add_face([a, b, c]);
-        let g = m.add_face([a, c, d]);
-        m.link_all();
-        m.add_edge_tag(a, c, FeatureOn::Secondary { polyline: 3 });
         let change = |tx: &mut Transaction<'_>| {
             let e = tx.add_vertex(Point::new(0.5, 0.5), t);
             tx.take_edge_tags(a, c);
