@@ -159,8 +159,8 @@ const PLAN_AHEAD: usize = 256;
 
 /// The fewest edges queued again worth staging to plan in parallel: two (a
 /// lone edge is planned when popped). Staging from 16 left 9 % of organ's
-/// pops planned one by one on the pipeline's thread; from 2, its
-/// two-thread time fell 3-5 % (session 15, benches/README.md).
+/// pops planned one by one on the pipeline's thread; from 2, the three
+/// slowest drawings' two-thread times fell 2-5 % (session 15).
 const STAGE_MIN: usize = 2;
 /// The envelope stages for vertices left rational (after §2.3.4's, which
 /// sample denser and then widen ε): ε multiplied by each of these in turn,
@@ -655,7 +655,7 @@ impl<T: Send> PlanAhead<T> {
         }
         if n >= self.from + self.plans.len() {
             let end = (n + PLAN_AHEAD).min(items.len());
-            // Into the same buffer: a window is planned thousands of times a pass.
+            // Into the same buffer: organ plans some twelve thousand windows.
             self.plans.clear();
             self.plans.par_extend(items[n..end].par_iter().map(plan));
             self.from = n;
