@@ -187,13 +187,8 @@ impl TriMesh {
     /// Every edge of the live faces once, face by face in id order, each edge
     /// at the first face that has it (boundary edges at their one face).
     pub(crate) fn edges(&self) -> impl Iterator<Item = EdgeKey> + '_ {
-        self.faces().flat_map(move |f| {
-            let v = self.face(f);
-            let adj = self.neighbours(f);
-            (0..3)
-                .filter(move |&i| adj[i].is_none_or(|g| g > f))
-                .map(move |i| EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]))
-        })
+        self.faces()
+            .flat_map(move |f| first_face_edges(f, self.face(f), self.neighbours(f)))
     }
 
     /// [`TriMesh::edges`] collected, in the same order; in parallel when the
@@ -208,11 +203,7 @@ impl TriMesh {
             .enumerate()
             .with_min_len(4096)
             .filter_map(|(k, d)| d.as_ref().map(|d| (FaceId::from_index(k), d.v, d.adj)))
-            .flat_map_iter(|(f, v, adj)| {
-                (0..3)
-                    .filter(move |&i| adj[i].is_none_or(|g| g > f))
-                    .map(move |i| EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]))
-            })
+            .flat_map_iter(|(f, v, adj)| first_face_edges(f, v, adj))
             .collect()
     }
 
@@ -315,6 +306,18 @@ impl VertexRing {
 thread_local! {
     /// Spare ring buffers for [`ScratchRing`].
     static SPARE_RINGS: std::cell::RefCell<Vec<VertexRing>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The edges of face `f` (vertices `v`, neighbours `adj`) that no face of a
+/// smaller id shares: [`TriMesh::edges`] lists each edge at its first face.
+fn first_face_edges(
+    f: FaceId,
+    v: [VertexId; 3],
+    adj: [Option<FaceId>; 3],
+) -> impl Iterator<Item = EdgeKey> {
+    (0..3)
+        .filter(move |&i| adj[i].is_none_or(|g| g > f))
+        .map(move |i| EdgeKey::new(v[(i + 1) % 3], v[(i + 2) % 3]))
 }
 
 /// A vertex ring in a reused buffer (one of a per-thread stack of spares,

@@ -488,8 +488,6 @@ pub(crate) struct Schedule<'a> {
     role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
     /// Longest edge a collapse may create, relative to its mean target.
     max_stretch: f64,
-    /// A one-ring buffer reused by the collapse pass's length checks.
-    ring: VertexRing,
     /// The clock when the last swap pass scanned the edges, and the edges it
     /// found a gain on: an edge whose ends' faces have not changed since
     /// (so neither has its quad) and that had no gain then has none now.
@@ -664,10 +662,12 @@ impl<T: Send> PlanAhead<T> {
     }
 }
 
-/// One direction of a collapse planned ahead ([`Schedule::plan_collapse`]).
+/// One direction of a collapse planned ([`Schedule::plan_collapse`]).
 enum CollapseDirection {
-    /// Left to the sequential pass (its role refusal was remembered).
-    Unplanned,
+    /// Its refusal by the role rules is remembered, and v's faces are
+    /// unchanged since ([`Schedule::role_refused`]): the same refusal,
+    /// without planning it again.
+    Remembered(Reject),
     /// The length rule refused it.
     Length,
     /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`]
@@ -746,7 +746,9 @@ enum SwapWhat {
 
 /// Whether collapsing `v` into `u` makes no edge longer than `max_stretch`
 /// times the mean target of its ends (`target` by vertex slot, `l` past its
-/// end), `ring_v` being v's ring: see [`Schedule::keeps_lengths`].
+/// end), `ring_v` being v's ring. Else the split pass would cut such an
+/// edge again (4/3 of its target): the two passes would undo each other
+/// forever.
 fn lengths_kept(
     mesh: &TriMesh,
     target: &[f64],
@@ -815,7 +817,6 @@ impl<'a> Schedule<'a> {
             topo_stamp: Vec::new(),
             role_refused: rustc_hash::FxHashMap::default(),
             max_stretch: SPLIT_ABOVE,
-            ring: VertexRing::empty(),
             swap_scan: None,
             #[cfg(test)]
             ahead_tally: (0, 0),
@@ -1203,36 +1204,27 @@ impl<'a> Schedule<'a> {
                     && (a.directions.is_none()
                         || !matches!(self.failed_collapse.get(&k), Some(f) if f.at >= a.at))
             });
-            // A plan that stands already made the round's checks.
-            let mut planned = match planned {
-                Some(a) => match a.directions {
-                    None => continue,
-                    Some(d) => Some(d),
-                },
-                None if !self.collapse_due(bits, k, factor) => continue,
-                None => None,
+            // A plan that stands already made the round's checks; without
+            // one, the edge is planned now, by the same function (the checks,
+            // then the plan and its verdict: a refusal only reads the mesh,
+            // and a decided collapse commits without a journal). Both
+            // directions are planned on the mesh as it is: the first changes
+            // nothing unless it is applied, and then the second is not tried.
+            let planned = planned.unwrap_or_else(|| self.plan_collapse(bits, k, factor));
+            let Some(directions) = planned.directions else {
+                continue;
             };
             let mut applied_now = false;
             let mut tried = false;
             let mut by_length = false;
-            for (d, (u, v)) in [(k.lo, k.hi), (k.hi, k.lo)].into_iter().enumerate() {
-                let direction = planned.as_mut().map_or(CollapseDirection::Unplanned, |a| {
-                    std::mem::replace(&mut a[d], CollapseDirection::Unplanned)
-                });
-                // Refused by the role rules, and v's faces unchanged since: the
-                // same refusal, without planning it (or measuring lengths) again.
-                // (A direction planned ahead found no such refusal then, and
-                // none can have come since: v is unchanged, and only this edge
-                // makes one.)
-                if matches!(direction, CollapseDirection::Unplanned)
-                    && let Some(&(at, reason)) = self.role_refused.get(&(u, v))
-                    && self.topo_stamp_of(v) <= at
-                {
-                    tried = true;
-                    self.stats.collapse.record(&Outcome::Rejected(reason));
-                    continue;
-                }
+            let ends = [(k.lo, k.hi), (k.hi, k.lo)];
+            for ((u, v), direction) in ends.into_iter().zip(directions) {
                 let (out, by_role) = match direction {
+                    CollapseDirection::Remembered(reason) => {
+                        tried = true;
+                        self.stats.collapse.record(&Outcome::Rejected(reason));
+                        continue;
+                    }
                     CollapseDirection::Length => {
                         by_length = true;
                         continue;
@@ -1245,24 +1237,6 @@ impl<'a> Schedule<'a> {
                     CollapseDirection::Refused(r, by_role) => {
                         tried = true;
                         (Outcome::Rejected(r), by_role)
-                    }
-                    CollapseDirection::Unplanned => {
-                        if !self.keeps_lengths(u, v) {
-                            by_length = true;
-                            continue;
-                        }
-                        tried = true;
-                        // Planned now, with its verdict, as ahead: a refusal
-                        // only reads the mesh (no tentative change to roll
-                        // back) and a decided collapse commits without a
-                        // journal. (`keeps_lengths` left v's ring in
-                        // `self.ring`.)
-                        let plan = CollapsePlan::new(self.mesh, self.ctx, u, v, Some(&self.ring));
-                        let verdict = plan
-                            .as_ref()
-                            .ok()
-                            .and_then(|p| p.verdict(self.mesh, self.ctx));
-                        try_collapse_planned(self.mesh, self.ctx, plan, verdict)
                     }
                 };
                 self.touch(&out, true);
@@ -1293,8 +1267,7 @@ impl<'a> Schedule<'a> {
                 } else {
                     k.hi
                 };
-                let mut ring = std::mem::replace(&mut self.ring, VertexRing::empty());
-                self.mesh.vertex_ring_into(u, &mut ring);
+                let ring = crate::mesh::ScratchRing::of(self.mesh, u);
                 for &w in &ring.neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
@@ -1302,29 +1275,14 @@ impl<'a> Schedule<'a> {
                         queue.again.push(std::cmp::Reverse((len.to_bits(), e)));
                     }
                 }
-                self.ring = ring;
             }
         }
         applied
     }
 
-    /// Whether collapsing `v` into `u` makes no edge longer than 4/3 of its
-    /// mean target (else the split pass would cut it again: the two passes
-    /// would undo each other forever).
-    fn keeps_lengths(&mut self, u: VertexId, v: VertexId) -> bool {
-        self.mesh.vertex_ring_into(v, &mut self.ring);
-        lengths_kept(
-            self.mesh,
-            &self.target,
-            self.opts.l,
-            self.max_stretch,
-            u,
-            &self.ring,
-        )
-    }
-
-    /// Plan the collapse of `k` (popped with `bits`) ahead, on the mesh as it
-    /// is: what the collapse round would do with it now, short of applying it.
+    /// Plan the collapse of `k` (popped with `bits`) on the mesh as it is,
+    /// ahead or when popped without a plan that stands: what the collapse
+    /// round would do with it now, short of applying it.
     fn plan_collapse(&self, bits: u64, k: EdgeKey, factor: f64) -> CollapseAhead {
         CollapseAhead {
             at: self.clock,
@@ -1345,10 +1303,10 @@ impl<'a> Schedule<'a> {
             return None;
         }
         let direction = |u: VertexId, v: VertexId| {
-            if let Some(&(at, _)) = self.role_refused.get(&(u, v))
+            if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
                 && self.topo_stamp_of(v) <= at
             {
-                return CollapseDirection::Unplanned;
+                return CollapseDirection::Remembered(reason);
             }
             let ring_v = crate::mesh::ScratchRing::of(mesh, v);
             if !lengths_kept(
@@ -1563,15 +1521,11 @@ impl<'a> Schedule<'a> {
                 .filter(|a: &SmoothAhead| self.fresh(a.at, &[v]));
             let out = match planned {
                 Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan, a.verdict),
-                // Planned now, with its verdict, as ahead.
-                None => {
-                    let plan = SmoothPlan::with_objective(self.mesh, self.ctx, v, objective);
-                    let verdict = plan
-                        .as_ref()
-                        .ok()
-                        .and_then(|p| p.verdict(self.mesh, self.ctx));
-                    try_smooth_planned(self.mesh, self.ctx, plan, verdict)
-                }
+                // Planned now, by the same function, with its verdict.
+                None => match self.plan_smooth(v, objective) {
+                    Some(a) => try_smooth_planned(self.mesh, self.ctx, a.plan, a.verdict),
+                    None => continue,
+                },
             };
             self.touch(&out, false);
             self.failed_smooth[i] = if out.is_applied() {
