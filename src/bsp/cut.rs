@@ -228,6 +228,56 @@ fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
     )
 }
 
+/// Put the cells of seed triangles `chunk` (chunk number `c`), cut into
+/// `cut`, into the mesh in order.
+///
+/// # Errors
+/// [`Error::meshing`] once the mesh has more than `opts.max_vertices`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the loop state of cut_all, split off to run beside the next chunk's cut"
+)]
+fn emit_chunk(
+    mesh: &mut TriMesh,
+    vmap: &mut fan::VertexMap,
+    stats: &mut BspStats,
+    opts: &BspOptions,
+    c: usize,
+    chunk: &[[u32; 3]],
+    cut: Vec<CutTriangle>,
+    seed_ids: &[VertexId],
+) -> Result<()> {
+    for (k, (tri, cut)) in chunk.iter().zip(cut).enumerate() {
+        let ids = tri.map(|i| seed_ids[i as usize]);
+        let cells = match cut {
+            CutTriangle::Whole => {
+                mesh.add_face(ids);
+                stats.cells += 1;
+                continue;
+            }
+            CutTriangle::Cells(cells) => cells,
+        };
+        stats.cut_triangles += 1;
+        for (pts, how) in cells {
+            if fan::emit_cell(mesh, vmap, pts, how) {
+                stats.barycentre_vertices += 1;
+            }
+            stats.cells += 1;
+        }
+        if mesh.num_vertices() > opts.max_vertices as usize {
+            tracing::debug!(seed_triangle = c * CUT_CHUNK + k, "vertex budget exceeded");
+            return Err(Error::meshing(
+                Stage::Bsp,
+                format!(
+                    "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
+                    opts.max_vertices
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Cut every seed triangle and triangulate every cell into `mesh`. The seed
 /// triangles are cut in parallel, a chunk at a time; their cells go into the
 /// mesh in seed order, so the mesh is the same for any number of threads.
@@ -254,40 +304,26 @@ pub(super) fn cut_all(
         |r, (p, _)| r.union_pt(*p),
     );
     let grid = Grid::new(bbox, &input.segments);
-    for (c, chunk) in seed.triangles.chunks(CUT_CHUNK).enumerate() {
-        crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
-        let cut: Vec<CutTriangle> = chunk
+    let cut_chunk = |chunk: &[[u32; 3]]| -> Vec<CutTriangle> {
+        chunk
             .par_iter()
             .map(|tri| cut_one(input, &grid, tri.map(|i| seed.points[i as usize].0)))
-            .collect();
-        for (k, (tri, cut)) in chunk.iter().zip(cut).enumerate() {
-            let ids = tri.map(|i| seed_ids[i as usize]);
-            let cells = match cut {
-                CutTriangle::Whole => {
-                    mesh.add_face(ids);
-                    stats.cells += 1;
-                    continue;
-                }
-                CutTriangle::Cells(cells) => cells,
-            };
-            stats.cut_triangles += 1;
-            for (pts, how) in cells {
-                if fan::emit_cell(&mut mesh, &mut vmap, pts, how) {
-                    stats.barycentre_vertices += 1;
-                }
-                stats.cells += 1;
-            }
-            if mesh.num_vertices() > opts.max_vertices as usize {
-                tracing::debug!(seed_triangle = c * CUT_CHUNK + k, "vertex budget exceeded");
-                return Err(Error::meshing(
-                    Stage::Bsp,
-                    format!(
-                        "more than {} vertices: too many feature crossings (raise max_vertices or simplify the input)",
-                        opts.max_vertices
-                    ),
-                ));
-            }
-        }
+            .collect()
+    };
+    // The cells of a chunk go into the mesh (in order, on this thread) while
+    // the next chunk is cut: with two threads, the cutting of the next chunk
+    // no longer waits for the mesh to take this one's cells.
+    let chunks: Vec<&[[u32; 3]]> = seed.triangles.chunks(CUT_CHUNK).collect();
+    let mut next = chunks.first().map(|chunk| cut_chunk(chunk));
+    for (c, chunk) in chunks.iter().enumerate() {
+        crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
+        let cut = next.take().unwrap_or_default();
+        let (emitted, following) = rayon::join(
+            || emit_chunk(&mut mesh, &mut vmap, stats, opts, c, chunk, cut, &seed_ids),
+            || chunks.get(c + 1).map(|chunk| cut_chunk(chunk)),
+        );
+        emitted?;
+        next = following;
     }
     mesh.link_all();
     Ok(mesh)

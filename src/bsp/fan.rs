@@ -292,7 +292,7 @@ fn step_ulps(x: f64, k: i32) -> f64 {
 /// nearest `f64` point is `p`: `p` first, then points up to [`ROUND_ULPS`]
 /// ulps away per coordinate, nearest (in ulps) first. A coordinate that is
 /// exactly an `f64` (e.g. on a box side or an axis-parallel segment) is kept.
-fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::Point> {
+pub(super) fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::Point> {
     let range = |e: bool| if e { 0..=0 } else { -ROUND_ULPS..=ROUND_ULPS };
     let mut offsets: Vec<(i32, i32)> = range(exact[0])
         .flat_map(|i| range(exact[1]).map(move |j| (i, j)))
@@ -309,6 +309,11 @@ fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::Point> {
 /// triangles stay exactly counter-clockwise: the nearest one, else one a few
 /// ulps away ([`round_candidates`]); repeat up to `passes` times while
 /// something changed.
+///
+/// A pass is Gauss–Seidel: the vertices in index order, each seeing the
+/// earlier ones rounded. It runs in levels ([`rounding_levels`]) so that the
+/// vertices of a level are decided in parallel with exactly the outcome of
+/// the sequential order, for any number of threads.
 pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
     for _ in 0..passes {
         let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
@@ -321,34 +326,88 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         }
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
-        for v in rational {
-            let star = &star[v.index()];
-            let fits = |p: kurbo::Point| {
-                star.iter()
-                    .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise)
-            };
-            let p = mesh.position(v);
-            let to = if fits(p) {
-                Some(p)
-            } else {
-                let exact = mesh
-                    .exact(v)
-                    .expect("internal: listed as rational")
-                    .coords_are_f64();
-                round_candidates(p, exact)
-                    .into_iter()
-                    .skip(1)
-                    .find(|&c| fits(c))
-            };
-            if let Some(to) = to {
-                mesh.set_position(v, to);
-                changed = true;
+        for level in rounding_levels(mesh, &rational, &star) {
+            let m: &TriMesh = mesh;
+            let decide = |&v: &VertexId| (v, rounded(m, v, &star[v.index()]));
+            let moves: Vec<(VertexId, Option<kurbo::Point>)> =
+                if level.len() >= PAR_ROUND_MIN && rayon::current_num_threads() > 1 {
+                    level.par_iter().map(decide).collect()
+                } else {
+                    level.iter().map(decide).collect()
+                };
+            for (v, to) in moves {
+                if let Some(to) = to {
+                    mesh.set_position(v, to);
+                    changed = true;
+                }
             }
         }
         if !changed {
             break;
         }
     }
+}
+
+/// The fewest vertices of a rounding level decided in parallel (fewer cost
+/// more to hand out than to decide).
+const PAR_ROUND_MIN: usize = 64;
+
+/// The rational vertices (in index order) grouped in levels: a vertex's level
+/// is one more than the highest level of the earlier rational vertices of its
+/// star (0 without). Rounding reads only the vertices of a vertex's star, so
+/// when the levels are rounded one after the other, each vertex sees the
+/// earlier vertices of its star rounded (lower levels) and the later ones not
+/// (higher levels), as in index order; the vertices of one level share no
+/// face and are decided independently.
+fn rounding_levels(
+    mesh: &TriMesh,
+    rational: &[VertexId],
+    star: &[Vec<FaceId>],
+) -> Vec<Vec<VertexId>> {
+    let mut order = vec![usize::MAX; mesh.vertex_capacity()];
+    for (i, v) in rational.iter().enumerate() {
+        order[v.index()] = i;
+    }
+    let mut level = vec![0usize; mesh.vertex_capacity()];
+    let mut levels: Vec<Vec<VertexId>> = Vec::new();
+    for &v in rational {
+        let mine = order[v.index()];
+        let lv = star[v.index()]
+            .iter()
+            .flat_map(|&f| mesh.face(f))
+            .filter(|w| order[w.index()] < mine)
+            .map(|w| level[w.index()] + 1)
+            .max()
+            .unwrap_or(0);
+        level[v.index()] = lv;
+        if levels.len() <= lv {
+            levels.resize_with(lv + 1, Vec::new);
+        }
+        levels[lv].push(v);
+    }
+    levels
+}
+
+/// Where [`round_vertices`] moves rational vertex `v` with faces `star`, on
+/// the mesh as it is: its nearest `f64` point, else the first candidate that
+/// keeps every face counter-clockwise; `None` for none.
+fn rounded(mesh: &TriMesh, v: VertexId, star: &[FaceId]) -> Option<kurbo::Point> {
+    let fits = |p: kurbo::Point| {
+        star.iter()
+            .all(|&f| mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise)
+    };
+    let p = mesh.position(v);
+    if fits(p) {
+        return Some(p);
+    }
+    let exact = mesh
+        .exact(v)
+        .expect("internal: listed as rational")
+        .coords_are_f64();
+    round_candidates(p, exact)
+        .into_iter()
+        .skip(1)
+        .find(|&c| fits(c))
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::exact::{Orientation, PointQ, orient2d_q};
-use crate::mesh::{EdgeKey, FeatureOn, VertexId};
+use crate::mesh::{EdgeKey, FaceId, FeatureOn, VertexId};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::cmp::Ordering;
@@ -365,4 +365,61 @@ fn bad_inputs_are_errors() {
         &BspOptions::DEFAULT.with_max_vertices(8),
     );
     assert!(matches!(r, Err(crate::Error::Meshing { .. })));
+}
+
+/// Rounding in levels, in parallel, moves every vertex exactly where the
+/// plain Gauss–Seidel order does: each vertex in index order, seeing the
+/// earlier ones rounded.
+#[test]
+fn rounding_in_levels_matches_the_sequential_order() {
+    fn sequential(mesh: &mut TriMesh, passes: u32) {
+        for _ in 0..passes {
+            let rational: Vec<VertexId> =
+                mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
+            let mut changed = false;
+            for v in rational {
+                let star: Vec<FaceId> = mesh
+                    .faces()
+                    .filter(|&f| mesh.face(f).contains(&v))
+                    .collect();
+                let fits = |p: Point| {
+                    star.iter().all(|&f| {
+                        mesh.orientation_if_moved(f, v, p) == Orientation::CounterClockwise
+                    })
+                };
+                let p0 = mesh.position(v);
+                let exact = mesh.exact(v).expect("rational").coords_are_f64();
+                if let Some(to) = fan::round_candidates(p0, exact)
+                    .into_iter()
+                    .find(|&c| fits(c))
+                {
+                    mesh.set_position(v, to);
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    let mut r = runner(6);
+    let levelled = std::cell::Cell::new(0);
+    r.run(&soup(120), |input| {
+        let (unrounded, stats) = run(&input, false);
+        let mut want = unrounded.clone();
+        sequential(&mut want, 2);
+        let mut got = unrounded;
+        pool.install(|| fan::round_vertices(&mut got, 2));
+        prop_assert!(got == want, "levels and the sequential order differ");
+        levelled.set(levelled.get() + stats.rational_before_rounding);
+        Ok(())
+    })
+    .expect("property holds");
+    // Enough rational vertices that some levels were decided in parallel.
+    let levelled = levelled.get();
+    assert!(levelled > 500, "only {levelled} rational vertices");
 }

@@ -584,24 +584,39 @@ impl<P> ShortestFirst<P> {
         which
     }
 
-    /// Whether the next edge comes from `again` with nothing staged: the
-    /// moment to [`Self::stage`] a batch.
+    /// Whether the next edge comes from `again`: the moment to
+    /// [`Self::stage`] a batch (before what is staged already: a collapse
+    /// queues the short edges at its vertex, shorter than the staged ones
+    /// more often than not; waiting until the staged batch ran out left
+    /// organ's and the emoji's edges queued again planned one by one, 260-300
+    /// thousand of them, on the pipeline's thread).
     fn next_is_unstaged(&self) -> bool {
-        self.staged.is_empty() && self.smallest() == Some(2)
+        self.smallest() == Some(2)
     }
 
-    /// Take the `n` smallest edges of `again` (fewer if it holds fewer), in
-    /// order, for the caller to plan and [`Self::push_staged`].
+    /// Take the `n` smallest edges of `again` (fewer if it holds fewer, and
+    /// only those before the first staged edge), in order, for the caller to
+    /// plan and [`Self::push_staged`].
     fn stage(&mut self, n: usize) -> Vec<(u64, EdgeKey)> {
-        std::iter::from_fn(|| self.again.pop().map(|r| r.0))
-            .take(n)
-            .collect()
+        let bound = self.staged.front().map(|&(b, k, _)| (b, k));
+        let mut batch = Vec::new();
+        while batch.len() < n
+            && let Some(r) = self.again.peek()
+            && bound.is_none_or(|b| r.0 < b)
+        {
+            batch.push(r.0);
+            self.again.pop();
+        }
+        batch
     }
 
-    /// Append staged edges (the output of [`Self::stage`], in its order) with
-    /// their plans.
+    /// Put staged edges (the output of [`Self::stage`], in its order) with
+    /// their plans before those staged already.
     fn push_staged(&mut self, batch: impl IntoIterator<Item = (u64, EdgeKey, Option<P>)>) {
-        self.staged.extend(batch);
+        let batch: Vec<_> = batch.into_iter().collect();
+        for item in batch.into_iter().rev() {
+            self.staged.push_front(item);
+        }
     }
 
     /// The next edge, with where it came from.
