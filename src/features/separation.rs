@@ -201,9 +201,14 @@ pub(super) fn merge_points(points: Vec<FeaturePoint>, mu: f64) -> Vec<FeaturePoi
     out
 }
 
-/// Decide, for every section, whether it is primary. Stops early once
+/// Decide, for every section, whether it is primary: eligible, and no other
+/// section or feature point violates its μ-separation. Stops early once
 /// `deadline` has passed (the answer is then incomplete: the caller checks the
 /// deadline and discards it).
+///
+/// A section's answer reads the other sections' geometry only (never their
+/// answers), so runs of sections are decided in parallel, each run with its
+/// own hint.
 pub(super) fn separate(
     sections: &[Section],
     points: &[FeaturePoint],
@@ -211,6 +216,7 @@ pub(super) fn separate(
     alpha: f64,
     deadline: &Deadline,
 ) -> Vec<bool> {
+    use rayon::prelude::*;
     let n = sections.len();
     let boxes = sections
         .iter()
@@ -218,12 +224,46 @@ pub(super) fn separate(
         .chain(points.iter().map(|p| Rect::from_points(p.pos, p.pos)));
     let grid = grid_for(boxes, n + points.len(), mu);
     let mut primary: Vec<bool> = sections.iter().map(|s| s.eligible).collect();
+    primary
+        .par_chunks_mut(SEPARATE_RUN)
+        .enumerate()
+        .for_each(|(run, flags)| {
+            separate_run(
+                sections,
+                points,
+                &grid,
+                (mu, alpha),
+                run * SEPARATE_RUN,
+                flags,
+                deadline,
+            );
+        });
+    primary
+}
+
+/// Sections decided in one run of [`separate`] (a run shares a hint).
+const SEPARATE_RUN: usize = 256;
+
+/// [`separate`] for the sections `from..from + primary.len()`, whose flags
+/// (eligibility on entry) are `primary`.
+fn separate_run(
+    sections: &[Section],
+    points: &[FeaturePoint],
+    grid: &Grid,
+    (mu, alpha): (f64, f64),
+    from: usize,
+    primary: &mut [bool],
+    deadline: &Deadline,
+) {
+    let n = sections.len();
     // The section that made the previous one fail: its successor along its curve
     // (or itself) usually makes this one fail too, next to a parallel curve. Tried
     // first, it spares the grid search; any violating section is one the search
     // would report, so the answer is the same.
     let mut hint: Option<usize> = None;
-    for (i, s) in sections.iter().enumerate() {
+    for (k, flag) in primary.iter_mut().enumerate() {
+        let i = from + k;
+        let s = &sections[i];
         if !s.eligible {
             continue;
         }
@@ -236,7 +276,7 @@ pub(super) fn separate(
                 .any(|j| j != i && j < n && violates(&s.ctrl, &sections[j].ctrl, mu, alpha))
         });
         if hinted {
-            primary[i] = false;
+            *flag = false;
             hint = hint.map(|h| h + 1);
             continue;
         }
@@ -262,10 +302,9 @@ pub(super) fn separate(
         });
         hint = culprit;
         if bad {
-            primary[i] = false;
+            *flag = false;
         }
     }
-    primary
 }
 
 /// Demote every primary section whose control polygon is shorter than `mu` and that
@@ -480,6 +519,51 @@ mod tests {
         let n = demote_short_isolated(&sections, &mut primary, 0.1);
         assert_eq!(n, 1);
         assert_eq!(primary, [false, false, false, true, true, true]);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 24, failure_persistence: None, ..proptest::prelude::ProptestConfig::default()
+        })]
+        /// Runs decided in parallel, each with its own hint, give every
+        /// section the answer of the definition: eligible, and no other
+        /// section violating its separation. Random walks (consecutive
+        /// sections share ends, so hints are taken and dropped) over more
+        /// sections than a run holds.
+        #[test]
+        fn separating_in_parallel_runs_matches_the_definition(
+            steps in proptest::collection::vec((-1.0..1.0f64, -1.0..1.0f64, proptest::bool::weighted(0.9), 0u8..20), 300..900),
+        ) {
+            let mut at = Point::ZERO;
+            let sections: Vec<Section> = steps
+                .iter()
+                .map(|&(dx, dy, eligible, jump)| {
+                    let from = if jump == 0 { Point::new(dx * 7.0, dy * 7.0) } else { at };
+                    at = from + kurbo::Vec2::new(dx, dy);
+                    Section {
+                        feature: 0,
+                        parent: super::super::Parent::Line(Line::new(from, at)),
+                        t0: 0.0,
+                        t1: 1.0,
+                        ctrl: seg((from.x, from.y), (at.x, at.y)),
+                        eligible,
+                    }
+                })
+                .collect();
+            let (mu, alpha) = (0.05, 10f64.to_radians());
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
+            let got = pool.install(|| separate(&sections, &[], mu, alpha, &Deadline::after(None)));
+            let want: Vec<bool> = (0..sections.len())
+                .map(|i| {
+                    sections[i].eligible
+                        && !(0..sections.len())
+                            .any(|j| j != i && violates(&sections[i].ctrl, &sections[j].ctrl, mu, alpha))
+                })
+                .collect();
+            proptest::prop_assert_eq!(&got, &want);
+            // Both answers occur.
+            proptest::prop_assert!(want.iter().any(|&p| p) && want.iter().any(|&p| !p));
+        }
     }
 
     #[test]
