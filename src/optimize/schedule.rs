@@ -162,6 +162,11 @@ const PLAN_AHEAD: usize = 256;
 /// pops planned one by one on the pipeline's thread; from 2, the three
 /// slowest drawings' two-thread times fell 2-5 % (session 15).
 const STAGE_MIN: usize = 2;
+/// A staged batch smaller than this is planned on the pipeline's thread, at
+/// once: handing out a few plans costs about what making them does (organ
+/// stages some 29 thousand batches of two to four edges, emoji_u1f98e 4
+/// thousand, besides 14 and 9 thousand single edges).
+const STAGE_PAR_MIN: usize = 8;
 /// The envelope stages for vertices left rational (after §2.3.4's, which
 /// sample denser and then widen ε): ε multiplied by each of these in turn,
 /// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, introduced
@@ -1179,10 +1184,12 @@ impl<'a> Schedule<'a> {
             if ahead.parallel && queue.again.len() >= STAGE_MIN && queue.next_is_unstaged() {
                 let batch = queue.stage(PLAN_AHEAD);
                 let this = &*self;
-                let plans: Vec<CollapseAhead> = batch
-                    .par_iter()
-                    .map(|&(b, e)| this.plan_collapse(b, e, factor))
-                    .collect();
+                let plan = |&(b, e): &(u64, EdgeKey)| this.plan_collapse(b, e, factor);
+                let plans: Vec<CollapseAhead> = if batch.len() >= STAGE_PAR_MIN {
+                    batch.par_iter().map(plan).collect()
+                } else {
+                    batch.iter().map(plan).collect()
+                };
                 queue.push_staged(
                     batch
                         .into_iter()
