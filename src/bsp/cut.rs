@@ -317,7 +317,9 @@ pub(super) fn cut_all(
     let mut next = chunks.first().map(|chunk| cut_chunk(chunk));
     for (c, chunk) in chunks.iter().enumerate() {
         crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
-        let cut = next.take().unwrap_or_default();
+        let cut = next
+            .take()
+            .expect("internal: each chunk is cut beside the one before it");
         let (emitted, following) = rayon::join(
             || emit_chunk(&mut mesh, &mut vmap, stats, opts, c, chunk, cut, &seed_ids),
             || chunks.get(c + 1).map(|chunk| cut_chunk(chunk)),
