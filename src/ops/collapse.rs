@@ -15,7 +15,7 @@
 
 use super::invariants::{self, Check};
 use super::{
-    Context, EnergyRule, LocalChange, Outcome, Reject, Role, corner_energy, max_energy,
+    Context, CurvedRule, EnergyRule, LocalChange, Outcome, Reject, Role, corner_energy, max_energy,
     max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
@@ -274,16 +274,13 @@ impl CollapsePlan {
 
 impl CollapsePlan {
     /// What [`apply`] would decide on this plan, decided on the mesh as it is,
-    /// without the tentative change, in linear mode (`None` in curved mode):
-    /// the exact orientation of the new faces, then the curvature and the
-    /// envelope of the feature edges at `u` with the tags they would have,
-    /// then the energy rule, in the order of [`invariants::validate`] (so the
-    /// same refusal). The schedule decides these ahead, in parallel, with the
+    /// without the tentative change: the exact orientation of the new faces,
+    /// then the curvature and the envelope of the feature edges at `u` with
+    /// the tags they would have, then the energy rule, in the order of
+    /// [`invariants::validate`] (so the same refusal); in curved mode
+    /// [`Self::curved_verdict`]. The schedule decides these ahead, in parallel, with the
     /// plan.
     pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
-        if ctx.curved.is_some() {
-            return None;
-        }
         let u = self.u;
         let ccw = self
             .new
@@ -292,18 +289,75 @@ impl CollapsePlan {
         if !ccw {
             return Some(Err(Reject::Inversion));
         }
+        if let Some(rule) = ctx.curved {
+            return Some(self.curved_verdict(mesh, ctx, &rule));
+        }
         // The edges at u of the new faces, with the tags they would have: the
         // ones they have, then those moved from v's edges.
         let edges = invariants::tags_after(mesh, &self.new, |a, b| a == u || b == u, &self.retag);
         if let Err(r) = invariants::feature_edges_hold(ctx, &edges, |x| mesh.position(x)) {
             return Some(Err(r));
         }
-        if ctx.energy == super::EnergyRule::NoWorseMax
+        if ctx.energy == EnergyRule::NoWorseMax
             && max_energy_of(mesh, ctx, self.new.iter().copied()) > self.old_max_energy
         {
             return Some(Err(Reject::Energy));
         }
         Some(Ok(()))
+    }
+
+    /// [`Self::verdict`] in curved mode, once the new faces are known to be
+    /// counter-clockwise (the reshaped ones keep their corners): the rules of
+    /// [`invariants::validate`] after the inversion, in its order, on the new
+    /// and the reshaped faces with the tags they would have: the turn of the
+    /// primary pieces at `u`, the curved elements (energy first), the corner
+    /// rule, the envelope.
+    fn curved_verdict(
+        &self,
+        mesh: &TriMesh,
+        ctx: &Context,
+        rule: &CurvedRule,
+    ) -> Result<(), Reject> {
+        let u = self.u;
+        let faces: Vec<[VertexId; 3]> = self
+            .new
+            .iter()
+            .copied()
+            .chain(self.reshaped.iter().map(|&f| mesh.face(f)))
+            .collect();
+        let edges = invariants::tags_after(mesh, &faces, |a, b| a == u || b == u, &self.retag);
+        invariants::curvature_holds(ctx, &edges)?;
+        // An edge at u takes the tags it would have; every other edge of the
+        // faces keeps its own.
+        let primary_of = |k: EdgeKey| match edges.iter().find(|(e, _)| *e == k) {
+            Some((_, tags)) => tags.iter().find_map(|t| match *t {
+                FeatureOn::Primary { section, t } => Some((section, t)),
+                FeatureOn::Secondary { .. } => None,
+            }),
+            None if k.lo == u || k.hi == u => None,
+            None => invariants::curved::primary(mesh, k),
+        };
+        // Without the energy rule only validity counts (an infinite bound
+        // refuses nothing by energy).
+        let bound = if ctx.energy == EnergyRule::NoWorseMax {
+            self.old_max_energy
+        } else {
+            f64::INFINITY
+        };
+        invariants::curved::holds_within_after(mesh, ctx, rule, &faces, bound, &primary_of)?;
+        if let (EnergyRule::NoWorseMax, Some(old)) = (ctx.energy, self.old_corner_energy) {
+            let corner = faces
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|x| mesh.position(x));
+                    crate::element::energy::amips(a, b, c)
+                })
+                .fold(0.0, f64::max);
+            if corner > old.max(rule.corner_floor) {
+                return Err(Reject::Energy);
+            }
+        }
+        invariants::envelope_holds(ctx, &edges, |x| mesh.position(x))
     }
 }
 

@@ -900,15 +900,24 @@ fn a_bounded_split_refuses_to_make_a_needle() {
 /// `SmoothPlan::verdict`, `SwapPlan::verdict`, `ReroutePlan::verdict`, which the
 /// schedule computes ahead in parallel) are the outcomes of the tentative
 /// change and its invariants: the same refusal, or applied. Random plans on
-/// random meshes, the meshes moving on between them.
+/// random meshes, the meshes moving on between them; the last three meshes
+/// are in curved mode (cubic), where only the collapse is decided ahead.
 #[test]
 fn verdicts_decided_ahead_match_the_tentative_changes() {
+    let cubic = CurvedRule::new(crate::element::Order::Cubic);
     let mut meshes: Vec<(TriMesh, Context)> = (0..3)
         .map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax))
         .chain((0..3).map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax)))
+        .chain((0..3).map(|seed| {
+            let (mesh, ctx) = delaunay_mesh(seed + 10, EnergyRule::NoWorseMax);
+            (mesh, ctx.with_curved(cubic))
+        }))
         .collect();
-    // (decided, of which refused) by operation.
+    // (decided, of which refused) by operation, linear mode.
     let mut seen = [(0usize, 0usize); 4];
+    // Curved collapses decided ahead: applied, and refused by reason.
+    let mut curved_applied = 0usize;
+    let mut curved_refused: HashMap<Reject, usize> = HashMap::new();
     for (i, (mesh, ctx)) in meshes.iter_mut().enumerate() {
         let mut rng = Rng(100 + i as u64);
         for step in 0..1500 {
@@ -917,6 +926,18 @@ fn verdicts_decided_ahead_match_the_tentative_changes() {
             let ring = mesh.vertex_ring(v);
             let Some(&u) = ring.neighbours.get(rng.below(ring.neighbours.len().max(1))) else {
                 continue;
+            };
+            // Curved mode: some collapses run along a feature edge (v's tags
+            // move to u).
+            let (u, v) = match mesh.edges().find(|k| {
+                ctx.curved.is_some()
+                    && step % 8 == 0
+                    && !mesh.edge_tags(k.lo, k.hi).is_empty()
+                    && rng.below(8) == 0
+            }) {
+                Some(k) if rng.below(2) == 0 => (k.lo, k.hi),
+                Some(k) => (k.hi, k.lo),
+                None => (u, v),
             };
             let what = format!("mesh {i} step {step}");
             // The tentative path on `mesh`; the decided one (the plan and its
@@ -962,16 +983,39 @@ fn verdicts_decided_ahead_match_the_tentative_changes() {
             );
             assert_eq!(outcome, by_verdict, "{what}, op {op}");
             let Some(verdict) = verdict else {
+                assert!(
+                    op > 0 || ctx.curved.is_none(),
+                    "{what}: a collapse undecided"
+                );
                 continue;
             };
-            seen[op].0 += 1;
             match (&verdict, &outcome) {
                 (Ok(()), Outcome::Applied(_)) => {}
-                (Err(r), Outcome::Rejected(s)) if r == s => seen[op].1 += 1,
+                (Err(r), Outcome::Rejected(s)) if r == s => {}
                 _ => panic!("{what}, op {op}: verdict {verdict:?}, outcome {outcome:?}"),
             }
+            if ctx.curved.is_some() {
+                match verdict {
+                    Ok(()) => curved_applied += 1,
+                    Err(r) => *curved_refused.entry(r).or_default() += 1,
+                }
+                continue;
+            }
+            seen[op].0 += 1;
+            seen[op].1 += usize::from(verdict.is_err());
         }
     }
+    // Curved collapses were decided both ways, and refused by the curved
+    // elements' rules too, not only by the inversion test.
+    assert!(
+        curved_applied >= 5,
+        "{curved_applied} applied, {curved_refused:?}"
+    );
+    let by_elements = [Reject::Energy, Reject::Jacobian]
+        .iter()
+        .map(|r| curved_refused.get(r).copied().unwrap_or(0))
+        .sum::<usize>();
+    assert!(by_elements >= 5, "{curved_refused:?}");
     // Every kind was decided ahead, both ways (else the check is vacuous);
     // reroutes are rare on these meshes.
     for (op, &(decided, refused)) in seen.iter().enumerate() {

@@ -32,9 +32,23 @@ pub(crate) fn on_curved(ctx: &Context, section: u32) -> bool {
     ctx.section(section).is_some_and(|s| !s.parent.is_line())
 }
 
+/// The primary tag of an edge (section and the parameters at `key.lo`,
+/// `key.hi`), as the mesh has it ([`primary`]) or as a change would leave it
+/// (the verdicts decided ahead).
+pub(crate) type PrimaryOf<'a> = &'a dyn Fn(EdgeKey) -> Option<(u32, [f64; 2])>;
+
 /// The tag of a primary edge on a curved parent: the edges that are curved.
 pub(crate) fn curved_tag(mesh: &TriMesh, ctx: &Context, key: EdgeKey) -> Option<(u32, [f64; 2])> {
-    primary(mesh, key).filter(|&(section, _)| on_curved(ctx, section))
+    curved_tag_by(ctx, &|k| primary(mesh, k), key)
+}
+
+/// [`curved_tag`] with the primary tags given by `primary_of`.
+fn curved_tag_by(
+    ctx: &Context,
+    primary_of: PrimaryOf<'_>,
+    key: EdgeKey,
+) -> Option<(u32, [f64; 2])> {
+    primary_of(key).filter(|&(section, _)| on_curved(ctx, section))
 }
 
 /// The exact inner nodes (from `key.lo` to `key.hi`) of a curved edge, or
@@ -45,7 +59,18 @@ pub(crate) fn exact_inner(
     order: crate::element::Order,
     key: EdgeKey,
 ) -> Option<Vec<Point>> {
-    let (section, t) = curved_tag(mesh, ctx, key)?;
+    exact_inner_by(mesh, ctx, &|k| primary(mesh, k), order, key)
+}
+
+/// [`exact_inner`] with the primary tags given by `primary_of`.
+fn exact_inner_by(
+    mesh: &TriMesh,
+    ctx: &Context,
+    primary_of: PrimaryOf<'_>,
+    order: crate::element::Order,
+    key: EdgeKey,
+) -> Option<Vec<Point>> {
+    let (section, t) = curved_tag_by(ctx, primary_of, key)?;
     let parent = ctx.section(section)?.parent;
     Some(element::piece_inner(
         |s| parent.along(t, s),
@@ -57,17 +82,30 @@ pub(crate) fn exact_inner(
 }
 
 /// The Lagrange nodes of the triangle `tri` with its exact curved edge, or
-/// `None` when it has more than one curved edge.
+/// `None` when it has more than one curved edge (the tests' view; the
+/// invariants go through [`energy_within_by`]).
+#[cfg(test)]
 pub(crate) fn exact_nodes(
     mesh: &TriMesh,
     ctx: &Context,
     order: crate::element::Order,
     tri: [VertexId; 3],
 ) -> Option<Vec<Point>> {
+    exact_nodes_by(mesh, ctx, &|k| primary(mesh, k), order, tri)
+}
+
+/// [`exact_nodes`] with the primary tags given by `primary_of`.
+fn exact_nodes_by(
+    mesh: &TriMesh,
+    ctx: &Context,
+    primary_of: PrimaryOf<'_>,
+    order: crate::element::Order,
+    tri: [VertexId; 3],
+) -> Option<Vec<Point>> {
     let mut curved: Option<(usize, Vec<Point>)> = None;
     for (e, [i, j]) in element::EDGES.into_iter().enumerate() {
         let key = EdgeKey::new(tri[i], tri[j]);
-        if let Some(mut inner) = exact_inner(mesh, ctx, order, key) {
+        if let Some(mut inner) = exact_inner_by(mesh, ctx, primary_of, order, key) {
             if curved.is_some() {
                 return None;
             }
@@ -116,9 +154,21 @@ fn energy_within(
     tri: [VertexId; 3],
     bound: f64,
 ) -> Result<f64, Reject> {
+    energy_within_by(mesh, ctx, &|k| primary(mesh, k), rule, tri, bound)
+}
+
+/// [`energy_within`] with the primary tags given by `primary_of`.
+fn energy_within_by(
+    mesh: &TriMesh,
+    ctx: &Context,
+    primary_of: PrimaryOf<'_>,
+    rule: &CurvedRule,
+    tri: [VertexId; 3],
+    bound: f64,
+) -> Result<f64, Reject> {
     let straight = element::EDGES
         .iter()
-        .all(|&[i, j]| curved_tag(mesh, ctx, EdgeKey::new(tri[i], tri[j])).is_none());
+        .all(|&[i, j]| curved_tag_by(ctx, primary_of, EdgeKey::new(tri[i], tri[j])).is_none());
     if straight {
         let [a, b, c] = tri.map(|v| mesh.position(v));
         let det = (b - a).cross(c - a);
@@ -132,7 +182,7 @@ fn energy_within(
             };
         }
     }
-    let nodes = exact_nodes(mesh, ctx, rule.order, tri).ok_or(Reject::Jacobian)?;
+    let nodes = exact_nodes_by(mesh, ctx, primary_of, rule.order, tri).ok_or(Reject::Jacobian)?;
     let e = element::amips(rule.order, &nodes);
     if e == f64::INFINITY {
         // `det J ≤ 0` at a sample point: not valid.
@@ -146,6 +196,22 @@ fn energy_within(
     } else {
         Err(Reject::Jacobian)
     }
+}
+
+/// [`holds_within`] for the triangles `tris` of a change decided ahead, with
+/// the primary tags the change would leave (`primary_of`), on the positions
+/// the mesh has now.
+pub(crate) fn holds_within_after(
+    mesh: &TriMesh,
+    ctx: &Context,
+    rule: &CurvedRule,
+    tris: &[[VertexId; 3]],
+    bound: f64,
+    primary_of: PrimaryOf<'_>,
+) -> Result<f64, Reject> {
+    tris.iter().try_fold(0.0f64, |m, &t| {
+        energy_within_by(mesh, ctx, primary_of, rule, t, bound).map(|e| m.max(e))
+    })
 }
 
 /// The largest curved energy of `faces`, or `None` when one of them is not a

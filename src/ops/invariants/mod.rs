@@ -74,19 +74,36 @@ pub(crate) fn tags_after(
 /// would have after a change, in its order: the turn of every primary piece
 /// ([`Reject::Curvature`]), then every secondary edge, its ends at `at`, in
 /// the envelope ([`Reject::Envelope`]). The verdicts the schedule decides
-/// ahead, without the tentative change, use it (linear mode: `validate`
-/// checks the curved elements between the two).
+/// ahead, without the tentative change, use it (curved mode checks the
+/// curved elements between the two: [`curvature_holds`], then
+/// [`envelope_holds`]).
 pub(crate) fn feature_edges_hold(
     ctx: &Context,
     edges: &[(EdgeKey, Vec<FeatureOn>)],
     at: impl Fn(VertexId) -> kurbo::Point,
 ) -> Result<(), Reject> {
+    curvature_holds(ctx, edges)?;
+    envelope_holds(ctx, edges, at)
+}
+
+/// The first half of [`feature_edges_hold`]: the turn of every primary piece.
+pub(crate) fn curvature_holds(
+    ctx: &Context,
+    edges: &[(EdgeKey, Vec<FeatureOn>)],
+) -> Result<(), Reject> {
     let bent = edges.iter().flat_map(|(_, tags)| tags).any(|tag| {
         matches!(*tag, FeatureOn::Primary { section, t } if !curvature::holds(ctx, section, t))
     });
-    if bent {
-        return Err(Reject::Curvature);
-    }
+    if bent { Err(Reject::Curvature) } else { Ok(()) }
+}
+
+/// The second half of [`feature_edges_hold`]: every secondary edge, its ends
+/// at `at`, in the envelope.
+pub(crate) fn envelope_holds(
+    ctx: &Context,
+    edges: &[(EdgeKey, Vec<FeatureOn>)],
+    at: impl Fn(VertexId) -> kurbo::Point,
+) -> Result<(), Reject> {
     for (key, tags) in edges {
         let (a, b) = (at(key.lo), at(key.hi));
         for tag in tags {
