@@ -278,8 +278,8 @@ impl CollapsePlan {
     /// then the curvature and the envelope of the feature edges at `u` with
     /// the tags they would have, then the energy rule, in the order of
     /// [`invariants::validate`] (so the same refusal); in curved mode
-    /// [`Self::curved_verdict`]. The schedule decides these ahead, in parallel, with the
-    /// plan.
+    /// [`Self::curved_verdict`]. The schedule decides these ahead, in
+    /// parallel, with the plan.
     pub(crate) fn verdict(&self, mesh: &TriMesh, ctx: &Context) -> Option<Result<(), Reject>> {
         let u = self.u;
         let ccw = self
