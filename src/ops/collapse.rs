@@ -346,13 +346,7 @@ impl CollapsePlan {
         };
         invariants::curved::holds_within_after(mesh, ctx, rule, &faces, bound, &primary_of)?;
         if let (EnergyRule::NoWorseMax, Some(old)) = (ctx.energy, self.old_corner_energy) {
-            let corner = faces
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|x| mesh.position(x));
-                    crate::element::energy::amips(a, b, c)
-                })
-                .fold(0.0, f64::max);
+            let corner = super::max_corner_energy_of(mesh, faces.iter().copied());
             if corner > old.max(rule.corner_floor) {
                 return Err(Reject::Energy);
             }

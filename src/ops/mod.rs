@@ -409,13 +409,7 @@ pub(crate) fn max_energy_of(
     tris: impl IntoIterator<Item = [VertexId; 3]>,
 ) -> f64 {
     match ctx.curved {
-        None => tris
-            .into_iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|x| mesh.position(x));
-                crate::element::energy::amips(a, b, c)
-            })
-            .fold(0.0, f64::max),
+        None => max_corner_energy_of(mesh, tris),
         Some(rule) => tris
             .into_iter()
             .map(|t| invariants::curved::energy(mesh, ctx, &rule, t).unwrap_or(f64::INFINITY))
@@ -433,10 +427,18 @@ pub(crate) fn corner_energy(mesh: &TriMesh, ctx: &Context, faces: &[FaceId]) -> 
 
 /// The largest straight (corner) AMIPS energy of the faces, whatever the mode.
 pub(crate) fn max_corner_energy(mesh: &TriMesh, faces: impl IntoIterator<Item = FaceId>) -> f64 {
-    faces
-        .into_iter()
-        .map(|f| {
-            let [a, b, c] = mesh.face(f).map(|x| mesh.position(x));
+    max_corner_energy_of(mesh, faces.into_iter().map(|f| mesh.face(f)))
+}
+
+/// [`max_corner_energy`] of triangles given by their vertices (a change's
+/// new faces, before it is made).
+pub(crate) fn max_corner_energy_of(
+    mesh: &TriMesh,
+    tris: impl IntoIterator<Item = [VertexId; 3]>,
+) -> f64 {
+    tris.into_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|x| mesh.position(x));
             crate::element::energy::amips(a, b, c)
         })
         .fold(0.0, f64::max)
