@@ -156,6 +156,9 @@ const SWAP_MIN_GAIN: f64 = 1e-9;
 /// [`Schedule::collapse_round`]); the plans are then applied one by one in the
 /// sequential order, so the mesh is the same for any number of threads.
 const PLAN_AHEAD: usize = 256;
+/// The step of [`ShortestFirst`]'s summary of its sorted edges: a block of
+/// sixteen 16-byte entries is four cache lines.
+const SUMMARY_STEP: usize = 16;
 
 /// The fewest edges queued again worth staging to plan in parallel: two (a
 /// lone edge is planned when popped). Staging from 16 left 9 % of organ's
@@ -526,6 +529,10 @@ struct FailedCollapse {
 struct ShortestFirst<P = ()> {
     sorted: Vec<(u64, EdgeKey)>,
     next: usize,
+    /// Every [`SUMMARY_STEP`]-th entry of `sorted` (from its first), made by
+    /// [`Self::sort`]: [`Self::is_ahead`] searches this first (a sixteenth of
+    /// `sorted`, it stays in cache), then one block of `sorted`.
+    summary: Vec<(u64, EdgeKey)>,
     again: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>>,
     /// Edges taken from `again` in order, each with its plan made ahead.
     staged: VecDeque<(u64, EdgeKey, Option<P>)>,
@@ -536,6 +543,7 @@ impl<P> Default for ShortestFirst<P> {
         ShortestFirst {
             sorted: Vec::new(),
             next: 0,
+            summary: Vec::new(),
             again: BinaryHeap::new(),
             staged: VecDeque::new(),
         }
@@ -566,6 +574,33 @@ impl<P> ShortestFirst<P> {
     fn sort(&mut self) {
         sort_unstable(&mut self.sorted);
         self.next = 0;
+        self.summary.clear();
+        self.summary
+            .extend(self.sorted.iter().step_by(SUMMARY_STEP).copied());
+    }
+
+    /// Whether `key` is in `sorted[next..]`. A binary search of all of
+    /// `sorted` (over a megabyte on organ) missed the cache at most of its
+    /// steps, on the pipeline's thread, for every edge queued again: 3-4 % of
+    /// that thread's time on renault. Below the head nothing is ahead (most
+    /// of the edges queued again that are not duplicates); otherwise the
+    /// summary's search finds the block of `sorted` that holds `key`'s place.
+    fn is_ahead(&self, key: (u64, EdgeKey)) -> bool {
+        match self.sorted.get(self.next) {
+            Some(&head) if head <= key => {}
+            _ => return false,
+        }
+        // summary[j - 1] = sorted[(j - 1) · step] < key <= sorted[j · step]
+        // (where those exist): key's place in `sorted` is in between.
+        let j = self.summary.partition_point(|s| *s < key);
+        let lo = if j == 0 {
+            0
+        } else {
+            (j - 1) * SUMMARY_STEP + 1
+        };
+        let hi = (j * SUMMARY_STEP).min(self.sorted.len());
+        let at = lo + self.sorted[lo..hi].partition_point(|s| *s < key);
+        at >= self.next && self.sorted.get(at) == Some(&key)
     }
 
     /// Which head is the smallest: 0 `sorted`, 1 `staged`, 2 `again` (on a tie
@@ -622,7 +657,7 @@ impl<P> ShortestFirst<P> {
     /// duplicates (organ 62 %, the emoji 45 %): the round's positions do
     /// not change, so an edge of u's ring kept its length and its key.
     fn push_again(&mut self, key: (u64, EdgeKey)) {
-        if self.sorted[self.next..].binary_search(&key).is_err() {
+        if !self.is_ahead(key) {
             self.again.push(std::cmp::Reverse(key));
         }
     }
@@ -1217,6 +1252,7 @@ impl<'a> Schedule<'a> {
             }
             budget -= 1;
             let this = &*self;
+            let from_sorted = matches!(popped, Popped::Sorted(_));
             let planned = match popped {
                 Popped::Sorted(i) => ahead.take(i, &queue.sorted, |&(b, e)| {
                     Some(this.plan_collapse(b, e, factor))
@@ -1233,10 +1269,18 @@ impl<'a> Schedule<'a> {
             .filter(|a: &CollapseAhead| {
                 // (An edge queued twice may have been refused since its plan;
                 // a plan that skips the edge needs no look: with both ends
-                // unchanged since, such a refusal makes the round skip it too.)
+                // unchanged since, such a refusal makes the round skip it too.
+                // Nor does an edge popped from `sorted`: `push_again` queued
+                // no copy of it while it was ahead there, so this is its
+                // first pop since its plan. A hash lookup per pop saved.)
+                let refused_since =
+                    |s: &Self| matches!(s.failed_collapse.get(&k), Some(f) if f.at >= a.at);
+                debug_assert!(
+                    !(from_sorted && a.directions.is_some() && refused_since(self)),
+                    "an edge popped from `sorted` refused since its plan"
+                );
                 self.fresh(a.at, &[k.lo, k.hi])
-                    && (a.directions.is_none()
-                        || !matches!(self.failed_collapse.get(&k), Some(f) if f.at >= a.at))
+                    && (a.directions.is_none() || from_sorted || !refused_since(self))
             });
             // A plan that stands already made the round's checks; without
             // one, the edge is planned now, by the same function (the checks,
@@ -2094,6 +2138,40 @@ mod queue_tests {
                     r.0.0
                 });
                 prop_assert_eq!(x, y);
+            }
+        }
+    }
+
+    proptest! {
+        /// `is_ahead` (the summary, then a block) answers what a search of
+        /// `sorted[next..]` does, on lists of many blocks, with runs of
+        /// equal bits, for keys in the list, between its entries and beyond
+        /// both ends, at any `next`.
+        #[test]
+        fn is_ahead_finds_what_a_search_of_the_rest_finds(
+            start in prop::collection::btree_set((0u64..400, 0usize..8, 0usize..8), 0..700),
+            next_at in 0.0f64..1.0,
+            probes in prop::collection::vec((0u64..420, 0usize..8, 0usize..8), 1..60),
+            from_list in prop::collection::vec(any::<prop::sample::Index>(), 0..60),
+        ) {
+            let mut q = ShortestFirst::<u64> {
+                sorted: start.iter().map(|&(bits, a, b)| (bits, key(a, b))).collect(),
+                ..ShortestFirst::default()
+            };
+            q.sort();
+            let n = q.sorted.len();
+            q.next = ((n as f64) * next_at) as usize;
+            let mut keys: Vec<(u64, EdgeKey)> =
+                probes.iter().map(|&(bits, a, b)| (bits, key(a, b))).collect();
+            if n > 0 {
+                keys.extend(from_list.iter().map(|i| q.sorted[i.index(n)]));
+            }
+            for k in keys {
+                prop_assert_eq!(
+                    q.is_ahead(k),
+                    q.sorted[q.next..].binary_search(&k).is_ok(),
+                    "{:?} with next {} of {}", k, q.next, n
+                );
             }
         }
     }

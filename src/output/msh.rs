@@ -22,7 +22,8 @@
 use crate::FemMesh;
 use crate::element::Order;
 use crate::fem::LineKind;
-use std::collections::{HashMap, HashSet};
+use rayon::prelude::*;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::io::{self, Write};
 
 /// gmsh element type numbers of (triangle, line) for an element order.
@@ -221,7 +222,7 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
 /// The corner nodes where curves meet (see [`Layout`]).
 fn corner_nodes(mesh: &FemMesh) -> HashSet<u32> {
     // Distinct edges and the physical curves on each.
-    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::default();
     for i in 0..mesh.line_count() {
         let l = mesh.line(i);
         let groups = edges.entry(edge_key(l[0], l[1])).or_default();
@@ -230,7 +231,7 @@ fn corner_nodes(mesh: &FemMesh) -> HashSet<u32> {
             groups.push(g);
         }
     }
-    let mut at: HashMap<u32, Vec<(u32, u32)>> = HashMap::new();
+    let mut at: HashMap<u32, Vec<(u32, u32)>> = HashMap::default();
     for (k, groups) in edges.iter_mut() {
         groups.sort_unstable();
         at.entry(k.0).or_default().push(*k);
@@ -268,12 +269,12 @@ impl Layout {
 
         // Curves: each physical curve's lines, cut at the corners into pieces.
         let corners = corner_nodes(mesh);
-        let mut point_of: HashMap<u32, i32> = HashMap::new();
+        let mut point_of: HashMap<u32, i32> = HashMap::default();
         let mut loop_points: Vec<u32> = Vec::new();
         let mut pieces: Vec<(u32, Vec<u32>)> = Vec::new();
         let mut parent: Vec<u32> = (0..mesh.line_count() as u32).collect();
         for (g, elems) in bucket(&mesh.line_group, mesh.curves.len()) {
-            let mut through: HashMap<u32, u32> = HashMap::new();
+            let mut through: HashMap<u32, u32> = HashMap::default();
             for &l in &elems {
                 for &v in &mesh.line(l as usize)[..2] {
                     if corners.contains(&v) {
@@ -290,7 +291,7 @@ impl Layout {
                     }
                 }
             }
-            let mut piece_of: HashMap<u32, usize> = HashMap::new();
+            let mut piece_of: HashMap<u32, usize> = HashMap::default();
             for &l in &elems {
                 let root = find(&mut parent, l);
                 let k = *piece_of.entry(root).or_insert_with(|| {
@@ -353,17 +354,29 @@ impl Layout {
 
         // Surfaces' bounding curves: the pieces along which a surface meets
         // another surface or nothing, signed by which side it is on.
-        let mut sides: HashMap<(u32, u32), Vec<(u32, u32)>> = HashMap::new();
-        for t in 0..mesh.triangle_count() {
+        // Every triangle side by its edge, then in triangle order (3 t + e):
+        // an edge's sides are one run, in the order the triangles come.
+        // (Sorted once: a map of small vectors took the most of the
+        // writer's time on organ.)
+        let side = |order: u32| {
+            let (t, e) = ((order / 3) as usize, (order % 3) as usize);
             let c = mesh.triangle(t);
-            for e in 0..3 {
-                let (a, b) = (c[e], c[(e + 1) % 3]);
-                sides
-                    .entry(edge_key(a, b))
-                    .or_default()
-                    .push((mesh.triangle_group[t], a));
-            }
-        }
+            (edge_key(c[e], c[(e + 1) % 3]), order)
+        };
+        let mut sides: Vec<((u32, u32), u32)> =
+            (0..3 * mesh.triangle_count() as u32).map(side).collect();
+        sides.sort_unstable();
+        let sides_of = |k: (u32, u32)| -> Vec<(u32, u32)> {
+            let from = sides.partition_point(|s| s.0 < k);
+            sides[from..]
+                .iter()
+                .take_while(|s| s.0 == k)
+                .map(|&(_, order)| {
+                    let (t, e) = ((order / 3) as usize, (order % 3) as usize);
+                    (mesh.triangle_group[t], mesh.triangle(t)[e])
+                })
+                .collect()
+        };
         let surface_index: HashMap<i32, usize> = entities[..surface_count]
             .iter()
             .enumerate()
@@ -373,10 +386,8 @@ impl Layout {
             let mut bounds: Vec<(usize, i32)> = Vec::new();
             for &l in &entities[ci].elems {
                 let line = mesh.line(l as usize);
-                let Some(adjacent) = sides.get(&edge_key(line[0], line[1])) else {
-                    continue;
-                };
-                for &(g, start) in adjacent {
+                let adjacent = sides_of(edge_key(line[0], line[1]));
+                for &(g, start) in &adjacent {
                     let on_boundary = adjacent.len() == 1 || adjacent.iter().any(|s| s.0 != g);
                     let Some(&si) = surface_index.get(&(g as i32 + 1)) else {
                         continue;
@@ -445,7 +456,7 @@ impl Layout {
     /// The node blocks of MSH 4.1: (dim, tag, node indices in order), points,
     /// then curves, then surfaces, each in tag order.
     fn node_blocks(&self) -> Vec<((i32, i32), Vec<u32>)> {
-        let mut blocks: HashMap<(i32, i32), Vec<u32>> = HashMap::new();
+        let mut blocks: HashMap<(i32, i32), Vec<u32>> = HashMap::default();
         for (v, &e) in self.node_entity.iter().enumerate() {
             blocks.entry(e).or_default().push(v as u32);
         }
@@ -519,6 +530,10 @@ impl<W: Write> Out<'_, W> {
             return self.w.write_all(&v.to_ne_bytes());
         }
         self.ascii_sep()?;
+        if v == 0.0 && v.is_sign_positive() {
+            // Every node's z: what `{:?}` prints, without the formatter.
+            return self.w.write_all(b"0.0");
+        }
         write!(self.w, "{v:?}")
     }
     /// End of an ASCII line (nothing in binary).
@@ -539,6 +554,44 @@ impl<W: Write> Out<'_, W> {
             Ok(())
         }
     }
+}
+
+/// Write a line for each of `items` through `o` (`line` writes one, ending
+/// it), formatted in parallel chunks and written in order: the bytes of
+/// writing them one by one. Formatting the node coordinates was the most of
+/// the writer's time, and the writer runs after the mesher, alone.
+fn lines_in_parallel<W: Write, T: Sync>(
+    o: &mut Out<'_, W>,
+    items: &[T],
+    line: impl Fn(&mut Out<'_, Vec<u8>>, &T) -> io::Result<()> + Sync,
+) -> io::Result<()> {
+    /// Lines formatted by one job.
+    const CHUNK: usize = 4096;
+    /// Chunks held at once (a bound on the memory of the formatted text).
+    const WINDOW: usize = 64;
+    debug_assert!(!o.sep, "lines start after an end of line");
+    let binary = o.binary;
+    for window in items.chunks(CHUNK * WINDOW) {
+        let texts: Vec<io::Result<Vec<u8>>> = window
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut text = Vec::with_capacity(chunk.len() * 64);
+                let mut c = Out {
+                    w: &mut text,
+                    binary,
+                    sep: false,
+                };
+                for item in chunk {
+                    line(&mut c, item)?;
+                }
+                Ok(text)
+            })
+            .collect();
+        for text in texts {
+            o.w.write_all(&text?)?;
+        }
+    }
+    Ok(())
 }
 
 fn header<W: Write>(w: &mut W, version: &str, binary: bool) -> io::Result<()> {
@@ -604,7 +657,7 @@ fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<(i32, i32, String)>
     };
     let mut naming: Vec<usize> = (0..groups.len()).collect();
     naming.sort_by_key(|&i| priority(&groups[i]));
-    let mut taken = HashSet::new();
+    let mut taken = HashSet::default();
     let mut names = vec![String::new(); groups.len()];
     for i in naming {
         let (dim, tag) = groups[i];
@@ -727,13 +780,13 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
             o.size(u64::from(v) + 1)?;
             o.eol()?;
         }
-        for &v in nodes {
+        lines_in_parallel(&mut o, nodes, |o, &v| {
             let p = mesh.nodes[v as usize];
             o.float(p.x)?;
             o.float(p.y)?;
             o.float(0.0)?;
-            o.eol()?;
-        }
+            o.eol()
+        })?;
     }
     o.end_data()?;
     w.write_all(b"$EndNodes\n")?;
@@ -783,13 +836,14 @@ pub(crate) fn write_v22<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
         binary,
         sep: false,
     };
-    for (i, p) in mesh.nodes.iter().enumerate() {
-        o.int(i as i32 + 1)?;
+    let numbered: Vec<(i32, kurbo::Point)> = (1..).zip(mesh.nodes.iter().copied()).collect();
+    lines_in_parallel(&mut o, &numbered, |o, &(tag, p)| {
+        o.int(tag)?;
         o.float(p.x)?;
         o.float(p.y)?;
         o.float(0.0)?;
-        o.eol()?;
-    }
+        o.eol()
+    })?;
     o.end_data()?;
     w.write_all(b"$EndNodes\n")?;
 
@@ -1121,6 +1175,81 @@ mod tests {
                 assert_eq!(r.lines, 1);
                 assert_eq!(r.physical_names.len(), 2);
             }
+        }
+    }
+
+    /// A grid of `n` × `n` nodes in two triangles per cell, its coordinates
+    /// of every kind `{:?}` prints differently (zeros of both signs, tiny,
+    /// huge, long fractions).
+    fn grid(n: usize) -> FemMesh {
+        let odd = [0.0, -0.0, 1e-300, 3.5e17, -2.0 / 3.0, 123.456];
+        let nodes = (0..n * n)
+            .map(|i| {
+                let (x, y) = ((i % n) as f64, (i / n) as f64);
+                Point::new(x + odd[i % odd.len()], y * 0.1)
+            })
+            .collect();
+        let mut triangles = Vec::new();
+        for r in 0..n - 1 {
+            for c in 0..n - 1 {
+                let v = (r * n + c) as u32;
+                let n = n as u32;
+                triangles.extend([v, v + 1, v + n + 1, v, v + n + 1, v + n]);
+            }
+        }
+        FemMesh {
+            order: Some(Order::Linear),
+            nodes,
+            triangle_group: vec![0; triangles.len() / 3],
+            triangles,
+            surfaces: vec!["s".into()],
+            ..FemMesh::default()
+        }
+    }
+
+    /// Node lines formatted in parallel chunks come out in order, as `{:?}`
+    /// prints each coordinate, and the bytes do not depend on the threads.
+    #[test]
+    fn node_lines_formatted_in_parallel_are_written_in_order() {
+        let m = grid(101); // 10 201 nodes: more than two chunks
+        let bytes = |threads: usize, version: MshVersion, binary: bool| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            let mut out = Vec::new();
+            pool.install(|| {
+                crate::output::write_msh_to(&m, &mut out, MshOptions { version, binary })
+            })
+            .expect("write");
+            out
+        };
+        for version in [MshVersion::V22, MshVersion::V41] {
+            for binary in [false, true] {
+                let one = bytes(1, version, binary);
+                assert_eq!(
+                    one,
+                    bytes(3, version, binary),
+                    "{version:?} binary {binary}"
+                );
+                let back = crate::read_msh(&one).expect("read");
+                assert_eq!(back.nodes.len(), m.nodes.len());
+                for (a, b) in back.nodes.iter().zip(&m.nodes) {
+                    assert_eq!(a.x.to_bits(), b.x.to_bits());
+                    assert_eq!(a.y.to_bits(), b.y.to_bits());
+                }
+            }
+        }
+        // MSH 2.2's node lines, against the formatter itself.
+        let text = String::from_utf8(bytes(2, MshVersion::V22, false)).expect("ascii");
+        let lines: Vec<&str> = text
+            .lines()
+            .skip_while(|l| *l != "$Nodes")
+            .skip(2)
+            .take(m.nodes.len())
+            .collect();
+        for (i, (line, p)) in lines.iter().zip(&m.nodes).enumerate() {
+            assert_eq!(*line, format!("{} {:?} {:?} {:?}", i + 1, p.x, p.y, 0.0));
         }
     }
 

@@ -690,20 +690,25 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let params = &opts.params;
     let drawing = load_file_params(input, params, &opts.paint)?;
     let t_load = t.elapsed().as_secs_f64();
-    let Meshed { mesh, mut report } = mesh_within(&drawing, params, &opts.regions, deadline)?;
-    let t = Instant::now();
-    output::write_msh(&mesh, output, opts.msh)?;
-    if let Some(p) = &opts.preview {
-        let colours: Vec<Option<String>> = report
-            .regions
-            .surfaces
-            .iter()
-            .map(|s| s.colour.clone())
-            .collect();
-        output::write_preview_coloured(&mesh, &colours, p)?;
-    }
+    // Meshing and writing on one pool: the writer formats in parallel too,
+    // on no more threads than the mesher was given.
+    let (mut report, t_output) = with_threads(params.threads, || -> Result<(Report, f64)> {
+        let Meshed { mesh, report } = mesh_stages(&drawing, params, &opts.regions, deadline)?;
+        let t = Instant::now();
+        output::write_msh(&mesh, output, opts.msh)?;
+        if let Some(p) = &opts.preview {
+            let colours: Vec<Option<String>> = report
+                .regions
+                .surfaces
+                .iter()
+                .map(|s| s.colour.clone())
+                .collect();
+            output::write_preview_coloured(&mesh, &colours, p)?;
+        }
+        Ok((report, t.elapsed().as_secs_f64()))
+    })?;
     report.times.insert("load", t_load);
-    report.times.insert("output", t.elapsed().as_secs_f64());
+    report.times.insert("output", t_output);
     report.times.insert("total", t0.elapsed().as_secs_f64());
     report.peak_memory_mb = crate::budget::peak_memory_mb();
     Ok(report)
