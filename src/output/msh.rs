@@ -1185,8 +1185,12 @@ mod tests {
         let odd = [0.0, -0.0, 1e-300, 3.5e17, -2.0 / 3.0, 123.456];
         let nodes = (0..n * n)
             .map(|i| {
-                let (x, y) = ((i % n) as f64, (i / n) as f64);
-                Point::new(x + odd[i % odd.len()], y * 0.1)
+                let (x, y) = ((i % n) as f64, (i / n) as f64 * 0.1);
+                match i % 7 {
+                    0 => Point::new(odd[(i / 7) % odd.len()], y),
+                    1 => Point::new(x, odd[(i / 7) % odd.len()]),
+                    _ => Point::new(x, y),
+                }
             })
             .collect();
         let mut triangles = Vec::new();
