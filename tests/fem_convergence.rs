@@ -105,8 +105,7 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: u8) -> FemMesh {
 }
 
 fn out_dir() -> std::path::PathBuf {
-    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
-    DIR.get_or_init(|| support::out_dir("fem")).clone()
+    support::out_dir("fem")
 }
 
 /// Solve on `mesh` with degree `p`.

@@ -117,8 +117,7 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: Order) -> Row {
 }
 
 fn out_dir() -> std::path::PathBuf {
-    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
-    DIR.get_or_init(|| support::out_dir("sizing")).clone()
+    support::out_dir("sizing")
 }
 
 /// Below this `-l` (relative) a level is "fine": `l` is below the boundary edges that
