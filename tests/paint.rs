@@ -299,3 +299,44 @@ fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
     let r = regions_of(&d, RegionMode::Shape);
     assert_close(area(&r, "disk"), PI * 2500.0 / 2.0, 1e-6);
 }
+
+#[test]
+fn a_snapped_stroke_outline_still_bounds_its_stroke() {
+    // The bundled folder emoji (data/svg): a 2-unit stroke with round caps on a
+    // fill. kurbo's outline of its bend ends in pieces shorter than l_m, which
+    // the feature stage snaps together; the bend's outer offset moved by a few
+    // hundredths of a unit. Trimming once judged that moved curve a micro-step to
+    // either side, found the stroke on neither and dropped it: the strip had no
+    // boundary there, and 190 of its 200 square units were relabelled to the fill
+    // beneath (stroke region 4 units²; rsvg's picture 0.99 against the mesh).
+    // Judged on the curve as drawn, the bend stays, and the stroke region is its
+    // centre line times its width plus the two half-disk caps.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/folder-emoji.svg");
+    let doc = std::fs::read(&path).expect("bundled drawing");
+    let d = load_bytes_painted(&doc, Units::User, 1.0, &PaintOptions::DEFAULT).expect("loads");
+    assert_eq!(d.paint.strokes_as_areas, 1);
+    let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
+    let meshed = mesh_drawing_with(&d, &Params::DEFAULT, &opts).expect("meshing succeeds");
+    let regions = &meshed.report.regions;
+    assert!(
+        regions.relabelled_area < 1.0,
+        "relabelled area {} (a region boundary is missing)",
+        regions.relabelled_area
+    );
+    let centre = kurbo::BezPath::from_svg(
+        "M21.63,58.73l22.76-3.89c5.7-1.27,6.61-3.43,6.6-7.97L51,45.7\
+         c0.18-3.42,1.84-5.44,5.21-6.02l55.67-9.65",
+    )
+    .expect("the stroke's path");
+    let length: f64 = centre
+        .segments()
+        .map(|s| kurbo::ParamCurveArclen::arclen(&s, 1e-9))
+        .sum();
+    let want = 2.0 * length + PI;
+    let got = area(&regions.surfaces, "fill-#fff9c4");
+    // the bends' joins add or take a little (inner overlap, outer miter)
+    assert!(
+        (got - want).abs() < 0.02 * want,
+        "stroke area {got}, about {want} expected"
+    );
+}

@@ -3,7 +3,7 @@
 //! It owns the rational point type [`PointQ`], the orientation predicate
 //! ([`orient2d`] for `f64` points, [`orient2d_q`] for rational points, both
 //! returning an [`Orientation`]), exact line/segment intersections
-//! ([`line_intersection`], [`segment_intersection`], [`segment_line`]) and the
+//! ([`line_intersection`], [`segment_intersection`]) and the
 //! barycentre of a convex polygon ([`PointQ::barycentre`]).
 //!
 //! Guarantees: every answer is exact. Predicates run a float filter first

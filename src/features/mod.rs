@@ -530,9 +530,12 @@ impl FeatureSet {
                 FeatureGeom::Conic(_) => counts.input_conics += 1,
             }
         }
-        for (i, f) in snapped.features {
+        // Each curve's geometry as drawn (before snapping), classified alike: what
+        // trimming judges, since the paint tests are built on the drawn outlines.
+        let mut drawn: Vec<Option<classify::Class>> = Vec::with_capacity(drawing.features.len());
+        for (j, f) in snapped.features {
             // Back to the index of the (first) input piece.
-            let i = joined.features[i as usize].0;
+            let i = joined.features[j as usize].0;
             let class = classify::classify(&f.geom, params.eps_m);
             match &class {
                 classify::Class::Point(p) => {
@@ -552,6 +555,11 @@ impl FeatureSet {
                 }
                 _ => {}
             }
+            let unsnapped = pieces[j as usize];
+            drawn.push(
+                (unsnapped.geom != f.geom)
+                    .then(|| classify::classify(&unsnapped.geom, params.eps_m)),
+            );
             curves.push((i, class));
         }
         timing.classify_ms = ms(t);
@@ -560,12 +568,19 @@ impl FeatureSet {
         // turn too much).
         let t = Instant::now();
         let mut pieces: Vec<(u32, Parent, Vec<[f64; 2]>)> = Vec::with_capacity(curves.len());
-        for (i, class) in curves {
+        // By piece: its curve as drawn, where snapping moved it (see `trim`).
+        let mut as_drawn: Vec<Option<Parent>> = Vec::with_capacity(curves.len());
+        for ((i, class), drawn) in curves.into_iter().zip(drawn) {
             match class {
                 classify::Class::Point(_) => {}
                 classify::Class::Lines(lines) => {
-                    for l in lines {
+                    let drawn_lines = match drawn {
+                        Some(classify::Class::Lines(d)) if d.len() == lines.len() => Some(d),
+                        _ => None,
+                    };
+                    for (n, l) in lines.into_iter().enumerate() {
                         pieces.push((i, Parent::Line(l), vec![[0.0, 1.0]]));
+                        as_drawn.push(drawn_lines.as_ref().map(|d| Parent::Line(d[n])));
                     }
                 }
                 classify::Class::Curve(c) => {
@@ -573,11 +588,19 @@ impl FeatureSet {
                     counts.inflection_splits += s.inflection_splits;
                     counts.curvature_splits += s.curvature_splits;
                     pieces.push((i, Parent::Cubic(c), s.intervals));
+                    as_drawn.push(match drawn {
+                        Some(classify::Class::Curve(d)) => Some(Parent::Cubic(d)),
+                        _ => None,
+                    });
                 }
                 classify::Class::Conic(c) => {
                     let s = split::split_conic(&c);
                     counts.curvature_splits += s.curvature_splits;
                     pieces.push((i, Parent::Conic(c), s.intervals));
+                    as_drawn.push(match drawn {
+                        Some(classify::Class::Conic(d)) => Some(Parent::Conic(d)),
+                        _ => None,
+                    });
                 }
             }
         }
@@ -623,7 +646,7 @@ impl FeatureSet {
             let shape = drawing.features[i as usize].source.shape;
             for w in cuts.windows(2) {
                 if let Some(trimmer) = &trimmer
-                    && !trimmer.keeps(shape, parent, w[0], w[1])
+                    && !trimmer.keeps(shape, parent, as_drawn[*k].as_ref(), w[0], w[1])
                 {
                     counts.trimmed_pieces += 1;
                     continue;

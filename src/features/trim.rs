@@ -19,6 +19,18 @@
 //! side differs: anything uncertain keeps it, so trimming can cost at most an
 //! unneeded feature, never a region boundary.
 //!
+//! The tests are built on the outlines as drawn, so a piece is judged on its
+//! curve as drawn. Snapping (step 0) moves a curve whose end it joins to a
+//! neighbour's by up to l_m, ten times the side step: judged where it moved to,
+//! a piece of an outline can have both sides off the drawn outline, on one
+//! side of it, and be dropped as bounding nothing (a stroke's bend whose join
+//! pieces were shorter than l_m lost its outer offset that way, and the strip
+//! its boundary). A piece of a moved curve is therefore also judged on the
+//! curve before snapping, at the same parameters, and dropped only when both
+//! judgements find it bounds nothing. (The drawn curve alone would not do: its
+//! crossings lie where they were before snapping, so near a window's end its
+//! samples may belong to the neighbouring piece.)
+//!
 //! What is judged:
 //! - a stroke area ([`ShapeKind::Stroke`]) and a clipped fill: by its own test;
 //! - a clip or mask outline ([`ShapeKind::ClipOutline`]): by the tests of the
@@ -145,8 +157,17 @@ impl Trimmer {
     }
 
     /// Whether the piece `[t0, t1]` of `parent` (a feature of shape `shape`)
-    /// is to be kept.
-    pub(super) fn keeps(&self, shape: ShapeId, parent: &Parent, t0: f64, t1: f64) -> bool {
+    /// is to be kept. `drawn` is the parent as drawn when snapping moved it
+    /// (see the module doc): the piece is then dropped only when it bounds
+    /// nothing judged on either curve.
+    pub(super) fn keeps(
+        &self,
+        shape: ShapeId,
+        parent: &Parent,
+        drawn: Option<&Parent>,
+        t0: f64,
+        t1: f64,
+    ) -> bool {
         let Some(judge) = self.judges.get(shape.index()) else {
             return true;
         };
@@ -156,19 +177,26 @@ impl Trimmer {
         if step.is_nan() || step <= 8.0 * self.eps_abs {
             return true;
         }
+        self.bounds(judge, parent, t0, t1, step)
+            || drawn.is_some_and(|d| self.bounds(judge, d, t0, t1, step))
+    }
+
+    /// Whether `judge` finds the piece `[t0, t1]` of `curve` bounding what is
+    /// painted (or is unsure), stepping `step` to either side.
+    fn bounds(&self, judge: &Judge, curve: &Parent, t0: f64, t1: f64, step: f64) -> bool {
         match judge {
             Judge::Keep => true,
             Judge::Inside(clips) => SAMPLES.iter().any(|&f| {
-                let p = parent.eval(t0 + f * (t1 - t0));
+                let p = curve.eval(t0 + f * (t1 - t0));
                 let (inside, clear) = all_contain(clips, p, self.eps_abs);
                 inside || !clear
             }),
             Judge::Boundary(list) => SAMPLES.iter().any(|&f| {
                 let t = t0 + f * (t1 - t0);
-                let Some(n) = normal(parent, t) else {
+                let Some(n) = normal(curve, t) else {
                     return true;
                 };
-                let p = parent.eval(t);
+                let p = curve.eval(t);
                 let (a, b) = (p + n * step, p - n * step);
                 list.iter().any(|&k| {
                     let test = &self.tests[k as usize];

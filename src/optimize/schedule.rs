@@ -1755,7 +1755,7 @@ pub(crate) fn optimize(
     optimize_with_caps(mesh, ctx, opts, &[])
 }
 
-/// [`optimize`] with a size cap per shape (`caps[shape index]`, user units;
+/// The optimization (the module doc) with a size cap per shape (`caps[shape index]`, user units;
 /// `∞` or missing: none): the vertices on a capped shape's primary edges target
 /// at most its cap (within `[l_floor, l]`), from the start through the final
 /// coarsening; split passes resolve those outlines to their caps before the

@@ -72,7 +72,7 @@ pub struct RegionReport {
 
 /// Classify `mesh` by the fills of `drawing` and make the surfaces `opts` asks
 /// for. `eps_abs` is the tolerance of [`ClassifyOptions::eps_abs`] (the pipeline
-/// passes ε_m). With [`RegionMode::None`] and nothing to drop, no
+/// passes ε_m). With [`select::RegionMode::None`] and nothing to drop, no
 /// classification is done: every triangle goes to one surface `domain`.
 /// Either way the kept domain's boundary is added as the physical curve
 /// [`crate::fem::BOUNDARY`] (the module's guarantees).

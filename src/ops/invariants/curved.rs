@@ -94,7 +94,8 @@ pub(crate) fn exact_nodes(
     exact_nodes_by(mesh, ctx, &|k| primary(mesh, k), order, tri)
 }
 
-/// [`exact_nodes`] with the primary tags given by `primary_of`.
+/// The Lagrange nodes of `tri` as `exact_nodes` (test-only) gives them, with
+/// the primary tags given by `primary_of`.
 fn exact_nodes_by(
     mesh: &TriMesh,
     ctx: &Context,
