@@ -340,3 +340,61 @@ fn a_snapped_stroke_outline_still_bounds_its_stroke() {
         "stroke area {got}, about {want} expected"
     );
 }
+
+#[test]
+fn a_stroke_narrower_than_the_envelope_is_reported_lost_not_dropped_silently() {
+    // A 0.1-unit stroke (above the hairline width l_min = 1e-4·d = 0.025, so
+    // meshed as an area) in a drawing whose feature envelope μ = 1e-3·d is 0.25:
+    // its two outlines are closer than μ, the mesh does not keep them apart and
+    // no triangle is its own. The picture shows it, so the report says so: one
+    // lost shape, and a warning naming it. The stroked square beside it is not
+    // lost; neither is a shape hidden under another everywhere.
+    let d = load(
+        r##"<rect id="a" x="10" y="10" width="180" height="180" fill="#ff0"/>
+            <path id="thin" d="M 40 100 C 80 40 120 160 160 100" fill="none" stroke="#00f"
+                  stroke-width="0.1"/>
+            <rect id="b" x="50" y="50" width="30" height="30" fill="#f00" stroke="#000"
+                  stroke-width="4"/>
+            <rect id="hidden" x="120" y="120" width="20" height="20" fill="#0f0"/>
+            <rect id="cover" x="110" y="110" width="40" height="40" fill="#00f"/>"##,
+    );
+    assert_eq!(d.paint.strokes_as_areas, 2);
+    let meshed =
+        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let report = &meshed.report;
+    assert_eq!(report.regions.lost_shapes, 1, "{:?}", report.warnings);
+    let warned: Vec<&String> = report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("no region"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", report.warnings);
+    assert!(
+        warned[0].contains("thin-stroke") && !warned[0].contains("hidden"),
+        "{warned:?}"
+    );
+    let names: Vec<&str> = report
+        .regions
+        .surfaces
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    assert!(
+        names.contains(&"b-stroke") && !names.contains(&"thin-stroke"),
+        "{names:?}"
+    );
+
+    // A drawing whose regions all show has nothing lost.
+    let r = load(
+        r##"<circle id="c" cx="100" cy="100" r="50" fill="#0c0" stroke="#000"
+                      stroke-width="3"/>"##,
+    );
+    let meshed =
+        mesh_drawing_with(&r, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    assert_eq!(meshed.report.regions.lost_shapes, 0);
+    assert!(
+        meshed.report.warnings.is_empty(),
+        "{:?}",
+        meshed.report.warnings
+    );
+}

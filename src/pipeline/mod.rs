@@ -455,10 +455,13 @@ fn mesh_stages(
             cm.line_feature.iter().map(|f| f.0).collect(),
         ),
     };
-    let (mesh, region_report) = times.time("regions", || {
+    let (mesh, region_report, lost) = times.time("regions", || {
         crate::regions::orient_lines(drawing, &mut mesh, &line_shape);
-        crate::regions::tag(drawing, &mesh, regions, resolved.eps_m)
+        crate::regions::tag(drawing, &mesh, regions, resolved.eps_m, resolved.l_min)
     })?;
+    if !lost.is_empty() {
+        warnings.push(lost_regions_warning(drawing, &lost, resolved.mu));
+    }
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
     let quality = times.time("quality", || Quality::of(&mesh));
@@ -484,6 +487,25 @@ fn mesh_stages(
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
     Ok(Meshed { mesh, report })
+}
+
+/// The warning for shapes whose regions the mesh lost (see
+/// [`crate::regions::RegionReport::lost_shapes`]), naming the first few.
+fn lost_regions_warning(drawing: &Drawing, lost: &[crate::svg::ShapeId], mu: f64) -> String {
+    const NAMED: usize = 5;
+    let names: Vec<String> = lost
+        .iter()
+        .take(NAMED)
+        .map(|s| drawing.shapes[s.index()].name())
+        .collect();
+    let more = if lost.len() > NAMED { ", ..." } else { "" };
+    format!(
+        "{} painted shape(s) show in the picture but have no region in the mesh: their \
+         outlines did not become mesh edges (outlines closer together than the feature \
+         envelope mu = {mu:.3e} are not kept apart; a smaller --mu keeps more): {}{more}",
+        lost.len(),
+        names.join(", ")
+    )
 }
 
 /// The box the TriWild meshers cover: the drawing's bounding box padded by

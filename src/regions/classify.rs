@@ -4,10 +4,10 @@
 use super::element::{element_area, element_point};
 use crate::fem::FemMesh;
 use crate::svg::winding::PaintTest;
-use crate::svg::{Drawing, ShapeId};
+use crate::svg::{Drawing, Segment, ShapeId};
 use kurbo::Point;
 use rayon::prelude::*;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Options of [`classify`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,15 +21,28 @@ pub(crate) struct ClassifyOptions {
     /// non-feature edges) the face's area-majority label. Default true; see the
     /// module documentation for why.
     pub vote_per_face: bool,
+    /// How far beside an outline a shape must show to count as shown when its
+    /// region is missing (see [`lost_shapes`]; user units). The pipeline uses
+    /// half the hairline width l_min: a stroke narrower than l_min stays a line,
+    /// and a sliver that thin (a shape peeking out from under a near-copy of
+    /// itself) is no region anybody sees.
+    pub probe_step: f64,
 }
 
 impl ClassifyOptions {
-    /// Options with tolerance `eps_abs` (user units) and per-face voting.
+    /// Options with tolerance `eps_abs` (user units), per-face voting and a
+    /// probe step of `1000 eps_abs`.
     pub(crate) fn new(eps_abs: f64) -> Self {
         ClassifyOptions {
             eps_abs,
             vote_per_face: true,
+            probe_step: PROBE_STEP * eps_abs,
         }
+    }
+    /// Set the probe step (user units; see [`ClassifyOptions::probe_step`]).
+    pub(crate) fn with_probe_step(mut self, step: f64) -> Self {
+        self.probe_step = step;
+        self
     }
     /// Turn per-face voting on or off.
     #[cfg(test)]
@@ -52,6 +65,11 @@ pub(crate) struct RegionAssignment {
     pub relabelled: usize,
     /// Total area of the relabelled triangles.
     pub relabelled_area: f64,
+    /// Filled shapes the picture shows (some probe point beside their outline
+    /// is theirs, see [`lost_shapes`]) that own no triangle: their outlines did
+    /// not become mesh edges (closer than the mesh resolves), so what they paint
+    /// went to a neighbour's region. In shape order.
+    pub lost: Vec<ShapeId>,
 }
 
 /// Interior points tried in turn (barycentric), the centroid first.
@@ -160,6 +178,7 @@ pub(crate) fn classify(
         near_boundary,
         relabelled: 0,
         relabelled_area: 0.0,
+        lost: Vec::new(),
     };
     if opts.vote_per_face && n > 0 {
         let face = faces(mesh);
@@ -192,6 +211,8 @@ pub(crate) fn classify(
             }
         }
     }
+    let sampled: HashSet<ShapeId> = samples.iter().filter(|s| s.1).filter_map(|s| s.0).collect();
+    out.lost = lost_shapes(drawing, &painting, &out.owner, &sampled, opts);
     tracing::debug!(
         triangles = n,
         near_boundary = out.near_boundary,
@@ -199,6 +220,73 @@ pub(crate) fn classify(
         "regions classified"
     );
     out
+}
+
+/// Probe points per shape (on as many of its segments, spread over them).
+const PROBES: usize = 8;
+/// The default probe step, in units of `eps_abs`.
+const PROBE_STEP: f64 = 1e3;
+
+/// The filled shapes that own no triangle in `owner` although the picture
+/// shows them: a triangle's own clear sample was theirs (`sampled`, before the
+/// faces voted), or at a probe point [`ClassifyOptions::probe_step`] to either
+/// side of the middle of one of their segments the topmost shape painting it
+/// (clear of every outline) is the shape itself. A shape hidden under others everywhere is not
+/// lost; one visible only where neither a sample nor a probe falls goes
+/// unnoticed (a probe per segment, on at most [`PROBES`] segments).
+fn lost_shapes(
+    drawing: &Drawing,
+    painting: &Painting,
+    owner: &[Option<ShapeId>],
+    sampled: &HashSet<ShapeId>,
+    opts: &ClassifyOptions,
+) -> Vec<ShapeId> {
+    let kept: HashSet<ShapeId> = owner.iter().flatten().copied().collect();
+    let (step, eps_abs) = (opts.probe_step, opts.eps_abs);
+    let candidates: Vec<ShapeId> = painting
+        .layers
+        .iter()
+        .map(|l| l.id)
+        .filter(|id| !kept.contains(id))
+        .collect();
+    let mut lost: Vec<ShapeId> = candidates
+        .into_par_iter()
+        .filter(|&id| {
+            if sampled.contains(&id) {
+                return true;
+            }
+            let segments: Vec<&Segment> = drawing.shapes[id.index()]
+                .subpaths
+                .iter()
+                .flat_map(|sp| sp.segments.iter())
+                .collect();
+            let n = segments.len();
+            (0..n.min(PROBES)).any(|k| {
+                let Some((p, normal)) = middle_and_normal(segments[k * n / n.min(PROBES)]) else {
+                    return false;
+                };
+                [p + normal * step, p - normal * step].into_iter().any(|q| {
+                    let (top, clear) = painting.owner_at(q, eps_abs);
+                    clear && top == Some(id)
+                })
+            })
+        })
+        .collect();
+    lost.sort_unstable();
+    lost
+}
+
+/// The middle of a segment and its unit normal there, `None` where the
+/// tangent vanishes.
+fn middle_and_normal(seg: &Segment) -> Option<(Point, kurbo::Vec2)> {
+    use kurbo::{ParamCurve, ParamCurveDeriv};
+    let (p, d) = match seg {
+        Segment::Line(l) => (l.eval(0.5), l.p1 - l.p0),
+        Segment::Cubic(c) => (c.eval(0.5), c.deriv().eval(0.5).to_vec2()),
+        Segment::Conic(c) => (c.eval(0.5), c.deriv(0.5)),
+    };
+    let len = d.hypot();
+    (len > 0.0 && len.is_finite()).then(|| (p, kurbo::Vec2::new(-d.y, d.x) / len))
 }
 
 /// Edge key: the two corner indices, sorted.

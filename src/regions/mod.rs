@@ -41,7 +41,12 @@
 //! smooth arc the sliver is about ⅔·μ per unit length). Triangles whose own
 //! sample disagrees with their face are counted in [`RegionReport`]
 //! (`relabelled`, `relabelled_area`): a large relabelled area points at a
-//! missing feature edge. The curved mesher makes the boundaries exact; then
+//! missing feature edge. A shape the picture shows (wider than half the
+//! hairline width l_min beside its outline, or under a triangle's own sample)
+//! that ends with no triangle at all has lost its region, typically a stroke
+//! or sliver narrower than the feature envelope μ, whose outlines the mesh does
+//! not keep apart: counted (`lost_shapes`) and named in a `--stats` warning,
+//! never dropped silently. The curved mesher makes the boundaries exact; then
 //! the same rule gives exact areas.
 
 mod classify;
@@ -68,14 +73,20 @@ pub struct RegionReport {
     pub relabelled: usize,
     /// Their total area.
     pub relabelled_area: f64,
+    /// Painted shapes whose region the mesh lost: visible by their own samples
+    /// but owning no triangle once each face took its majority label (their
+    /// outlines are closer than the mesh resolves; `--stats` warns with names).
+    pub lost_shapes: usize,
 }
 
 /// Classify `mesh` by the fills of `drawing` and make the surfaces `opts` asks
 /// for. `eps_abs` is the tolerance of [`ClassifyOptions::eps_abs`] (the pipeline
-/// passes ε_m). With [`select::RegionMode::None`] and nothing to drop, no
+/// passes ε_m), `l_min` the hairline width (half of it is the probe step of
+/// [`ClassifyOptions::probe_step`]). With [`select::RegionMode::None`] and nothing to drop, no
 /// classification is done: every triangle goes to one surface `domain`.
 /// Either way the kept domain's boundary is added as the physical curve
-/// [`crate::fem::BOUNDARY`] (the module's guarantees).
+/// [`crate::fem::BOUNDARY`] (the module's guarantees). Also returns the shapes
+/// whose region was lost ([`RegionReport::lost_shapes`]).
 ///
 /// # Errors
 /// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
@@ -85,7 +96,8 @@ pub(crate) fn tag(
     mesh: &FemMesh,
     opts: &RegionOptions,
     eps_abs: f64,
-) -> Result<(FemMesh, RegionReport)> {
+    l_min: f64,
+) -> Result<(FemMesh, RegionReport, Vec<crate::svg::ShapeId>)> {
     if !opts.needs_classification() {
         let mut out = mesh.clone();
         out.surfaces = vec![DOMAIN.to_owned()];
@@ -95,9 +107,10 @@ pub(crate) fn tag(
             surfaces: stats_of(&out),
             ..RegionReport::default()
         };
-        return Ok((out, report));
+        return Ok((out, report, Vec::new()));
     }
-    let asg = classify(drawing, mesh, &ClassifyOptions::new(eps_abs));
+    let classify_opts = ClassifyOptions::new(eps_abs).with_probe_step(0.5 * l_min);
+    let asg = classify(drawing, mesh, &classify_opts);
     let (mut out, surfaces) = apply(drawing, mesh, &asg, opts)?;
     orient::add_boundary(&mut out);
     Ok((
@@ -107,7 +120,9 @@ pub(crate) fn tag(
             near_boundary: asg.near_boundary,
             relabelled: asg.relabelled,
             relabelled_area: asg.relabelled_area,
+            lost_shapes: asg.lost.len(),
         },
+        asg.lost,
     ))
 }
 

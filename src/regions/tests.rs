@@ -251,10 +251,10 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
 
     let none = RegionOptions::DEFAULT.with_mode(RegionMode::None);
-    let (out, report) = tag(&d, &mesh, &none, 1e-9).unwrap();
+    let (out, report, _) = tag(&d, &mesh, &none, 1e-9, 1e-5).unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 64.0);
-    let (out, report) = tag(&d, &mesh, &none.with_cut_outside(true), 1e-9).unwrap();
+    let (out, report, _) = tag(&d, &mesh, &none.with_cut_outside(true), 1e-9, 1e-5).unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 28.0);
 }
@@ -263,7 +263,7 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
 fn cut_outside_drops_background_nodes_and_keeps_boundary_lines() {
     let (d, mesh) = two_squares();
     let opts = RegionOptions::DEFAULT.with_cut_outside(true);
-    let (out, report) = tag(&d, &mesh, &opts, 1e-9).unwrap();
+    let (out, report, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5).unwrap();
     check_mesh(&out);
     assert_eq!(out.surfaces, ["a", "b"]);
     let area: f64 = report.surfaces.iter().map(|s| s.area).sum();
@@ -314,11 +314,12 @@ fn boundary_enclosed(m: &FemMesh) -> (usize, f64) {
 #[test]
 fn keep_and_hole_select_regions() {
     let (d, mesh) = two_squares();
-    let (out, report) = tag(
+    let (out, report, _) = tag(
         &d,
         &mesh,
         &RegionOptions::DEFAULT.with_keep(vec!["a".into()]),
         1e-9,
+        1e-5,
     )
     .unwrap();
     check_mesh(&out);
@@ -332,7 +333,14 @@ fn keep_and_hole_select_regions() {
     assert_eq!(boundary_enclosed(&out), (16, 12.0));
     // Removing b by a point inside it, and the background by a point in the padding.
     let holes = vec![Point::new(6.5, 6.5), Point::new(0.5, 7.5)];
-    let (out, report) = tag(&d, &mesh, &RegionOptions::DEFAULT.with_holes(holes), 1e-9).unwrap();
+    let (out, report, _) = tag(
+        &d,
+        &mesh,
+        &RegionOptions::DEFAULT.with_holes(holes),
+        1e-9,
+        1e-5,
+    )
+    .unwrap();
     assert_eq!(out.surfaces, ["a"]);
     assert_eq!(report.surfaces[0].area, 12.0);
     assert_eq!(boundary_enclosed(&out), (16, 12.0));
@@ -342,15 +350,16 @@ fn keep_and_hole_select_regions() {
         &mesh,
         &RegionOptions::DEFAULT.with_keep(vec!["c".into()]),
         1e-9,
+        1e-5,
     )
     .unwrap_err();
     assert!(bad.to_string().contains("background, a, b"), "{bad}");
     let outside = RegionOptions::DEFAULT.with_holes(vec![Point::new(9.0, 1.0)]);
-    assert!(tag(&d, &mesh, &outside, 1e-9).is_err());
+    assert!(tag(&d, &mesh, &outside, 1e-9, 1e-5).is_err());
     let all = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_keep(vec!["background".into()]);
-    assert!(tag(&d, &mesh, &all, 1e-9).is_err());
+    assert!(tag(&d, &mesh, &all, 1e-9, 1e-5).is_err());
 }
 
 #[test]
@@ -370,7 +379,7 @@ fn evenodd_and_nonzero_differ_in_the_overlap() {
     );
     for (rule, area) in [(FillRule::NonZero, 36.0), (FillRule::EvenOdd, 32.0)] {
         let d = drawing(vec![shape(Some("s"), 0, rule, [0; 3], sub.clone())]);
-        let (_, report) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9).unwrap();
+        let (_, report, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5).unwrap();
         assert_eq!(stat(&report.surfaces, "s").area, area, "{rule:?}");
         assert_eq!(stat(&report.surfaces, "background").area, 64.0 - area);
     }
@@ -403,7 +412,7 @@ fn a_face_is_labelled_by_its_majority() {
 fn a_shape_named_background_does_not_merge_with_it() {
     let (mut d, mesh) = two_squares();
     d.shapes[1].svg_id = Some("background".into());
-    let (out, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9).unwrap();
+    let (out, _, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5).unwrap();
     assert_eq!(out.surfaces, ["background", "a", "shape-1"]);
 }
 
@@ -437,7 +446,7 @@ fn the_rim_of_a_hole_runs_clockwise() {
     let opts = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_holes(vec![Point::new(4.2, 4.5)]);
-    let (out, _) = tag(&d, &mesh, &opts, 1e-9).unwrap();
+    let (out, _, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5).unwrap();
     assert_eq!(out.surfaces, ["outer"]);
     assert_eq!(boundary_enclosed(&out), (32, 36.0 - 4.0));
 }

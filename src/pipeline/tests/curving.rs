@@ -62,7 +62,8 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
     // As the pipeline does: lines run one way per chain, then regions.
     let shapes: Vec<crate::svg::ShapeId> = cm.line_feature.iter().map(|f| f.0).collect();
     regions::orient_lines(drawing, &mut fem, &shapes);
-    let (fem, _) = regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d).expect("regions");
+    let (fem, _, _) =
+        regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d, 1e-4 * d).expect("regions");
     (fem, stats)
 }
 
