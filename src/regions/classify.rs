@@ -65,10 +65,10 @@ pub(crate) struct RegionAssignment {
     pub relabelled: usize,
     /// Total area of the relabelled triangles.
     pub relabelled_area: f64,
-    /// Filled shapes the picture shows (some probe point beside their outline
-    /// is theirs, see [`lost_shapes`]) that own no triangle: their outlines did
-    /// not become mesh edges (closer than the mesh resolves), so what they paint
-    /// went to a neighbour's region. In shape order.
+    /// Filled shapes the picture shows (see [`lost_shapes`]) that own no
+    /// triangle: their outlines did not become mesh edges (closer than the mesh
+    /// resolves), so what they paint went to a neighbour's region. In shape
+    /// order.
     pub lost: Vec<ShapeId>,
 }
 
@@ -231,9 +231,10 @@ const PROBE_STEP: f64 = 1e3;
 /// shows them: a triangle's own clear sample was theirs (`sampled`, before the
 /// faces voted), or at a probe point [`ClassifyOptions::probe_step`] to either
 /// side of the middle of one of their segments the topmost shape painting it
-/// (clear of every outline) is the shape itself. A shape hidden under others everywhere is not
-/// lost; one visible only where neither a sample nor a probe falls goes
-/// unnoticed (a probe per segment, on at most [`PROBES`] segments).
+/// (clear of every outline) is the shape itself. A shape hidden under others
+/// everywhere is not lost; one visible only where neither a sample nor a probe
+/// falls goes unnoticed (a probe per segment, on at most [`PROBES`] segments;
+/// an open subpath's closing segment is not probed).
 fn lost_shapes(
     drawing: &Drawing,
     painting: &Painting,

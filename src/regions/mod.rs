@@ -73,17 +73,19 @@ pub struct RegionReport {
     pub relabelled: usize,
     /// Their total area.
     pub relabelled_area: f64,
-    /// Painted shapes whose region the mesh lost: visible by their own samples
-    /// but owning no triangle once each face took its majority label (their
-    /// outlines are closer than the mesh resolves; `--stats` warns with names).
+    /// Painted shapes whose region the mesh lost: the picture shows them (a
+    /// triangle's own sample, or a probe beside their outline) but they own no
+    /// triangle once each face took its majority label (their outlines are
+    /// closer than the mesh resolves; `--stats` warns with their names).
     pub lost_shapes: usize,
 }
 
 /// Classify `mesh` by the fills of `drawing` and make the surfaces `opts` asks
 /// for. `eps_abs` is the tolerance of [`ClassifyOptions::eps_abs`] (the pipeline
 /// passes ε_m), `l_min` the hairline width (half of it is the probe step of
-/// [`ClassifyOptions::probe_step`]). With [`select::RegionMode::None`] and nothing to drop, no
-/// classification is done: every triangle goes to one surface `domain`.
+/// [`ClassifyOptions::probe_step`]). With [`select::RegionMode::None`] and
+/// nothing to drop, no classification is done: every triangle goes to one
+/// surface `domain`.
 /// Either way the kept domain's boundary is added as the physical curve
 /// [`crate::fem::BOUNDARY`] (the module's guarantees). Also returns the shapes
 /// whose region was lost ([`RegionReport::lost_shapes`]).
