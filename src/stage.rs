@@ -18,6 +18,9 @@ pub enum Stage {
     Curve,
     /// The CDT baseline mesher (`--mesher cdt`).
     Baseline,
+    /// Regions: each triangle classified by the fills (winding numbers on the
+    /// input curves) and tagged (DESIGN `regions`).
+    Regions,
 }
 
 impl Stage {
@@ -29,6 +32,7 @@ impl Stage {
             Stage::Optimize => "optimize",
             Stage::Curve => "curve",
             Stage::Baseline => "baseline",
+            Stage::Regions => "regions",
         }
     }
 

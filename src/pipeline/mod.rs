@@ -456,8 +456,15 @@ fn mesh_stages(
         ),
     };
     let (mesh, region_report, lost) = times.time("regions", || {
-        crate::regions::orient_lines(drawing, &mut mesh, &line_shape);
-        crate::regions::tag(drawing, &mesh, regions, resolved.eps_m, resolved.l_min)
+        crate::regions::orient_lines(drawing, &mut mesh, &line_shape, &deadline);
+        crate::regions::tag(
+            drawing,
+            &mesh,
+            regions,
+            resolved.eps_m,
+            resolved.l_min,
+            deadline,
+        )
     })?;
     if !lost.is_empty() {
         warnings.push(lost_regions_warning(drawing, &lost, resolved.mu));

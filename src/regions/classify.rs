@@ -27,6 +27,9 @@ pub(crate) struct ClassifyOptions {
     /// and a sliver that thin (a shape peeking out from under a near-copy of
     /// itself) is no region anybody sees.
     pub probe_step: f64,
+    /// The run's time limit: once it has passed, the triangles left are not
+    /// classified (the caller checks it and stops the run).
+    pub deadline: crate::budget::Deadline,
 }
 
 impl ClassifyOptions {
@@ -37,7 +40,13 @@ impl ClassifyOptions {
             eps_abs,
             vote_per_face: true,
             probe_step: PROBE_STEP * eps_abs,
+            deadline: crate::budget::Deadline::NONE,
         }
+    }
+    /// Set the time limit (see [`ClassifyOptions::deadline`]).
+    pub(crate) fn with_deadline(mut self, deadline: crate::budget::Deadline) -> Self {
+        self.deadline = deadline;
+        self
     }
     /// Set the probe step (user units; see [`ClassifyOptions::probe_step`]).
     pub(crate) fn with_probe_step(mut self, step: f64) -> Self {
@@ -155,6 +164,10 @@ pub(crate) fn classify(
     let samples: Vec<(Option<ShapeId>, bool, f64)> = (0..n)
         .into_par_iter()
         .map(|t| {
+            // Past the time limit the rest is not classified (the caller stops).
+            if opts.deadline.expired() {
+                return (None, false, 0.0);
+            }
             let nodes: Vec<Point> = mesh
                 .triangle(t)
                 .iter()
@@ -255,6 +268,9 @@ fn lost_shapes(
         .filter(|&id| {
             if sampled.contains(&id) {
                 return true;
+            }
+            if opts.deadline.expired() {
+                return false;
             }
             let segments: Vec<&Segment> = drawing.shapes[id.index()]
                 .subpaths

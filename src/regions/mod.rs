@@ -92,13 +92,15 @@ pub struct RegionReport {
 ///
 /// # Errors
 /// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
-/// mesh, or nothing left.
+/// mesh, or nothing left; [`crate::Error::TimeLimit`] once `deadline` has passed
+/// (checked while the triangles are classified).
 pub(crate) fn tag(
     drawing: &Drawing,
     mesh: &FemMesh,
     opts: &RegionOptions,
     eps_abs: f64,
     l_min: f64,
+    deadline: crate::budget::Deadline,
 ) -> Result<(FemMesh, RegionReport, Vec<crate::svg::ShapeId>)> {
     if !opts.needs_classification() {
         let mut out = mesh.clone();
@@ -111,8 +113,11 @@ pub(crate) fn tag(
         };
         return Ok((out, report, Vec::new()));
     }
-    let classify_opts = ClassifyOptions::new(eps_abs).with_probe_step(0.5 * l_min);
+    let classify_opts = ClassifyOptions::new(eps_abs)
+        .with_probe_step(0.5 * l_min)
+        .with_deadline(deadline);
     let asg = classify(drawing, mesh, &classify_opts);
+    crate::error::check_deadline(&deadline, crate::stage::Stage::Regions)?;
     let (mut out, surfaces) = apply(drawing, mesh, &asg, opts)?;
     orient::add_boundary(&mut out);
     Ok((

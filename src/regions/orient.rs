@@ -27,7 +27,14 @@ const NEAREST_ACCURACY_REL: f64 = 1e-9;
 
 /// Orient the feature lines of `mesh` (see the module docs). `line_shape[i]`
 /// is the source shape of line `i`; lines beyond it are left as they are.
-pub(crate) fn orient_lines(drawing: &Drawing, mesh: &mut FemMesh, line_shape: &[ShapeId]) {
+/// Once `deadline` has passed the chains left keep their direction (the caller
+/// stops the run with a time-limit error).
+pub(crate) fn orient_lines(
+    drawing: &Drawing,
+    mesh: &mut FemMesh,
+    line_shape: &[ShapeId],
+    deadline: &crate::budget::Deadline,
+) {
     let count = mesh.line_count().min(line_shape.len());
     let mut by_shape: HashMap<ShapeId, Vec<usize>> = HashMap::new();
     for (i, &s) in line_shape.iter().enumerate().take(count) {
@@ -46,6 +53,9 @@ pub(crate) fn orient_lines(drawing: &Drawing, mesh: &mut FemMesh, line_shape: &[
     for s in shapes {
         let own = own.get(&s).map_or(&[][..], Vec::as_slice);
         for chain in chains(mesh, &by_shape[&s]) {
+            if deadline.expired() {
+                return;
+            }
             orient_chain(drawing, mesh, own, &chain);
         }
     }

@@ -2,6 +2,7 @@
 //! (End-to-end tests on CDT meshes are in `tests/regions.rs`.)
 
 use super::*;
+use crate::budget::Deadline;
 use crate::element::Order;
 use crate::fem::LineKind;
 use crate::regions::select::RegionMode;
@@ -250,11 +251,28 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     assert_eq!(out.surfaces, ["background", "fill-#ff0000"]);
     assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
 
+    // Past the run's time limit the stage stops with a time-limit error
+    // naming it (a drawing whose winding queries are slow once took 11 s here
+    // under a 10 s limit and still wrote its mesh).
+    let passed = Deadline::after(Some(0.0));
+    match tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5, passed) {
+        Err(crate::Error::TimeLimit { stage, .. }) => assert_eq!(stage, crate::Stage::Regions),
+        other => panic!("expected a time-limit error, got {:?}", other.map(|r| r.1)),
+    }
+
     let none = RegionOptions::DEFAULT.with_mode(RegionMode::None);
-    let (out, report, _) = tag(&d, &mesh, &none, 1e-9, 1e-5).unwrap();
+    let (out, report, _) = tag(&d, &mesh, &none, 1e-9, 1e-5, Deadline::NONE).unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 64.0);
-    let (out, report, _) = tag(&d, &mesh, &none.with_cut_outside(true), 1e-9, 1e-5).unwrap();
+    let (out, report, _) = tag(
+        &d,
+        &mesh,
+        &none.with_cut_outside(true),
+        1e-9,
+        1e-5,
+        Deadline::NONE,
+    )
+    .unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 28.0);
 }
@@ -263,7 +281,7 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
 fn cut_outside_drops_background_nodes_and_keeps_boundary_lines() {
     let (d, mesh) = two_squares();
     let opts = RegionOptions::DEFAULT.with_cut_outside(true);
-    let (out, report, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5).unwrap();
+    let (out, report, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5, Deadline::NONE).unwrap();
     check_mesh(&out);
     assert_eq!(out.surfaces, ["a", "b"]);
     let area: f64 = report.surfaces.iter().map(|s| s.area).sum();
@@ -320,6 +338,7 @@ fn keep_and_hole_select_regions() {
         &RegionOptions::DEFAULT.with_keep(vec!["a".into()]),
         1e-9,
         1e-5,
+        Deadline::NONE,
     )
     .unwrap();
     check_mesh(&out);
@@ -339,6 +358,7 @@ fn keep_and_hole_select_regions() {
         &RegionOptions::DEFAULT.with_holes(holes),
         1e-9,
         1e-5,
+        Deadline::NONE,
     )
     .unwrap();
     assert_eq!(out.surfaces, ["a"]);
@@ -351,15 +371,16 @@ fn keep_and_hole_select_regions() {
         &RegionOptions::DEFAULT.with_keep(vec!["c".into()]),
         1e-9,
         1e-5,
+        Deadline::NONE,
     )
     .unwrap_err();
     assert!(bad.to_string().contains("background, a, b"), "{bad}");
     let outside = RegionOptions::DEFAULT.with_holes(vec![Point::new(9.0, 1.0)]);
-    assert!(tag(&d, &mesh, &outside, 1e-9, 1e-5).is_err());
+    assert!(tag(&d, &mesh, &outside, 1e-9, 1e-5, Deadline::NONE).is_err());
     let all = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_keep(vec!["background".into()]);
-    assert!(tag(&d, &mesh, &all, 1e-9, 1e-5).is_err());
+    assert!(tag(&d, &mesh, &all, 1e-9, 1e-5, Deadline::NONE).is_err());
 }
 
 #[test]
@@ -379,7 +400,15 @@ fn evenodd_and_nonzero_differ_in_the_overlap() {
     );
     for (rule, area) in [(FillRule::NonZero, 36.0), (FillRule::EvenOdd, 32.0)] {
         let d = drawing(vec![shape(Some("s"), 0, rule, [0; 3], sub.clone())]);
-        let (_, report, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5).unwrap();
+        let (_, report, _) = tag(
+            &d,
+            &mesh,
+            &RegionOptions::DEFAULT,
+            1e-9,
+            1e-5,
+            Deadline::NONE,
+        )
+        .unwrap();
         assert_eq!(stat(&report.surfaces, "s").area, area, "{rule:?}");
         assert_eq!(stat(&report.surfaces, "background").area, 64.0 - area);
     }
@@ -412,7 +441,15 @@ fn a_face_is_labelled_by_its_majority() {
 fn a_shape_named_background_does_not_merge_with_it() {
     let (mut d, mesh) = two_squares();
     d.shapes[1].svg_id = Some("background".into());
-    let (out, _, _) = tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5).unwrap();
+    let (out, _, _) = tag(
+        &d,
+        &mesh,
+        &RegionOptions::DEFAULT,
+        1e-9,
+        1e-5,
+        Deadline::NONE,
+    )
+    .unwrap();
     assert_eq!(out.surfaces, ["background", "a", "shape-1"]);
 }
 
@@ -446,7 +483,7 @@ fn the_rim_of_a_hole_runs_clockwise() {
     let opts = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_holes(vec![Point::new(4.2, 4.5)]);
-    let (out, _, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5).unwrap();
+    let (out, _, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5, Deadline::NONE).unwrap();
     assert_eq!(out.surfaces, ["outer"]);
     assert_eq!(boundary_enclosed(&out), (32, 36.0 - 4.0));
 }
@@ -509,7 +546,7 @@ fn feature_lines_run_one_way() {
         mesh.reverse_line(i);
     }
     let shapes: Vec<ShapeId> = mesh.line_group.iter().map(|&g| ShapeId(g)).collect();
-    orient_lines(&d, &mut mesh, &shapes);
+    orient_lines(&d, &mut mesh, &shapes, &Deadline::NONE);
     for g in [0, 1] {
         let lines = lines_of(&mesh, g);
         let starts: std::collections::HashSet<u32> = lines.iter().map(|l| l.0).collect();

@@ -61,9 +61,16 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
     let mut fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
     // As the pipeline does: lines run one way per chain, then regions.
     let shapes: Vec<crate::svg::ShapeId> = cm.line_feature.iter().map(|f| f.0).collect();
-    regions::orient_lines(drawing, &mut fem, &shapes);
-    let (fem, _, _) =
-        regions::tag(drawing, &fem, &RegionOptions::DEFAULT, 1e-8 * d, 1e-4 * d).expect("regions");
+    regions::orient_lines(drawing, &mut fem, &shapes, &crate::budget::Deadline::NONE);
+    let (fem, _, _) = regions::tag(
+        drawing,
+        &fem,
+        &RegionOptions::DEFAULT,
+        1e-8 * d,
+        1e-4 * d,
+        crate::budget::Deadline::NONE,
+    )
+    .expect("regions");
     (fem, stats)
 }
 
