@@ -139,6 +139,16 @@ fn grid(n: u32, outlines: &[(&str, &[(u32, u32)])]) -> FemMesh {
     m
 }
 
+/// [`tag`] with the tolerances these tests use (ε_m 1e-9, l_min 1e-5) and no
+/// time limit.
+fn tag_no_limit(
+    d: &Drawing,
+    mesh: &FemMesh,
+    opts: &RegionOptions,
+) -> Result<(FemMesh, RegionReport, Vec<ShapeId>)> {
+    tag(d, mesh, opts, 1e-9, 1e-5, Deadline::NONE)
+}
+
 fn stat<'a>(stats: &'a [RegionStat], name: &str) -> &'a RegionStat {
     stats
         .iter()
@@ -261,18 +271,10 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     }
 
     let none = RegionOptions::DEFAULT.with_mode(RegionMode::None);
-    let (out, report, _) = tag(&d, &mesh, &none, 1e-9, 1e-5, Deadline::NONE).unwrap();
+    let (out, report, _) = tag_no_limit(&d, &mesh, &none).unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 64.0);
-    let (out, report, _) = tag(
-        &d,
-        &mesh,
-        &none.with_cut_outside(true),
-        1e-9,
-        1e-5,
-        Deadline::NONE,
-    )
-    .unwrap();
+    let (out, report, _) = tag_no_limit(&d, &mesh, &none.with_cut_outside(true)).unwrap();
     assert_eq!(out.surfaces, ["domain"]);
     assert_eq!(report.surfaces[0].area, 28.0);
 }
@@ -281,7 +283,7 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
 fn cut_outside_drops_background_nodes_and_keeps_boundary_lines() {
     let (d, mesh) = two_squares();
     let opts = RegionOptions::DEFAULT.with_cut_outside(true);
-    let (out, report, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5, Deadline::NONE).unwrap();
+    let (out, report, _) = tag_no_limit(&d, &mesh, &opts).unwrap();
     check_mesh(&out);
     assert_eq!(out.surfaces, ["a", "b"]);
     let area: f64 = report.surfaces.iter().map(|s| s.area).sum();
@@ -332,13 +334,10 @@ fn boundary_enclosed(m: &FemMesh) -> (usize, f64) {
 #[test]
 fn keep_and_hole_select_regions() {
     let (d, mesh) = two_squares();
-    let (out, report, _) = tag(
+    let (out, report, _) = tag_no_limit(
         &d,
         &mesh,
         &RegionOptions::DEFAULT.with_keep(vec!["a".into()]),
-        1e-9,
-        1e-5,
-        Deadline::NONE,
     )
     .unwrap();
     check_mesh(&out);
@@ -352,35 +351,25 @@ fn keep_and_hole_select_regions() {
     assert_eq!(boundary_enclosed(&out), (16, 12.0));
     // Removing b by a point inside it, and the background by a point in the padding.
     let holes = vec![Point::new(6.5, 6.5), Point::new(0.5, 7.5)];
-    let (out, report, _) = tag(
-        &d,
-        &mesh,
-        &RegionOptions::DEFAULT.with_holes(holes),
-        1e-9,
-        1e-5,
-        Deadline::NONE,
-    )
-    .unwrap();
+    let (out, report, _) =
+        tag_no_limit(&d, &mesh, &RegionOptions::DEFAULT.with_holes(holes)).unwrap();
     assert_eq!(out.surfaces, ["a"]);
     assert_eq!(report.surfaces[0].area, 12.0);
     assert_eq!(boundary_enclosed(&out), (16, 12.0));
     // Errors a user can act on.
-    let bad = tag(
+    let bad = tag_no_limit(
         &d,
         &mesh,
         &RegionOptions::DEFAULT.with_keep(vec!["c".into()]),
-        1e-9,
-        1e-5,
-        Deadline::NONE,
     )
     .unwrap_err();
     assert!(bad.to_string().contains("background, a, b"), "{bad}");
     let outside = RegionOptions::DEFAULT.with_holes(vec![Point::new(9.0, 1.0)]);
-    assert!(tag(&d, &mesh, &outside, 1e-9, 1e-5, Deadline::NONE).is_err());
+    assert!(tag_no_limit(&d, &mesh, &outside).is_err());
     let all = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_keep(vec!["background".into()]);
-    assert!(tag(&d, &mesh, &all, 1e-9, 1e-5, Deadline::NONE).is_err());
+    assert!(tag_no_limit(&d, &mesh, &all).is_err());
 }
 
 #[test]
@@ -400,15 +389,7 @@ fn evenodd_and_nonzero_differ_in_the_overlap() {
     );
     for (rule, area) in [(FillRule::NonZero, 36.0), (FillRule::EvenOdd, 32.0)] {
         let d = drawing(vec![shape(Some("s"), 0, rule, [0; 3], sub.clone())]);
-        let (_, report, _) = tag(
-            &d,
-            &mesh,
-            &RegionOptions::DEFAULT,
-            1e-9,
-            1e-5,
-            Deadline::NONE,
-        )
-        .unwrap();
+        let (_, report, _) = tag_no_limit(&d, &mesh, &RegionOptions::DEFAULT).unwrap();
         assert_eq!(stat(&report.surfaces, "s").area, area, "{rule:?}");
         assert_eq!(stat(&report.surfaces, "background").area, 64.0 - area);
     }
@@ -441,15 +422,7 @@ fn a_face_is_labelled_by_its_majority() {
 fn a_shape_named_background_does_not_merge_with_it() {
     let (mut d, mesh) = two_squares();
     d.shapes[1].svg_id = Some("background".into());
-    let (out, _, _) = tag(
-        &d,
-        &mesh,
-        &RegionOptions::DEFAULT,
-        1e-9,
-        1e-5,
-        Deadline::NONE,
-    )
-    .unwrap();
+    let (out, _, _) = tag_no_limit(&d, &mesh, &RegionOptions::DEFAULT).unwrap();
     assert_eq!(out.surfaces, ["background", "a", "shape-1"]);
 }
 
@@ -483,7 +456,7 @@ fn the_rim_of_a_hole_runs_clockwise() {
     let opts = RegionOptions::DEFAULT
         .with_cut_outside(true)
         .with_holes(vec![Point::new(4.2, 4.5)]);
-    let (out, _, _) = tag(&d, &mesh, &opts, 1e-9, 1e-5, Deadline::NONE).unwrap();
+    let (out, _, _) = tag_no_limit(&d, &mesh, &opts).unwrap();
     assert_eq!(out.surfaces, ["outer"]);
     assert_eq!(boundary_enclosed(&out), (32, 36.0 - 4.0));
 }
