@@ -59,6 +59,7 @@ mod params;
 mod pipeline;
 mod quality;
 mod regions;
+mod sizing;
 mod stage;
 mod svg;
 mod units;
@@ -84,18 +85,22 @@ pub use element::{CertifyOptions, Order};
 pub use error::{Error, ErrorKind, Result};
 pub use fem::{BOUNDARY, FeatureEdge, FemMesh, LineKind, LinearMesh};
 pub use input::msh::{
-    LineBlock, MshEntity, MshFormat, MshMesh, TriangleBlock, read_msh, read_msh_file,
+    LineBlock, MshEntity, MshFormat, MshMesh, NodeData, TriangleBlock, read_msh, read_msh_file,
 };
 pub use output::{
     MshOptions, MshVersion, check_writable, remove_temporaries, write_file, write_msh,
     write_msh_to, write_preview, write_preview_coloured,
 };
-pub use params::{Length, Mesher, Params, defaults};
+pub use params::{
+    BoxSize, Length, Mesher, NearSize, Params, RegionSize, SizeFn, SizeFnSignature, SizeSpec,
+    defaults,
+};
 pub use pipeline::{
     FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,
     mesh_drawing_with, mesh_svg, run_file,
 };
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
+pub use sizing::{EdgeMatch, HISTOGRAM_BOUNDS, SizingReport};
 pub use stage::Stage;
 pub use svg::drawing::{
     Clip, ClipPart, Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, PaintCounts,

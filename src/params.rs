@@ -91,7 +91,18 @@ pub mod defaults {
     /// Worker threads of the stages that run in parallel: 0, one per core
     /// (ours; `triwild batch` gives each child 1): `--threads`.
     pub const THREADS: usize = 0;
+    /// Grading of the size field: from one element to the next the size grows
+    /// by at most this factor (ours: 1.5, the growth rate 0.5 per unit length
+    /// that thin strokes' sizes used before the size field; gmsh's
+    /// `Mesh.SmoothRatio` default is 1.8): `--grading`.
+    pub const GRADING: f64 = 1.5;
+    /// The automatic local-feature-size field (`--feature-size on|off`): on
+    /// by default (see `sizing` for what it measured).
+    pub const FEATURE_SIZE: bool = true;
 }
+
+mod size_spec;
+pub use size_spec::{BoxSize, NearSize, RegionSize, SizeFn, SizeFnSignature, SizeSpec};
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -113,7 +124,8 @@ impl Length {
         }
     }
 
-    fn value(self) -> f64 {
+    /// The number as given (relative or absolute).
+    pub(crate) fn value(self) -> f64 {
         match self {
             Length::Rel(v) | Length::Abs(v) => v,
         }
@@ -208,6 +220,10 @@ pub struct Params {
     /// classification); 0: one per core. The output is the same for every
     /// count. Default [`defaults::THREADS`].
     pub threads: usize,
+    /// The size field's inputs beside [`Params::l`]: per-region sizes, sizes
+    /// near outlines, boxes, a formula, a background mesh, a function, the
+    /// automatic feature size and the grading. Default [`SizeSpec::DEFAULT`].
+    pub size: SizeSpec,
 }
 
 impl Params {
@@ -249,6 +265,7 @@ impl Params {
         max_memory_mb: defaults::MAX_MEMORY_MB,
         time_limit: defaults::TIME_LIMIT,
         threads: defaults::THREADS,
+        size: SizeSpec::DEFAULT,
     };
 
     /// Set the feature envelope μ.
@@ -345,6 +362,12 @@ impl Params {
     /// Set the wall-clock limit, seconds (`None`: no limit).
     pub fn with_time_limit(mut self, seconds: Option<f64>) -> Self {
         self.time_limit = seconds;
+        self
+    }
+
+    /// Set the size field's inputs (see [`SizeSpec`]).
+    pub fn with_size(mut self, size: SizeSpec) -> Self {
+        self.size = size;
         self
     }
 
@@ -454,6 +477,7 @@ impl Params {
                 )));
             }
         }
+        self.size.validate()?;
         if self.stop_after.is_some() && self.mesher != Mesher::TriWild {
             return Err(Error::InvalidParams(
                 "--stop-after and --linear need --mesher triwild".into(),

@@ -6,6 +6,9 @@
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Stage {
+    /// The size field (`sizing`): built before the features from the drawing
+    /// and the size parameters.
+    Sizing,
     /// Feature preprocessing: primary and secondary features (§4.3.1, §4.4).
     Features,
     /// The exact BSP mesh: every vertex rounded to `f64` or an error, no
@@ -27,6 +30,7 @@ impl Stage {
     /// The stage's lower-case name, as in messages, `--stats` and `--stop-after`.
     pub fn name(self) -> &'static str {
         match self {
+            Stage::Sizing => "sizing",
             Stage::Features => "features",
             Stage::Bsp => "bsp",
             Stage::Optimize => "optimize",

@@ -164,12 +164,13 @@ fn mesh_planar(
         vertices.push(Point2::new(p.x, p.y));
     }
     let s = |l: f64| scale.length(l);
+    let (min_angle, max_vertices) = (params.cdt_min_angle_deg, params.max_vertices as usize);
     let refinement = |n: usize| {
         RefinementParameters::<f64>::new()
-            .with_angle_limit(AngleLimit::from_deg(params.cdt_min_angle_deg))
+            .with_angle_limit(AngleLimit::from_deg(min_angle))
             .with_max_allowed_area(equilateral_area(s(r.l)))
             .with_min_required_area(equilateral_area(s(r.l_min)))
-            .with_max_additional_vertices((params.max_vertices as usize).saturating_sub(n))
+            .with_max_additional_vertices(max_vertices.saturating_sub(n))
     };
     // Snap rounding leaves no crossing, so constraints go in without splitting; a
     // panic inside spade is still caught rather than taking the process down.

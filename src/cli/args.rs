@@ -8,7 +8,7 @@
 use clap::{Args, ValueEnum};
 use triwild::Order;
 use triwild::defaults;
-use triwild::{Length, Mesher, Params, Stage, Units};
+use triwild::{Length, Mesher, Params, SizeSpec, Stage, Units};
 use triwild::{MshOptions, MshVersion};
 use triwild::{PaintOptions, StrokeMode};
 use triwild::{RegionMode, RegionOptions};
@@ -327,6 +327,96 @@ pub(crate) struct ParamArgs {
     /// unless this is given.
     #[arg(long, default_value_t = defaults::THREADS, value_name = "N")]
     threads: usize,
+    /// Mesh size inside a region: h ≤ L there (repeatable). NAME is a region as
+    /// the .msh names it (a shape's id, shape-N, fill-#rrggbb with --regions
+    /// colour, background); L is relative to d, or in output units when the
+    /// edge length is given with --edge-length-abs (as are all the size fields'
+    /// lengths).
+    #[arg(long = "size", value_name = "NAME=L", value_parser = parse_named_size)]
+    size: Vec<(String, f64)>,
+    /// Mesh size near a region's outline: h = L on it, growing linearly to the
+    /// ambient size over DIST (gmsh's Distance + Threshold), or at the grading
+    /// without DIST (repeatable).
+    #[arg(long, value_name = "NAME=L[:DIST]", value_parser = parse_near_size)]
+    size_near: Vec<(String, f64, Option<f64>)>,
+    /// Mesh size in a box of output coordinates: h ≤ L there (repeatable).
+    #[arg(long, value_name = "X0,Y0,X1,Y1=L", value_parser = parse_box_size, allow_hyphen_values = true)]
+    size_box: Vec<([f64; 4], f64)>,
+    /// Mesh size as a formula in x and y (output coordinates), in output units,
+    /// e.g. '0.5 + 0.05*x' (+ - * / ^, sin, cos, exp, ln, sqrt, abs, ...).
+    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    size_expr: Option<String>,
+    /// Mesh size from a background mesh: a gmsh triangle mesh with one
+    /// $NodeData value per node (a view, as gmsh writes it), in output units,
+    /// interpolated linearly; it must cover the drawing.
+    #[arg(long, value_name = "FILE.msh")]
+    size_from: Option<std::path::PathBuf>,
+    /// The automatic local feature size: narrow gaps, thin parts and tight
+    /// curves get elements that fit them.
+    #[arg(long, value_enum, default_value_t = if defaults::FEATURE_SIZE { OnOff::On } else { OnOff::Off })]
+    feature_size: OnOff,
+    /// Grading: the mesh size grows by at most this factor from one element
+    /// to the next (at least 1).
+    #[arg(long, default_value_t = defaults::GRADING, value_name = "G")]
+    grading: f64,
+}
+
+/// A switch.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum OnOff {
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
+/// `NAME=L`.
+fn parse_named_size(s: &str) -> Result<(String, f64), String> {
+    let (name, l) = s
+        .rsplit_once('=')
+        .ok_or_else(|| format!("expected NAME=L, got `{s}`"))?;
+    if name.is_empty() {
+        return Err(format!("expected NAME=L, got `{s}` (no name)"));
+    }
+    let l: f64 = l
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected NAME=L with a number L, got `{s}`"))?;
+    Ok((name.to_owned(), l))
+}
+
+/// `NAME=L[:DIST]`.
+fn parse_near_size(s: &str) -> Result<(String, f64, Option<f64>), String> {
+    let (name, rest) = s
+        .rsplit_once('=')
+        .ok_or_else(|| format!("expected NAME=L[:DIST], got `{s}`"))?;
+    if name.is_empty() {
+        return Err(format!("expected NAME=L[:DIST], got `{s}` (no name)"));
+    }
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("expected NAME=L[:DIST] with numbers, got `{s}`"))
+    };
+    match rest.split_once(':') {
+        Some((l, dist)) => Ok((name.to_owned(), num(l)?, Some(num(dist)?))),
+        None => Ok((name.to_owned(), num(rest)?, None)),
+    }
+}
+
+/// `X0,Y0,X1,Y1=L`.
+fn parse_box_size(s: &str) -> Result<([f64; 4], f64), String> {
+    let bad = || format!("expected X0,Y0,X1,Y1=L, got `{s}`");
+    let (corners, l) = s.rsplit_once('=').ok_or_else(bad)?;
+    let v: Vec<f64> = corners
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    let [x0, y0, x1, y1] = v[..] else {
+        return Err(bad());
+    };
+    Ok(([x0, y0, x1, y1], l.trim().parse().map_err(|_| bad())?))
 }
 
 /// `--time-limit`'s default from [`defaults::TIME_LIMIT`]; infinite for none.
@@ -405,6 +495,38 @@ impl ParamArgs {
             .with_limits(self.max_segments, self.max_shapes, self.max_memory)
             .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))
             .with_threads(self.threads)
+            .with_size(self.size_spec())
+    }
+
+    /// The size fields these flags ask for: their lengths take the edge
+    /// length's form (relative to d, or absolute with --edge-length-abs).
+    fn size_spec(&self) -> SizeSpec {
+        let form = |v: f64| {
+            if self.edge_length_abs.is_some() {
+                Length::Abs(v)
+            } else {
+                Length::Rel(v)
+            }
+        };
+        let mut spec = SizeSpec::DEFAULT
+            .with_feature_size(self.feature_size == OnOff::On)
+            .with_grading(self.grading);
+        for (name, l) in &self.size {
+            spec = spec.with_region(name.clone(), form(*l));
+        }
+        for (name, l, dist) in &self.size_near {
+            spec = spec.with_near(name.clone(), form(*l), dist.map(form));
+        }
+        for (corners, l) in &self.size_box {
+            spec = spec.with_box(*corners, form(*l));
+        }
+        if let Some(e) = &self.size_expr {
+            spec = spec.with_expr(e.clone());
+        }
+        if let Some(p) = &self.size_from {
+            spec = spec.with_background(p.clone());
+        }
+        spec
     }
 
     /// `--max-memory` in bytes.

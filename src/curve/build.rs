@@ -62,9 +62,9 @@ use crate::svg::ShapeId;
 use kurbo::Point;
 
 /// How the curving stage works.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 #[non_exhaustive]
-pub(crate) struct CurveOptions {
+pub(crate) struct CurveOptions<'a> {
     /// Element order of the output (1: straight, 2: quadratic, 3: cubic).
     pub order: Order,
     /// The input's bounding-box diagonal `d` (user units): distances in
@@ -99,6 +99,9 @@ pub(crate) struct CurveOptions {
     /// The run's wall-clock limit: the curved optimization starts no pass
     /// after it (default none).
     pub deadline: Deadline,
+    /// The size field the curved optimization measures edges against
+    /// (default: `l_abs` everywhere).
+    pub size: Option<&'a crate::sizing::SizeField>,
 }
 
 /// Default [`CurveOptions::max_splits`]: a budget that only a runaway repair
@@ -113,7 +116,7 @@ const DEFAULT_FIT_ITERATIONS: usize = 80;
 /// Empirical, introduced in 7b6b441.
 const DEFAULT_FIT_MIN_RATIO: f64 = 0.01;
 
-impl CurveOptions {
+impl<'a> CurveOptions<'a> {
     /// `d` as given; `l_min`, `l`, the curved stop energy and pass limit from
     /// [`crate::Params::DEFAULT`] (`1e-4 · d`, `0.05 · d`, 10, 10); 10 000
     /// splits, 8 repair rounds, 80 fit iterations, fitted ratio ≥ 0.01; the
@@ -136,6 +139,7 @@ impl CurveOptions {
             corner_floor: rule.corner_floor,
             curved_alpha: rule.alpha,
             deadline: Deadline::NONE,
+            size: None,
         }
     }
     /// Set the wall-clock limit.
@@ -148,7 +152,14 @@ impl CurveOptions {
         self.l_min_abs = l;
         self
     }
+    /// Set the size field of the curved optimization (its largest size is `l`).
+    pub(crate) fn with_size(mut self, field: &'a crate::sizing::SizeField) -> Self {
+        self.l_abs = field.l();
+        self.size = Some(field);
+        self
+    }
     /// Set the target edge length `l` (user units) of the curved optimization.
+    #[cfg(test)]
     pub(crate) fn with_l_abs(mut self, l: f64) -> Self {
         self.l_abs = l;
         self
@@ -278,6 +289,7 @@ fn curved_optimization(
     };
     let curved_opts = CurvedOptimizeOptions {
         l: opts.l_abs,
+        field: opts.size,
         stop_energy: opts.stop_energy,
         max_passes: opts.max_passes,
         deadline: opts.deadline,

@@ -40,6 +40,7 @@ use crate::ops::invariants::curved;
 use crate::ops::{self, Context};
 use crate::optimize::OptimizeOptions;
 use crate::optimize::schedule::{EnergyMeasure, OpTally, Schedule, measure_energy};
+use crate::sizing::SizeField;
 
 /// Collapse edges shorter than this fraction of `l` (the shared schedule's
 /// collapses never create an edge longer than 4/3 `l`): thesis §2.3.2,
@@ -56,10 +57,12 @@ const STALL_MEAN: f64 = 1e-3;
 const SEED: u64 = 0x0063_7572_7665_6421;
 
 /// Parameters of the curved optimization, in user units.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct CurvedOptimizeOptions {
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CurvedOptimizeOptions<'a> {
     /// Target edge length `l`.
     pub l: f64,
+    /// The size field (`None`: `l` everywhere).
+    pub field: Option<&'a SizeField>,
     /// Curved AMIPS energy (1 for equilateral) below which the mesh is good enough.
     pub stop_energy: f64,
     /// Passes after the preliminary one; 0 skips the stage.
@@ -137,7 +140,7 @@ pub(crate) fn optimize_curved(
         ..CurvedOptimizeStats::default()
     };
     // The linear schedule's collapse, swap and smoothing passes, with every
-    // target at `l` (its sizing-field and stop fields are not used here).
+    // target at the size field (its refinement and stop rules are not used here).
     let sched_opts = OptimizeOptions {
         l: opts.l,
         l_floor: opts.l,
@@ -148,7 +151,15 @@ pub(crate) fn optimize_curved(
         deadline: opts.deadline,
     };
     let mut sched_ctx = ctx.clone();
-    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED);
+    let uniform;
+    let field = match opts.field {
+        Some(f) => f,
+        None => {
+            uniform = SizeField::uniform(opts.l, kurbo::Rect::ZERO);
+            &uniform
+        }
+    };
+    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED, field);
     let mut pass = |s: &mut Schedule<'_>| {
         let collapses = s.collapse_pass(COLLAPSE_BELOW);
         let swaps = s.swap_pass();

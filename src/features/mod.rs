@@ -505,6 +505,18 @@ impl FeatureSet {
         params: &Resolved,
         deadline: &Deadline,
     ) -> FeatureSet {
+        Self::build_sized(drawing, params, deadline, &|_| params.l)
+    }
+
+    /// [`FeatureSet::build_within`] with the size field `size` (output units,
+    /// at most `params.l`): curves are resampled into sections no longer than
+    /// the size along them.
+    pub(crate) fn build_sized(
+        drawing: &Drawing,
+        params: &Resolved,
+        deadline: &Deadline,
+        size: &(dyn Fn(kurbo::Point) -> f64 + Sync),
+    ) -> FeatureSet {
         let _span = tracing::debug_span!("features").entered();
         let start = Instant::now();
         let mut counts = FeatureCounts::default();
@@ -651,7 +663,7 @@ impl FeatureSet {
                     counts.trimmed_pieces += 1;
                     continue;
                 }
-                for p in resample::resample(parent, w[0], w[1], params) {
+                for p in resample::resample(parent, w[0], w[1], params, size) {
                     let mut ctrl = p.ctrl;
                     // Sections meeting at a crossing share its point exactly.
                     if let Some(&x) = found.points.get(&(idx, p.t0.to_bits())) {

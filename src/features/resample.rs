@@ -74,13 +74,28 @@ fn curvature_bounded(parent: &Parent, t0: f64, t1: f64, ctrl: &CubicBez, kappa_m
     })
 }
 
-/// Cut `parent` on `[t0, t1]` into sections. For a line: equal pieces no longer than l.
-pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<Piece> {
+/// The smallest size of the field `size` at the ends and the middle of a
+/// section (at most `r.l`).
+fn size_along(ctrl: &CubicBez, r: &Resolved, size: &dyn Fn(kurbo::Point) -> f64) -> f64 {
+    let mid = kurbo::ParamCurve::eval(ctrl, 0.5);
+    r.l.min(size(ctrl.p0)).min(size(mid)).min(size(ctrl.p3))
+}
+
+/// Cut `parent` on `[t0, t1]` into sections no longer than the size field
+/// `size` along them (at most l). For a line: equal pieces.
+pub(super) fn resample(
+    parent: &Parent,
+    t0: f64,
+    t1: f64,
+    r: &Resolved,
+    size: &dyn Fn(kurbo::Point) -> f64,
+) -> Vec<Piece> {
     let mut out = Vec::new();
     match parent {
         Parent::Line(l) => {
             let len = l.length() * (t1 - t0);
-            let n = (len / r.l).ceil().clamp(1.0, MAX_SECTIONS as f64) as usize;
+            let h = size_along(&parent.restrict(t0, t1), r, size);
+            let n = (len / h).ceil().clamp(1.0, MAX_SECTIONS as f64) as usize;
             let ts: Vec<f64> = (0..=n)
                 .map(|i| match i {
                     0 => t0,
@@ -103,7 +118,7 @@ pub(super) fn resample(parent: &Parent, t0: f64, t1: f64, r: &Resolved) -> Vec<P
             while let Some((a, b, depth)) = stack.pop() {
                 let ctrl = parent.restrict(a, b);
                 let len = polygon_length(&ctrl);
-                let shape_ok = len <= r.l && chord_deviation(&ctrl) <= r.mu;
+                let shape_ok = len <= size_along(&ctrl, r, size) && chord_deviation(&ctrl) <= r.mu;
                 let turn_ok = end_tangent_angle(&ctrl) < r.alpha;
                 let curvature_ok = curvature_bounded(parent, a, b, &ctrl, 2.0 / r.l_min);
                 let m = 0.5 * (a + b);
@@ -146,7 +161,7 @@ mod tests {
         let r = Params::DEFAULT.resolve(2.0 * 2f64.sqrt());
         let k = 0.552_284_749_8;
         let c = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
-        let ps = resample(&Parent::Cubic(c), 0.0, 1.0, &r);
+        let ps = resample(&Parent::Cubic(c), 0.0, 1.0, &r, &|_| r.l);
         assert_eq!(ps.len(), 16);
         for (i, p) in ps.iter().enumerate() {
             assert_eq!(p.t0, i as f64 / 16.0);
@@ -158,7 +173,7 @@ mod tests {
     fn line_pieces_are_no_longer_than_l_and_share_end_points() {
         let r = Params::DEFAULT.resolve(20.0);
         let l = Line::new((0.0, 0.0), (10.0, 0.0));
-        let ps = resample(&Parent::Line(l), 0.0, 1.0, &r);
+        let ps = resample(&Parent::Line(l), 0.0, 1.0, &r, &|_| r.l);
         assert_eq!(ps.len(), 10);
         assert_eq!(ps[0].ctrl.p0, l.p0);
         assert_eq!(ps[9].ctrl.p3, l.p1);
@@ -175,18 +190,18 @@ mod tests {
         let r = Params::DEFAULT.resolve(d);
         let k = 0.552_284_749_8;
         let c = CubicBez::new((1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0));
-        let ps = resample(&Parent::Cubic(c), 0.0, 1e-7, &r);
+        let ps = resample(&Parent::Cubic(c), 0.0, 1e-7, &r, &|_| r.l);
         assert_eq!(ps.len(), 1);
         assert!(!ps[0].eligible);
         let l = Line::new((0.0, 0.0), (1.0, 0.0));
-        let ps = resample(&Parent::Line(l), 1.0 - 1e-7, 1.0, &r);
+        let ps = resample(&Parent::Line(l), 1.0 - 1e-7, 1.0, &r, &|_| r.l);
         assert_eq!(ps.len(), 1);
         assert!(!ps[0].eligible);
         // Just above l_m both stay eligible.
         let t = 2.0 * r.l_min;
-        assert!(resample(&Parent::Line(l), 0.0, t, &r)[0].eligible);
+        assert!(resample(&Parent::Line(l), 0.0, t, &r, &|_| r.l)[0].eligible);
         assert!(
-            resample(&Parent::Cubic(c), 0.0, t, &r)
+            resample(&Parent::Cubic(c), 0.0, t, &r, &|_| r.l)
                 .iter()
                 .all(|p| p.eligible)
         );
@@ -199,7 +214,7 @@ mod tests {
         let r = Params::DEFAULT.resolve(2.0 * 2f64.sqrt());
         let w = std::f64::consts::FRAC_1_SQRT_2;
         let c = crate::svg::drawing::Conic::new((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), w);
-        let ps = resample(&Parent::Conic(c), 0.0, 1.0, &r);
+        let ps = resample(&Parent::Conic(c), 0.0, 1.0, &r, &|_| r.l);
         assert_eq!(ps.len(), 16);
         assert_eq!(ps[0].ctrl.p0, c.p0);
         assert_eq!(ps[15].ctrl.p3, c.p2);

@@ -98,6 +98,17 @@ pub struct MshMesh {
     pub other_elements: usize,
     /// Physical names: (dimension, tag, name).
     pub physical_names: Vec<(i32, i32, String)>,
+    /// The `$NodeData` sections (a gmsh view's values per node), in file order.
+    pub node_data: Vec<NodeData>,
+}
+
+/// One `$NodeData` section: the first component of each listed node's value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeData {
+    /// The view's name (the first string tag), empty without one.
+    pub name: String,
+    /// (node index in [`MshMesh::nodes`], value), in file order.
+    pub values: Vec<(u32, f64)>,
 }
 
 impl MshMesh {
@@ -533,6 +544,7 @@ impl<'a> Reader<'a> {
         let mut names = Vec::new();
         let mut entity_physical: HashMap<(i32, i32), i32> = HashMap::new();
         let mut entities = Vec::new();
+        let mut node_data: Vec<(String, Vec<(u64, f64)>)> = Vec::new();
         let (mut saw_nodes, mut saw_elements) = (false, false);
         while let Some(l) = self.line() {
             let Some(name) = l.strip_prefix('$') else {
@@ -574,6 +586,11 @@ impl<'a> Reader<'a> {
                     } else {
                         self.elements_v2(&mut elems)?;
                     }
+                    self.end(name)?;
+                }
+                "NodeData" => {
+                    self.section = "$NodeData";
+                    node_data.push(self.node_data()?);
                     self.end(name)?;
                 }
                 _ if name.starts_with("End") => {
@@ -618,6 +635,23 @@ impl<'a> Reader<'a> {
                 nodes: idx,
             });
         }
+        let node_data = node_data
+            .into_iter()
+            .map(|(name, values)| {
+                let values = values
+                    .into_iter()
+                    .map(|(t, v)| {
+                        Ok((
+                            nodes.get(t).map_err(|_| {
+                                format!("$NodeData lists node {t}, which does not exist")
+                            })?,
+                            v,
+                        ))
+                    })
+                    .collect::<R<Vec<(u32, f64)>>>()?;
+                Ok(NodeData { name, values })
+            })
+            .collect::<R<Vec<NodeData>>>()?;
         Ok(MshMesh {
             format: MshFormat { version, binary },
             nodes: nodes.points,
@@ -630,7 +664,63 @@ impl<'a> Reader<'a> {
             unsupported_2d: elems.unsupported_2d,
             other_elements: elems.other,
             physical_names: names,
+            node_data,
         })
+    }
+
+    /// A `$NodeData` section after its header line: string, real and integer
+    /// tags (always ASCII), then per node its tag and values (ASCII or binary).
+    fn node_data(&mut self) -> R<(String, Vec<(u64, f64)>)> {
+        let ascii_count = |r: &mut Self, what: &str| -> R<u64> {
+            match r.line() {
+                Some(l) => l
+                    .trim()
+                    .parse()
+                    .or_else(|_| r.err(format!("bad {what} {:?}", truncate(l)))),
+                None => r.err("unexpected end of file"),
+            }
+        };
+        let n_strings = ascii_count(self, "string tag count")?;
+        let mut name = String::new();
+        for i in 0..n_strings {
+            let Some(l) = self.line() else {
+                return self.err("unexpected end of file");
+            };
+            if i == 0 {
+                name = l.trim().trim_matches('"').to_owned();
+            }
+        }
+        let n_reals = ascii_count(self, "real tag count")?;
+        for _ in 0..n_reals {
+            if self.line().is_none() {
+                return self.err("unexpected end of file");
+            }
+        }
+        let n_ints = ascii_count(self, "integer tag count")?;
+        let mut ints = Vec::new();
+        for _ in 0..n_ints {
+            ints.push(ascii_count(self, "integer tag")?);
+        }
+        let components = ints.get(1).copied().unwrap_or(1);
+        let count = ints.get(2).copied().unwrap_or(0);
+        if components == 0 || components > 9 {
+            return self.err(format!("{components} components per node"));
+        }
+        let per = 4 + 8 * components as usize;
+        let mut values = Vec::with_capacity(self.cap(count, per));
+        for _ in 0..count {
+            let tag = match self.mode {
+                Mode::Ascii => self.parse("node tag")?,
+                Mode::Binary { .. } if self.major == 4 => self.size()?,
+                Mode::Binary { .. } => self.int_count("node tag")?,
+            };
+            let first = self.float()?;
+            for _ in 1..components {
+                self.float()?;
+            }
+            values.push((tag, first));
+        }
+        Ok((name, values))
     }
 
     fn physical_names(&mut self, out: &mut Vec<(i32, i32, String)>) -> R<()> {

@@ -52,6 +52,7 @@ use crate::ops::{
     try_reroute_planned, try_round, try_smooth_planned, try_split, try_split_planned,
     try_swap_planned,
 };
+use crate::sizing::SizeField;
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 use std::collections::{BTreeMap, BinaryHeap, VecDeque};
@@ -63,13 +64,10 @@ use std::collections::{BTreeMap, BinaryHeap, VecDeque};
 /// lengths".
 const SPLIT_ABOVE: f64 = 4.0 / 3.0;
 
-/// At most this many split passes resolve the thin strokes' size caps before
-/// the main passes (each halves the longest capped edges: 2^12 covers any cap
-/// above the sizing floor).
-const CAP_SPLIT_PASSES: usize = 12;
-
-/// How fast sizes grow away from a capped outline (length per unit distance).
-const CAP_GRADING: f64 = 0.5;
+/// At most this many split passes resolve the size field before the main
+/// passes where it asks for sizes well below the BSP mesh's edges (each halves
+/// the longest edges: 2^12 covers any size above the sizing floor).
+const FIELD_SPLIT_PASSES: usize = 12;
 /// Edges shorter than this fraction of their target are collapsed in a pass
 /// (the collapse may not make an edge longer than [`SPLIT_ABOVE`] of its
 /// target, so splits never undo it). The thesis (§2.3.2) collapses below 4/5;
@@ -81,7 +79,7 @@ const COLLAPSE_FACTOR: f64 = 1.0;
 const COARSEN_FACTOR: f64 = f64::INFINITY;
 /// The final coarsening may create edges up to this multiple of `l` (no split
 /// pass follows it to undo them). Introduced in 8f4bc8a ("new edges up to 2l").
-const COARSEN_STRETCH: f64 = 2.0;
+const COARSEN_STRETCH: f64 = SPLIT_ABOVE;
 /// The final coarsening may always make triangles up to this energy (1 for
 /// equilateral), even in a mesh whose worst triangle is better (the stop energy
 /// still caps it). With the mesh's own worst energy as the only bound, a mesh
@@ -127,6 +125,12 @@ const STOP_STRETCH: f64 = 2.0;
 const SIZING_WORST_DIVISOR: f64 = 100.0;
 /// See [`SIZING_WORST_DIVISOR`]: the reference's `stop_energy * 0.9`.
 const SIZING_STOP_FRACTION: f64 = 0.9;
+/// Along an edge whose ends' field values differ by less than this factor the
+/// field at the midpoint is taken as their mean (see `Schedule::edge_target`).
+const FIELD_LINEAR: f64 = 1.1;
+/// A vertex whose target falls below this fraction of the field counts as
+/// refined by the optimizer (the size report leaves its edges out).
+const REFINED_BELOW: f64 = 0.999;
 /// A target near a bad triangle is multiplied by this (thesis §2.3.2: "divided
 /// by 2"; the reference's `refine_scale = 0.5`).
 const SIZING_REFINE: f64 = 0.5;
@@ -465,15 +469,14 @@ pub(crate) struct Schedule<'a> {
     opts: OptimizeOptions,
     /// Target edge length by vertex slot.
     target: Vec<f64>,
-    /// The largest target by vertex slot: `l`, or less on the outline of a thin
-    /// stroke (see [`optimize_with_caps`]); the sizing field relaxes and the
-    /// coarsening resets to it.
+    /// The size field at the vertex by vertex slot (the largest target: the
+    /// optimizer's refinement relaxes and the coarsening resets to it).
     base: Vec<f64>,
-    /// Whether some vertex has a base below `l`.
-    capped: bool,
-    /// By primary section: whether its shape has a size cap below `l` (see
-    /// [`optimize_with_caps`]).
-    capped_section: Vec<bool>,
+    /// The size field (`crate::sizing`): what every edge is measured against.
+    field: &'a SizeField,
+    /// By vertex slot: whether the optimizer refined the vertex's target below
+    /// the field (around a triangle it could not improve at the field's size).
+    refined: Vec<bool>,
     stats: OptimizeStats,
     rng: Shuffle,
     /// Operation clock: advanced by every applied operation.
@@ -850,12 +853,14 @@ impl<'a> Schedule<'a> {
         ctx: &'a mut Context,
         opts: &OptimizeOptions,
         seed: u64,
+        field: &'a SizeField,
     ) -> Self {
+        let base = bases(mesh, field, opts.l);
         Schedule {
-            target: vec![opts.l; mesh.vertex_capacity()],
-            base: vec![opts.l; mesh.vertex_capacity()],
-            capped: false,
-            capped_section: Vec::new(),
+            target: base.clone(),
+            base,
+            field,
+            refined: Vec::new(),
             mesh,
             ctx,
             opts: *opts,
@@ -943,91 +948,65 @@ impl<'a> Schedule<'a> {
         *slot(&mut self.base, v, self.opts.l) = t;
     }
 
-    /// Cap the base (and target) of every vertex on a primary edge whose shape
-    /// has a size cap (`caps` by shape index; `∞` or missing: none). Caps are
-    /// kept within `[l_floor, l]`.
-    fn apply_caps(&mut self, caps: &[f64]) {
-        let l = self.opts.l;
-        let cap_of = |c: &crate::ops::CurveSection| {
-            c.source
-                .and_then(|src| caps.get(src.shape.index()).copied())
-                .filter(|&cap| cap < l)
-        };
-        let section_caps: Vec<Option<f64>> = self.ctx.sections.iter().map(cap_of).collect();
-        if section_caps.iter().all(Option::is_none) {
+    fn is_refined(&self, v: VertexId) -> bool {
+        self.refined.get(v.index()).copied().unwrap_or(false)
+    }
+
+    /// The size field at every vertex again (smoothing and projection move
+    /// vertices); targets keep their ratio to it.
+    fn refresh_bases(&mut self) {
+        if self.field.is_uniform() {
             return;
         }
-        self.capped_section = section_caps.iter().map(Option::is_some).collect();
-        let mut edges: Vec<(EdgeKey, f64)> = Vec::new();
-        for (k, tags) in self.mesh.tagged_edges() {
-            for tag in tags {
-                if let FeatureOn::Primary { section, .. } = *tag
-                    && let Some(Some(cap)) = section_caps.get(section as usize)
-                {
-                    edges.push((k, cap.max(self.opts.l_floor)));
-                }
-            }
+        let fresh = bases(self.mesh, self.field, self.opts.l);
+        for v in self.mesh.vertices() {
+            let i = v.index();
+            let old = self.base.get(i).copied().unwrap_or(self.opts.l);
+            let ratio = self.target.get(i).map_or(1.0, |t| t / old);
+            *slot(&mut self.target, v, self.opts.l) = fresh[i] * ratio;
         }
-        for (k, cap) in edges {
-            for v in [k.lo, k.hi] {
-                if cap < self.base_of(v) {
-                    self.set_base(v, cap);
-                    self.set_target(v, cap);
-                    self.capped = true;
-                }
-            }
-        }
+        self.base = fresh;
     }
 
-    /// Whether the edge lies on a primary section of a capped shape.
-    fn on_capped_feature(&self, k: EdgeKey) -> bool {
-        self.mesh.edge_tags(k.lo, k.hi).iter().any(|tag| {
-            matches!(*tag, FeatureOn::Primary { section, .. }
-                if self.capped_section.get(section as usize).copied().unwrap_or(false))
-        })
+    /// Whether some edge is longer than the split bound of the field (only
+    /// looked at when the field is not uniform: the BSP mesh knows nothing of it).
+    fn sizes_pending(&self) -> bool {
+        !self.field.is_uniform()
+            && self
+                .mesh
+                .edge_list()
+                .into_par_iter()
+                .any(|k| self.mesh.distance(k.lo, k.hi) > SPLIT_ABOVE * self.edge_target(k))
     }
 
-    /// Whether an edge on a capped shape's outline is still longer than the
-    /// split bound of its mean base (the thin strokes are not yet resolved).
-    fn caps_pending(&mut self) -> bool {
-        if !self.capped {
-            return false;
-        }
-        let this = &*self;
-        this.mesh.edge_list().into_par_iter().any(|k| {
-            let b = 0.5 * (this.base_of(k.lo) + this.base_of(k.hi));
-            b < this.opts.l
-                && this.mesh.distance(k.lo, k.hi) > SPLIT_ABOVE * b
-                && this.on_capped_feature(k)
-        })
+    /// The longest edge over its target (the stop rule's stretch).
+    fn longest_stretch(&self) -> f64 {
+        self.mesh
+            .edge_list()
+            .into_par_iter()
+            .map(|k| self.mesh.distance(k.lo, k.hi) / self.edge_target(k))
+            .reduce(|| 0.0, f64::max)
     }
 
-    /// The target length of edge `k`: its ends' mean target; off a capped
-    /// outline, for an edge from a capped vertex, the size at its midpoint:
-    /// the smaller end's target grown by [`CAP_GRADING`] times the distance,
-    /// at most the ends' mean with capped ends counted at `l`. The sizes grade
-    /// away from a thin stroke instead of spreading its small size over the
-    /// plain parts of the drawing, and no fan of needles joins the stroke to
-    /// the coarse mesh.
+    /// The target length of edge `k`: the size field at its midpoint, times
+    /// its ends' mean refinement (their targets over the field at them). Where
+    /// the field at the two ends differs by less than [`FIELD_LINEAR`], the
+    /// midpoint's value is their mean (the field is linear along such an edge
+    /// to well within the split and collapse bounds, and no lookup is needed);
+    /// for a uniform field, the ends' mean target.
     fn edge_target(&self, k: EdgeKey) -> f64 {
-        let t = self.mean_target(k);
-        if !self.capped || self.base_of(k.lo).min(self.base_of(k.hi)) >= self.opts.l {
-            return t;
+        if self.field.is_uniform() {
+            return self.mean_target(k);
         }
-        if self.on_capped_feature(k) {
-            return t;
-        }
-        // Off the outline a capped vertex counts at the plain size `l`, and the
-        // stroke's size grows with the distance from it: the size at the edge's
-        // midpoint, seen from its smaller end.
-        let l = self.opts.l;
-        let free = |s: &Self, v: VertexId| {
-            if s.base_of(v) < l { l } else { s.target_of(v) }
+        let (ba, bb) = (self.base_of(k.lo), self.base_of(k.hi));
+        let ratio = 0.5 * (self.target_of(k.lo) / ba + self.target_of(k.hi) / bb);
+        let h = if ba.max(bb) <= FIELD_LINEAR * ba.min(bb) {
+            0.5 * (ba + bb)
+        } else {
+            let (a, b) = (self.mesh.position(k.lo), self.mesh.position(k.hi));
+            self.field.at_mid(a, b)
         };
-        let mean_free = 0.5 * (free(self, k.lo) + free(self, k.hi));
-        let small = self.target_of(k.lo).min(self.target_of(k.hi));
-        let len = self.mesh.distance(k.lo, k.hi);
-        mean_free.min(small + CAP_GRADING * 0.5 * len).min(l)
+        h * ratio
     }
 
     fn set_target(&mut self, v: VertexId, t: f64) {
@@ -1061,7 +1040,6 @@ impl<'a> Schedule<'a> {
             if self.mesh.num_vertices() >= self.opts.max_vertices {
                 break;
             }
-            let on_cap = self.capped && self.on_capped_feature(k);
             let this = &*self;
             let planned = ahead
                 .take(i, &cands, |&(_, e, _)| {
@@ -1075,11 +1053,18 @@ impl<'a> Schedule<'a> {
             self.touch(&out, true);
             if let Outcome::Applied(ch) = &out {
                 if let Some(m) = ch.new_vertex {
-                    self.set_target(m, t);
-                    if on_cap {
-                        let b = 0.5 * (self.base_of(k.lo) + self.base_of(k.hi));
-                        self.set_base(m, b);
+                    if self.field.is_uniform() {
+                        self.set_target(m, t);
+                    } else {
+                        // the field at the new vertex, refined as its edge's ends were
+                        let ratio = |s: &Self, v: VertexId| s.target_of(v) / s.base_of(v);
+                        let r = 0.5 * (ratio(self, k.lo) + ratio(self, k.hi));
+                        let h = self.field.at(self.mesh.position(m));
+                        self.set_base(m, h);
+                        self.set_target(m, h * r);
                     }
+                    let refined = self.is_refined(k.lo) || self.is_refined(k.hi);
+                    *slot(&mut self.refined, m, false) = refined;
                 }
                 applied += 1;
             }
@@ -1151,7 +1136,11 @@ impl<'a> Schedule<'a> {
                 hit_floor = true;
             }
             let top = self.base_of(v);
-            self.set_target(v, t.clamp(self.opts.l_floor, top));
+            let t = t.clamp(self.opts.l_floor.min(top), top);
+            if t < top * REFINED_BELOW {
+                *slot(&mut self.refined, v, false) = true;
+            }
+            self.set_target(v, t);
         }
         hit_floor
     }
@@ -1744,36 +1733,46 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
     (new.is_finite() && new < old * (1.0 - SWAP_MIN_GAIN)).then_some(old - new)
 }
 
-/// Improve `mesh` in place (see the module doc). `ctx.envelope` may be
-/// restaged (denser sampling, larger ε) when rational vertices are left.
+/// Improve `mesh` in place (see the module doc) with the size `opts.l`
+/// everywhere. `ctx.envelope` may be restaged (denser sampling, larger ε) when
+/// rational vertices are left.
 #[cfg(test)]
 pub(crate) fn optimize(
     mesh: &mut TriMesh,
     ctx: &mut Context,
     opts: &OptimizeOptions,
 ) -> OptimizeStats {
-    optimize_with_caps(mesh, ctx, opts, &[])
+    let field = SizeField::uniform(opts.l, mesh_bounds(mesh));
+    optimize_with_field(mesh, ctx, opts, &field).0
 }
 
-/// The optimization (the module doc) with a size cap per shape (`caps[shape index]`, user units;
-/// `∞` or missing: none): the vertices on a capped shape's primary edges target
-/// at most its cap (within `[l_floor, l]`), from the start through the final
-/// coarsening; split passes resolve those outlines to their caps before the
-/// main passes, and the sizes grade away from them (see `edge_target`). The pipeline caps the area of a thin stroke at a small
-/// multiple of its width ([`stroke_size_caps`]): a strip meshed at the global
-/// size is a row of needles.
-pub(crate) fn optimize_with_caps(
+/// The bounding box of a mesh's vertices.
+#[cfg(test)]
+fn mesh_bounds(mesh: &TriMesh) -> kurbo::Rect {
+    mesh.vertices()
+        .map(|v| mesh.position(v))
+        .fold(None, |r: Option<kurbo::Rect>, p| {
+            Some(r.map_or(kurbo::Rect::from_points(p, p), |r| r.union_pt(p)))
+        })
+        .unwrap_or_default()
+}
+
+/// The optimization (the module doc) against the size field `field`: every
+/// target starts at the field (`opts.l` is its largest value); split passes
+/// resolve it before the main passes where it asks for sizes below the BSP
+/// mesh's edges. Returns the statistics and the positions of the vertices the
+/// optimizer refined below the field (the size report leaves their edges out).
+pub(crate) fn optimize_with_field(
     mesh: &mut TriMesh,
     ctx: &mut Context,
     opts: &OptimizeOptions,
-    caps: &[f64],
-) -> OptimizeStats {
+    field: &SizeField,
+) -> (OptimizeStats, Vec<kurbo::Point>) {
     let mut ever_off = Vec::new();
-    let mut s = Schedule::new(mesh, ctx, opts, SEED);
-    s.apply_caps(caps);
+    let mut s = Schedule::new(mesh, ctx, opts, SEED, field);
     let rational = s.improve(&mut ever_off);
     if s.stats().stop == StopReason::TimeLimit {
-        return s.stats().clone();
+        return (s.stats().clone(), Vec::new());
     }
     // From here on no operation stretches an edge past 2 l: the coarsening's
     // collapses by their length rule, smoothing and swaps by the context's bound.
@@ -1784,35 +1783,46 @@ pub(crate) fn optimize_with_caps(
     s.ctx.max_new_edge = f64::INFINITY;
     s.minmax_polish();
     let rational = s.envelope_stages(rational);
-    s.finish(rational, &mut ever_off)
+    let refined: Vec<kurbo::Point> = s
+        .mesh
+        .vertices()
+        .filter(|&v| s.is_refined(v))
+        .map(|v| s.mesh.position(v))
+        .collect();
+    (s.finish(rational, &mut ever_off), refined)
 }
 
-/// Edge length per stroke width on the outline of a stroke meshed as an area:
-/// the sides of a strip of width w then carry vertices about 2–2.7 w apart,
-/// and its triangles have angles near 35° (20° where two vertices face each
-/// other straight across), where the global size would make needles.
-pub(crate) const STROKE_SIZE_PER_WIDTH: f64 = 2.0;
-
-/// The size caps of [`optimize_with_caps`] for `drawing`: a stroke area's
-/// shape is capped at [`STROKE_SIZE_PER_WIDTH`] times its width.
-pub(crate) fn stroke_size_caps(drawing: &crate::svg::Drawing) -> Vec<f64> {
-    drawing
-        .shapes
-        .iter()
-        .map(|s| {
-            s.paint
-                .stroke_width
-                .map_or(f64::INFINITY, |w| STROKE_SIZE_PER_WIDTH * w)
-        })
-        .collect()
+/// The size field at every vertex slot (`l` at free slots).
+fn bases(mesh: &TriMesh, field: &SizeField, l: f64) -> Vec<f64> {
+    let mut out = vec![l; mesh.vertex_capacity()];
+    if field.is_uniform() {
+        return out;
+    }
+    let verts: Vec<VertexId> = mesh.vertices().collect();
+    let vals: Vec<f64> = verts
+        .par_iter()
+        .map(|&v| field.at(mesh.position(v)))
+        .collect();
+    for (v, h) in verts.into_iter().zip(vals) {
+        out[v.index()] = h;
+    }
+    out
 }
 
 /// Whether the quality goal is met: every vertex in `f64` and on its curve, no
 /// edge longer than `2 l`, and the minimum angle above α or the maximum energy
 /// below the stop energy (over the triangles not locked).
-fn quality_reached(m: &Measure, opts: &OptimizeOptions, rational: usize, off: usize) -> bool {
+fn quality_reached(
+    m: &Measure,
+    opts: &OptimizeOptions,
+    rational: usize,
+    off: usize,
+    stretch: impl FnOnce() -> f64,
+) -> bool {
     let good = m.min_angle > opts.alpha_deg || m.max_energy < opts.stop_energy;
-    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * opts.l
+    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * opts.l && {
+        stretch() <= STOP_STRETCH
+    }
 }
 
 /// Whether a pass from `last` to `now` paid off too little at the current
@@ -1854,11 +1864,11 @@ impl Schedule<'_> {
         let mut just_updated = false;
         let mut hit_floor = false;
         let mut history: Vec<(f64, f64)> = Vec::new();
-        // Thin strokes first: split their outlines down to their caps (the
-        // main passes then work at those sizes; their stop rule knows nothing
-        // of the caps, so they would not wait for them).
-        for _ in 0..CAP_SPLIT_PASSES {
-            if !self.caps_pending() || self.out_of_time() {
+        // Where the field asks for sizes well below the BSP mesh's edges (thin
+        // strokes, the user's fields), split down to them first: the main
+        // passes then work at those sizes.
+        for _ in 0..FIELD_SPLIT_PASSES {
+            if !self.sizes_pending() || self.out_of_time() {
                 break;
             }
             self.split_pass();
@@ -1868,11 +1878,15 @@ impl Schedule<'_> {
                 self.stats.stop = StopReason::TimeLimit;
                 break;
             }
-            if quality_reached(&last, &opts, rational, off) {
+            let uniform = self.field.is_uniform();
+            if quality_reached(&last, &opts, rational, off, || {
+                if uniform { 0.0 } else { self.longest_stretch() }
+            }) {
                 self.stats.stop = StopReason::Quality;
                 break;
             }
             self.stats.passes = pass + 1;
+            self.refresh_bases();
             // The deadline is also checked between the sub-passes: one pass of
             // a large mesh can take seconds, more on a loaded machine.
             let (long, splits) = self.split_pass();
@@ -1930,6 +1944,7 @@ impl Schedule<'_> {
     /// than [`COARSEN_STRETCH`] `l` (collapses never make the local worst
     /// triangle worse).
     fn coarsen(&mut self) {
+        self.refresh_bases();
         let all: Vec<VertexId> = self.mesh.vertices().collect();
         for v in all {
             let b = self.base_of(v);
@@ -2251,7 +2266,8 @@ mod swap_memo_tests {
         let (mut checked, mut skipped) = (0, 0);
         for (i, (mut mesh, mut ctx)) in meshes.enumerate() {
             let opts = test_options();
-            let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7);
+            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
             for pass in 0..8 {
                 s.split_pass();
                 s.collapse_pass(0.8);
@@ -2306,7 +2322,8 @@ mod plan_ahead_tests {
                 .expect("a pool");
             pool.install(|| {
                 let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
-                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7);
+                let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
                 for pass in 0..6 {
                     s.split_pass();
                     s.collapse_pass(if pass < 3 { 0.8 } else { COARSEN_FACTOR });

@@ -22,7 +22,9 @@ use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MshOptions};
 use crate::params::{Length, Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
+use crate::regions::select::RegionMode;
 use crate::regions::{RegionOptions, RegionReport};
+use crate::sizing::{FieldInput, SizeField, SizingReport};
 use crate::svg::{self, Drawing, FeatureGeom, PaintOptions};
 use crate::{Error, Result};
 use kurbo::Rect;
@@ -194,6 +196,9 @@ pub struct Report {
     /// its `min_jacobian_ratio` is that of the mesh as written (after regions
     /// dropped any elements), equal to `quality.min_jacobian_ratio`.
     pub curve: Option<CurveStats>,
+    /// The size field: the fields applied, the grading, and how well the
+    /// mesh's edges match it (`--mesher triwild`).
+    pub sizing: Option<SizingReport>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
     /// The process's peak resident memory in MiB when the report was made
@@ -376,6 +381,8 @@ fn mesh_stages(
     let mut optimize = None;
     let mut warnings = drawing.warnings.clone();
     let mut curve = None;
+    let mut field: Option<SizeField> = None;
+    let mut refined: Vec<kurbo::Point> = Vec::new();
     let delivered = match params.mesher {
         Mesher::Cdt => {
             check_deadline(&deadline, Stage::Baseline)?;
@@ -385,9 +392,23 @@ fn mesh_stages(
             Delivered::Linear(linear)
         }
         Mesher::TriWild => {
+            let names = region_names(drawing, regions);
+            let bounds = padded_box(drawing, resolved.padding);
+            let built = times.time("sizing", || {
+                SizeField::build(&FieldInput {
+                    drawing,
+                    resolved: &resolved,
+                    spec: &params.size,
+                    region_names: &names,
+                    bounds,
+                    deadline,
+                })
+            })?;
+            field = Some(built);
+            let field = field.as_ref().expect("internal: just built");
             check_deadline(&deadline, Stage::Features)?;
             let fs = times.time("features", || {
-                FeatureSet::build_within(drawing, &resolved, &deadline)
+                FeatureSet::build_sized(drawing, &resolved, &deadline, &|p| field.at(p))
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
@@ -410,10 +431,10 @@ fn mesh_stages(
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
                 let opts = optimize_options(params, &resolved).with_deadline(deadline);
-                let stats = times.time("optimize", || {
-                    let caps = crate::optimize::stroke_size_caps(drawing);
-                    crate::optimize::optimize_with_caps(&mut mesh, &mut ctx, &opts, &caps)
+                let (stats, below) = times.time("optimize", || {
+                    crate::optimize::optimize_with_field(&mut mesh, &mut ctx, &opts, field)
                 });
+                refined = below;
                 check_deadline(&deadline, Stage::Optimize)?;
                 if params.paranoid {
                     check_trimesh(&mesh, Stage::Optimize)?;
@@ -431,7 +452,7 @@ fn mesh_stages(
                     let (cm, cs) = times.time("curve", || {
                         let opts = CurveOptions::new(params.order, resolved.d)
                             .with_l_min_abs(resolved.l_min)
-                            .with_l_abs(resolved.l)
+                            .with_size(field)
                             .with_stop_curved(params.stop_energy_curved, params.max_passes_curved)
                             .with_corner_floor(params.stop_energy)
                             .with_deadline(deadline);
@@ -472,6 +493,11 @@ fn mesh_stages(
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
     let quality = times.time("quality", || Quality::of(&mesh));
+    let sizing = field.map(|f| {
+        let mut report = f.report().clone();
+        report.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, &f, &refined)));
+        report
+    });
     if let Some(c) = &mut curve {
         c.min_jacobian_ratio = quality.min_jacobian_ratio;
     }
@@ -490,10 +516,55 @@ fn mesh_stages(
         stopped_after: params.stop_after,
         optimize,
         curve,
+        sizing,
         warnings,
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
     Ok(Meshed { mesh, report })
+}
+
+/// The name of each shape's region as the .msh will write it under `regions`'
+/// grouping (`None`: the shape paints no region), for the size fields that
+/// name regions.
+fn region_names(drawing: &Drawing, regions: &RegionOptions) -> Vec<Option<String>> {
+    drawing
+        .shapes
+        .iter()
+        .map(|s| {
+            s.filled.then(|| match regions.mode {
+                RegionMode::Shape => s.name(),
+                RegionMode::Colour => crate::regions::colour_name(s),
+                RegionMode::None => crate::regions::DOMAIN.to_owned(),
+            })
+        })
+        .collect()
+}
+
+/// How well the delivered mesh's edges (between its triangles' corners) match
+/// `field`, leaving out the edges at vertices the optimizer refined below it.
+fn mesh_edge_match(
+    mesh: &FemMesh,
+    field: &SizeField,
+    refined: &[kurbo::Point],
+) -> crate::sizing::EdgeMatch {
+    let key = |p: kurbo::Point| (p.x.to_bits(), p.y.to_bits());
+    let refined: std::collections::HashSet<(u64, u64)> = refined.iter().map(|&p| key(p)).collect();
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * mesh.triangle_count());
+    for t in 0..mesh.triangle_count() {
+        let c = mesh.triangle(t);
+        for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])] {
+            edges.push((a.min(b), a.max(b)));
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    crate::sizing::edge_match(
+        field,
+        edges
+            .into_iter()
+            .map(|(a, b)| (mesh.nodes[a as usize], mesh.nodes[b as usize])),
+        |a, b| refined.contains(&key(a)) || refined.contains(&key(b)),
+    )
 }
 
 /// The warning for shapes whose regions the mesh lost (see
@@ -604,11 +675,19 @@ pub(crate) fn optimize_stage(
 ) -> Result<(TriMesh, FeatureSet, Context, OptimizeStats)> {
     let (mut mesh, fs, mut ctx) = bsp_stage(drawing, params)?;
     let resolved = params.resolve(drawing.diagonal());
-    let stats = crate::optimize::optimize_with_caps(
+    let field = SizeField::build(&FieldInput {
+        drawing,
+        resolved: &resolved,
+        spec: &params.size,
+        region_names: &region_names(drawing, &RegionOptions::DEFAULT),
+        bounds: padded_box(drawing, resolved.padding),
+        deadline: Deadline::NONE,
+    })?;
+    let (stats, _) = crate::optimize::optimize_with_field(
         &mut mesh,
         &mut ctx,
         &optimize_options(params, &resolved),
-        &crate::optimize::stroke_size_caps(drawing),
+        &field,
     );
     Ok((mesh, fs, ctx, stats))
 }

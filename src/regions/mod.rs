@@ -56,7 +56,7 @@ pub(crate) mod select;
 
 pub(crate) use classify::{ClassifyOptions, classify};
 pub(crate) use orient::orient_lines;
-pub(crate) use select::{DOMAIN, RegionOptions, RegionStat, apply, stats_of};
+pub(crate) use select::{DOMAIN, RegionOptions, RegionStat, apply, colour_name, stats_of};
 
 use crate::Result;
 use crate::fem::FemMesh;

@@ -368,12 +368,15 @@ impl Drawing {
     /// refused: translate it closer to the origin.
     pub const MIN_RELATIVE_EXTENT: f64 = 1e-6;
 
-    /// The diagonal `d` of the bounding box (the unit of relative parameters);
-    /// for a drawing that is a single point, 1.0, or [`Self::MIN_RELATIVE_EXTENT`]
+    /// The diagonal `d` of the drawing's extent (the unit of relative
+    /// parameters): the tight bounding box of its curves ([`Self::extent`]), so
+    /// that `d` does not depend on how a curve is parametrised or rotated; for a
+    /// drawing that is a single point, 1.0, or [`Self::MIN_RELATIVE_EXTENT`]
     /// times the point's largest coordinate magnitude when that is larger (so
     /// the mesh around a far point is resolved in f64 as any drawing's is).
     pub fn diagonal(&self) -> f64 {
-        let d = self.bbox.width().hypot(self.bbox.height());
+        let e = self.extent();
+        let d = e.width().hypot(e.height());
         if d > 0.0 {
             d
         } else {
@@ -382,5 +385,21 @@ impl Drawing {
                 .fold(0.0_f64, |m, c| m.max(c.abs()));
             (Self::MIN_RELATIVE_EXTENT * magnitude).max(1.0)
         }
+    }
+
+    /// The tight bounding box of the drawing's curves (cubics and conics at
+    /// their extrema, not their control points); inside [`Self::bbox`].
+    pub fn extent(&self) -> Rect {
+        let mut out: Option<Rect> = None;
+        for f in &self.features {
+            let r = match f.geom {
+                FeatureGeom::Point(p) => Rect::from_points(p, p),
+                FeatureGeom::Line(l) => Rect::from_points(l.p0, l.p1),
+                FeatureGeom::Cubic(c) => kurbo::ParamCurveExtrema::bounding_box(&c),
+                FeatureGeom::Conic(c) => super::reconstruct::conic_bbox(&c),
+            };
+            out = Some(out.map_or(r, |o| o.union(r)));
+        }
+        out.unwrap_or(self.bbox)
     }
 }

@@ -195,7 +195,7 @@ pub(super) fn bbox(subpaths: &[Subpath]) -> Option<Rect> {
 /// The tight bounding box of a conic piece: its ends and the interior extrema of
 /// each coordinate, where the derivative's numerator
 /// `w(p1 − p0)(1 − t)² + (p2 − p0)t(1 − t) + w(p2 − p1)t²` vanishes.
-fn conic_bbox(c: &Conic) -> Rect {
+pub(super) fn conic_bbox(c: &Conic) -> Rect {
     let mut r = Rect::from_points(c.p0, c.p2);
     for axis in [0, 1] {
         let v = |p: Point| if axis == 0 { p.x } else { p.y };

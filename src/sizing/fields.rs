@@ -1,0 +1,402 @@
+//! The fields given pointwise: per-region sizes inside their regions, boxes,
+//! the formula (`--size-expr`, parsed by exmex), the background mesh
+//! (`--size-from`) and the caller's function, evaluated at batches of points
+//! (`∞` where none sets a size).
+
+use super::FieldInput;
+use crate::svg::winding::PaintTest;
+use crate::svg::{Drawing, ShapeId};
+use crate::{Error, Result};
+use exmex::prelude::*;
+use kurbo::{Point, Rect};
+
+/// The topmost filled shape at a point, for the per-region sizes: filled shapes,
+/// topmost first (the order `regions` classifies in).
+struct Painting {
+    layers: Vec<(ShapeId, PaintTest, Rect)>,
+    eps: f64,
+}
+
+impl Painting {
+    fn new(drawing: &Drawing, eps: f64) -> Painting {
+        let mut layers: Vec<(u32, ShapeId, PaintTest, Rect)> = drawing
+            .shapes
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.filled)
+            .filter_map(|(i, s)| {
+                let t = PaintTest::new(s);
+                let bb = t.bbox()?;
+                Some((s.paint_order, ShapeId(i as u32), t, bb))
+            })
+            .collect();
+        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
+        Painting {
+            layers: layers
+                .into_iter()
+                .map(|(_, id, t, bb)| (id, t, bb))
+                .collect(),
+            eps,
+        }
+    }
+
+    fn owner_at(&self, p: Point) -> Option<ShapeId> {
+        self.layers
+            .iter()
+            .find(|(_, t, bb)| bb.contains(p) && t.paints(p, self.eps).0)
+            .map(|l| l.0)
+    }
+}
+
+/// A triangle mesh with one value per node, located through a bucket grid.
+pub(super) struct Background {
+    nodes: Vec<Point>,
+    values: Vec<f64>,
+    triangles: Vec<[u32; 3]>,
+    grid: Rect,
+    nx: usize,
+    ny: usize,
+    buckets: Vec<Vec<u32>>,
+}
+
+impl Background {
+    /// Read `path`: a gmsh triangle mesh (2.2 or 4.1, any order: its corners
+    /// are used) with one `$NodeData` value per node.
+    pub(super) fn read(path: &std::path::Path) -> Result<Background> {
+        let what = |e: String| Error::InvalidParams(format!("--size-from {}: {e}", path.display()));
+        let mesh = crate::input::msh::read_msh_file(path).map_err(|e| what(e.to_string()))?;
+        let data = mesh.node_data.first().ok_or_else(|| {
+            what("no $NodeData section (write a view, e.g. gmsh.view.write)".into())
+        })?;
+        let mut values = vec![f64::NAN; mesh.nodes.len()];
+        for &(node, v) in &data.values {
+            if let Some(slot) = values.get_mut(node as usize) {
+                *slot = v;
+            }
+        }
+        let triangles: Vec<[u32; 3]> = mesh
+            .triangles()
+            .map(|(_, nodes)| [nodes[0], nodes[1], nodes[2]])
+            .collect();
+        if triangles.is_empty() {
+            return Err(what("no triangles".into()));
+        }
+        for t in &triangles {
+            for &n in t {
+                let v = values[n as usize];
+                if !(v.is_finite() && v > 0.0) {
+                    let p = mesh.nodes[n as usize];
+                    return Err(what(format!(
+                        "the size at node ({}, {}) is {v}, not a positive finite number",
+                        p.x, p.y
+                    )));
+                }
+            }
+        }
+        Ok(Background::new(mesh.nodes, values, triangles))
+    }
+
+    fn new(nodes: Vec<Point>, values: Vec<f64>, triangles: Vec<[u32; 3]>) -> Background {
+        let tri_box = |t: &[u32; 3]| {
+            let [a, b, c] = t.map(|i| nodes[i as usize]);
+            Rect::from_points(a, b).union_pt(c)
+        };
+        let grid = triangles
+            .iter()
+            .map(tri_box)
+            .reduce(|a, b| a.union(b))
+            .unwrap_or_default();
+        let side = (triangles.len() as f64).sqrt().ceil().clamp(1.0, 1024.0) as usize;
+        let (nx, ny) = (side, side);
+        let mut buckets = vec![Vec::new(); nx * ny];
+        let cell = |x: f64, lo: f64, w: f64, n: usize| {
+            (((x - lo) / w.max(f64::MIN_POSITIVE) * n as f64)
+                .floor()
+                .max(0.0) as usize)
+                .min(n - 1)
+        };
+        for (k, t) in triangles.iter().enumerate() {
+            let b = tri_box(t);
+            let (i0, i1) = (
+                cell(b.x0, grid.x0, grid.width(), nx),
+                cell(b.x1, grid.x0, grid.width(), nx),
+            );
+            let (j0, j1) = (
+                cell(b.y0, grid.y0, grid.height(), ny),
+                cell(b.y1, grid.y0, grid.height(), ny),
+            );
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    buckets[j * nx + i].push(k as u32);
+                }
+            }
+        }
+        Background {
+            nodes,
+            values,
+            triangles,
+            grid,
+            nx,
+            ny,
+            buckets,
+        }
+    }
+
+    /// The interpolated value at `p`, `None` outside the mesh.
+    pub(super) fn at(&self, p: Point) -> Option<f64> {
+        let slack = 1e-9 * self.grid.width().hypot(self.grid.height());
+        if !self.grid.inflate(slack, slack).contains(p) {
+            return None;
+        }
+        let cell = |x: f64, lo: f64, w: f64, n: usize| {
+            (((x - lo) / w.max(f64::MIN_POSITIVE) * n as f64)
+                .floor()
+                .max(0.0) as usize)
+                .min(n - 1)
+        };
+        let i = cell(p.x, self.grid.x0, self.grid.width(), self.nx);
+        let j = cell(p.y, self.grid.y0, self.grid.height(), self.ny);
+        let tol = 1e-9;
+        for &k in &self.buckets[j * self.nx + i] {
+            let t = self.triangles[k as usize];
+            let [a, b, c] = t.map(|n| self.nodes[n as usize]);
+            let det = (b - a).cross(c - a);
+            if det == 0.0 {
+                continue;
+            }
+            let l1 = (b - p).cross(c - p) / det;
+            let l2 = (c - p).cross(a - p) / det;
+            let l3 = 1.0 - l1 - l2;
+            if l1 >= -tol && l2 >= -tol && l3 >= -tol {
+                let [va, vb, vc] = t.map(|n| self.values[n as usize]);
+                return Some(l1 * va + l2 * vb + l3 * vc);
+            }
+        }
+        None
+    }
+}
+
+/// A parsed formula in `x` and `y`.
+struct Formula {
+    text: String,
+    expr: FlatEx<f64>,
+    /// For each of the formula's variables (alphabetical): 0 for x, 1 for y.
+    vars: Vec<usize>,
+}
+
+impl Formula {
+    fn parse(text: &str) -> Result<Formula> {
+        let bad = |why: String| Error::InvalidParams(format!("--size-expr '{text}': {why}"));
+        let expr = exmex::parse::<f64>(text).map_err(|e| bad(e.to_string()))?;
+        let vars = expr
+            .var_names()
+            .iter()
+            .map(|v| match v.as_str() {
+                "x" => Ok(0),
+                "y" => Ok(1),
+                other => Err(bad(format!(
+                    "unknown variable '{other}' (the formula may use x and y, output coordinates)"
+                ))),
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        Ok(Formula {
+            text: text.to_owned(),
+            expr,
+            vars,
+        })
+    }
+
+    fn at(&self, p: Point) -> Result<f64> {
+        let xy = [p.x, p.y];
+        let args: Vec<f64> = self.vars.iter().map(|&i| xy[i]).collect();
+        let v = self.expr.eval(&args).map_err(|e| {
+            Error::InvalidParams(format!(
+                "--size-expr '{}' at ({}, {}): {e}",
+                self.text, p.x, p.y
+            ))
+        })?;
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(Error::InvalidParams(format!(
+                "--size-expr '{}' at ({}, {}) is {v}, not a positive finite size",
+                self.text, p.x, p.y
+            )))
+        }
+    }
+}
+
+/// The pointwise fields of one run.
+pub(super) struct PointFields<'a> {
+    /// `(box, size)`.
+    boxes: Vec<(Rect, f64)>,
+    /// Per shape: the size its region asks for inside it (`∞`: none).
+    region_size: Vec<f64>,
+    /// The background's size (`∞`: none).
+    background_size: f64,
+    painting: Option<Painting>,
+    formula: Option<Formula>,
+    mesh: Option<Background>,
+    /// Where the background mesh must cover: the drawing's extent.
+    extent: Rect,
+    function: Option<&'a crate::params::SizeFn>,
+}
+
+impl<'a> PointFields<'a> {
+    pub(super) fn new(input: &FieldInput<'a>) -> Result<PointFields<'a>> {
+        let spec = input.spec;
+        let d = input.resolved.d;
+        let boxes = spec
+            .boxes
+            .iter()
+            .map(|b| {
+                let [x0, y0, x1, y1] = b.corners;
+                (Rect::new(x0, y0, x1, y1).abs(), b.size.resolve(d))
+            })
+            .collect();
+        let mut region_size = vec![f64::INFINITY; input.drawing.shapes.len()];
+        let mut background_size = f64::INFINITY;
+        for r in &spec.regions {
+            let size = r.size.resolve(d);
+            let shapes = super::sources::shapes_named(input, &r.name, "--size")?;
+            if r.name == super::sources::BACKGROUND {
+                background_size = background_size.min(size);
+            }
+            for s in shapes {
+                region_size[s.index()] = region_size[s.index()].min(size);
+            }
+        }
+        let painting =
+            (!spec.regions.is_empty()).then(|| Painting::new(input.drawing, input.resolved.eps_m));
+        let formula = spec.expr.as_deref().map(Formula::parse).transpose()?;
+        let mesh = spec
+            .background
+            .as_deref()
+            .map(Background::read)
+            .transpose()?;
+        Ok(PointFields {
+            boxes,
+            region_size,
+            background_size,
+            painting,
+            formula,
+            mesh,
+            extent: input.drawing.extent(),
+            function: spec.function.as_ref(),
+        })
+    }
+
+    /// The names of the fields given, for the report.
+    pub(super) fn names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.painting.is_some() {
+            out.push("size".into());
+        }
+        if !self.boxes.is_empty() {
+            out.push("size-box".into());
+        }
+        if self.formula.is_some() {
+            out.push("size-expr".into());
+        }
+        if self.mesh.is_some() {
+            out.push("size-from".into());
+        }
+        if self.function.is_some() {
+            out.push("size-fn".into());
+        }
+        out
+    }
+
+    /// The sizes at `pts` (`∞` where no field sets one).
+    pub(super) fn eval(&mut self, pts: &[Point]) -> Result<Vec<f64>> {
+        let mut out = vec![f64::INFINITY; pts.len()];
+        for (h, &p) in out.iter_mut().zip(pts) {
+            for &(b, size) in &self.boxes {
+                if b.contains(p) {
+                    *h = h.min(size);
+                }
+            }
+            if let Some(painting) = &self.painting {
+                let size = match painting.owner_at(p) {
+                    Some(s) => self.region_size[s.index()],
+                    None => self.background_size,
+                };
+                *h = h.min(size);
+            }
+            if let Some(f) = &self.formula {
+                *h = h.min(f.at(p)?);
+            }
+            if let Some(m) = &self.mesh {
+                match m.at(p) {
+                    Some(v) => *h = h.min(v),
+                    None if self.extent.contains(p) => {
+                        return Err(Error::InvalidParams(format!(
+                            "--size-from: the background mesh does not cover the drawing: \
+                             no triangle holds ({}, {})",
+                            p.x, p.y
+                        )));
+                    }
+                    None => {}
+                }
+            }
+        }
+        if let Some(f) = self.function {
+            let xs: Vec<f64> = pts.iter().map(|p| p.x).collect();
+            let ys: Vec<f64> = pts.iter().map(|p| p.y).collect();
+            let vals = (f.0)(&xs, &ys)
+                .map_err(|e| Error::InvalidParams(format!("the size function failed: {e}")))?;
+            if vals.len() != pts.len() {
+                return Err(Error::InvalidParams(format!(
+                    "the size function returned {} values for {} points",
+                    vals.len(),
+                    pts.len()
+                )));
+            }
+            for ((h, v), p) in out.iter_mut().zip(vals).zip(pts) {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(Error::InvalidParams(format!(
+                        "the size function gave {v} at ({}, {}), not a positive finite size",
+                        p.x, p.y
+                    )));
+                }
+                *h = h.min(v);
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_formula_reads_x_and_y_and_refuses_other_names() {
+        let f = Formula::parse("0.5 + 0.05*x + 0*y").unwrap();
+        assert!((f.at(Point::new(10.0, 3.0)).unwrap() - 1.0).abs() < 1e-12);
+        let only_y = Formula::parse("1 + y").unwrap();
+        assert_eq!(only_y.at(Point::new(7.0, 2.0)).unwrap(), 3.0);
+        assert!(Formula::parse("0.5 + z").is_err());
+        assert!(Formula::parse("0.5 +* x").is_err());
+        let e = Formula::parse("x - 1").unwrap().at(Point::new(0.5, 0.0));
+        let msg = e.unwrap_err().to_string();
+        assert!(msg.contains("(0.5, 0)"), "{msg}");
+    }
+
+    #[test]
+    fn a_background_mesh_interpolates_linearly_and_knows_its_cover() {
+        let nodes = vec![
+            Point::new(0.0, 0.0),
+            Point::new(2.0, 0.0),
+            Point::new(2.0, 2.0),
+            Point::new(0.0, 2.0),
+        ];
+        let values = vec![1.0, 3.0, 5.0, 3.0]; // 1 + x + y
+        let bg = Background::new(nodes, values, vec![[0, 1, 2], [0, 2, 3]]);
+        for p in [(0.5, 0.25), (1.5, 1.0), (0.2, 1.9), (2.0, 2.0)] {
+            let p = Point::new(p.0, p.1);
+            assert!((bg.at(p).unwrap() - (1.0 + p.x + p.y)).abs() < 1e-12);
+        }
+        assert_eq!(bg.at(Point::new(2.5, 1.0)), None);
+    }
+}

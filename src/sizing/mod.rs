@@ -1,0 +1,178 @@
+//! The size field h(x): the one answer to "how long should an edge be here".
+//!
+//! Built once per run, before the BSP, from the drawing and the parameters,
+//! never from the mesh being optimized: the global edge length `l` (the largest
+//! size), the user's fields ([`crate::SizeSpec`]: per region, near outlines,
+//! boxes, a formula, a background mesh, a function), the sizes the drawing
+//! itself asks for (thin strokes meshed as areas: twice their width on their
+//! outlines; the automatic local feature size: narrow gaps, thin parts and
+//! tight curves), combined by minimum, clamped to `[l_min, l]` and graded so
+//! that h grows by at most the grading `G` from one element to the next (a
+//! slope of `G − 1` per unit length). Every stage reads it: the features'
+//! resampling, the optimizer (split above 4/3·h, collapse below h, judged at
+//! the edge's midpoint), the curved stage and the CDT baseline.
+//!
+//! Thesis §2.3.2 and §4.4.1 drive the optimizer with a sizing field refined
+//! around bad elements; that refinement stays the optimizer's (below h, counted
+//! apart in the report), this field is what it starts from and returns to.
+
+mod fields;
+mod report;
+mod sources;
+pub(crate) mod tree;
+
+pub(crate) use report::edge_match;
+pub use report::{EdgeMatch, HISTOGRAM_BOUNDS, SizingReport};
+
+use crate::budget::Deadline;
+use crate::params::{Resolved, SizeSpec};
+use crate::svg::Drawing;
+use crate::{Error, Result};
+use kurbo::{Point, Rect};
+use tree::Tree;
+
+/// The size field of one run (see the module doc).
+#[derive(Clone, Debug)]
+pub(crate) struct SizeField {
+    tree: Tree,
+    /// `Some(l)` when the field is `l` everywhere (evaluation is then free).
+    uniform: Option<f64>,
+    l: f64,
+    l_min: f64,
+    report: SizingReport,
+}
+
+/// What the field is built from beside the parameters: the drawing, the name
+/// of each shape's region as the .msh will write it (`None`: the shape is no
+/// region), and the box the mesh covers.
+pub(crate) struct FieldInput<'a> {
+    pub drawing: &'a Drawing,
+    pub resolved: &'a Resolved,
+    pub spec: &'a SizeSpec,
+    pub region_names: &'a [Option<String>],
+    pub bounds: Rect,
+    pub deadline: Deadline,
+}
+
+impl SizeField {
+    /// `l` everywhere.
+    pub(crate) fn uniform(l: f64, bounds: Rect) -> SizeField {
+        SizeField {
+            tree: Tree::uniform(bounds, l),
+            uniform: Some(l),
+            l,
+            l_min: l,
+            report: SizingReport::uniform(l),
+        }
+    }
+
+    /// Build the field (see the module doc).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParams`] for a field that names no region, a formula that
+    /// does not parse or gives a non-finite value, a background mesh that cannot
+    /// be read or does not cover the drawing, a function that fails or gives a
+    /// non-finite value (each naming the point); [`Error::TimeLimit`] past the deadline.
+    pub(crate) fn build(input: &FieldInput<'_>) -> Result<SizeField> {
+        let r = input.resolved;
+        let l = r.l;
+        let l_min = r.l_min.min(l);
+        let slope = input.spec.grading - 1.0;
+        let mut points = fields::PointFields::new(input)?;
+        let mut sources = sources::strokes(input.drawing, slope);
+        let mut applied: Vec<String> = Vec::new();
+        if !sources.is_empty() {
+            applied.push("strokes".into());
+        }
+        sources.extend(sources::user(input, slope, &mut applied)?);
+        if input.spec.feature_size {
+            let lfs = sources::feature_size(input, slope);
+            if !lfs.is_empty() {
+                applied.push("feature-size".into());
+            }
+            sources.extend(lfs);
+        }
+        applied.extend(points.names());
+        let n_sources = sources.len();
+        if applied.is_empty() || slope.is_nan() {
+            let mut f = SizeField::uniform(l, input.bounds);
+            f.report.grading = input.spec.grading;
+            return Ok(f);
+        }
+        let deadline = input.deadline;
+        let keep_going = || -> Result<()> {
+            if deadline.expired() {
+                Err(Error::TimeLimit {
+                    seconds: deadline.seconds(),
+                    stage: crate::Stage::Sizing,
+                })
+            } else {
+                Ok(())
+            }
+        };
+        let tree = Tree::build(
+            input.bounds,
+            l_min,
+            l,
+            slope,
+            &sources,
+            &mut |pts: &[Point]| points.eval(pts),
+            &keep_going,
+        )?;
+        let min_size = tree.min_value();
+        let report = SizingReport {
+            fields: applied,
+            grading: input.spec.grading,
+            l,
+            l_min,
+            min_size,
+            sources: n_sources,
+            leaves: tree.leaves(),
+            edges: None,
+        };
+        Ok(SizeField {
+            uniform: (min_size >= l).then_some(l),
+            tree,
+            l,
+            l_min,
+            report,
+        })
+    }
+
+    /// The size at `p`, within `[l_min, l]`.
+    pub(crate) fn at(&self, p: Point) -> f64 {
+        match self.uniform {
+            Some(l) => l,
+            None => self.tree.at(p),
+        }
+    }
+
+    /// The size at the midpoint of `a` and `b`.
+    pub(crate) fn at_mid(&self, a: Point, b: Point) -> f64 {
+        match self.uniform {
+            Some(l) => l,
+            None => self.tree.at(a.midpoint(b)),
+        }
+    }
+
+    /// Whether the field is `l` everywhere.
+    pub(crate) fn is_uniform(&self) -> bool {
+        self.uniform.is_some()
+    }
+
+    /// The largest size, `l`.
+    pub(crate) fn l(&self) -> f64 {
+        self.l
+    }
+
+    /// The smallest size the field may give, `l_min` (or `l` when uniform).
+    #[cfg_attr(not(test), expect(dead_code, reason = "read by the tests"))]
+    pub(crate) fn l_min(&self) -> f64 {
+        self.l_min
+    }
+
+    /// What the field was built from (the edge match is filled in later).
+    pub(crate) fn report(&self) -> &SizingReport {
+        &self.report
+    }
+}

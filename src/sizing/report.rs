@@ -1,0 +1,108 @@
+//! What the size field reports (`--stats` `sizing`): the fields applied, the
+//! grading, and how well the mesh's edges match the field.
+
+use super::SizeField;
+use kurbo::Point;
+
+/// The `sizing` entry of `--stats`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SizingReport {
+    /// The fields applied beside `l`: `strokes` (thin strokes meshed as
+    /// areas), `feature-size`, `size`, `size-near`, `size-box`, `size-expr`,
+    /// `size-from`, `size-fn`. Empty: the size is `l` everywhere.
+    pub fields: Vec<String>,
+    /// The grading: the largest growth of the size from one element to the next.
+    pub grading: f64,
+    /// The largest size, `l` (output units).
+    pub l: f64,
+    /// The smallest size the field may give, `l_min` (output units).
+    pub l_min: f64,
+    /// The smallest size the field gives.
+    pub min_size: f64,
+    /// Source points on outlines (thin strokes, outline fields, feature size).
+    pub sources: usize,
+    /// Leaves of the background quadtree.
+    pub leaves: usize,
+    /// How well the delivered mesh's edges match the field.
+    pub edges: Option<EdgeMatch>,
+}
+
+impl SizingReport {
+    pub(super) fn uniform(l: f64) -> SizingReport {
+        SizingReport {
+            fields: Vec::new(),
+            grading: crate::defaults::GRADING,
+            l,
+            l_min: l,
+            min_size: l,
+            sources: 0,
+            leaves: 1,
+            edges: None,
+        }
+    }
+}
+
+/// Bounds of the edge-length histogram, as edge / h.
+pub const HISTOGRAM_BOUNDS: [f64; 7] = [0.25, 0.5, 0.8, 4.0 / 3.0, 2.0, 4.0, f64::INFINITY];
+
+/// How well a mesh's edges match the size field h: each edge's length over h
+/// at its midpoint.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct EdgeMatch {
+    /// Edges measured (the edges the optimizer refined below the field, around
+    /// elements it could not improve at the field's size, are left out).
+    pub edges: usize,
+    /// Edges left out as refined below the field by the optimizer.
+    pub refined: usize,
+    /// Share of the measured edges with length within [4/5, 4/3] of h.
+    pub matched: f64,
+    /// Median of edge / h.
+    pub median_ratio: f64,
+    /// Edge counts by edge / h: below 1/4, [1/4, 1/2), [1/2, 4/5), [4/5, 4/3),
+    /// [4/3, 2), [2, 4), 4 and above (bounds: [`HISTOGRAM_BOUNDS`]).
+    pub histogram: [usize; 7],
+}
+
+/// The match of `edges` (end points) against `field`; `refined(a, b)` says
+/// whether the optimizer refined the edge below the field.
+pub(crate) fn edge_match(
+    field: &SizeField,
+    edges: impl Iterator<Item = (Point, Point)>,
+    refined: impl Fn(Point, Point) -> bool,
+) -> EdgeMatch {
+    let mut ratios = Vec::new();
+    let mut left_out = 0;
+    for (a, b) in edges {
+        if refined(a, b) {
+            left_out += 1;
+            continue;
+        }
+        ratios.push(a.distance(b) / field.at_mid(a, b));
+    }
+    let mut histogram = [0usize; 7];
+    let mut matched = 0usize;
+    for &r in &ratios {
+        let bin = HISTOGRAM_BOUNDS.iter().position(|&b| r < b).unwrap_or(6);
+        histogram[bin] += 1;
+        if (0.8..=4.0 / 3.0).contains(&r) {
+            matched += 1;
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median_ratio = if ratios.is_empty() {
+        0.0
+    } else {
+        ratios[ratios.len() / 2]
+    };
+    EdgeMatch {
+        edges: ratios.len(),
+        refined: left_out,
+        matched: if ratios.is_empty() {
+            0.0
+        } else {
+            matched as f64 / ratios.len() as f64
+        },
+        median_ratio,
+        histogram,
+    }
+}
