@@ -408,6 +408,7 @@ fn polling_memory_guard_kills() {
         args: &args,
         timeout: std::time::Duration::from_secs(60),
         memory: &guard,
+        preview: false,
     };
     let row = batch::run_child(
         &spec,
