@@ -134,7 +134,10 @@ fn assert_page_matches(page: &str, rows: &[Row]) {
     let unique: BTreeSet<&str> = files.iter().copied().collect();
     assert_eq!(unique.len(), files.len(), "each file once in the gallery");
     let expected: BTreeSet<&str> = rows.iter().map(|r| r.file.as_str()).collect();
-    assert_eq!(unique, expected, "the gallery shows exactly the report's files");
+    assert_eq!(
+        unique, expected,
+        "the gallery shows exactly the report's files"
+    );
     for r in rows {
         let c = cards
             .iter()
@@ -145,7 +148,12 @@ fn assert_page_matches(page: &str, rows: &[Row]) {
             Status::Failed => r.cause.expect("cause").name(),
         };
         assert_eq!(c["data-status"], status, "{}", r.file);
-        assert_eq!(c["data-wall"].parse::<f64>().ok(), Some(r.wall), "{}", r.file);
+        assert_eq!(
+            c["data-wall"].parse::<f64>().ok(),
+            Some(r.wall),
+            "{}",
+            r.file
+        );
         opt_eq(
             c.get("data-tris"),
             r.triangles().map(|t| t as f64),
@@ -188,7 +196,10 @@ fn assert_page_matches(page: &str, rows: &[Row]) {
     if !rows.is_empty() {
         let wall: f64 = rows.iter().map(|r| r.wall).sum();
         let shown = data_v(page, "n-time").expect("total time");
-        assert!((shown - wall).abs() <= 1e-9 * wall.max(1.0), "{shown} vs {wall}");
+        assert!(
+            (shown - wall).abs() <= 1e-9 * wall.max(1.0),
+            "{shown} vs {wall}"
+        );
     }
     let worst = rows
         .iter()
@@ -198,8 +209,16 @@ fn assert_page_matches(page: &str, rows: &[Row]) {
     // every failure is listed with its cause and its error
     let failures = &page[page.find("id=\"failures\"").expect("failures section")..];
     for r in rows.iter().filter(|r| r.status == Status::Failed) {
-        let name = format!(">{}</a></td><td>{}</td>", esc(&r.file), r.cause.expect("cause").name());
-        assert!(failures.contains(&name), "{} not in the failures table", r.file);
+        let name = format!(
+            ">{}</a></td><td>{}</td>",
+            esc(&r.file),
+            r.cause.expect("cause").name()
+        );
+        assert!(
+            failures.contains(&name),
+            "{} not in the failures table",
+            r.file
+        );
         if let Some(m) = &r.message {
             assert!(failures.contains(&esc(m)), "{}: message missing", r.file);
         }
@@ -254,7 +273,8 @@ fn page_numbers_equal_the_report() {
     let ok = report.iter().filter(|r| r.status == Status::Ok).count();
     assert!(ok >= 4, "{report:#?}");
     assert_eq!(
-        page.matches("<img class=\"thumb\" alt=\"\" src=\"data:image/png;base64,").count(),
+        page.matches("<img class=\"thumb\" alt=\"\" src=\"data:image/png;base64,")
+            .count(),
         ok,
         "a thumbnail for every mesh"
     );
@@ -267,7 +287,10 @@ fn page_numbers_equal_the_report() {
     let again = out.join("again.html");
     let o = triwild(&[&"report", &out.join("report.jsonl"), &"-o", &again], &[]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    assert!(read(&again) == page, "triwild report differs from the batch's page");
+    assert!(
+        read(&again) == page,
+        "triwild report differs from the batch's page"
+    );
 }
 
 /// `triwild report` on merged shard reports gives the page of the unsharded
@@ -303,34 +326,60 @@ fn merged_shards_give_the_batch_page() {
     }
     let merged = whole.join("merged.jsonl");
     let o = triwild(
-        &[&"batch", &"--merge-reports", &shards[1], &shards[0], &"-o", &merged],
+        &[
+            &"batch",
+            &"--merge-reports",
+            &shards[1],
+            &shards[0],
+            &"-o",
+            &merged,
+        ],
         &[],
     );
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     let rebuilt = whole.join("rebuilt.html");
     let o = triwild(&[&"report", &merged, &"-o", &rebuilt], &[]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    assert!(read(&rebuilt) == page, "merged-report page differs from the batch page");
+    assert!(
+        read(&rebuilt) == page,
+        "merged-report page differs from the batch page"
+    );
     // the shard reports themselves, given together
     let o = triwild(&[&"report", &shards[0], &shards[1], &"-o", &rebuilt], &[]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    assert!(read(&rebuilt) == page, "shard reports' page differs from the batch page");
+    assert!(
+        read(&rebuilt) == page,
+        "shard reports' page differs from the batch page"
+    );
 
     // A real sharded run into one directory, merged, then its page.
     let mut reports = Vec::new();
     for k in 1..=2 {
         let shard = format!("{k}/2");
         let o = triwild(
-            &[&"batch", &input, &"-o", &sharded, &"--shard", &shard, &"-j", &"1"],
+            &[
+                &"batch", &input, &"-o", &sharded, &"--shard", &shard, &"-j", &"1",
+            ],
             &[],
         );
         assert!(matches!(o.status.code(), Some(0 | 1)), "{}", text(&o));
-        assert!(sharded.join(format!("report.shard-{k}-of-2.html")).is_file());
+        assert!(
+            sharded
+                .join(format!("report.shard-{k}-of-2.html"))
+                .is_file()
+        );
         reports.push(sharded.join(format!("report.shard-{k}-of-2.jsonl")));
     }
     let merged = sharded.join("report.jsonl");
     let o = triwild(
-        &[&"batch", &"--merge-reports", &reports[0], &reports[1], &"-o", &merged],
+        &[
+            &"batch",
+            &"--merge-reports",
+            &reports[0],
+            &reports[1],
+            &"-o",
+            &merged,
+        ],
         &[],
     );
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -407,7 +456,10 @@ fn every_failure_appears_with_its_reason() {
     let page = read(&html);
     assert_page_matches(&page, &rows);
     let failures = &page[page.find("id=\"failures\"").expect("failures")..];
-    assert!(failures.contains("<td>meshing</td><td>bsp</td>"), "stage of the meshing failure");
+    assert!(
+        failures.contains("<td>meshing</td><td>bsp</td>"),
+        "stage of the meshing failure"
+    );
     assert!(failures.contains("<td>timeout</td><td>unknown</td>"));
     assert!(failures.contains("<td>interrupted</td><td>unknown</td>"));
     assert!(page.contains("bsp × 1"), "the cause table names the stage");
@@ -419,7 +471,15 @@ fn every_failure_appears_with_its_reason() {
 fn one_file_and_all_failed_render() {
     let base = out_dir("small");
     write(&base, "one/square.svg", SQUARE.as_bytes());
-    let o = triwild(&[&"batch", &base.join("one/square.svg"), &"-o", &base.join("one-out")], &[]);
+    let o = triwild(
+        &[
+            &"batch",
+            &base.join("one/square.svg"),
+            &"-o",
+            &base.join("one-out"),
+        ],
+        &[],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let page = read(&base.join("one-out/report.html"));
     assert_page_matches(&page, &rows(&base.join("one-out/report.jsonl")));
@@ -428,7 +488,10 @@ fn one_file_and_all_failed_render() {
 
     write(&base, "bad/empty.svg", b"");
     write(&base, "bad/not-svg.svg", b"\x00\x01 not XML");
-    let o = triwild(&[&"batch", &base.join("bad"), &"-o", &base.join("bad-out")], &[]);
+    let o = triwild(
+        &[&"batch", &base.join("bad"), &"-o", &base.join("bad-out")],
+        &[],
+    );
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     let page = read(&base.join("bad-out/report.html"));
     assert_page_matches(&page, &rows(&base.join("bad-out/report.jsonl")));
@@ -437,7 +500,13 @@ fn one_file_and_all_failed_render() {
 
     // --no-html: neither the page nor the previews
     let o = triwild(
-        &[&"batch", &base.join("one"), &"-o", &base.join("no-html"), &"--no-html"],
+        &[
+            &"batch",
+            &base.join("one"),
+            &"-o",
+            &base.join("no-html"),
+            &"--no-html",
+        ],
         &[],
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
@@ -446,9 +515,25 @@ fn one_file_and_all_failed_render() {
     assert!(!base.join("no-html/square.preview.svg").exists());
     // an empty report still gives a page
     std::fs::write(base.join("empty.jsonl"), "").expect("write");
-    let o = triwild(&[&"report", &base.join("empty.jsonl"), &"-o", &base.join("empty.html")], &[]);
+    let o = triwild(
+        &[
+            &"report",
+            &base.join("empty.jsonl"),
+            &"-o",
+            &base.join("empty.html"),
+        ],
+        &[],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     assert!(read(&base.join("empty.html")).contains("id=\"n-files\">0<"));
-    let o = triwild(&[&"report", &base.join("missing.jsonl"), &"-o", &base.join("x.html")], &[]);
+    let o = triwild(
+        &[
+            &"report",
+            &base.join("missing.jsonl"),
+            &"-o",
+            &base.join("x.html"),
+        ],
+        &[],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }

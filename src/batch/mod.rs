@@ -36,11 +36,11 @@ pub use child::{
 pub use discover::{Discovery, Shard, SourceFile, discover};
 pub use page::{PageOptions, PageStats, preview_path, render_page, stage_of, write_page};
 pub use report::{
-    Cause, Merged, ReadReport, ReportWriter, Row, Status, build_name, last_per_file,
-    merge_reports, read_report, write_report,
+    Cause, Merged, ReadReport, ReportWriter, Row, Status, build_name, last_per_file, merge_reports,
+    read_report, write_report,
 };
-pub use thumbnail::{THUMB_PX, render_png as render_thumbnail};
 pub use summary::{Extreme, Percentiles, Summary};
+pub use thumbnail::{THUMB_PX, render_png as render_thumbnail};
 
 use crate::{Error, Result};
 use std::collections::HashSet;

@@ -155,12 +155,13 @@ struct Entry<'a> {
 
 impl<'a> Entry<'a> {
     fn of(id: usize, row: &'a Row, opts: &PageOptions, html_dir: &Path) -> Self {
-        let mesh = opts.out_dir.join(row.output.clone().unwrap_or_else(|| {
-            match row.file.rsplit_once('.') {
-                Some((stem, _)) => format!("{stem}.msh"),
-                None => format!("{}.msh", row.file),
-            }
-        }));
+        let mesh =
+            opts.out_dir.join(row.output.clone().unwrap_or_else(
+                || match row.file.rsplit_once('.') {
+                    Some((stem, _)) => format!("{stem}.msh"),
+                    None => format!("{}.msh", row.file),
+                },
+            ));
         let preview = (row.status == Status::Ok).then(|| preview_path(&mesh));
         let thumb = preview
             .as_deref()
@@ -359,7 +360,10 @@ fn head(h: &mut String, entries: &[Entry<'_>]) {
 }
 
 fn headline(h: &mut String, entries: &[Entry<'_>]) {
-    let ok = entries.iter().filter(|e| e.row.status == Status::Ok).count();
+    let ok = entries
+        .iter()
+        .filter(|e| e.row.status == Status::Ok)
+        .count();
     let failed = entries.len() - ok;
     let wall = Percentiles::of(entries.iter().map(|e| e.row.wall).collect());
     let tris: u64 = entries.iter().filter_map(|e| e.triangles).sum();
@@ -473,12 +477,7 @@ fn headline(h: &mut String, entries: &[Entry<'_>]) {
     let mut meshers: BTreeMap<String, usize> = BTreeMap::new();
     for e in entries {
         *builds
-            .entry(
-                e.row
-                    .build
-                    .clone()
-                    .unwrap_or_else(|| "not recorded".into()),
-            )
+            .entry(e.row.build.clone().unwrap_or_else(|| "not recorded".into()))
             .or_default() += 1;
         let f: Vec<String> = e.row.flags.iter().map(|a| shell_word(a)).collect();
         *flags
@@ -541,7 +540,8 @@ fn plots_section(h: &mut String, entries: &[Entry<'_>]) {
         .iter()
         .filter(|e| e.row.status == Status::Ok)
         .collect();
-    let col = |f: fn(&Entry<'_>) -> Option<f64>| -> Vec<f64> { ok.iter().filter_map(|e| f(e)).collect() };
+    let col =
+        |f: fn(&Entry<'_>) -> Option<f64>| -> Vec<f64> { ok.iter().filter_map(|e| f(e)).collect() };
     let times: Vec<f64> = entries.iter().map(|e| e.row.wall).collect();
     let size_time: Vec<(f64, f64)> = ok
         .iter()
@@ -644,7 +644,9 @@ fn gallery(h: &mut String, entries: &[Entry<'_>]) {
     for (s, n) in &statuses {
         let _ = write!(h, "<option value=\"{s}\">{s} ({n})</option>");
     }
-    h.push_str("</select></label><label>folder <select id=\"folder\"><option value=\"\">all</option>");
+    h.push_str(
+        "</select></label><label>folder <select id=\"folder\"><option value=\"\">all</option>",
+    );
     for (f, n) in &folders {
         let _ = write!(h, "<option value=\"{0}\">{0} ({n})</option>", esc(f));
     }
@@ -653,7 +655,11 @@ fn gallery(h: &mut String, entries: &[Entry<'_>]) {
         let _ = write!(
             h,
             "<a class=\"card {}\" href=\"#f-{}\" data-file=\"{}\" data-folder=\"{}\" data-status=\"{}\" data-wall=\"{}\" data-tris=\"{}\" data-angle=\"{}\" data-jac=\"{}\" data-mem=\"{}\">",
-            if e.row.status == Status::Ok { "ok" } else { "failed" },
+            if e.row.status == Status::Ok {
+                "ok"
+            } else {
+                "failed"
+            },
             e.id,
             esc(&e.row.file),
             esc(&e.folder),
@@ -837,7 +843,11 @@ fn flatten(prefix: &str, v: &serde_json::Value, out: &mut Vec<(String, String)>)
                 Some(f) if n.is_f64() => {
                     let t = format!("{f:.6}");
                     let t = t.trim_end_matches('0').trim_end_matches('.');
-                    if t.is_empty() || t == "-" { "0".into() } else { t.to_string() }
+                    if t.is_empty() || t == "-" {
+                        "0".into()
+                    } else {
+                        t.to_string()
+                    }
                 }
                 _ => n.to_string(),
             };
@@ -871,7 +881,11 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
              <h2>{}</h2><p class=\"st {}\">{}",
             e.id,
             esc(&r.file),
-            if r.status == Status::Ok { "ok" } else { "failed" },
+            if r.status == Status::Ok {
+                "ok"
+            } else {
+                "failed"
+            },
             e.status
         );
         if r.status == Status::Failed {
@@ -952,7 +966,12 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
             }
             h.push_str("<h3>--stats figures</h3><table class=\"kv stats\">");
             for (g, items) in groups {
-                let _ = write!(h, "<tr><th>{}</th><td>{}</td></tr>", esc(&g), items.join(" · "));
+                let _ = write!(
+                    h,
+                    "<tr><th>{}</th><td>{}</td></tr>",
+                    esc(&g),
+                    items.join(" · ")
+                );
             }
             h.push_str("</table>");
         }
@@ -1014,7 +1033,7 @@ a.card:hover{outline:2px solid #3168b5}a.card.failed{background:#fdecea}a.card[h
 .file{display:none}.file:target{display:block;position:fixed;inset:0;background:#0008;overflow:auto;z-index:10;padding:20px}
 .sheet{background:#fff;border-radius:8px;padding:12px 20px;max-width:1200px;margin:0 auto}
 .close{float:right}.pics{display:flex;flex-wrap:wrap;gap:16px}.pics figure{margin:0}
-.pics img{max-width:560px;max-height:560px;border:1px solid #ddd;background:#fff}
+.pics img{width:min(540px,44vw);max-height:640px;object-fit:contain;border:1px solid #ddd;background:#fff}
 pre.cmd{background:#f0f2f4;padding:8px;white-space:pre-wrap;word-break:break-all}
 .st.ok{color:#1a7f37}.st.failed{color:#b42318}.small{font-size:12px;color:#666}ul.warn li{color:#8a5a00}
 "#;
@@ -1093,29 +1112,56 @@ mod tests {
     fn stages_from_messages() {
         let s = |cause, msg| stage_of(&row("a.svg", Some(cause), msg));
         assert_eq!(
-            s(Cause::Meshing, "error: a.svg: meshing failed in stage bsp: x").as_deref(),
+            s(
+                Cause::Meshing,
+                "error: a.svg: meshing failed in stage bsp: x"
+            )
+            .as_deref(),
             Some("bsp")
         );
         assert_eq!(
-            s(Cause::Meshing, "error: a.svg: time limit of 1 s reached in regions").as_deref(),
+            s(
+                Cause::Meshing,
+                "error: a.svg: time limit of 1 s reached in regions"
+            )
+            .as_deref(),
             Some("regions")
         );
-        assert_eq!(s(Cause::BadInput, "error: a.svg: empty file").as_deref(), Some("load"));
         assert_eq!(
-            s(Cause::Panic, "thread 'main' panicked at src/ops/split.rs:3:5: boom").as_deref(),
+            s(Cause::BadInput, "error: a.svg: empty file").as_deref(),
+            Some("load")
+        );
+        assert_eq!(
+            s(
+                Cause::Panic,
+                "thread 'main' panicked at src/ops/split.rs:3:5: boom"
+            )
+            .as_deref(),
             Some("optimize")
         );
-        assert_eq!(s(Cause::Timeout, "killed after the time limit").as_deref(), None);
+        assert_eq!(
+            s(Cause::Timeout, "killed after the time limit").as_deref(),
+            None
+        );
         assert_eq!(stage_of(&row("a.svg", None, "")), None);
     }
 
     #[test]
     fn escaping_and_links() {
-        assert_eq!(esc(r#"<a href="x">'&'</a>"#), "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;");
+        assert_eq!(
+            esc(r#"<a href="x">'&'</a>"#),
+            "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
+        );
         assert_eq!(url("a b/#c%?.svg"), "a%20b/%23c%25%3F.svg");
         assert_eq!(link_text("a%20b/%23c.svg"), "a b/#c.svg");
-        assert_eq!(rel_link(Path::new("/x/out"), Path::new("/x/in/a b.svg")), "../in/a%20b.svg");
-        assert_eq!(rel_link(Path::new("/x/out"), Path::new("/x/out/./a/../b.svg")), "b.svg");
+        assert_eq!(
+            rel_link(Path::new("/x/out"), Path::new("/x/in/a b.svg")),
+            "../in/a%20b.svg"
+        );
+        assert_eq!(
+            rel_link(Path::new("/x/out"), Path::new("/x/out/./a/../b.svg")),
+            "b.svg"
+        );
         assert_eq!(shell_word("a b'c"), r"'a b'\''c'");
         assert_eq!(shell_word("--edge-length=0.1"), "--edge-length=0.1");
     }
@@ -1129,13 +1175,24 @@ mod tests {
         assert!(!page.contains("<b>&"), "unescaped name");
         assert!(page.contains("&lt;b&gt;&amp;&quot;x&#39;&lt;/b&gt;.svg"));
         assert!(page.contains("a &lt;warning&gt; &amp; more"));
-        assert_eq!((stats.files, stats.thumbnails, stats.missing_previews), (1, 0, 1));
+        assert_eq!(
+            (stats.files, stats.thumbnails, stats.missing_previews),
+            (1, 0, 1)
+        );
         let (page, stats) = render_page(&[], &opts, dir.path());
         assert_eq!(stats.files, 0);
         assert!(page.contains("id=\"n-files\">0<") && page.contains("no data"));
         let failed = [
-            row("a.svg", Some(Cause::Timeout), "killed after the time limit of 3 s"),
-            row("b.svg", Some(Cause::Interrupted), "interrupted by SIGINT (2) while meshing"),
+            row(
+                "a.svg",
+                Some(Cause::Timeout),
+                "killed after the time limit of 3 s",
+            ),
+            row(
+                "b.svg",
+                Some(Cause::Interrupted),
+                "interrupted by SIGINT (2) while meshing",
+            ),
             row("c.svg", Some(Cause::BadInput), "error: c.svg: empty file"),
         ];
         let (page, _) = render_page(&failed, &opts, dir.path());

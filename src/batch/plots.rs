@@ -30,25 +30,27 @@ pub(crate) enum Axis {
     Log,
 }
 
-/// A number as an axis label: short, no trailing zeros.
+/// A number as an axis label: two significant digits (the ticks of a
+/// logarithmic axis fall between round numbers), `k` and `M` for thousands
+/// and millions, no trailing zeros.
 pub(crate) fn short(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if a >= 1e6 {
-        format!("{:.3}M", v / 1e6)
-            .replace(".000M", "M")
-            .replace("00M", "M")
+    if a == 0.0 || !a.is_finite() {
+        return if a == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let digits = a.log10().floor() as i32;
+    let unit = 10f64.powi(digits - 1);
+    let r = (v / unit).round() * unit;
+    if a >= 1e6 {
+        format!("{}M", trim(format!("{:.1}", r / 1e6)))
     } else if a >= 1e4 {
-        format!("{:.0}k", v / 1e3)
-    } else if a >= 100.0 {
-        format!("{v:.0}")
-    } else if a >= 1.0 {
-        trim(format!("{v:.2}"))
-    } else if a >= 0.001 {
-        trim(format!("{v:.4}"))
+        format!("{}k", trim(format!("{:.1}", r / 1e3)))
+    } else if digits >= 1 {
+        format!("{r:.0}")
+    } else if digits >= -4 {
+        trim(format!("{r:.*}", (1 - digits) as usize))
     } else {
-        format!("{v:.1e}")
+        format!("{r:.1e}")
     }
 }
 
@@ -152,10 +154,16 @@ fn draw_histogram(
         .x_label_formatter(&fmt)
         .draw()?;
     let w = (hi - lo) / counts.len() as f64;
-    chart.draw_series(counts.iter().enumerate().filter(|(_, c)| **c > 0).map(|(i, &c)| {
-        let a = lo + i as f64 * w;
-        Rectangle::new([(a, 0u32), (a + w, c)], INK.mix(0.75).filled())
-    }))?;
+    chart.draw_series(
+        counts
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| **c > 0)
+            .map(|(i, &c)| {
+                let a = lo + i as f64 * w;
+                Rectangle::new([(a, 0u32), (a + w, c)], INK.mix(0.75).filled())
+            }),
+    )?;
     root.present()?;
     Ok(())
 }
@@ -300,7 +308,7 @@ fn draw_scatter(
         .draw()?;
     chart.draw_series(
         logp.iter()
-            .map(|&(x, y)| Circle::new((x, y), 2, INK.mix(0.45).filled())),
+            .map(|&(x, y)| Circle::new((x, y), 3, INK.mix(0.5).filled())),
     )?;
     if trend {
         let b = buckets(points);
@@ -358,7 +366,10 @@ mod tests {
         let pts = [(1.0, 1.0), (3.0, 5.0), (2.0, 3.0), (100.0, 7.0), (0.0, 1.0)];
         let b = buckets(&pts);
         assert_eq!(b.len(), 3, "{b:?}");
-        assert_eq!((b[1].from, b[1].count, b[1].median, b[1].p95), (2.0, 2, 3.0, 5.0));
+        assert_eq!(
+            (b[1].from, b[1].count, b[1].median, b[1].p95),
+            (2.0, 2, 3.0, 5.0)
+        );
         assert_eq!(b[2].from, 64.0);
     }
 
@@ -381,8 +392,12 @@ mod tests {
     fn short_labels() {
         assert_eq!(short(0.0), "0");
         assert_eq!(short(1500.0), "1500");
+        assert_eq!(short(631.0), "630");
         assert_eq!(short(25000.0), "25k");
+        assert_eq!(short(2_500_000.0), "2.5M");
         assert_eq!(short(2.5), "2.5");
-        assert_eq!(short(0.0125), "0.0125");
+        assert_eq!(short(3.98), "4");
+        assert_eq!(short(0.0316), "0.032");
+        assert_eq!(short(0.15849), "0.16");
     }
 }
