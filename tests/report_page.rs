@@ -114,8 +114,8 @@ fn by_id(page: &str, id: &str) -> Option<String> {
 
 /// The `data-v` value of the element with `id="ID"`.
 fn data_v(page: &str, id: &str) -> Option<f64> {
-    let start = page.find(&format!("id=\"{id}\" data-v=\""))?;
-    let from = start + id.len() + 13;
+    let needle = format!("id=\"{id}\" data-v=\"");
+    let from = page.find(&needle)? + needle.len();
     let end = from + page[from..].find('"')?;
     page[from..end].parse().ok()
 }

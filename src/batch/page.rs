@@ -291,6 +291,15 @@ fn normal(p: &Path) -> Option<Vec<String>> {
     Some(parts)
 }
 
+/// `p` as an absolute path without `.` and `..` (as given when that fails):
+/// the same text however the output directory was spelled.
+fn absolute(p: &Path) -> String {
+    match normal(p) {
+        Some(parts) if cfg!(unix) => format!("/{}", parts.join("/")),
+        _ => p.to_string_lossy().into_owned(),
+    }
+}
+
 /// The URL of `target` relative to the folder `from` (both taken against the
 /// working directory).
 fn rel_link(from: &Path, target: &Path) -> String {
@@ -938,7 +947,7 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
         let mut cmd = vec!["triwild".to_string()];
         cmd.extend(r.flags.iter().map(|f| shell_word(f)));
         cmd.push("-o".into());
-        cmd.push(shell_word(&e.mesh.to_string_lossy()));
+        cmd.push(shell_word(&absolute(&e.mesh)));
         cmd.push("--stats".into());
         cmd.push("--".into());
         cmd.push(shell_word(&r.input));
@@ -980,10 +989,10 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
             "<p class=\"small\">exit code {} · signal {} · mesh {}</p></div></section>",
             r.exit_code.map_or("—".into(), |c| c.to_string()),
             r.signal.map_or("—".into(), |s| s.to_string()),
-            esc(&r.output.as_deref().map_or_else(
-                || "none".to_string(),
-                |o| opts.out_dir.join(o).to_string_lossy().into_owned()
-            ))
+            esc(&r
+                .output
+                .as_deref()
+                .map_or_else(|| "none".to_string(), |o| absolute(&opts.out_dir.join(o))))
         );
     }
     h.push_str("</div>\n");
@@ -1162,6 +1171,8 @@ mod tests {
             rel_link(Path::new("/x/out"), Path::new("/x/out/./a/../b.svg")),
             "b.svg"
         );
+        #[cfg(unix)]
+        assert_eq!(absolute(Path::new("/a/./b/../c.msh")), "/a/c.msh");
         assert_eq!(shell_word("a b'c"), r"'a b'\''c'");
         assert_eq!(shell_word("--edge-length=0.1"), "--edge-length=0.1");
     }
