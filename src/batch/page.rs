@@ -711,8 +711,13 @@ fn gallery(h: &mut String, entries: &[Entry<'_>]) {
         };
         let _ = writeln!(
             h,
-            "<span class=\"name\">{}</span><span class=\"meta\">{}</span></a>",
+            "<span class=\"name\" title=\"{}\">{}</span><span class=\"meta\">{}</span></a>",
             esc(&e.row.file),
+            esc(e
+                .row
+                .file
+                .rsplit_once('/')
+                .map_or(e.row.file.as_str(), |(_, n)| n)),
             esc(&meta)
         );
     }

@@ -147,6 +147,7 @@ fn draw_histogram(
     chart
         .configure_mesh()
         .disable_x_mesh()
+        .light_line_style(WHITE)
         .x_desc(x_desc)
         .y_desc("files")
         .x_labels(6)
