@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # A real cluster run on one machine (issue 17.6): docs/batch.md's Slurm job array,
 # unchanged, on a single-node Slurm (slurmctld + slurmd on this host, munge
-# authentication), over data/svg with 3 shards; then the doc's merge job; then a
-# check that every data/svg file has exactly one row in the merged report.
+# authentication), over data/svg with 3 shards; then the doc's merge job (and the
+# report page of the whole); then a check that every data/svg file has exactly one
+# row in the merged report and one card in the page's gallery.
 #
 #   scripts/slurm-smoke.sh            # as root on Debian (installs slurm-wlm, munge)
 #
@@ -168,6 +169,8 @@ echo "array job $jid"
 # returns when it has finished.
 say "merging the shard reports (a dependent job)"
 merge="$TRIWILD batch --merge-reports $OUT/report.shard-*-of-$SHARDS.jsonl -o $OUT/report.jsonl"
+# and the page of the whole collection from the merged report (issue 40)
+merge="$merge && $TRIWILD report $OUT/report.jsonl -o $OUT/report.html"
 merge_rc=0
 (cd "$WORK" && sbatch --wait --dependency=afterany:"$jid" --mem=256M --time=00:10:00 \
   --output="$WORK/logs/merge-%j.out" --wrap "$merge") || merge_rc=$?
@@ -203,5 +206,10 @@ rows=$(wc -l <"$WORK/rows")
 ok=$(grep -c '"status":"ok"' "$OUT/report.jsonl" || true)
 meshes=$(find "$OUT" -name '*.msh' | wc -l)
 echo "merged report: $rows rows for $(wc -l <"$WORK/expected") files, $ok ok, $meshes meshes"
+# the page shows every file once in its gallery
+cards=$(grep -o 'class="card [a-z]*" href="#f-[0-9]*" data-file="[^"]*"' "$OUT/report.html" 2>/dev/null |
+  sed 's/.*data-file="//; s/"$//' | LC_ALL=C sort | uniq | wc -l || true)
+echo "report page: $cards files in its gallery"
+[ "$cards" -eq "$rows" ] || { echo "the page's gallery has $cards files, the report $rows"; failed=1; }
 [ "$failed" -eq 0 ] || fail "slurm smoke test"
 say "PASS: $SHARDS shards over $(wc -l <"$WORK/expected") files, one row each"

@@ -230,6 +230,20 @@ fn failures_are_rows_and_the_rest_succeeds() {
         );
     }
 
+    // The report page lists every failure with its cause (issue 40).
+    let page = std::fs::read_to_string(out.join("report.html")).expect("report page");
+    for (f, c) in [
+        ("broken/empty.svg", "bad-input"),
+        ("hooks/panic-me.svg", "panic"),
+        ("hooks/sleep-me.svg", "timeout"),
+        ("hooks/hog-me.svg", "memory"),
+    ] {
+        assert!(
+            page.contains(&format!(">{f}</a></td><td>{c}</td>")),
+            "{f} [{c}] not in the page's failures"
+        );
+    }
+
     // The same bytes as the single-file command with the same parameters;
     // and the parameters reached the child.
     let single = base.join("single.msh");
@@ -408,6 +422,7 @@ fn polling_memory_guard_kills() {
         args: &args,
         timeout: std::time::Duration::from_secs(60),
         memory: &guard,
+        preview: false,
     };
     let row = batch::run_child(
         &spec,

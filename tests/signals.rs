@@ -246,6 +246,12 @@ fn an_interrupted_batch_reports_the_files_in_flight() {
         .map(|l| serde_json::from_str(l).expect("a report row"))
         .collect();
     assert_eq!(rows.len(), 2, "{report}");
+    // the page of the interrupted batch shows both files with their cause
+    let page = fs::read_to_string(out.join("report.html")).expect("report page");
+    assert!(
+        page.contains("id=\"n-cause-interrupted\">2<"),
+        "the page counts two interrupted files"
+    );
     for r in &rows {
         assert_eq!(r["cause"], "interrupted", "{r}");
         assert!(

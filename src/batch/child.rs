@@ -128,6 +128,10 @@ pub struct ChildSpec<'a> {
     pub timeout: Duration,
     /// Memory limit.
     pub memory: &'a MemoryGuard,
+    /// Also write the mesh's SVG preview beside it
+    /// ([`super::page::preview_path`]: `x/y.msh` → `x/y.preview.svg`), for
+    /// the report page.
+    pub preview: bool,
 }
 
 /// The longest message kept from a child's stderr.
@@ -298,9 +302,15 @@ pub fn run_child(
         wall: 0.0,
         peak_rss: None,
         stats: None,
+        flags: Vec::new(),
+        build: None,
     };
+    let preview = spec.preview.then(|| super::page::preview_path(output));
     let fail = |mut row: Row, cause: Cause, message: String| {
         remove_output(output);
+        if let Some(p) = &preview {
+            remove_output(p);
+        }
         row.cause = Some(cause);
         row.message = Some(message);
         row
@@ -328,10 +338,11 @@ pub fn run_child(
         }
         _ => Command::new(spec.exe),
     };
-    cmd.args(spec.args)
-        .arg("-o")
-        .arg(output)
-        .arg("--stats")
+    cmd.args(spec.args).arg("-o").arg(output);
+    if let Some(p) = &preview {
+        cmd.arg("--preview").arg(p);
+    }
+    cmd.arg("--stats")
         .arg("--")
         .arg(input)
         // The batch keeps only the panic message; symbolizing a backtrace
@@ -574,6 +585,7 @@ mod tests {
                 args: &args,
                 timeout: Duration::from_secs_f64(secs),
                 memory: &none,
+                preview: false,
             };
             run_child(&spec, "x.svg", Path::new("x.svg"), &out, "x.msh")
         };

@@ -24,18 +24,23 @@
 
 mod child;
 mod discover;
+mod page;
+mod plots;
 mod report;
 mod summary;
+mod thumbnail;
 
 pub use child::{
     ChildSpec, MemoryGuard, PARENT_PIPE_ENV, interrupt, interrupted, parse_size, run_child,
 };
 pub use discover::{Discovery, Shard, SourceFile, discover};
+pub use page::{PageOptions, PageStats, preview_path, render_page, stage_of, write_page};
 pub use report::{
-    Cause, Merged, ReadReport, ReportWriter, Row, Status, last_per_file, merge_reports,
+    Cause, Merged, ReadReport, ReportWriter, Row, Status, build_name, last_per_file, merge_reports,
     read_report, write_report,
 };
 pub use summary::{Extreme, Percentiles, Summary};
+pub use thumbnail::{THUMB_PX, render_png as render_thumbnail};
 
 use crate::{Error, Result};
 use std::collections::HashSet;
@@ -66,6 +71,12 @@ pub struct BatchOptions {
     pub resume: bool,
     /// Run only this slice of the sorted file list.
     pub shard: Option<Shard>,
+    /// The flags recorded in each row (the single-file command's flags in
+    /// `child_args`, without a launcher's leading arguments).
+    pub flags: Vec<String>,
+    /// Have each child write its mesh's SVG preview beside the mesh
+    /// ([`preview_path`]), for the report page. Default on.
+    pub previews: bool,
 }
 
 impl BatchOptions {
@@ -84,6 +95,8 @@ impl BatchOptions {
             memory: MemoryGuard::None,
             resume: false,
             shard: None,
+            flags: Vec::new(),
+            previews: true,
         }
     }
     /// Set the flags passed to every child.
@@ -115,6 +128,22 @@ impl BatchOptions {
     pub fn with_shard(mut self, shard: Option<Shard>) -> Self {
         self.shard = shard;
         self
+    }
+    /// Set the flags recorded in each row.
+    pub fn with_flags(mut self, flags: Vec<String>) -> Self {
+        self.flags = flags;
+        self
+    }
+    /// Write (or not) a preview beside each mesh.
+    pub fn with_previews(mut self, previews: bool) -> Self {
+        self.previews = previews;
+        self
+    }
+
+    /// The report page's path: the report's with extension `.html`
+    /// (`OUTDIR/report.html`, `OUTDIR/report.shard-K-of-N.html`).
+    pub fn page_path(&self) -> PathBuf {
+        self.report_path().with_extension("html")
     }
 
     /// The report's path: `OUTDIR/report.jsonl`, or
@@ -255,7 +284,9 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
         args: &opts.child_args,
         timeout: opts.timeout,
         memory: &opts.memory,
+        preview: opts.previews,
     };
+    let build = build_name();
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let mut rows = plan.done.clone();
@@ -264,7 +295,7 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
         let (tx, rx) = mpsc::channel::<Row>();
         for _ in 0..opts.jobs.clamp(1, plan.todo.len().max(1)) {
             let tx = tx.clone();
-            let (spec, next, stop) = (&spec, &next, &stop);
+            let (spec, next, stop, build) = (&spec, &next, &stop, &build);
             s.spawn(move || {
                 while !stop.load(Ordering::Relaxed) && interrupted().is_none() {
                     let Some(f) = plan.todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
@@ -273,7 +304,9 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
                     let _span = tracing::info_span!("file", key = %f.key).entered();
                     let rel = f.output_rel();
                     let out = opts.out_dir.join(&rel);
-                    let row = run_child(spec, &f.key, &f.path, &out, &rel);
+                    let mut row = run_child(spec, &f.key, &f.path, &out, &rel);
+                    row.flags.clone_from(&opts.flags);
+                    row.build = Some(build.clone());
                     if tx.send(row).is_err() {
                         break;
                     }

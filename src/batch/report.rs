@@ -113,6 +113,28 @@ pub struct Row {
     /// times per stage, output counts, quality, warnings) when ok.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stats: Option<serde_json::Value>,
+    /// The single-file command's flags the batch gave this file's child
+    /// (`-l 0.02`, ...; the batch adds `--threads=1` unless told): with the
+    /// input and output, the command that reproduces the run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flags: Vec<String>,
+    /// The triwild that ran the batch (`triwild 0.1.0 (release)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build: Option<String>,
+}
+
+/// This library's build, as report rows record it: `triwild VERSION (release)`
+/// or `(debug)`.
+pub fn build_name() -> String {
+    format!(
+        "triwild {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+    )
 }
 
 impl Row {
@@ -336,6 +358,8 @@ mod tests {
             peak_rss: Some(1 << 20),
             stats: Some(serde_json::json!({"times": {"load": 0.1}, "t_core": 0.2,
                 "output": {"triangles": 12}, "quality": {"min_angle_deg": 21.5}})),
+            flags: vec!["-l".into(), "0.1".into()],
+            build: Some(build_name()),
         }
     }
 

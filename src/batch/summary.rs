@@ -192,6 +192,8 @@ mod tests {
                 serde_json::json!({"output": {"triangles": tris},
                     "quality": {"min_angle_deg": angle, "max_amips": 100.0 / angle}})
             }),
+            flags: Vec::new(),
+            build: None,
         }
     }
 

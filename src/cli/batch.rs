@@ -34,6 +34,12 @@ every 50 ms and kills it past the limit.
 
 Merging shards: triwild batch --merge-reports A.jsonl B.jsonl ... -o OUT.jsonl
 
+The report page: OUTDIR/report.html (--no-html to skip), one offline file with
+the headline, plots, a gallery of every mesh (each child also writes its preview,
+OUTDIR/a/b.preview.svg), the slowest and worst files and every failure. Build
+it again from a report (merged shard reports too): triwild report REPORT.jsonl
+-o report.html
+
 Exit codes:
   0  every file meshed
   1  some file failed (see the report)
@@ -82,6 +88,10 @@ pub(crate) struct BatchArgs {
     /// file, sorted) and print their summary.
     #[arg(long, conflicts_with_all = ["resume", "shard", "jobs"])]
     merge_reports: bool,
+    /// Do not write the report page (OUTDIR/report.html, or
+    /// report.shard-K-of-N.html for a shard) nor the mesh previews it shows.
+    #[arg(long)]
+    no_html: bool,
     #[command(flatten)]
     format: FormatArgs,
     #[command(flatten)]
@@ -183,9 +193,16 @@ pub(crate) fn run(
             }
         },
     };
-    leading.extend(child_args(matches));
+    let flags = child_args(matches);
+    let recorded = flags
+        .iter()
+        .map(|f| f.to_string_lossy().into_owned())
+        .collect();
+    leading.extend(flags);
     let mut opts = BatchOptions::new(exe, args.output.clone())
         .with_child_args(leading)
+        .with_flags(recorded)
+        .with_previews(!args.no_html)
         .with_timeout(Duration::from_secs_f64(args.timeout))
         .with_memory(MemoryGuard::detect(memory_limit(args, matches)))
         .with_resume(args.resume)
@@ -227,6 +244,17 @@ pub(crate) fn run(
             let summary = outcome.summary();
             outln!("{summary}");
             outln!("report: {}", plan.report.display());
+            if !args.no_html {
+                let page = opts.page_path();
+                let popts = batch::PageOptions::new(opts.out_dir.clone());
+                match batch::write_page(&outcome.rows, &popts, &page) {
+                    Ok(s) => outln!("{}", super::report::page_line(&page, &s)),
+                    Err(e) => {
+                        errln!("error: report page: {e}");
+                        return ExitCode::from(4);
+                    }
+                }
+            }
             if let Some(sig) = batch::interrupted() {
                 errln!(
                     "interrupted by signal {sig}: the files being meshed have an `interrupted` row; --resume runs the rest"

@@ -15,11 +15,13 @@ pub(crate) mod features;
 #[cfg(feature = "test-hooks")]
 pub(crate) mod hooks;
 pub(crate) mod mesh;
+pub(crate) mod report;
 
 use crate::cli::batch::BatchArgs;
 use crate::cli::check::CheckArgs;
 use crate::cli::features::FeaturesArgs;
 use crate::cli::mesh::MeshArgs;
+use crate::cli::report::ReportArgs;
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::ffi::OsString;
 use std::process::ExitCode;
@@ -68,6 +70,10 @@ enum Command {
     /// every triangle's Jacobian, report invalid elements, the minimum Jacobian ratio
     /// and the area. Exit 0 valid, 1 invalid, 2 unreadable.
     Check(CheckArgs),
+    /// Build a batch's report page (report.html) again from its report: a
+    /// batch's report.jsonl, a merged report, or the shards' reports of a
+    /// cluster run (joined one row per file).
+    Report(ReportArgs),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -202,6 +208,7 @@ pub fn main_with(args: impl IntoIterator<Item = OsString>, child: Option<&[OsStr
         None => mesh::run(&cli.mesh, quiet),
         Some(Command::Features(args)) => features::run(args, quiet),
         Some(Command::Check(args)) => check::run(args),
+        Some(Command::Report(args)) => report::run(args, quiet),
         Some(Command::Batch(args)) => {
             let sub = matches
                 .subcommand_matches("batch")
