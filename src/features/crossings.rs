@@ -445,3 +445,87 @@ pub(super) fn find(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+    use kurbo::Line;
+
+    fn line(a: (f64, f64), b: (f64, f64)) -> Piece {
+        Piece {
+            parent: Parent::Line(Line::new(a, b)),
+            t: [0.0, 1.0],
+        }
+    }
+
+    /// A hatch of parallel lines crossed by short transversals (fewer
+    /// crossings each than [`MAX_PER_PIECE`]): every hatch-transversal
+    /// crossing is found (the count a pair-by-pair check gives), and the
+    /// parallel lines are split only there.
+    #[test]
+    fn hatch_crossings_are_the_transversal_ones() {
+        let mut pieces: Vec<Piece> = (0..200)
+            .map(|k| {
+                let x = k as f64 * 0.5;
+                line((x - 50.0, 0.0), (x + 50.0, 100.0))
+            })
+            .collect();
+        for k in 0..6 {
+            let (x, y) = (k as f64 * 12.0, 10.0 + k as f64 * 14.0);
+            pieces.push(line((x, y), (x + 10.0, y + 0.5)));
+        }
+        let params = Params::DEFAULT.resolve(Point::new(160.0, 100.0).to_vec2().hypot());
+        let found = find(&pieces, &[], &params, &Deadline::NONE);
+        // Each transversal crosses the hatch lines whose span reaches it,
+        // away from their ends.
+        let transversals = 200..pieces.len();
+        let brute = pieces[transversals.clone()]
+            .iter()
+            .map(|t| {
+                let (a, b) = (t.parent.eval(0.0), t.parent.eval(1.0));
+                pieces[..200]
+                    .iter()
+                    .filter(|h| {
+                        let (c, d) = (h.parent.eval(0.0), h.parent.eval(1.0));
+                        chord_cross(a, b, c, d).is_some_and(|(u, v)| {
+                            let x = a.lerp(b, u);
+                            let far = |e: Point| e.distance(x) > params.mu;
+                            (far(a) && far(b) && far(c) && far(d)) && (0.0..=1.0).contains(&v)
+                        })
+                    })
+                    .count()
+            })
+            .sum::<usize>();
+        assert!(brute > 60, "{brute}");
+        assert_eq!(found.count, brute);
+        let hatch_splits: usize = found.splits[..200].iter().map(Vec::len).sum();
+        let transversal_splits: usize = found.splits[transversals].iter().map(Vec::len).sum();
+        assert_eq!((hatch_splits, transversal_splits), (brute, brute));
+    }
+
+    #[test]
+    fn direction_classes_pair_only_steep_meetings() {
+        let min_angle = 1f64.to_radians();
+        let pieces = [
+            line((0.0, 0.0), (1.0, 0.0)),
+            line((0.0, 1.0), (1.0, 1.0 + 0.3f64.to_radians().tan())),
+            line((0.0, 0.0), (1.0, 2f64.to_radians().tan())),
+            line((0.0, 0.0), (-1.0, -0.001)),
+            line((0.0, 0.0), (0.0, 0.0)),
+        ];
+        let (class, bins) = direction_classes(&pieces, min_angle);
+        assert!(bins >= 360);
+        // 0.3°: never paired; 2°: paired; opposite direction, 0.06°: never;
+        // a degenerate line: always.
+        assert!(!may_cross(class[0], class[1], bins));
+        assert!(may_cross(class[0], class[2], bins));
+        assert!(!may_cross(class[0], class[3], bins));
+        assert_eq!(class[4], bins);
+        assert!(may_cross(class[0], class[4], bins));
+        // A too fine binning: one class, every pair tried.
+        let (class, bins) = direction_classes(&pieces, 1e-9);
+        assert_eq!(bins, 0);
+        assert!(class.iter().all(|&c| may_cross(c, class[0], bins)));
+    }
+}
