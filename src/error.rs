@@ -58,6 +58,27 @@ pub enum Error {
         /// The stage that noticed.
         stage: crate::stage::Stage,
     },
+    /// The process's memory reached a limit (`--max-memory`, or one set from
+    /// outside: `ulimit -v`, a cgroup); nothing was written.
+    #[error("memory limit of {limit_mb} MB reached in {stage} ({limit})")]
+    MemoryLimit {
+        /// The limit, MiB.
+        limit_mb: u64,
+        /// Which limit: `--max-memory`, the address-space limit or the
+        /// cgroup's.
+        limit: &'static str,
+        /// The stage that noticed.
+        stage: crate::stage::Stage,
+    },
+    /// An allocation failed: the system (or a limit set from outside the
+    /// process) had no more memory to give; nothing was written.
+    #[error("out of memory in {stage}: {} MB could not be allocated", bytes.div_ceil(1 << 20))]
+    OutOfMemory {
+        /// The size asked for, bytes.
+        bytes: u64,
+        /// The stage that asked.
+        stage: crate::stage::Stage,
+    },
     /// A meshing stage failed.
     #[error("meshing failed in stage {stage}: {message}")]
     Meshing {
@@ -86,7 +107,24 @@ impl Error {
             | Error::BadMesh(_)
             | Error::InvalidParams(_)
             | Error::TooLarge(_) => ErrorKind::BadInput,
-            Error::Meshing { .. } | Error::TimeLimit { .. } => ErrorKind::Meshing,
+            Error::Meshing { .. }
+            | Error::TimeLimit { .. }
+            | Error::MemoryLimit { .. }
+            | Error::OutOfMemory { .. } => ErrorKind::Meshing,
+        }
+    }
+
+    /// The error of a run that overran its budget in `stage`.
+    pub(crate) fn overrun(over: crate::budget::Overrun, stage: crate::stage::Stage) -> Self {
+        use crate::budget::Overrun;
+        match over {
+            Overrun::Time { seconds } => Error::TimeLimit { seconds, stage },
+            Overrun::Memory { limit_mb, source } => Error::MemoryLimit {
+                limit_mb,
+                limit: source.flag(),
+                stage,
+            },
+            Overrun::Allocation { bytes } => Error::OutOfMemory { bytes, stage },
         }
     }
 
@@ -99,21 +137,17 @@ impl Error {
     }
 }
 
-/// A time-limit error in `stage` once `deadline` has passed.
+/// A time-limit or memory-limit error in `stage` once `deadline` has passed
+/// (see [`crate::budget::Deadline`]).
 ///
 /// # Errors
-/// [`Error::TimeLimit`] when the deadline has passed.
+/// [`Error::MemoryLimit`] past the memory limit, [`Error::TimeLimit`] past the
+/// time limit.
 pub(crate) fn check_deadline(
     deadline: &crate::budget::Deadline,
     stage: crate::stage::Stage,
 ) -> Result<()> {
-    if deadline.expired() {
-        return Err(Error::TimeLimit {
-            seconds: deadline.seconds(),
-            stage,
-        });
-    }
-    Ok(())
+    deadline.check().map_err(|o| Error::overrun(o, stage))
 }
 
 /// `Result` with [`Error`].

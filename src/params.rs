@@ -209,8 +209,11 @@ pub struct Params {
     /// Most drawable elements (paths and basic shapes, `<use>` copies
     /// included). Default [`defaults::MAX_SHAPES`].
     pub max_shapes: u64,
-    /// Most memory, MiB, the run is estimated to need from the input's counts
-    /// (checked before the large allocations). Default [`defaults::MAX_MEMORY_MB`].
+    /// Most memory, MiB: the run's estimate from the input's counts is checked
+    /// against it before usvg builds its tree, and the process's resident
+    /// memory in the pipeline's loops and before the large allocations (past
+    /// it the run stops with [`Error::MemoryLimit`] and writes nothing).
+    /// Default [`defaults::MAX_MEMORY_MB`].
     pub max_memory_mb: u64,
     /// Wall-clock limit, seconds, checked cooperatively in the pipeline's
     /// loops: past it the run stops with [`Error::TimeLimit`] and writes
@@ -388,7 +391,7 @@ impl Params {
 
     /// The deadline of a run starting now.
     pub(crate) fn deadline(&self) -> Deadline {
-        Deadline::after(self.time_limit)
+        Deadline::after(self.time_limit).with_memory_mb(self.max_memory_mb)
     }
 
     /// Turn the paranoid validator on or off.

@@ -22,7 +22,12 @@
 //! By default ~30 cases of a fixed seed plus every fixture under
 //! `tests/fixtures/fuzz/` (earlier findings and notable attacks, replayed).
 //! `docs/fuzz.md` has the long run: `TRIWILD_FUZZ_CASES`, `TRIWILD_FUZZ_SEED`,
-//! `TRIWILD_FUZZ_JOBS`, `TRIWILD_FUZZ_MSHCHECK`, `TRIWILD_FUZZ_FAILURES`.
+//! `TRIWILD_FUZZ_JOBS`, `TRIWILD_FUZZ_MSHCHECK`, `TRIWILD_FUZZ_FAILURES`,
+//! `TRIWILD_FUZZ_MAX_MEMORY`.
+//!
+//! With `--max-memory` (issue 41) a case also fails when the child's peak
+//! resident memory (its `VmHWM`, polled while it runs) passes the budget by
+//! more than [`MEMORY_MARGIN_MB`].
 #![allow(
     clippy::print_stderr,
     reason = "the table by mutation kind and the failures are this test's report"
@@ -57,6 +62,11 @@ const URL_MARK: &str = "@URL@";
 /// The default seed (CI replays the same cases); `TRIWILD_FUZZ_SEED` for fresh ones.
 const DEFAULT_SEED: u64 = 0x7219_1d17;
 const DEFAULT_CASES: usize = 30;
+/// `--max-memory` of every case, MiB (`TRIWILD_FUZZ_MAX_MEMORY`).
+const DEFAULT_MAX_MEMORY_MB: u64 = 2048;
+/// How far past `--max-memory` a child's peak may go: the memory check reads
+/// the process's memory every few milliseconds, and the error path allocates.
+const MEMORY_MARGIN_MB: f64 = 64.0;
 
 // ---------------------------------------------------------------------------
 // Configuration
@@ -81,6 +91,9 @@ struct Runner {
     /// Past this a run is a hang: the time limit plus a margin, or a fixed
     /// generous limit when the binary has no `--time-limit`.
     watchdog: Duration,
+    /// `--max-memory` passed to every case, MiB, when the binary has it: a
+    /// case whose peak passes it by more than [`MEMORY_MARGIN_MB`] fails.
+    max_memory_mb: Option<u64>,
     /// Cap on the huge-path generator's segments without `--max-segments` (a
     /// 100k-segment zigzag then takes minutes: the budget is what bounds it).
     max_path_segments: usize,
@@ -110,8 +123,10 @@ impl Runner {
         if has("--max-shapes") {
             budget_args.extend(["--max-shapes".to_owned(), "2000".to_owned()]);
         }
-        if has("--max-memory") {
-            budget_args.extend(["--max-memory".to_owned(), "2048".to_owned()]);
+        let max_memory_mb = has("--max-memory")
+            .then(|| env_num("TRIWILD_FUZZ_MAX_MEMORY").unwrap_or(DEFAULT_MAX_MEMORY_MB));
+        if let Some(mb) = max_memory_mb {
+            budget_args.extend(["--max-memory".to_owned(), mb.to_string()]);
         }
         let watchdog = if has("--time-limit") {
             Duration::from_secs(time_limit + 10)
@@ -145,6 +160,7 @@ impl Runner {
         let url = format!("http://{}/external.svg", listener.local_addr().unwrap());
         Runner {
             budget_args,
+            max_memory_mb,
             has_budgets: has("--time-limit") && has("--max-segments"),
             watchdog,
             max_path_segments,
@@ -194,7 +210,16 @@ impl Runner {
             .stderr(fs::File::create(&err_path).unwrap())
             .spawn()
             .expect("spawn triwild");
+        let status_path = PathBuf::from(format!("/proc/{}/status", child.id()));
+        let mut peak_mb = 0.0f64;
         let status = loop {
+            // Before try_wait: the child's status is readable until it is reaped.
+            if let Some(mb) = fs::read_to_string(&status_path)
+                .ok()
+                .and_then(|s| vm_hwm_mb(&s))
+            {
+                peak_mb = peak_mb.max(mb);
+            }
             if let Some(status) = child.try_wait().unwrap() {
                 break Some(status);
             }
@@ -213,6 +238,11 @@ impl Runner {
         };
         let outcome = if self.poll_connections() > before {
             Outcome::Network
+        } else if self
+            .max_memory_mb
+            .is_some_and(|max| peak_mb > max as f64 + MEMORY_MARGIN_MB)
+        {
+            Outcome::OverMemory(peak_mb.round() as u64)
         } else {
             outcome
         };
@@ -224,6 +254,7 @@ impl Runner {
         Run {
             outcome,
             wall,
+            peak_mb,
             stderr,
         }
     }
@@ -305,6 +336,17 @@ impl Runner {
     }
 }
 
+/// `VmHWM` (peak resident memory) of a `/proc/<pid>/status` text, MiB.
+fn vm_hwm_mb(status: &str) -> Option<f64> {
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line["VmHWM:".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    Some(kb / 1024.0)
+}
+
 fn last_line(stdout: &str, stderr: &str) -> String {
     let text = if stderr.trim().is_empty() {
         stdout
@@ -347,6 +389,8 @@ enum Outcome {
     BadMessage(i32, String),
     OtherExit(i32),
     Network,
+    /// The peak resident memory (MiB) passed `--max-memory` plus the margin.
+    OverMemory(u64),
 }
 
 impl Outcome {
@@ -365,6 +409,7 @@ impl Outcome {
             Outcome::BadMessage(..) => "bad-message",
             Outcome::OtherExit(_) => "other-exit",
             Outcome::Network => "network",
+            Outcome::OverMemory(_) => "over-memory",
         }
     }
 }
@@ -372,6 +417,8 @@ impl Outcome {
 struct Run {
     outcome: Outcome,
     wall: f64,
+    /// The child's peak resident memory, MiB (as last polled).
+    peak_mb: f64,
     stderr: String,
 }
 
@@ -1436,12 +1483,14 @@ struct Row {
     invalid: usize,
     other: usize,
     max_wall: f64,
+    max_peak_mb: f64,
 }
 
 impl Row {
     fn add(&mut self, run: &Run) {
         self.cases += 1;
         self.max_wall = self.max_wall.max(run.wall);
+        self.max_peak_mb = self.max_peak_mb.max(run.peak_mb);
         match run.outcome {
             Outcome::Ok => self.ok += 1,
             Outcome::Error(2) => self.exit2 += 1,
@@ -1451,14 +1500,17 @@ impl Row {
             Outcome::Signal(_) => self.signals += 1,
             Outcome::Hang => self.hangs += 1,
             Outcome::Invalid(_) => self.invalid += 1,
-            Outcome::BadMessage(..) | Outcome::OtherExit(_) | Outcome::Network => self.other += 1,
+            Outcome::BadMessage(..)
+            | Outcome::OtherExit(_)
+            | Outcome::Network
+            | Outcome::OverMemory(_) => self.other += 1,
         }
     }
 }
 
 fn table(rows: &BTreeMap<String, Row>) -> String {
     let mut s = format!(
-        "{:<14} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>5} {:>7} {:>5} {:>8}\n",
+        "{:<14} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>5} {:>7} {:>5} {:>8} {:>8}\n",
         "kind",
         "cases",
         "exit0",
@@ -1470,7 +1522,8 @@ fn table(rows: &BTreeMap<String, Row>) -> String {
         "hang",
         "invalid",
         "other",
-        "max_s"
+        "max_s",
+        "peak_mb"
     );
     let mut total = Row::default();
     for r in rows.values() {
@@ -1485,6 +1538,7 @@ fn table(rows: &BTreeMap<String, Row>) -> String {
         total.invalid += r.invalid;
         total.other += r.other;
         total.max_wall = total.max_wall.max(r.max_wall);
+        total.max_peak_mb = total.max_peak_mb.max(r.max_peak_mb);
     }
     for (name, r) in rows
         .iter()
@@ -1493,7 +1547,7 @@ fn table(rows: &BTreeMap<String, Row>) -> String {
     {
         let _ = writeln!(
             s,
-            "{:<14} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>5} {:>7} {:>5} {:>8.2}",
+            "{:<14} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>5} {:>7} {:>5} {:>8.2} {:>8.0}",
             name,
             r.cases,
             r.ok,
@@ -1505,7 +1559,8 @@ fn table(rows: &BTreeMap<String, Row>) -> String {
             r.hangs,
             r.invalid,
             r.other,
-            r.max_wall
+            r.max_wall,
+            r.max_peak_mb
         );
     }
     s

@@ -313,9 +313,10 @@ pub(crate) struct ParamArgs {
     /// Most drawable elements (paths and basic shapes, `<use>` copies included).
     #[arg(long, default_value_t = defaults::MAX_SHAPES, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     max_shapes: u64,
-    /// Most memory the run is estimated to need, MiB (or a size like 4G),
-    /// checked from the input's counts before meshing. `triwild batch` also
-    /// limits each child's memory to it when given.
+    /// Most memory, MiB (or a size like 4G): the run's estimate from the
+    /// input's counts is checked before meshing (exit 2), and the process's
+    /// resident memory while it meshes (exit 3, nothing written). `triwild
+    /// batch` also limits each child's memory to it when given.
     #[arg(long, default_value_t = defaults::MAX_MEMORY_MB, value_name = "MB", value_parser = parse_mb)]
     max_memory: u64,
     /// Stop with exit 3 after this many seconds of wall-clock time (checked

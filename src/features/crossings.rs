@@ -9,10 +9,18 @@
 //! primary when they are otherwise separated. Shallower crossings, tangencies
 //! and overlaps are left alone: the separation test demotes them as before.
 //!
-//! Candidates come from a grid over the pieces' control boxes; each candidate
-//! pair is flattened into a few chords, chord crossings seed a Newton solve of
-//! `c1(s) = c2(t)`, and only converged solutions inside both pieces count.
-//! Budgets bound the work per piece and in total.
+//! Candidates come from a grid over the pieces' boxes: a curve's control box,
+//! a straight piece's run of boxes about one grid cell long each (issue 41: the
+//! boxes of long parallel lines of a hatch all overlap one another, their runs
+//! of small boxes only their neighbours'), so the pairs tried grow with the
+//! pairs that come near each other, not with all pairs. Two straight pieces
+//! whose directions differ by less than the smallest crossing angle any pair
+//! is split at are never tried (their crossing would be refused): a hatch's
+//! parallel lines are not paired at all. Each candidate pair
+//! is flattened into a few chords (a straight piece is its one chord), chord
+//! crossings seed a Newton solve of `c1(s) = c2(t)`, and only converged
+//! solutions inside both pieces count. Budgets bound the work per piece and in
+//! total.
 
 use super::Parent;
 use super::grid::Grid;
@@ -65,6 +73,87 @@ fn control_box(p: &Parent, t: [f64; 2]) -> Rect {
         }
         Parent::Line(_) => Rect::from_points(p.eval(t[0]), p.eval(t[1])),
     }
+}
+
+/// The boxes that cover `p` for the candidate search: a straight piece's run
+/// of boxes at most `step` long each (grown by `pad`), a curve's control box.
+fn cover_boxes(p: &Piece, step: f64, pad: f64, out: &mut Vec<Rect>) {
+    match p.parent {
+        Parent::Line(_) => {
+            let (a, b) = (p.parent.eval(p.t[0]), p.parent.eval(p.t[1]));
+            let len = a.distance(b);
+            // At most MAX_RUN boxes: a piece longer than that many cells is
+            // covered by longer boxes (the search stays correct, only coarser).
+            let k = if step > 0.0 && len.is_finite() {
+                ((len / step).ceil() as usize).clamp(1, MAX_RUN)
+            } else {
+                1
+            };
+            for i in 0..k {
+                let u0 = a.lerp(b, i as f64 / k as f64);
+                let u1 = if i + 1 == k {
+                    b
+                } else {
+                    a.lerp(b, (i + 1) as f64 / k as f64)
+                };
+                out.push(Rect::from_points(u0, u1).inflate(pad, pad));
+            }
+        }
+        Parent::Cubic(_) | Parent::Conic(_) => {
+            out.push(control_box(&p.parent, p.t).inflate(pad, pad));
+        }
+    }
+}
+
+/// Most boxes in a straight piece's run (see [`cover_boxes`]).
+const MAX_RUN: usize = 4096;
+/// Most direction classes of straight pieces (see [`direction_classes`]);
+/// with more (a tiny α) every piece is tried against every other.
+const MAX_CLASSES: usize = 4096;
+/// A direction class of at least this many pieces (and 1/32 of them) gets a
+/// grid of its own (see [`find`]).
+const BIG_CLASS: usize = 64;
+
+/// The direction class of each piece and the number of straight classes
+/// (curves and degenerate lines get that number, a class of their own).
+/// Straight pieces are binned by direction modulo π in bins a little
+/// narrower than half of `min_angle` (radians): two straight pieces in the
+/// same or in neighbouring bins (circularly) meet at less than `min_angle`,
+/// so a crossing of theirs would be refused by its angle.
+fn direction_classes(pieces: &[Piece], min_angle: f64) -> (Vec<u32>, u32) {
+    let width = 0.5 * min_angle * (1.0 - 1e-6);
+    let bins = (std::f64::consts::PI / width).ceil();
+    if !(bins.is_finite() && bins >= 3.0 && bins <= MAX_CLASSES as f64) {
+        // Too fine to bin (or nothing to skip): one class, every pair tried.
+        return (vec![0; pieces.len()], 0);
+    }
+    let bins = bins as u32;
+    let class = pieces
+        .iter()
+        .map(|p| match p.parent {
+            Parent::Line(_) => {
+                let v = p.parent.eval(p.t[1]) - p.parent.eval(p.t[0]);
+                if v.hypot2() > 0.0 && v.is_finite() {
+                    let a = v.y.atan2(v.x).rem_euclid(std::f64::consts::PI);
+                    ((a / width) as u32).min(bins - 1)
+                } else {
+                    bins
+                }
+            }
+            Parent::Cubic(_) | Parent::Conic(_) => bins,
+        })
+        .collect();
+    (class, bins)
+}
+
+/// Whether pieces of classes `a` and `b` (of [`direction_classes`], `bins`
+/// straight ones) may cross at an angle that counts.
+fn may_cross(a: u32, b: u32, bins: u32) -> bool {
+    if a >= bins || b >= bins {
+        return true;
+    }
+    let d = a.abs_diff(b);
+    d.min(bins - d) > 1
 }
 
 /// The crossing parameters of segments `a b` and `c d` (as fractions), if they
@@ -130,12 +219,56 @@ pub(super) fn find(
     }
     let boxes: Vec<Rect> = pieces.iter().map(|p| control_box(&p.parent, p.t)).collect();
     let bounds = boxes.iter().skip(1).fold(boxes[0], |r, b| r.union(*b));
-    let mut grid = Grid::new(bounds, params.l, n);
-    for (i, b) in boxes.iter().enumerate() {
-        grid.insert(
-            u32::try_from(i).expect("internal: piece count fits u32"),
-            *b,
-        );
+    // Each piece is covered by boxes about a cell of a grid with a few cells
+    // per piece long (never shorter than μ); the grid over those boxes has
+    // cells of that size.
+    let step = Grid::new(bounds, params.mu, n).cell();
+    // Touching counts: a crossing at a box's edge is in both boxes grown by a
+    // hair.
+    let pad = 1e-9 * params.d;
+    let mut cover: Vec<Rect> = Vec::new();
+    // The boxes of piece i: cover[first[i]..first[i + 1]].
+    let mut first: Vec<usize> = Vec::with_capacity(n + 1);
+    for p in pieces {
+        first.push(cover.len());
+        cover_boxes(p, step, pad, &mut cover);
+    }
+    first.push(cover.len());
+    let Ok(boxes_u32) = u32::try_from(cover.len()) else {
+        // Past 4 billion boxes no grid is built: nothing is split (the
+        // memory budget stops such a run long before).
+        return out;
+    };
+    // The piece of each box.
+    let owner: Vec<u32> = (0..n)
+        .flat_map(|i| std::iter::repeat_n(i as u32, first[i + 1] - first[i]))
+        .collect();
+    // The smallest angle any pair is split at: below it, no pair counts.
+    let min_angle = (4.0 * params.alpha)
+        .min(TRIM_MIN_DEG.to_radians())
+        .min(std::f64::consts::FRAC_PI_2);
+    let (class, bins) = direction_classes(pieces, min_angle);
+    // A direction class of many pieces (a hatch's) has a grid of its own,
+    // which the pieces that may cross it search and the others skip; the
+    // rest share one grid, filtered by class item by item.
+    let mut members = vec![0usize; bins as usize + 1];
+    for &c in &class {
+        members[c as usize] += 1;
+    }
+    let big = |c: u32| c < bins && members[c as usize] >= BIG_CLASS.max(n / 32);
+    let big_classes: Vec<u32> = (0..bins).filter(|&c| big(c)).collect();
+    let area = bounds.inflate(pad, pad);
+    let mut shared = Grid::new(area, step, boxes_u32 as usize);
+    let mut own: Vec<Grid> = big_classes
+        .iter()
+        .map(|&c| Grid::new(area, step, members[c as usize]))
+        .collect();
+    for (k, b) in cover.iter().enumerate() {
+        let c = class[owner[k] as usize];
+        match big_classes.binary_search(&c) {
+            Ok(g) => own[g].insert(k as u32, *b),
+            Err(_) => shared.insert(k as u32, *b),
+        }
     }
     // The two curves' points must agree far below the on-curve tolerance
     // (1e-9·d): the shared point is their mean.
@@ -143,27 +276,56 @@ pub(super) fn find(
     let min_sin = (4.0 * params.alpha).min(std::f64::consts::FRAC_PI_2).sin();
     let trim_sin = TRIM_MIN_DEG.to_radians().sin();
     let is_trimmable = |k: usize| trimmable.get(k).copied().unwrap_or(false);
-    let chords = |p: &Piece| -> Vec<(Point, f64)> {
-        (0..=CHORDS)
-            .map(|k| {
-                let t = p.t[0] + (p.t[1] - p.t[0]) * k as f64 / CHORDS as f64;
-                (p.parent.eval(t), t)
-            })
-            .collect()
-    };
+    // Each piece's chords, once (a straight piece is its own chord).
+    let chords: Vec<Vec<(Point, f64)>> = pieces
+        .par_iter()
+        .map(|p| {
+            let m = match p.parent {
+                Parent::Line(_) => 1,
+                Parent::Cubic(_) | Parent::Conic(_) => CHORDS,
+            };
+            (0..=m)
+                .map(|k| {
+                    let t = p.t[0] + (p.t[1] - p.t[0]) * k as f64 / m as f64;
+                    (p.parent.eval(t), t)
+                })
+                .collect()
+        })
+        .collect();
     // (piece, s, piece, t, point, nearness bound, split the first, the second)
     type Found = (usize, f64, usize, f64, Point, f64, bool, bool);
     // The crossings of piece i with the pieces after it that it overlaps.
     let crossings_of = |i: usize, found: &mut Vec<Found>| {
-        let mut near = grid.query(boxes[i]);
-        near.retain(|&j| (j as usize) > i && boxes[j as usize].overlaps(boxes[i]));
+        // The pieces after i with a box overlapping one of i's, in order.
+        let mut near: Vec<u32> = Vec::new();
+        let keep = |k: u32| {
+            let j = owner[k as usize];
+            j as usize > i && may_cross(class[i], class[j as usize], bins)
+        };
+        let grids = std::iter::once(&shared).chain(
+            big_classes
+                .iter()
+                .zip(&own)
+                .filter(|&(&c, _)| may_cross(class[i], c, bins))
+                .map(|(_, g)| g),
+        );
+        for grid in grids {
+            for b in &cover[first[i]..first[i + 1]] {
+                grid.any_of(*b, keep, |k| {
+                    near.push(owner[k as usize]);
+                    false
+                });
+            }
+        }
+        near.sort_unstable();
+        near.dedup();
         if near.is_empty() {
             return;
         }
-        let ci = chords(&pieces[i]);
+        let ci = &chords[i];
         for j in near {
             let j = j as usize;
-            let cj = chords(&pieces[j]);
+            let cj = &chords[j];
             let (near_ends, pair_sin) = if is_trimmable(i) && is_trimmable(j) {
                 (TRIM_NEAR * params.mu, trim_sin)
             } else {
@@ -236,7 +398,15 @@ pub(super) fn find(
             found
         })
         .collect();
-    let found: Vec<Found> = by_piece.into_iter().flatten().collect();
+    // One buffer of the exact size, reserved within the memory budget (a
+    // dense hatch crosses itself ~n²/4 times: past the budget the run stops
+    // here, at the next check, instead of doubling a list of gigabytes).
+    let total = by_piece.iter().map(Vec::len).sum();
+    let mut found: Vec<Found> = Vec::new();
+    if crate::budget::reserve(&mut found, total, deadline).is_err() {
+        return out;
+    }
+    found.extend(by_piece.into_iter().flatten());
     // Crossings within μ of each other on one piece would make tiny sections:
     // keep the first of such a cluster (by order found) and drop its partners.
     let mut kept: Vec<Found> = Vec::new();
@@ -274,4 +444,88 @@ pub(super) fn find(
         s.dedup();
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+    use kurbo::Line;
+
+    fn line(a: (f64, f64), b: (f64, f64)) -> Piece {
+        Piece {
+            parent: Parent::Line(Line::new(a, b)),
+            t: [0.0, 1.0],
+        }
+    }
+
+    /// A hatch of parallel lines crossed by short transversals (fewer
+    /// crossings each than [`MAX_PER_PIECE`]): every hatch-transversal
+    /// crossing is found (the count a pair-by-pair check gives), and the
+    /// parallel lines are split only there.
+    #[test]
+    fn hatch_crossings_are_the_transversal_ones() {
+        let mut pieces: Vec<Piece> = (0..200)
+            .map(|k| {
+                let x = k as f64 * 0.5;
+                line((x - 50.0, 0.0), (x + 50.0, 100.0))
+            })
+            .collect();
+        for k in 0..6 {
+            let (x, y) = (k as f64 * 12.0, 10.0 + k as f64 * 14.0);
+            pieces.push(line((x, y), (x + 10.0, y + 0.5)));
+        }
+        let params = Params::DEFAULT.resolve(Point::new(160.0, 100.0).to_vec2().hypot());
+        let found = find(&pieces, &[], &params, &Deadline::NONE);
+        // Each transversal crosses the hatch lines whose span reaches it,
+        // away from their ends.
+        let transversals = 200..pieces.len();
+        let brute = pieces[transversals.clone()]
+            .iter()
+            .map(|t| {
+                let (a, b) = (t.parent.eval(0.0), t.parent.eval(1.0));
+                pieces[..200]
+                    .iter()
+                    .filter(|h| {
+                        let (c, d) = (h.parent.eval(0.0), h.parent.eval(1.0));
+                        chord_cross(a, b, c, d).is_some_and(|(u, v)| {
+                            let x = a.lerp(b, u);
+                            let far = |e: Point| e.distance(x) > params.mu;
+                            (far(a) && far(b) && far(c) && far(d)) && (0.0..=1.0).contains(&v)
+                        })
+                    })
+                    .count()
+            })
+            .sum::<usize>();
+        assert!(brute > 60, "{brute}");
+        assert_eq!(found.count, brute);
+        let hatch_splits: usize = found.splits[..200].iter().map(Vec::len).sum();
+        let transversal_splits: usize = found.splits[transversals].iter().map(Vec::len).sum();
+        assert_eq!((hatch_splits, transversal_splits), (brute, brute));
+    }
+
+    #[test]
+    fn direction_classes_pair_only_steep_meetings() {
+        let min_angle = 1f64.to_radians();
+        let pieces = [
+            line((0.0, 0.0), (1.0, 0.0)),
+            line((0.0, 1.0), (1.0, 1.0 + 0.3f64.to_radians().tan())),
+            line((0.0, 0.0), (1.0, 2f64.to_radians().tan())),
+            line((0.0, 0.0), (-1.0, -0.001)),
+            line((0.0, 0.0), (0.0, 0.0)),
+        ];
+        let (class, bins) = direction_classes(&pieces, min_angle);
+        assert!(bins >= 360);
+        // 0.3°: never paired; 2°: paired; opposite direction, 0.06°: never;
+        // a degenerate line: always.
+        assert!(!may_cross(class[0], class[1], bins));
+        assert!(may_cross(class[0], class[2], bins));
+        assert!(!may_cross(class[0], class[3], bins));
+        assert_eq!(class[4], bins);
+        assert!(may_cross(class[0], class[4], bins));
+        // A too fine binning: one class, every pair tried.
+        let (class, bins) = direction_classes(&pieces, 1e-9);
+        assert_eq!(bins, 0);
+        assert!(class.iter().all(|&c| may_cross(c, class[0], bins)));
+    }
 }

@@ -47,6 +47,11 @@ impl Grid {
         }
     }
 
+    /// The side of a cell.
+    pub(super) fn cell(&self) -> f64 {
+        self.cell
+    }
+
     fn span(&self, r: Rect) -> (usize, usize, usize, usize) {
         let ix = |x: f64, n: usize| (((x / self.cell).floor()).max(0.0) as usize).min(n - 1);
         (
@@ -78,11 +83,25 @@ impl Grid {
     /// An item is reported only from the cell holding the lower-left corner of its
     /// box's intersection with `r` (a cell both spans share), so no item is seen
     /// twice and nothing is sorted: the work is the items in the cells `r` covers.
-    pub(super) fn any(&self, r: Rect, mut f: impl FnMut(u32) -> bool) -> bool {
+    pub(super) fn any(&self, r: Rect, f: impl FnMut(u32) -> bool) -> bool {
+        self.any_of(r, |_| true, f)
+    }
+
+    /// [`Grid::any`] over the items `keep` accepts (asked first, before the
+    /// item's box is looked at: a cheap filter saves the overlap tests).
+    pub(super) fn any_of(
+        &self,
+        r: Rect,
+        keep: impl Fn(u32) -> bool,
+        mut f: impl FnMut(u32) -> bool,
+    ) -> bool {
         let (x0, x1, y0, y1) = self.span(r);
         for y in y0..=y1 {
             for x in x0..=x1 {
                 for &id in &self.cells[y * self.nx + x] {
+                    if !keep(id) {
+                        continue;
+                    }
                     let b = self.boxes[id as usize];
                     if b.x0 > r.x1 || b.x1 < r.x0 || b.y0 > r.y1 || b.y1 < r.y0 {
                         continue;

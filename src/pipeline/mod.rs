@@ -346,9 +346,11 @@ fn mesh_within(
     regions: &RegionOptions,
     deadline: Deadline,
 ) -> Result<Meshed> {
-    with_threads(params.threads, || {
+    let meshed = with_threads(params.threads, || {
         mesh_stages(drawing, params, regions, deadline)
-    })
+    });
+    deadline.finish();
+    meshed
 }
 
 /// Run `f` on a pool of `threads` workers (0: rayon's global pool, one per
@@ -800,7 +802,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let t_load = t.elapsed().as_secs_f64();
     // Meshing and writing on one pool: the writer formats in parallel too,
     // on no more threads than the mesher was given.
-    let (mut report, t_output) = with_threads(params.threads, || -> Result<(Report, f64)> {
+    let written = with_threads(params.threads, || -> Result<(Report, f64)> {
         let Meshed { mesh, report } = mesh_stages(&drawing, params, &opts.regions, deadline)?;
         let t = Instant::now();
         output::write_msh(&mesh, output, opts.msh)?;
@@ -814,7 +816,9 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
             output::write_preview_coloured(&mesh, &colours, p)?;
         }
         Ok((report, t.elapsed().as_secs_f64()))
-    })?;
+    });
+    deadline.finish();
+    let (mut report, t_output) = written?;
     report.times.insert("load", t_load);
     report.times.insert("output", t_output);
     report.times.insert("total", t0.elapsed().as_secs_f64());
