@@ -34,8 +34,12 @@ impl Grid {
         if !(cell.is_finite() && cell > 0.0) {
             cell = 1.0;
         }
-        let nx = ((w / cell).floor() as usize + 1).min(max_cells as usize);
-        let ny = ((h / cell).floor() as usize + 1).min(max_cells as usize);
+        let nx = ((w / cell).floor() as usize)
+            .saturating_add(1)
+            .min(max_cells as usize);
+        let ny = ((h / cell).floor() as usize)
+            .saturating_add(1)
+            .min(max_cells as usize);
         Grid {
             x0: bounds.x0,
             y0: bounds.y0,

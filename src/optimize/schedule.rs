@@ -79,7 +79,7 @@ const COLLAPSE_FACTOR: f64 = 1.0;
 const COARSEN_FACTOR: f64 = f64::INFINITY;
 /// The final coarsening may create edges up to this multiple of `l` (no split
 /// pass follows it to undo them). Introduced in 8f4bc8a ("new edges up to 2l").
-const COARSEN_STRETCH: f64 = SPLIT_ABOVE;
+const COARSEN_STRETCH: f64 = 2.0;
 /// The final coarsening may always make triangles up to this energy (1 for
 /// equilateral), even in a mesh whose worst triangle is better (the stop energy
 /// still caps it). With the mesh's own worst energy as the only bound, a mesh
@@ -831,7 +831,16 @@ fn lengths_kept(
     let pu = mesh.position(u);
     let tu = target_of(u);
     ring_v.neighbours.iter().all(|&w| {
-        w == u || pu.distance(mesh.position(w)) <= max_stretch * 0.5 * (tu + target_of(w))
+        let t = 0.5 * (tu + target_of(w));
+        // Where the size field asks for less than `l` (a thin stroke, the
+        // user's fields), no collapse stretches an edge past the split bound;
+        // at `l` the coarsening may (see [`COARSEN_STRETCH`]).
+        let stretch = if t < l * REFINED_BELOW {
+            max_stretch.min(SPLIT_ABOVE)
+        } else {
+            max_stretch
+        };
+        w == u || pu.distance(mesh.position(w)) <= stretch * t
     })
 }
 

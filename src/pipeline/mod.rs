@@ -648,7 +648,7 @@ pub(crate) fn bsp_stage(
     params.validate()?;
     let resolved = params.resolve(drawing.diagonal());
     let mut times = Times::default();
-    let fs = FeatureSet::build(drawing, &resolved);
+    let fs = sized_features(drawing, params)?;
     let chains = fs.primary_chains();
     let (mesh, _) = bsp_trimesh(
         drawing,
@@ -661,6 +661,30 @@ pub(crate) fn bsp_stage(
     )?;
     let ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
     Ok((mesh, fs, ctx))
+}
+
+/// The features of `drawing` as the pipeline builds them: resampled against
+/// the size field of `params` (default region names).
+///
+/// # Errors
+/// As [`SizeField::build`].
+#[cfg(test)]
+pub(crate) fn sized_features(drawing: &Drawing, params: &Params) -> Result<FeatureSet> {
+    let resolved = params.resolve(drawing.diagonal());
+    let field = SizeField::build(&FieldInput {
+        drawing,
+        resolved: &resolved,
+        spec: &params.size,
+        region_names: &region_names(drawing, &RegionOptions::DEFAULT),
+        bounds: padded_box(drawing, resolved.padding),
+        deadline: Deadline::NONE,
+    })?;
+    Ok(FeatureSet::build_sized(
+        drawing,
+        &resolved,
+        &Deadline::NONE,
+        &|p| field.at(p),
+    ))
 }
 
 /// The optimized linear mesh of a drawing (TriWild §4.4.1): [`bsp_stage`]

@@ -24,10 +24,10 @@ pub(crate) mod tree;
 pub(crate) use report::edge_match;
 pub use report::{EdgeMatch, HISTOGRAM_BOUNDS, SizingReport};
 
+use crate::Result;
 use crate::budget::Deadline;
 use crate::params::{Resolved, SizeSpec};
 use crate::svg::Drawing;
-use crate::{Error, Result};
 use kurbo::{Point, Rect};
 use tree::Tree;
 
@@ -38,7 +38,6 @@ pub(crate) struct SizeField {
     /// `Some(l)` when the field is `l` everywhere (evaluation is then free).
     uniform: Option<f64>,
     l: f64,
-    l_min: f64,
     report: SizingReport,
 }
 
@@ -61,7 +60,6 @@ impl SizeField {
             tree: Tree::uniform(bounds, l),
             uniform: Some(l),
             l,
-            l_min: l,
             report: SizingReport::uniform(l),
         }
     }
@@ -100,16 +98,7 @@ impl SizeField {
             return Ok(f);
         }
         let deadline = input.deadline;
-        let keep_going = || -> Result<()> {
-            if deadline.expired() {
-                Err(Error::TimeLimit {
-                    seconds: deadline.seconds(),
-                    stage: crate::Stage::Sizing,
-                })
-            } else {
-                Ok(())
-            }
-        };
+        let keep_going = || crate::error::check_deadline(&deadline, crate::Stage::Sizing);
         let tree = Tree::build(
             input.bounds,
             l_min,
@@ -134,7 +123,6 @@ impl SizeField {
             uniform: (min_size >= l).then_some(l),
             tree,
             l,
-            l_min,
             report,
         })
     }
@@ -163,12 +151,6 @@ impl SizeField {
     /// The largest size, `l`.
     pub(crate) fn l(&self) -> f64 {
         self.l
-    }
-
-    /// The smallest size the field may give, `l_min` (or `l` when uniform).
-    #[cfg_attr(not(test), expect(dead_code, reason = "read by the tests"))]
-    pub(crate) fn l_min(&self) -> f64 {
-        self.l_min
     }
 
     /// What the field was built from (the edge match is filled in later).

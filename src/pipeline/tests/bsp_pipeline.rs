@@ -14,7 +14,7 @@
 use super::support::devset::{devset_files, svg_files};
 
 use super::support::{Msh, check, out_dir, read_msh};
-use crate::features::{FeatureSet, SegmentTag};
+use crate::features::SegmentTag;
 use crate::pipeline::{self, Report, RunOptions};
 use crate::{Drawing, Mesher, Params, Stage};
 use kurbo::{Line, Point};
@@ -36,7 +36,7 @@ fn key(p: [f64; 2]) -> (u64, u64) {
 /// What the conformance check found wrong, in words (empty: all good).
 fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<String> {
     let d = drawing.diagonal();
-    let fs = FeatureSet::build(drawing, &params.resolve(d));
+    let fs = pipeline::sized_features(drawing, params).expect("the size field builds");
     let tol = 1e-9 * d;
     let pos: HashMap<u64, [f64; 2]> = m.nodes.iter().map(|&(t, x)| (t, [x[0], x[1]])).collect();
     let by_pos: HashMap<(u64, u64), u64> = m
