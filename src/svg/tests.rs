@@ -315,6 +315,58 @@ fn text_becomes_outlines_when_a_font_exists() {
     }
 }
 
+/// Issue 39: text whose family is missing falls back, for the characters its
+/// font lacks, to a face of the requested weight and style (usvg's default
+/// fallback took the first face with the character: Arabic in regular text came
+/// out DejaVu Sans Bold). Here the requested family is missing, the default
+/// serif face has no Arabic, and the fallback must draw what DejaVu Sans in
+/// the same weight and style draws. Skipped without DejaVu Sans.
+#[test]
+fn the_fallback_font_keeps_the_weight_and_style() {
+    let db = super::load::font_database();
+    let has = |family: &str| {
+        db.faces()
+            .any(|f| f.families.iter().any(|(name, _)| name == family))
+    };
+    if !has("DejaVu Sans") || !has("DejaVu Serif") {
+        return;
+    }
+    let outline = |family: &str, style: &str| {
+        let text = format!(
+            r#"<text x="10" y="50" font-size="20" font-family="{family}" {style}>&#x645;&#x631;&#x62D;&#x628;&#x627;</text>"#
+        );
+        let d = load_bytes(svg(&text).as_bytes()).expect("the text has outlines");
+        let points: Vec<Point> = d
+            .shapes
+            .iter()
+            .flat_map(|s| &s.subpaths)
+            .flat_map(|sp| {
+                std::iter::once(sp.start)
+                    .chain(sp.segments.iter().flat_map(Segment::control_points))
+            })
+            .collect();
+        assert!(!points.is_empty(), "{family} {style}: no outline");
+        points
+    };
+    for style in [
+        r#"font-weight="normal""#,
+        r#"font-weight="bold""#,
+        r#"font-style="italic""#,
+        r#"font-weight="bold" font-style="italic""#,
+    ] {
+        assert_eq!(
+            outline("NoSuchFamily, serif", style),
+            outline("DejaVu Sans", style),
+            "{style}"
+        );
+    }
+    // and the weights differ, so the comparison can fail
+    assert_ne!(
+        outline("DejaVu Sans", r#"font-weight="normal""#),
+        outline("DejaVu Sans", r#"font-weight="bold""#)
+    );
+}
+
 #[test]
 fn images_are_ignored_with_a_warning() {
     let d = load(
