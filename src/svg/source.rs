@@ -512,15 +512,11 @@ impl<'a, 'input> Source<'a, 'input> {
 /// `None` when `n` leaves it to inheritance (unset or `inherit`).
 fn marker_property<'a>(n: Node<'a, '_>, property: &str) -> Option<&'a str> {
     let in_style = n.attribute("style").and_then(|style| {
-        style
-            .split(';')
-            .filter_map(|decl| {
-                let (k, v) = decl.split_once(':')?;
-                let k = k.trim();
-                (k == property || k == "marker")
-                    .then(|| v.trim().trim_end_matches("!important").trim())
-            })
-            .last()
+        style.split(';').rev().find_map(|decl| {
+            let (k, v) = decl.split_once(':')?;
+            let k = k.trim();
+            (k == property || k == "marker").then(|| v.trim().trim_end_matches("!important").trim())
+        })
     });
     in_style
         .or_else(|| n.attribute(property).map(str::trim))
