@@ -337,9 +337,6 @@ fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_,
     let usvg::Node::Group(g) = &siblings[k] else {
         return false;
     };
-    if !holds_marker_instances(g) {
-        return false;
-    }
     let basic_with_markers = |j: usize| {
         let Some(usvg::Node::Path(p)) = siblings.get(j) else {
             return false;
@@ -350,7 +347,8 @@ fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_,
                     && source.may_have_markers(*n)
             })
     };
-    (k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)
+    // the neighbour first: rare to pass, and cheaper than the group's content
+    ((k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)) && holds_marker_instances(g)
 }
 
 /// Whether `g` has the form of usvg's marker group: no id, transform, clip,
