@@ -12,10 +12,18 @@ format has no entities of its own):
   the domain on their left: the area they enclose (sum over their chords of
   (x_a y_b - x_b y_a) / 2) equals the area of the straight triangles on the
   elements' corners, which is positive;
-- within each physical curve no two line elements start at the same node and
-  no two end at the same node, except where the curve meets itself (a
-  self-crossing outline, a branch): there as many start as end (one more of
-  either when an odd number meet).
+- within each piece of a physical curve (its elements on one curve entity)
+  no two line elements start at the same node and no two end at the same
+  node, except where the piece meets itself (a self-crossing outline, a
+  branch): there as many start as end (one more of either when an odd number
+  meet);
+- (MSH 4.1) no two line elements join the same two nodes: an edge on several
+  physical curves is one element in one entity they all list (issue 39);
+- (MSH 4.1) gmsh's own mesh operations accept the model:
+  gmsh.model.mesh.refine(), then gmsh.model.mesh.setOrder(2) (they fail, for
+  example, on "mesh edges from different curves share nodes"; MSH 2.2 gives an
+  element one physical tag, so an edge on two physical curves is two elements
+  there, and these are not asked of it).
 
 Prints one line per failing mesh and ends with "gmsh model: N passed, M failed".
 Exit status 0 iff nothing failed and at least one mesh was found.
@@ -86,23 +94,45 @@ def check(path: Path) -> list[str]:
     names = {}
     for dim, tag in gmsh.model.getPhysicalGroups(1):
         names[gmsh.model.getPhysicalName(dim, tag)] = tag
-        starts, ends = Counter(), Counter()
-        for _, rows in elements_of_group(dim, tag):
-            starts.update(rows[:, 0].tolist())
-            ends.update(rows[:, 1].tolist())
         name = gmsh.model.getPhysicalName(dim, tag)
-        # Where the curve meets itself (a crossing, a branch) `degree` > 2
-        # elements meet: as many start as end there (one more for odd degree).
-        bad = []
-        for v in set(starts) | set(ends):
-            s, e = starts[v], ends[v]
-            degree = s + e
-            if (degree <= 2 and (s > 1 or e > 1)) or abs(s - e) > degree % 2:
-                bad.append(v)
-        if bad:
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+            starts, ends = Counter(), Counter()
+            types, _, nodes = gmsh.model.mesh.getElements(dim, ent)
+            for t, n in zip(types, nodes):
+                _, _, _, count, _, _ = gmsh.model.mesh.getElementProperties(t)
+                rows = np.asarray(n, dtype=np.int64).reshape(-1, count)
+                starts.update(rows[:, 0].tolist())
+                ends.update(rows[:, 1].tolist())
+            # Where the piece meets itself (a crossing, a branch) `degree` > 2
+            # elements meet: as many start as end there (one more for odd degree).
+            bad = []
+            for v in set(starts) | set(ends):
+                s, e = starts[v], ends[v]
+                degree = s + e
+                if (degree <= 2 and (s > 1 or e > 1)) or abs(s - e) > degree % 2:
+                    bad.append(v)
+            if bad:
+                problems.append(
+                    f"physical curve {name!r}, entity {ent}: {len(bad)} nodes where line "
+                    f"elements do not run one way (two start or two end there)"
+                )
+
+    if not legacy:
+        seen, twice = {}, []
+        for _, ent in gmsh.model.getEntities(1):
+            types, _, nodes = gmsh.model.mesh.getElements(1, ent)
+            for t, n in zip(types, nodes):
+                _, _, _, count, _, _ = gmsh.model.mesh.getElementProperties(t)
+                for row in np.asarray(n, dtype=np.int64).reshape(-1, count):
+                    key = (int(min(row[0], row[1])), int(max(row[0], row[1])))
+                    if key in seen:
+                        twice.append((seen[key], ent, key))
+                    seen[key] = ent
+        if twice:
+            a, b, (u, v) = twice[0]
             problems.append(
-                f"physical curve {name!r}: {len(bad)} nodes where line elements do not "
-                f"run one way (two start or two end there)"
+                f"{len(twice)} edges joined by two line elements (first: nodes {u} and {v}, "
+                f"on curves {a} and {b})"
             )
 
     if "boundary" not in names:
@@ -118,6 +148,23 @@ def check(path: Path) -> list[str]:
                 f"'boundary' encloses {enclosed!r}, the domain's corner triangles cover "
                 f"{domain_area!r}: not counter-clockwise around the domain"
             )
+
+    # gmsh's own operations on the mesh (last: they change the model).
+    for what, op in () if legacy else (
+        ("refine()", gmsh.model.mesh.refine),
+        ("setOrder(2)", lambda: gmsh.model.mesh.setOrder(2)),
+    ):
+        gmsh.logger.start()
+        try:
+            op()
+            errors = [m for m in gmsh.logger.get() if m.startswith("Error")]
+        except Exception as e:  # noqa: BLE001 - any failure is the finding
+            errors = [str(e)]
+        finally:
+            gmsh.logger.stop()
+        if errors:
+            problems.append(f"gmsh.model.mesh.{what} fails: {errors[0]}")
+            break
     return problems
 
 

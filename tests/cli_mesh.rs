@@ -73,11 +73,14 @@ fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
                 stats["output"]["nodes"].as_u64().unwrap(),
                 "{stem} {name}"
             );
-            assert_eq!(
-                report.lines as u64,
-                stats["output"]["feature_edges"].as_u64().unwrap(),
-                "{stem} {name}"
-            );
+            // 2.2 writes each line element of each physical curve; 4.1 writes
+            // an edge on several physical curves once (issue 39)
+            let feature_edges = stats["output"]["feature_edges"].as_u64().unwrap();
+            if name.starts_with("v22") {
+                assert_eq!(report.lines as u64, feature_edges, "{stem} {name}");
+            } else {
+                assert!(report.lines as u64 <= feature_edges, "{stem} {name}");
+            }
             assert!(report.triangles > 0 && report.lines > 0);
             // The mesh covers the padded box: its area is the box's.
             assert!(report.area > 0.0 && report.area.is_finite());
@@ -116,13 +119,28 @@ fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
                         by_tag(&m),
                         "{stem} {name}: same nodes, bit for bit"
                     );
+                    let is_line = |etype: i32| matches!(etype, 1 | 8 | 26);
                     let conn = |x: &support::Msh| {
                         x.elements
                             .iter()
+                            .filter(|e| !is_line(e.etype))
                             .map(|e| (e.etype, e.nodes.clone(), e.physical.clone()))
                             .collect::<Vec<_>>()
                     };
-                    assert_eq!(conn(f), conn(&m), "{stem} {name}: same elements and groups");
+                    assert_eq!(
+                        conn(f),
+                        conn(&m),
+                        "{stem} {name}: same triangles and groups"
+                    );
+                    // the same edges carry line elements (4.1 writes each once)
+                    let edges = |x: &support::Msh| {
+                        x.elements
+                            .iter()
+                            .filter(|e| is_line(e.etype))
+                            .map(|e| (e.nodes[0].min(e.nodes[1]), e.nodes[0].max(e.nodes[1])))
+                            .collect::<std::collections::BTreeSet<_>>()
+                    };
+                    assert_eq!(edges(f), edges(&m), "{stem} {name}: same line edges");
                     assert_eq!(
                         f.physical_names, m.physical_names,
                         "{stem} {name}: same group names"

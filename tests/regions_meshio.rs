@@ -289,6 +289,17 @@ fn expected_groups(mesh: &FemMesh) -> serde_json::Value {
     serde_json::Value::Array(groups)
 }
 
+/// The number of distinct edges among `mesh`'s line elements (MSH 4.1 writes
+/// one element per edge, listed by every physical curve on it).
+fn distinct_lines(mesh: &FemMesh) -> usize {
+    let nodes = mesh.order().line_nodes();
+    mesh.lines
+        .chunks(nodes)
+        .map(|l| (l[0].min(l[1]), l[0].max(l[1])))
+        .collect::<std::collections::HashSet<_>>()
+        .len()
+}
+
 /// Write `mesh` as `<stem>-<version>.msh` (ASCII, plus binary when asked) in
 /// `dir`, each with its sidecar `<file>.json`. Returns the files written.
 fn write_with_sidecars(mesh: &FemMesh, dir: &Path, stem: &str, binary: bool) -> Vec<PathBuf> {
@@ -313,6 +324,8 @@ fn write_with_sidecars(mesh: &FemMesh, dir: &Path, stem: &str, binary: bool) -> 
                 "nodes": mesh.nodes.len(),
                 "triangles": mesh.triangle_count(),
                 "lines": mesh.line_count(),
+                // 4.1 writes an edge on several physical curves once
+                "distinct_lines": distinct_lines(mesh),
                 "groups": groups,
             });
             let text = serde_json::to_string_pretty(&sidecar).expect("json");

@@ -9,13 +9,19 @@
 //!   keeps its name, a curve whose name is taken is written as `<name>-curve` (then
 //!   `-curve-2`, …); see `physical_names_of`;
 //! - the entities of a discrete gmsh model ([`Layout`]): points where curves meet,
-//!   curve entities per connected piece of a physical curve, one surface entity per
+//!   curve entities per connected piece of edges on the same physical curves (an
+//!   edge on several physical curves, such as an outline that is also the
+//!   domain's boundary, is one line element in one entity that each of those
+//!   physical curves lists), one surface entity per
 //!   physical surface (tag = its physical tag) bounded by its curves, each entity
 //!   holding elements of one type only (gmsh's API shows one element type per
 //!   entity); 4.1 writes `$Entities` and lists each node under the entity of lowest
 //!   dimension it lies on, 2.2 writes the same elementary tags;
 //! - node tags 1..=N in `FemMesh::nodes` order; element tags 1..=M, triangles
-//!   first (by surface), then lines (by curve entity);
+//!   first (by surface), then lines (by curve entity); no two line elements join
+//!   the same two nodes in 4.1. MSH 2.2 gives each element one physical tag, so
+//!   there a line on several physical curves is written once per curve, in an
+//!   entity per curve (gmsh's own `refine()` rejects such shared nodes: use 4.1);
 //! - coordinates in ASCII are shortest round-trip decimal (`{:?}`), so they read
 //!   back bit-exactly; binary uses native byte order with gmsh's endianness marker.
 
@@ -146,9 +152,9 @@ struct Entity {
     /// Entity tag: a surface's is its physical tag (group index + 1); curves
     /// are numbered 1.. in order (pieces of physical curves).
     tag: i32,
-    /// Physical tag (group index + 1); `None` for the fallback entity that
-    /// only carries nodes.
-    physical: Option<i32>,
+    /// Physical tags (group index + 1), ascending; empty for the fallback
+    /// entity that only carries nodes.
+    physical: Vec<i32>,
     /// gmsh element type.
     etype: i32,
     /// Element indices (into triangles or lines) in this entity.
@@ -166,11 +172,13 @@ struct Entity {
 ///   elements' distinct edges are not exactly two of the same physical
 ///   curves: ends, branches, crossings, a change of curves), and one on each
 ///   closed curve that has none (its smallest node).
-/// - Curves: each physical curve's line elements cut at the points into
-///   connected pieces, one entity each (coincident pieces of two physical
-///   curves, such as an outline that is also the domain's boundary, are two
-///   entities with their own elements, so each physical curve keeps its own
-///   elements and direction and meshio sees one physical tag per element).
+/// - Curves: the distinct edges of the line elements, grouped by the set of
+///   physical curves on them and cut at the points into connected pieces, one
+///   entity each, listed by every physical curve of its set. An edge on
+///   several physical curves (an outline that is also the domain's boundary,
+///   the outline two shapes share) is one element, written in the direction
+///   of the boundary's line if it is on the boundary, else of the line of the
+///   lowest curve: along a piece, one curve's consistent direction.
 /// - Surfaces: one per physical surface, bounded by the curve entities along
 ///   which it meets another surface or nothing.
 /// - Each node is classified on the entity of lowest dimension it lies on
@@ -219,32 +227,69 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
     i
 }
 
-/// The corner nodes where curves meet (see [`Layout`]).
-fn corner_nodes(mesh: &FemMesh) -> HashSet<u32> {
-    // Distinct edges and the physical curves on each.
-    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::default();
-    for i in 0..mesh.line_count() {
-        let l = mesh.line(i);
-        let groups = edges.entry(edge_key(l[0], l[1])).or_default();
-        let g = mesh.line_group[i];
+/// The distinct edges of a mesh's line elements: for each, the line element
+/// that stands for it (the boundary's, else the lowest physical curve's, else
+/// the first) and the physical curves on it (group indices, ascending), in
+/// order of the standing line. Unless `shared` (MSH 2.2, one physical tag per
+/// element): then every line element stands for itself, on its own curve.
+fn distinct_edges(mesh: &FemMesh, shared: bool) -> Vec<(u32, Vec<u32>)> {
+    if !shared {
+        // MSH 2.2: every line stands for itself, on its own curve
+        return (0..mesh.line_count())
+            .map(|l| (l as u32, vec![mesh.line_group[l]]))
+            .collect();
+    }
+    let rank = |l: usize| {
+        (
+            mesh.line_kind.get(l) != Some(&LineKind::Boundary),
+            mesh.line_group[l],
+            l,
+        )
+    };
+    let mut index: HashMap<(u32, u32), usize> = HashMap::default();
+    let mut edges: Vec<(u32, Vec<u32>)> = Vec::new();
+    for l in 0..mesh.line_count() {
+        let line = mesh.line(l);
+        let g = mesh.line_group[l];
+        let k = *index.entry(edge_key(line[0], line[1])).or_insert_with(|| {
+            edges.push((l as u32, Vec::new()));
+            edges.len() - 1
+        });
+        let (rep, groups) = &mut edges[k];
+        if rank(l) < rank(*rep as usize) {
+            *rep = l as u32;
+        }
         if !groups.contains(&g) {
             groups.push(g);
         }
     }
-    let mut at: HashMap<u32, Vec<(u32, u32)>> = HashMap::default();
-    for (k, groups) in edges.iter_mut() {
+    for (_, groups) in &mut edges {
         groups.sort_unstable();
-        at.entry(k.0).or_default().push(*k);
-        at.entry(k.1).or_default().push(*k);
+    }
+    edges.sort_unstable_by_key(|e| e.0);
+    edges
+}
+
+/// The corner nodes where curves meet (see [`Layout`]), from the distinct
+/// edges and their curves.
+fn corner_nodes(mesh: &FemMesh, edges: &[(u32, Vec<u32>)]) -> HashSet<u32> {
+    let mut at: HashMap<u32, Vec<usize>> = HashMap::default();
+    for (k, (rep, _)) in edges.iter().enumerate() {
+        let line = mesh.line(*rep as usize);
+        at.entry(line[0]).or_default().push(k);
+        at.entry(line[1]).or_default().push(k);
     }
     at.into_iter()
-        .filter(|(_, ks)| ks.len() != 2 || edges[&ks[0]] != edges[&ks[1]])
+        .filter(|(_, ks)| ks.len() != 2 || edges[ks[0]].1 != edges[ks[1]].1)
         .map(|(v, _)| v)
         .collect()
 }
 
 impl Layout {
-    fn new(mesh: &FemMesh) -> Layout {
+    /// The layout of `mesh`; `shared`: an edge on several physical curves is
+    /// one element in one entity they all list (MSH 4.1), else one element and
+    /// entity per curve (MSH 2.2, where an element has one physical tag).
+    fn new(mesh: &FemMesh, shared: bool) -> Layout {
         let (ttype, ltype) = element_types(mesh.order());
         let mut entities = Vec::new();
         for (g, elems) in bucket(&mesh.triangle_group, mesh.surfaces.len()) {
@@ -258,7 +303,7 @@ impl Layout {
             entities.push(Entity {
                 dim: 2,
                 tag,
-                physical: Some(tag),
+                physical: vec![tag],
                 etype: ttype,
                 elems,
                 bbox,
@@ -267,13 +312,27 @@ impl Layout {
         }
         let surface_count = entities.len();
 
-        // Curves: each physical curve's lines, cut at the corners into pieces.
-        let corners = corner_nodes(mesh);
+        // Curves: the distinct edges by the curves on them, cut at the corners
+        // into pieces.
+        let edges = distinct_edges(mesh, shared);
+        let corners = corner_nodes(mesh, &edges);
         let mut point_of: HashMap<u32, i32> = HashMap::default();
         let mut loop_points: Vec<u32> = Vec::new();
-        let mut pieces: Vec<(u32, Vec<u32>)> = Vec::new();
+        let mut pieces: Vec<(Vec<u32>, Vec<u32>)> = Vec::new();
         let mut parent: Vec<u32> = (0..mesh.line_count() as u32).collect();
-        for (g, elems) in bucket(&mesh.line_group, mesh.curves.len()) {
+        let mut by_curves: Vec<(Vec<u32>, Vec<u32>)> = Vec::new();
+        {
+            let mut slot: HashMap<&[u32], usize> = HashMap::default();
+            for (rep, groups) in &edges {
+                let k = *slot.entry(groups.as_slice()).or_insert_with(|| {
+                    by_curves.push((groups.clone(), Vec::new()));
+                    by_curves.len() - 1
+                });
+                by_curves[k].1.push(*rep);
+            }
+        }
+        by_curves.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+        for (g, elems) in by_curves {
             let mut through: HashMap<u32, u32> = HashMap::default();
             for &l in &elems {
                 for &v in &mesh.line(l as usize)[..2] {
@@ -295,7 +354,7 @@ impl Layout {
             for &l in &elems {
                 let root = find(&mut parent, l);
                 let k = *piece_of.entry(root).or_insert_with(|| {
-                    pieces.push((g, Vec::new()));
+                    pieces.push((g.clone(), Vec::new()));
                     pieces.len() - 1
                 });
                 pieces[k].1.push(l);
@@ -344,7 +403,7 @@ impl Layout {
             entities.push(Entity {
                 dim: 1,
                 tag: k as i32 + 1,
-                physical: Some(g as i32 + 1),
+                physical: g.iter().map(|&g| g as i32 + 1).collect(),
                 etype: ltype,
                 elems,
                 bbox,
@@ -426,7 +485,7 @@ impl Layout {
             entities.push(Entity {
                 dim: 2,
                 tag: 1,
-                physical: None,
+                physical: Vec::new(),
                 etype: ttype,
                 elems: Vec::new(),
                 bbox: BBox::of(mesh, 0..mesh.nodes.len() as u32),
@@ -640,7 +699,7 @@ fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<(i32, i32, String)>
     let mut groups: Vec<(i32, i32)> = layout
         .entities
         .iter()
-        .filter_map(|e| Some((e.dim, e.physical?)))
+        .flat_map(|e| e.physical.iter().map(|&p| (e.dim, p)))
         .collect();
     groups.sort_unstable_by_key(|&(dim, tag)| (std::cmp::Reverse(dim), tag));
     groups.dedup();
@@ -700,7 +759,7 @@ fn physical_names<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout) -> io::R
 
 /// Write MSH 4.1.
 pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io::Result<()> {
-    let layout = Layout::new(mesh);
+    let layout = Layout::new(mesh, true);
     header(w, "4.1", binary)?;
     physical_names(w, mesh, &layout)?;
 
@@ -739,12 +798,9 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
             ] {
                 o.float(v)?;
             }
-            match e.physical {
-                Some(p) => {
-                    o.size(1)?;
-                    o.int(p)?;
-                }
-                None => o.size(0)?,
+            o.size(e.physical.len() as u64)?;
+            for &p in &e.physical {
+                o.int(p)?;
             }
             o.size(e.bounding.len() as u64)?;
             for &b in &e.bounding {
@@ -826,7 +882,7 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
 
 /// Write MSH 2.2.
 pub(crate) fn write_v22<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io::Result<()> {
-    let layout = Layout::new(mesh);
+    let layout = Layout::new(mesh, false);
     header(w, "2.2", binary)?;
     physical_names(w, mesh, &layout)?;
 
@@ -855,7 +911,8 @@ pub(crate) fn write_v22<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
     };
     let mut tag = 0i32;
     for e in layout.blocks() {
-        let physical = e.physical.unwrap_or(0);
+        // at most one physical group per entity in this layout (0: none)
+        let physical = e.physical.first().copied().unwrap_or(0);
         if binary {
             // Element header: type, number of elements that follow, number of tags.
             o.int(e.etype)?;
@@ -973,20 +1030,46 @@ mod tests {
                         (2, 1, "plate".to_owned()),
                     ]
                 );
-                // Lines as written, with their physical tags and directions.
-                let lines: Vec<(Option<i32>, Vec<u32>)> = r
+                // Lines as written, with their physical tags and directions:
+                // in 2.2 one copy per physical curve; in 4.1 one element per
+                // edge, its entity listed by every curve on the edge.
+                let physicals_of = |b: &crate::LineBlock| -> Vec<i32> {
+                    match b.entity {
+                        Some(e) if version == MshVersion::V41 => r
+                            .entities
+                            .iter()
+                            .find(|c| c.dim == 1 && c.tag == e)
+                            .expect("the line's entity exists")
+                            .physicals
+                            .clone(),
+                        _ => b.physical.into_iter().collect(),
+                    }
+                };
+                let lines: Vec<(Vec<i32>, Vec<u32>)> = r
                     .line_blocks
                     .iter()
-                    .flat_map(|b| b.lines().map(move |l| (b.physical, l.to_vec())))
+                    .flat_map(|b| {
+                        let p = physicals_of(b);
+                        b.lines().map(move |l| (p.clone(), l.to_vec()))
+                    })
                     .collect();
-                assert_eq!(lines.len(), 9);
+                let expected = if version == MshVersion::V22 { 9 } else { 5 };
+                assert_eq!(lines.len(), expected, "{version:?}");
                 for (i, l) in (0..m.line_count()).map(|i| m.line(i)).enumerate() {
-                    let g = Some(m.line_group[i] as i32 + 1);
-                    assert!(lines.contains(&(g, l.to_vec())), "{l:?}");
+                    let g = m.line_group[i] as i32 + 1;
+                    assert!(
+                        lines.iter().any(|(p, n)| p.contains(&g) && n == l),
+                        "{l:?} of curve {g}"
+                    );
                 }
                 if version == MshVersion::V22 {
                     assert!(r.entities.is_empty() && r.node_entities.is_empty());
                     continue;
+                }
+                // No two elements join the same two nodes.
+                let mut seen = HashSet::default();
+                for (_, l) in &lines {
+                    assert!(seen.insert(edge_key(l[0], l[1])), "{l:?} twice");
                 }
                 // Points at node 0 (three edges meet) and at the centre (an end).
                 let points: Vec<&crate::MshEntity> =
@@ -994,20 +1077,21 @@ mod tests {
                 assert_eq!(points.len(), 2);
                 assert_eq!(r.node_entities[0], (0, 1));
                 assert_eq!(r.node_entities[4], (0, 2));
-                // Curves: the two loops from and to point 1, the spoke from 1 to 2.
+                // Curves: the loop from and to point 1, on the outline and the
+                // boundary; the spoke from 1 to 2.
                 let curves: Vec<&crate::MshEntity> =
                     r.entities.iter().filter(|e| e.dim == 1).collect();
-                assert_eq!(curves.len(), 3);
+                assert_eq!(curves.len(), 2);
                 assert_eq!(curves[0].bounding, [1, -1]);
-                assert_eq!(curves[1].bounding, [1, -1]);
-                assert_eq!(curves[2].bounding, [1, -2]);
-                assert_eq!(curves[2].physicals, [3]);
-                // Nodes 1-3 lie on the first loop; the surface is bounded by both loops.
+                assert_eq!(curves[0].physicals, [1, 2]);
+                assert_eq!(curves[1].bounding, [1, -2]);
+                assert_eq!(curves[1].physicals, [3]);
+                // Nodes 1-3 lie on the loop; the surface is bounded by it.
                 assert!(r.node_entities[1..4].iter().all(|&e| e == (1, 1)));
                 let surface = r.entities.iter().find(|e| e.dim == 2).expect("a surface");
                 assert_eq!(
                     (surface.physicals.as_slice(), surface.bounding.as_slice()),
-                    (&[1][..], &[1, 2][..])
+                    (&[1][..], &[1][..])
                 );
                 // Every element sits on an entity that exists.
                 for b in &r.line_blocks {
@@ -1015,7 +1099,7 @@ mod tests {
                     assert!(
                         curves
                             .iter()
-                            .any(|c| c.tag == e && c.physicals == [b.physical.unwrap_or(0)])
+                            .any(|c| c.tag == e && c.physicals.first() == b.physical.as_ref())
                     );
                 }
             }

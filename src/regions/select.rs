@@ -104,17 +104,27 @@ pub(crate) const DOMAIN: &str = "domain";
 
 /// The surface name of a shape under [`RegionMode::Colour`]: `fill-#rrggbb` for
 /// an opaque colour (a stroke's area by its stroke colour), `fill-#rrggbbaa`
-/// for a translucent one (CSS hex with alpha: the mesh carries no blending),
+/// for a translucent one (CSS hex with alpha: the mesh carries no blending;
+/// an opacity that rounds to alpha 255 is opaque, see [`hex_colour`]),
 /// `fill-<gradient or pattern id>` for a paint server, else `fill-<shape name>`.
 pub(crate) fn colour_name(s: &Shape) -> String {
     match (s.fill_colour, &s.paint.server) {
-        (Some([r, g, b]), _) if s.paint.alpha >= 1.0 => format!("fill-#{r:02x}{g:02x}{b:02x}"),
-        (Some([r, g, b]), _) => {
-            let a = (s.paint.alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
-            format!("fill-#{r:02x}{g:02x}{b:02x}{a:02x}")
-        }
+        (Some(rgb), _) => format!("fill-{}", hex_colour(rgb, s.paint.alpha)),
         (None, Some(server)) => format!("fill-{server}"),
         (None, None) => format!("fill-{}", s.name()),
+    }
+}
+
+/// A colour as CSS hex: `#rrggbb`, or `#rrggbbaa` when the opacity as a byte
+/// (rounded) is below 255. An opacity of 0.999 is written `#rrggbb`, the name
+/// the same colour at opacity 1 has: one region, not two.
+fn hex_colour([r, g, b]: [u8; 3], alpha: f32) -> String {
+    // clamped and scaled: the rounded value is in 0..=255
+    let a = (alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
+    if a == u8::MAX {
+        format!("#{r:02x}{g:02x}{b:02x}")
+    } else {
+        format!("#{r:02x}{g:02x}{b:02x}{a:02x}")
     }
 }
 
@@ -163,13 +173,8 @@ fn labels(
 
 /// A shape's paint as a CSS colour (see [`RegionStat::colour`]).
 fn css_colour(s: &Shape) -> Option<String> {
-    let [r, g, b] = s.fill_colour.or(s.paint.average_colour)?;
-    Some(if s.paint.alpha >= 1.0 {
-        format!("#{r:02x}{g:02x}{b:02x}")
-    } else {
-        let a = (s.paint.alpha.clamp(0.0, 1.0) * 255.0).round() as u8;
-        format!("#{r:02x}{g:02x}{b:02x}{a:02x}")
-    })
+    let rgb = s.fill_colour.or(s.paint.average_colour)?;
+    Some(hex_colour(rgb, s.paint.alpha))
 }
 
 /// The first triangle whose corner triangle contains `p` (exact test).

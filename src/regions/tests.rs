@@ -248,6 +248,39 @@ fn paint_order_not_document_order_decides() {
     assert_eq!(stat(&stats, "b").area, 12.0);
 }
 
+/// Issue 39: a fill at opacity 0.999 is alpha 255 as a byte: it names the
+/// same region as the opaque fill (`fill-#5d432e`), not a second one
+/// (`fill-#5d432eff`); an opacity that rounds below 255 keeps its alpha.
+#[test]
+fn an_opacity_that_rounds_to_opaque_names_the_opaque_region() {
+    let (mut d, mesh) = two_squares();
+    d.shapes[0].fill_colour = Some([0x5d, 0x43, 0x2e]);
+    d.shapes[1].fill_colour = Some([0x5d, 0x43, 0x2e]);
+    d.shapes[1].paint.alpha = 0.999;
+    let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
+    let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
+    let (out, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    assert_eq!(out.surfaces, ["background", "fill-#5d432e"]);
+    assert_eq!(stat(&stats, "fill-#5d432e").area, 28.0);
+    assert_eq!(
+        stat(&stats, "fill-#5d432e").colour.as_deref(),
+        Some("#5d432e")
+    );
+    for (alpha, name) in [
+        (0.997, "fill-#5d432efe"),
+        (0.5, "fill-#5d432e80"),
+        (0.0, "fill-#5d432e00"),
+    ] {
+        d.shapes[1].paint.alpha = alpha;
+        let (out, _) = apply(&d, &mesh, &asg, &opts).unwrap();
+        assert_eq!(
+            out.surfaces,
+            ["background", "fill-#5d432e", name],
+            "alpha {alpha}"
+        );
+    }
+}
+
 #[test]
 fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     let (mut d, mesh) = two_squares();

@@ -350,6 +350,10 @@ pub struct PaintCounts {
     /// Shapes dropped because a copy of them (the same outline to 1e-10·d, the
     /// same role: fill rule, kind, clips) is painted on top and covers them.
     pub duplicates_merged: usize,
+    /// Fills and strokes of the markers usvg would draw on a `<rect>`,
+    /// `<circle>` or `<ellipse>` (SVG 1.1 draws markers on paths, lines,
+    /// polylines and polygons only): not loaded.
+    pub markers_not_drawn: usize,
 }
 
 impl Drawing {

@@ -232,6 +232,10 @@ fn convert<R>(
     let facts = xml_facts(doc);
     let opt = usvg::Options {
         fontdb,
+        font_resolver: usvg::FontResolver {
+            select_font: usvg::FontResolver::default_font_selector(),
+            select_fallback: Box::new(fallback_face),
+        },
         image_href_resolver: usvg::ImageHrefResolver {
             // Images are not geometry: never decode or read them.
             resolve_data: Box::new(|_, _, _| None),
@@ -453,6 +457,64 @@ fn xml_facts(doc: &roxmltree::Document<'_>) -> XmlFacts {
         }
     }
     facts
+}
+
+/// The face that draws `c` where the faces in `used` cannot (`used[0]` is the
+/// face the text asked for): of the faces that have `c`, the closest to
+/// `used[0]` in style (the same, else italic for oblique or the reverse, else
+/// any), then weight, then stretch, then a face of the default sans-serif
+/// family ([`font_database`] sets it); remaining ties go to the database's order.
+///
+/// usvg's default fallback takes the first face with the character unless it
+/// differs in style *and* weight *and* stretch, so regular text could come out
+/// in a bold face (Arabic in DejaVu Sans Bold).
+fn fallback_face(
+    c: char,
+    used: &[fontdb::ID],
+    db: &mut Arc<fontdb::Database>,
+) -> Option<fontdb::ID> {
+    let base = db.face(*used.first()?)?;
+    let (style, weight, stretch) = (base.style, base.weight.0, base.stretch.to_number());
+    let slanted = |s: fontdb::Style| s != fontdb::Style::Normal;
+    let sans = db.family_name(&fontdb::Family::SansSerif).to_owned();
+    let mut candidates: Vec<(u8, u16, u16, bool, usize, fontdb::ID)> = db
+        .faces()
+        .enumerate()
+        .filter(|(_, f)| !used.contains(&f.id))
+        .map(|(k, f)| {
+            let style_distance = if f.style == style {
+                0
+            } else if slanted(f.style) == slanted(style) {
+                1
+            } else {
+                2
+            };
+            (
+                style_distance,
+                f.weight.0.abs_diff(weight),
+                f.stretch.to_number().abs_diff(stretch),
+                !f.families.iter().any(|(name, _)| *name == sans),
+                k,
+                f.id,
+            )
+        })
+        .collect();
+    candidates.sort_unstable_by_key(|&(s, w, t, other, k, _)| (s, w, t, other, k));
+    candidates
+        .into_iter()
+        .map(|c| c.5)
+        .find(|&id| has_char(db, id, c))
+}
+
+/// Whether face `id` of `db` maps `c` to a glyph (as usvg's own check).
+fn has_char(db: &fontdb::Database, id: fontdb::ID, c: char) -> bool {
+    db.with_face_data(id, |data, index| {
+        skrifa::FontRef::from_index(data, index)
+            .ok()
+            .and_then(|font| skrifa::MetadataProvider::charmap(&font).map(c))
+            .is_some()
+    })
+    .unwrap_or(false)
 }
 
 /// The system fonts, loaded once per process.

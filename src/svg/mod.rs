@@ -42,7 +42,9 @@
 //! - what you see is what you mesh (`paint.rs`, [`PaintOptions`]): what the
 //!   renderer does not paint is not loaded (hidden, `display: none`, zero
 //!   opacity along the group chain, zero fill or stroke opacity, markers on
-//!   `<rect>`, `<circle>`, `<ellipse>`); paint whose effective opacity is
+//!   `<rect>`, `<circle>`, `<ellipse>`: usvg's group of them is recognised by
+//!   what it holds and by the element's marker properties resolving to a
+//!   `<marker>`, never by position alone); paint whose effective opacity is
 //!   below `min_opacity` is decoration (no shape; its outline only on request);
 //!   a stroke becomes the area it paints (kurbo's stroke expansion of the f64
 //!   path in the path's user space: width, joins, caps, miter limit, dashes),

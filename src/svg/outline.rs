@@ -39,6 +39,29 @@ pub(super) struct Outlines {
     pub(super) precision: Precision,
     /// What the paint model did.
     pub(super) paint: PaintCounts,
+    /// The loader audit's ledger (tests only): what became of each usvg path
+    /// the walk visited, by the path's address in the tree.
+    #[cfg(test)]
+    pub(super) ledger: Vec<(usize, [Fate; 2])>,
+    /// The loader audit's ledger (tests only): the groups skipped as markers
+    /// on a basic shape, by address.
+    #[cfg(test)]
+    pub(super) skipped_markers: Vec<usize>,
+}
+
+/// What became of a path's fill or stroke.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum Fate {
+    /// No such paint.
+    None,
+    /// Not painted at all ([`PaintCounts::dropped_invisible`]).
+    Invisible,
+    /// Below `--min-opacity` ([`PaintCounts::dropped_decoration`]).
+    Decoration,
+    /// A stroke left out (`--strokes ignore`, [`PaintCounts::strokes_ignored`]).
+    Ignored,
+    /// Painted: a shape (a fill, a stroke's area, or a stroke's centre line).
+    Painted,
 }
 
 /// What the groups above a node do to its paint.
@@ -128,7 +151,9 @@ pub(super) fn collect(
     let root = Rc::new(root);
     let children = tree.root().children();
     for (k, node) in children.iter().enumerate().rev() {
-        if !is_basic_shape_markers(children, k, source) {
+        if is_basic_shape_markers(children, k, source) {
+            skip_markers(node, &mut out);
+        } else {
             stack.push(Step::Visit(node, None, Scope::Document, root.clone()));
         }
     }
@@ -157,7 +182,9 @@ pub(super) fn collect(
                 }
                 let children = g.children();
                 for (k, child) in children.iter().enumerate().rev() {
-                    if !is_basic_shape_markers(children, k, source) {
+                    if is_basic_shape_markers(children, k, source) {
+                        skip_markers(child, &mut out);
+                    } else {
                         stack.push(Step::Visit(child, inherited, scope, ctx.clone()));
                     }
                 }
@@ -179,7 +206,7 @@ pub(super) fn collect(
                     document_server(p, source, "fill"),
                     document_server(p, source, "stroke"),
                 ];
-                paint_items(
+                let fates = paint_items(
                     p,
                     shape,
                     &ctx,
@@ -189,6 +216,11 @@ pub(super) fn collect(
                     &mut items,
                     &mut out.paint,
                 )?;
+                #[cfg(test)]
+                out.ledger
+                    .push((std::ptr::from_ref::<usvg::Path>(p).addr(), fates));
+                #[cfg(not(test))]
+                let _ = fates;
             }
             Step::Visit(usvg::Node::Text(t), inherited, _, ctx) => {
                 let id = source.public(t.id()).or(inherited);
@@ -272,17 +304,39 @@ fn document_server(p: &usvg::Path, source: &Source<'_, '_>, property: &str) -> O
     None
 }
 
+/// Skip `node`, usvg's markers on a basic shape: its fills and strokes are
+/// counted in [`PaintCounts::markers_not_drawn`].
+fn skip_markers(node: &usvg::Node, out: &mut Outlines) {
+    fn count(node: &usvg::Node) -> usize {
+        match node {
+            usvg::Node::Group(g) => g.children().iter().map(count).sum(),
+            usvg::Node::Path(p) => {
+                usize::from(p.fill().is_some()) + usize::from(p.stroke().is_some())
+            }
+            usvg::Node::Text(t) => t.flattened().children().iter().map(count).sum(),
+            usvg::Node::Image(_) => 0,
+        }
+    }
+    out.paint.markers_not_drawn += count(node);
+    #[cfg(test)]
+    out.skipped_markers.push(std::ptr::from_ref(node).addr());
+}
+
 /// Whether `siblings[k]` is the group of markers usvg draws on a `<rect>`,
 /// `<circle>` or `<ellipse>` (SVG draws markers on path, line, polyline and
-/// polygon only): an anonymous group next to such an element's path, the
-/// element having a `marker*` property.
+/// polygon only).
+///
+/// usvg puts that group right before or after the element's path, and makes it
+/// only when a marker property resolves. So the group is recognised by what it
+/// holds and by what its neighbour asks for, never by a neighbour's style
+/// merely mentioning markers (`marker: none` included): it has the form of a
+/// marker group ([`holds_marker_instances`]), and a neighbouring path is such
+/// an element whose `marker-start`, `marker-mid` or `marker-end` names a
+/// `<marker>` ([`Source::may_have_markers`]).
 fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_, '_>) -> bool {
     let usvg::Node::Group(g) = &siblings[k] else {
         return false;
     };
-    if !g.id().is_empty() {
-        return false;
-    }
     let basic_with_markers = |j: usize| {
         let Some(usvg::Node::Path(p)) = siblings.get(j) else {
             return false;
@@ -290,11 +344,41 @@ fn is_basic_shape_markers(siblings: &[usvg::Node], k: usize, source: &Source<'_,
         !p.id().is_empty()
             && source.shapes_with_id(p.id()).first().is_some_and(|n| {
                 matches!(n.tag_name().name(), "rect" | "circle" | "ellipse")
-                    && (n.attributes().any(|a| a.name().starts_with("marker"))
-                        || n.attribute("style").is_some_and(|s| s.contains("marker")))
+                    && source.may_have_markers(*n)
             })
     };
-    (k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)
+    // the neighbour first: rare to pass, and cheaper than the group's content
+    ((k > 0 && basic_with_markers(k - 1)) || basic_with_markers(k + 1)) && holds_marker_instances(g)
+}
+
+/// Whether `g` has the form of usvg's marker group: no id, transform, clip,
+/// mask, filter, opacity or blending of its own; every child an anonymous group
+/// (one per marker instance: a marker's position, scale and `overflow` clip);
+/// no path below it with an id (usvg gives marker content none, while every
+/// shape of the document has one, its own or a private one: a group usvg makes
+/// for a transformed, clipped or masked element holds that element's path).
+fn holds_marker_instances(g: &usvg::Group) -> bool {
+    fn no_named_path(g: &usvg::Group) -> bool {
+        g.children().iter().all(|c| match c {
+            usvg::Node::Group(inner) => no_named_path(inner),
+            usvg::Node::Path(p) => p.id().is_empty(),
+            usvg::Node::Image(i) => i.id().is_empty(),
+            usvg::Node::Text(t) => t.id().is_empty(),
+        })
+    }
+    g.id().is_empty()
+        && g.transform().is_identity()
+        && g.clip_path().is_none()
+        && g.mask().is_none()
+        && g.filters().is_empty()
+        && g.opacity().get() >= 1.0
+        && g.blend_mode() == usvg::BlendMode::Normal
+        && !g.isolate()
+        && g.children().iter().all(|c| match c {
+            usvg::Node::Group(inner) => inner.id().is_empty(),
+            _ => false,
+        })
+        && no_named_path(g)
 }
 
 /// The context of a group's children: its opacity, clip path, mask and filters added.
@@ -420,7 +504,8 @@ fn clip_parts(
 }
 
 /// What one usvg path paints: its fill and stroke as items in paint order,
-/// unless invisible (hidden, zero opacity) or decoration (below `--min-opacity`).
+/// unless invisible (hidden, zero opacity) or decoration (below `--min-opacity`);
+/// what became of the fill and of the stroke.
 #[allow(
     clippy::too_many_arguments,
     reason = "one path's paint: the path, its shape, context, frame, options, servers and outputs"
@@ -434,14 +519,7 @@ fn paint_items(
     servers: &[Option<String>; 2],
     items: &mut Vec<Item>,
     counts: &mut PaintCounts,
-) -> Result<()> {
-    #[derive(PartialEq)]
-    enum Fate {
-        None,
-        Invisible,
-        Decoration,
-        Painted,
-    }
+) -> Result<[Fate; 2]> {
     let visible = p.is_visible();
     let fate = |alpha: f32| {
         if !visible || alpha <= 0.0 {
@@ -484,7 +562,7 @@ fn paint_items(
 
     let mut fill_item = None;
     match fill_fate {
-        Fate::None => {}
+        Fate::None | Fate::Ignored => {}
         Fate::Invisible => counts.dropped_invisible += 1,
         Fate::Decoration => {
             counts.dropped_decoration += 1;
@@ -508,9 +586,14 @@ fn paint_items(
         }
     }
     let fill_is_region = fill_fate == Fate::Painted;
+    let stroke_result = match (stroke_fate, opts.strokes) {
+        (Fate::None, _) => Fate::None,
+        (_, StrokeMode::Ignore) => Fate::Ignored,
+        (f, _) => f,
+    };
     let mut stroke_item = None;
     match (stroke_fate, opts.strokes) {
-        (Fate::None, _) => {}
+        (Fate::None | Fate::Ignored, _) => {}
         (_, StrokeMode::Ignore) => counts.strokes_ignored += 1,
         (Fate::Invisible, _) => {
             counts.strokes_ignored += 1;
@@ -578,7 +661,7 @@ fn paint_items(
     };
     items.extend(first);
     items.extend(second);
-    Ok(())
+    Ok([fill_fate, stroke_result])
 }
 
 /// Items → shapes in paint order: a stroke narrower than the hairline width

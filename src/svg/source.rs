@@ -150,6 +150,9 @@ pub(super) struct Source<'a, 'input> {
     /// A style sheet declares `transform` (CSS transforms are presentation
     /// properties that usvg applies): transforms are then not read at all.
     css_transform: bool,
+    /// A style sheet mentions `marker` (it may set marker properties this
+    /// reader does not resolve).
+    css_marker: bool,
     /// Shape instances expanded so far (bounded by [`MAX_EXPANDED`]).
     expanded: Cell<usize>,
 }
@@ -159,12 +162,14 @@ impl<'a, 'input> Source<'a, 'input> {
     pub(super) fn new(doc: &'a Document<'input>, private_prefix: Option<String>) -> Self {
         let mut by_id: HashMap<&'a str, Vec<Node<'a, 'input>>> = HashMap::new();
         let mut css_transform = false;
+        let mut css_marker = false;
         for node in doc.descendants().filter(Node::is_element) {
             if let Some(id) = node.attribute("id") {
                 by_id.entry(id).or_default().push(node);
             }
             if node.tag_name().name() == "style" {
                 css_transform |= node.text().is_some_and(declares_transform);
+                css_marker |= node.text().is_some_and(|t| t.contains("marker"));
             }
         }
         Self {
@@ -172,6 +177,7 @@ impl<'a, 'input> Source<'a, 'input> {
             private_prefix,
             by_id,
             css_transform,
+            css_marker,
             expanded: Cell::new(0),
         }
     }
@@ -210,6 +216,48 @@ impl<'a, 'input> Source<'a, 'input> {
                 .filter(|n| is_svg(*n) && tag(n.tag_name().name()))
                 .collect()
         })
+    }
+
+    /// Whether a style sheet mentions `marker` (it may set marker properties).
+    #[cfg(test)]
+    pub(super) fn style_sheet_mentions_markers(&self) -> bool {
+        self.css_marker
+    }
+
+    /// Whether usvg may draw markers on `element`: its `marker-start`,
+    /// `marker-mid` or `marker-end` (set on it or inherited; as an attribute, in
+    /// its `style`, or through the `marker` shorthand there) names a `<marker>`
+    /// of the document, as usvg resolves them; also `true` when a style sheet
+    /// mentions markers (this reader does not apply style sheets), and never
+    /// inside a `<clipPath>` (usvg draws no markers there). `marker: none`
+    /// names none.
+    pub(super) fn may_have_markers(&self, element: Node<'a, 'input>) -> bool {
+        if element
+            .ancestors()
+            .any(|a| a.tag_name().name() == "clipPath")
+        {
+            return false;
+        }
+        if self.css_marker {
+            return true;
+        }
+        ["marker-start", "marker-mid", "marker-end"]
+            .iter()
+            .any(|property| {
+                let value = element
+                    .ancestors()
+                    .filter(Node::is_element)
+                    .find_map(|n| marker_property(n, property));
+                value.is_some_and(|v| {
+                    // `none` or anything but a link names no marker
+                    svgtypes::FuncIRI::from_str(v).is_ok_and(|link| {
+                        self.by_id
+                            .get(link.0)
+                            .and_then(|nodes| nodes.first())
+                            .is_some_and(|n| is_svg(*n) && n.tag_name().name() == "marker")
+                    })
+                })
+            })
     }
 
     /// The element a `<use>` refers to, as usvg resolves it (unprefixed `href`
@@ -456,6 +504,23 @@ impl<'a, 'input> Source<'a, 'input> {
             || root.has_attribute("transform")
             || root.attribute("style").is_some_and(declares_transform)
     }
+}
+
+/// The value `n` itself gives marker property `property` (`marker-start`,
+/// `marker-mid` or `marker-end`), as usvg reads it: the last declaration in its
+/// `style` (the `marker` shorthand sets all three), else its attribute;
+/// `None` when `n` leaves it to inheritance (unset or `inherit`).
+fn marker_property<'a>(n: Node<'a, '_>, property: &str) -> Option<&'a str> {
+    let in_style = n.attribute("style").and_then(|style| {
+        style.split(';').rev().find_map(|decl| {
+            let (k, v) = decl.split_once(':')?;
+            let k = k.trim();
+            (k == property || k == "marker").then(|| v.trim().trim_end_matches("!important").trim())
+        })
+    });
+    in_style
+        .or_else(|| n.attribute(property).map(str::trim))
+        .filter(|v| *v != "inherit")
 }
 
 /// Whether CSS text (a `style` attribute or a style sheet) declares `transform`
