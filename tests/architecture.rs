@@ -53,16 +53,18 @@ fn lib_modules() -> (BTreeSet<String>, BTreeMap<String, String>) {
         if let Some(m) = decl.strip_prefix("mod ").and_then(|m| m.strip_suffix(';')) {
             modules.insert(m.trim().to_owned());
         }
-        if let Some(u) = line.strip_prefix("pub use ") {
-            let u = u.trim_end_matches(';');
-            let (module, names) = u.split_once("::").expect("pub use module::...");
-            let names = names.trim_start_matches('{').trim_end_matches('}');
-            for name in names.split(',') {
-                let name = name.split("::").last().unwrap_or(name);
-                let name = name.split(" as ").last().unwrap_or(name).trim();
-                if !name.is_empty() {
-                    aliases.insert(name.to_owned(), module.trim().to_owned());
-                }
+    }
+    // `pub use module::{...};`, on one line or several
+    for (i, _) in lib.match_indices("pub use ") {
+        let rest = &lib[i + "pub use ".len()..];
+        let u = rest.split(';').next().unwrap_or("");
+        let (module, names) = u.split_once("::").expect("pub use module::...");
+        let names = names.trim().trim_start_matches('{').trim_end_matches('}');
+        for name in names.split(',') {
+            let name = name.split("::").last().unwrap_or(name);
+            let name = name.split(" as ").last().unwrap_or(name).trim();
+            if !name.is_empty() {
+                aliases.insert(name.to_owned(), module.trim().to_owned());
             }
         }
     }
