@@ -824,6 +824,7 @@ fn lengths_kept(
     target: &[f64],
     l: f64,
     max_stretch: f64,
+    strict: bool,
     u: VertexId,
     ring_v: &VertexRing,
 ) -> bool {
@@ -832,10 +833,10 @@ fn lengths_kept(
     let tu = target_of(u);
     ring_v.neighbours.iter().all(|&w| {
         let t = 0.5 * (tu + target_of(w));
-        // Where the size field asks for less than `l` (a thin stroke, the
-        // user's fields), no collapse stretches an edge past the split bound;
-        // at `l` the coarsening may (see [`COARSEN_STRETCH`]).
-        let stretch = if t < l * REFINED_BELOW {
+        // Where the user's size field asks for less than `l` (`strict`), no
+        // collapse stretches an edge past the split bound; at `l`, and without
+        // a field of the user's, the coarsening may (see [`COARSEN_STRETCH`]).
+        let stretch = if strict && t < l * REFINED_BELOW {
             max_stretch.min(SPLIT_ABOVE)
         } else {
             max_stretch
@@ -1390,6 +1391,7 @@ impl<'a> Schedule<'a> {
                 &self.target,
                 self.opts.l,
                 self.max_stretch,
+                self.field.is_asked(),
                 u,
                 &ring_v,
             ) {

@@ -143,6 +143,15 @@ impl SizeField {
         }
     }
 
+    /// Whether the user asked for sizes (a field of [`SizeSpec`] or the
+    /// automatic feature size): then no collapse stretches an edge past the
+    /// split bound where the field is below `l`. Without (the drawing's own
+    /// thin strokes only), the final coarsening stretches edges as it did
+    /// before the size field, and the default meshes keep their size.
+    pub(crate) fn is_asked(&self) -> bool {
+        self.report.fields.iter().any(|f| f != "strokes")
+    }
+
     /// Whether the field is `l` everywhere.
     pub(crate) fn is_uniform(&self) -> bool {
         self.uniform.is_some()

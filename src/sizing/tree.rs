@@ -23,6 +23,9 @@ use rustc_hash::FxHashMap;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+/// Sizes at a batch of points (`∞` where none is set), or why not.
+pub(crate) type PointField<'a, E> = dyn FnMut(&[Point]) -> Result<Vec<f64>, E> + 'a;
+
 /// A point or straight piece whose size bounds the field around it:
 /// `h + slope·dist(x, [a, b])`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -266,7 +269,7 @@ impl Tree {
         hi: f64,
         slope: f64,
         sources: &[Source],
-        point_field: &mut dyn FnMut(&[Point]) -> Result<Vec<f64>, E>,
+        point_field: &mut PointField<'_, E>,
         keep_going: &dyn Fn() -> Result<(), E>,
     ) -> Result<Tree, E> {
         let (w, h) = (bounds.width().max(lo), bounds.height().max(lo));
