@@ -663,6 +663,24 @@ pub(crate) fn bsp_stage(
     Ok((mesh, fs, ctx))
 }
 
+/// The size field of `drawing` as the pipeline builds it (default region names,
+/// no time limit), for the stage functions of the tests.
+///
+/// # Errors
+/// As [`SizeField::build`].
+#[cfg(test)]
+fn test_field(drawing: &Drawing, params: &Params) -> Result<SizeField> {
+    let resolved = params.resolve(drawing.diagonal());
+    SizeField::build(&FieldInput {
+        drawing,
+        resolved: &resolved,
+        spec: &params.size,
+        region_names: &region_names(drawing, &RegionOptions::DEFAULT),
+        bounds: padded_box(drawing, resolved.padding),
+        deadline: Deadline::NONE,
+    })
+}
+
 /// The features of `drawing` as the pipeline builds them: resampled against
 /// the size field of `params` (default region names).
 ///
@@ -671,14 +689,7 @@ pub(crate) fn bsp_stage(
 #[cfg(test)]
 pub(crate) fn sized_features(drawing: &Drawing, params: &Params) -> Result<FeatureSet> {
     let resolved = params.resolve(drawing.diagonal());
-    let field = SizeField::build(&FieldInput {
-        drawing,
-        resolved: &resolved,
-        spec: &params.size,
-        region_names: &region_names(drawing, &RegionOptions::DEFAULT),
-        bounds: padded_box(drawing, resolved.padding),
-        deadline: Deadline::NONE,
-    })?;
+    let field = test_field(drawing, params)?;
     Ok(FeatureSet::build_sized(
         drawing,
         &resolved,
@@ -701,14 +712,7 @@ pub(crate) fn optimize_stage(
 ) -> Result<(TriMesh, FeatureSet, Context, OptimizeStats)> {
     let (mut mesh, fs, mut ctx) = bsp_stage(drawing, params)?;
     let resolved = params.resolve(drawing.diagonal());
-    let field = SizeField::build(&FieldInput {
-        drawing,
-        resolved: &resolved,
-        spec: &params.size,
-        region_names: &region_names(drawing, &RegionOptions::DEFAULT),
-        bounds: padded_box(drawing, resolved.padding),
-        deadline: Deadline::NONE,
-    })?;
+    let field = test_field(drawing, params)?;
     let (stats, _) = crate::optimize::optimize_with_field(
         &mut mesh,
         &mut ctx,
