@@ -48,6 +48,14 @@ impl Painting {
     }
 }
 
+/// The bucket of coordinate `x` on an axis from `lo` of width `w` in `n` buckets.
+fn cell(x: f64, lo: f64, w: f64, n: usize) -> usize {
+    (((x - lo) / w.max(f64::MIN_POSITIVE) * n as f64)
+        .floor()
+        .max(0.0) as usize)
+        .min(n - 1)
+}
+
 /// A triangle mesh with one value per node, located through a bucket grid.
 pub(super) struct Background {
     nodes: Vec<Point>,
@@ -109,12 +117,6 @@ impl Background {
         let side = (triangles.len() as f64).sqrt().ceil().clamp(1.0, 1024.0) as usize;
         let (nx, ny) = (side, side);
         let mut buckets = vec![Vec::new(); nx * ny];
-        let cell = |x: f64, lo: f64, w: f64, n: usize| {
-            (((x - lo) / w.max(f64::MIN_POSITIVE) * n as f64)
-                .floor()
-                .max(0.0) as usize)
-                .min(n - 1)
-        };
         for (k, t) in triangles.iter().enumerate() {
             let b = tri_box(t);
             let (i0, i1) = (
@@ -148,12 +150,6 @@ impl Background {
         if !self.grid.inflate(slack, slack).contains(p) {
             return None;
         }
-        let cell = |x: f64, lo: f64, w: f64, n: usize| {
-            (((x - lo) / w.max(f64::MIN_POSITIVE) * n as f64)
-                .floor()
-                .max(0.0) as usize)
-                .min(n - 1)
-        };
         let i = cell(p.x, self.grid.x0, self.grid.width(), self.nx);
         let j = cell(p.y, self.grid.y0, self.grid.height(), self.ny);
         let tol = 1e-9;

@@ -251,13 +251,6 @@ fn feature_samples(drawing: &Drawing, step: f64, turn: f64) -> Vec<Sample> {
                 Segment::Conic(c) => c.deriv(t),
             }
         };
-        let curvature = |t: f64| -> f64 {
-            match seg {
-                Segment::Line(_) => 0.0,
-                Segment::Cubic(c) => c.curvature(t).abs(),
-                Segment::Conic(c) => c.curvature(t).abs(),
-            }
-        };
         // turning, from 16 tangents
         let mut turning = 0.0;
         let mut last = deriv(0.0);
@@ -289,7 +282,7 @@ fn feature_samples(drawing: &Drawing, step: f64, turn: f64) -> Vec<Sample> {
             out.push(Sample {
                 p,
                 tangent,
-                curvature: curvature(t),
+                curvature: curvature(&seg, t),
                 branch,
                 arc: s,
                 period: f64::INFINITY,
