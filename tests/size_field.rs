@@ -389,3 +389,49 @@ fn d_does_not_depend_on_rotation() {
     }
     assert!((d0 - 120.0 * 2f64.sqrt()).abs() < 1e-9 * d0, "{d0}");
 }
+
+/// A thin stroke meshed as an area sizes its outline (twice its width); one
+/// narrower than the feature envelope mu gets no size of its own (its outlines
+/// are not kept apart, so no element could fit it: on a dev flag with 0.1-wide
+/// strokes sizing them gave 12x the triangles and 50 s).
+#[test]
+fn a_stroke_is_sized_only_when_its_outlines_are_kept_apart() {
+    let svg = |w: f64| {
+        format!(
+            r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect width="100" height="100" fill="#eee"/><circle cx="50" cy="50" r="30" fill="#58a" stroke="#000" stroke-width="{w}"/></svg>"##
+        )
+    };
+    let run = |w: f64| {
+        let drawing = triwild::load_bytes(svg(w).as_bytes()).expect("loads");
+        let p = Params::DEFAULT.with_order(Order::Linear);
+        triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).expect("meshes")
+    };
+    // mu is 1e-3 of the diagonal (0.14 here) by default.
+    let (thin, wide) = (run(0.05), run(1.5));
+    let fields = |m: &Meshed| m.report.sizing.as_ref().map(|s| s.fields.clone());
+    println!(
+        "stroke 0.05: {} triangles, fields {:?}; stroke 1.5: {} triangles, fields {:?}",
+        thin.mesh.triangle_count(),
+        fields(&thin),
+        wide.mesh.triangle_count(),
+        fields(&wide)
+    );
+    assert!(
+        !fields(&thin)
+            .unwrap_or_default()
+            .iter()
+            .any(|f| f == "strokes"),
+        "a stroke below mu is not sized"
+    );
+    assert!(
+        fields(&wide)
+            .unwrap_or_default()
+            .iter()
+            .any(|f| f == "strokes"),
+        "a stroke above mu is sized"
+    );
+    assert!(
+        thin.mesh.triangle_count() < wide.mesh.triangle_count(),
+        "the sized stroke is finer"
+    );
+}

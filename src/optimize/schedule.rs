@@ -815,33 +815,33 @@ enum SwapWhat {
 }
 
 /// Whether collapsing `v` into `u` makes no edge longer than `max_stretch`
-/// times the mean target of its ends (`target` by vertex slot, `l` past its
-/// end), `ring_v` being v's ring. Else the split pass would cut such an
+/// times its target (`target(u, w)`: what the split pass would compare it
+/// with), `ring_v` being v's ring. Else the split pass would cut such an
 /// edge again (4/3 of its target): the two passes would undo each other
-/// forever.
+/// forever. Where the user's size field asks for less than `l` (`strict`),
+/// no collapse stretches an edge past the split bound; at `l`, and without a
+/// field of the user's, the coarsening may (see [`COARSEN_STRETCH`]).
 fn lengths_kept(
     mesh: &TriMesh,
-    target: &[f64],
+    target: impl Fn(VertexId, VertexId) -> f64,
     l: f64,
     max_stretch: f64,
     strict: bool,
     u: VertexId,
     ring_v: &VertexRing,
 ) -> bool {
-    let target_of = |w: VertexId| target.get(w.index()).copied().unwrap_or(l);
     let pu = mesh.position(u);
-    let tu = target_of(u);
     ring_v.neighbours.iter().all(|&w| {
-        let t = 0.5 * (tu + target_of(w));
-        // Where the user's size field asks for less than `l` (`strict`), no
-        // collapse stretches an edge past the split bound; at `l`, and without
-        // a field of the user's, the coarsening may (see [`COARSEN_STRETCH`]).
+        if w == u {
+            return true;
+        }
+        let t = target(u, w);
         let stretch = if strict && t < l * REFINED_BELOW {
             max_stretch.min(SPLIT_ABOVE)
         } else {
             max_stretch
         };
-        w == u || pu.distance(mesh.position(w)) <= stretch * t
+        pu.distance(mesh.position(w)) <= stretch * t
     })
 }
 
@@ -1005,15 +1005,22 @@ impl<'a> Schedule<'a> {
     /// to well within the split and collapse bounds, and no lookup is needed);
     /// for a uniform field, the ends' mean target.
     fn edge_target(&self, k: EdgeKey) -> f64 {
+        self.pair_target(k.lo, k.hi)
+    }
+
+    /// [`Self::edge_target`] of the segment from `u` to `w`, an edge or not
+    /// (a collapse's new edges are judged as the split pass will judge them).
+    fn pair_target(&self, u: VertexId, w: VertexId) -> f64 {
+        let (tu, tw) = (self.target_of(u), self.target_of(w));
         if self.field.is_uniform() {
-            return self.mean_target(k);
+            return 0.5 * (tu + tw);
         }
-        let (ba, bb) = (self.base_of(k.lo), self.base_of(k.hi));
-        let ratio = 0.5 * (self.target_of(k.lo) / ba + self.target_of(k.hi) / bb);
-        let h = if ba.max(bb) <= FIELD_LINEAR * ba.min(bb) {
-            0.5 * (ba + bb)
+        let (bu, bw) = (self.base_of(u), self.base_of(w));
+        let ratio = 0.5 * (tu / bu + tw / bw);
+        let h = if bu.max(bw) <= FIELD_LINEAR * bu.min(bw) {
+            0.5 * (bu + bw)
         } else {
-            let (a, b) = (self.mesh.position(k.lo), self.mesh.position(k.hi));
+            let (a, b) = (self.mesh.position(u), self.mesh.position(w));
             self.field.at_mid(a, b)
         };
         h * ratio
@@ -1021,10 +1028,6 @@ impl<'a> Schedule<'a> {
 
     fn set_target(&mut self, v: VertexId, t: f64) {
         *slot(&mut self.target, v, self.opts.l) = t;
-    }
-
-    fn mean_target(&self, k: EdgeKey) -> f64 {
-        0.5 * (self.target_of(k.lo) + self.target_of(k.hi))
     }
 
     /// Split every edge longer than 4/3 of its mean target once, longest first.
@@ -1388,7 +1391,7 @@ impl<'a> Schedule<'a> {
             let ring_v = crate::mesh::ScratchRing::of(mesh, v);
             if !lengths_kept(
                 mesh,
-                &self.target,
+                |a, b| self.pair_target(a, b),
                 self.opts.l,
                 self.max_stretch,
                 self.field.is_asked(),
@@ -1875,6 +1878,9 @@ impl Schedule<'_> {
         let mut just_updated = false;
         let mut hit_floor = false;
         let mut history: Vec<(f64, f64)> = Vec::new();
+        // Splits applied by the last pass: once none is, the stretch against
+        // the field is as good as the splits can make it (the rest are refused).
+        let mut last_splits = u64::MAX;
         // Where the field asks for sizes well below the BSP mesh's edges (thin
         // strokes, the user's fields), split down to them first: the main
         // passes then work at those sizes.
@@ -1891,7 +1897,11 @@ impl Schedule<'_> {
             }
             let uniform = self.field.is_uniform();
             if quality_reached(&last, &opts, rational, off, || {
-                if uniform { 0.0 } else { self.longest_stretch() }
+                if uniform || last_splits == 0 {
+                    0.0
+                } else {
+                    self.longest_stretch()
+                }
             }) {
                 self.stats.stop = StopReason::Quality;
                 break;
@@ -1901,6 +1911,7 @@ impl Schedule<'_> {
             // The deadline is also checked between the sub-passes: one pass of
             // a large mesh can take seconds, more on a loaded machine.
             let (long, splits) = self.split_pass();
+            last_splits = splits;
             if self.out_of_time() {
                 break;
             }

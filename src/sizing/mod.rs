@@ -5,7 +5,7 @@
 //! size), the user's fields ([`crate::SizeSpec`]: per region, near outlines,
 //! boxes, a formula, a background mesh, a function), the sizes the drawing
 //! itself asks for (thin strokes meshed as areas: twice their width on their
-//! outlines; the automatic local feature size: narrow gaps, thin parts and
+//! outlines, growing by a factor 2 per element; the automatic local feature size: narrow gaps, thin parts and
 //! tight curves), combined by minimum, clamped to `[l_min, l]` and graded so
 //! that h grows by at most the grading `G` from one element to the next (a
 //! slope of `G − 1` per unit length). Every stage reads it: the features'
@@ -77,7 +77,7 @@ impl SizeField {
         let l_min = r.l_min.min(l);
         let slope = input.spec.grading - 1.0;
         let mut points = fields::PointFields::new(input)?;
-        let mut sources = sources::strokes(input.drawing, slope);
+        let mut sources = sources::strokes(input.drawing, r.mu, slope);
         let mut applied: Vec<String> = Vec::new();
         if !sources.is_empty() {
             applied.push("strokes".into());

@@ -14,9 +14,10 @@
 //! 2. **Value** every corner: the point fields there, and the cone
 //!    `h + s·|x − p|` of each source, spread over the corners from the leaf that
 //!    holds the source outwards, nearest first, with the exact Euclidean
-//!    distance to the source (a vector distance transform). The point fields
-//!    spread the same way at the grading's slope, so the result grows by at most
-//!    the grading per element everywhere.
+//!    distance to the source (a vector distance transform), each cone at its
+//!    own slope. The point fields spread the same way at the grading's slope, so
+//!    the result grows by at most the grading per element everywhere but next
+//!    to thin strokes, whose cones are steeper.
 
 use kurbo::{Point, Rect};
 use rustc_hash::FxHashMap;
@@ -36,7 +37,9 @@ pub(crate) struct Source {
     pub b: Point,
     /// The size on it.
     pub h: f64,
-    /// How fast the bound grows with the distance (at most the grading's slope).
+    /// How fast the bound grows with the distance: the grading's slope, or
+    /// less (`--size-near` over its distance), or more for a thin stroke (the
+    /// drawing's own need, see `sources::STROKE_SLOPE`).
     pub slope: f64,
 }
 
@@ -500,7 +503,6 @@ impl Tree {
             let (start, len) = node.local;
             for s in &self.local[start as usize..(start + len) as usize] {
                 let s = Source {
-                    slope: s.slope.min(slope),
                     h: s.h.max(self.lo),
                     ..*s
                 };
@@ -630,6 +632,21 @@ mod tests {
             );
         }
         assert_eq!(t.at(Point::new(90.0, 90.0)), 5.0);
+    }
+
+    #[test]
+    fn a_steeper_source_keeps_its_own_slope() {
+        // A thin stroke's cone grows at slope 1 under a grading of 1.5 (slope
+        // 0.5): the spread must not flatten it to the grading's slope.
+        let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
+        let src = [Source::point(Point::new(50.0, 50.0), 0.2, 1.0)];
+        let t = Tree::build(bounds, 0.01, 5.0, 0.5, &src, &mut no_points, &|| Ok(())).unwrap();
+        for d in [1.0, 2.0, 3.0] {
+            let got = t.at(Point::new(50.0 + d, 50.0));
+            let want = 0.2 + d;
+            assert!((got - want).abs() < 0.1 * want, "at {d}: {got} vs {want}");
+        }
+        assert_eq!(t.at(Point::new(50.0, 60.0)), 5.0, "l beyond 4.8");
     }
 
     #[test]
