@@ -461,3 +461,79 @@ fn a_path_painted_many_times_meshes_as_one_and_the_stats_count_the_copies() {
     assert!(names.contains(&"fill-#ff0000"), "{names:?}");
     assert!(!names.contains(&"fill-#0000ff"), "{names:?}");
 }
+
+#[test]
+fn the_size_preview_shades_a_graded_mesh_with_a_legend() {
+    let out = support::out_dir("cli_preview_size");
+    let plate = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/plate.svg");
+    let (msh, preview, plain) = (
+        out.join("plate.msh"),
+        out.join("plate-size.svg"),
+        out.join("plate.svg"),
+    );
+    let graded = [
+        "--cut-outside",
+        "--edge-length-abs",
+        "5",
+        "--size-expr",
+        "0.5 + 0.05*x",
+    ];
+    succeeds(
+        bin()
+            .arg(&plate)
+            .arg("-o")
+            .arg(&msh)
+            .args(graded)
+            .arg("--preview")
+            .arg(&preview)
+            .arg("--preview-size"),
+        "--preview-size",
+    );
+    support::check_msh(&msh).assert_valid("plate graded");
+    let svg = std::fs::read_to_string(&preview).unwrap();
+    assert!(svg.contains("id=\"size-legend\"") && svg.contains("edge / h"));
+    usvg::Tree::from_str(&svg, &usvg::Options::default()).expect("the preview is valid SVG");
+    // the fills of the shaded triangles (closed outlines per colour), legend aside
+    let fills: Vec<(String, usize)> = svg
+        .lines()
+        .filter(|l| l.starts_with("<path fill=\"#"))
+        .map(|l| {
+            let colour = l["<path fill=\"".len()..].split('"').next().unwrap();
+            (colour.to_owned(), l.matches('Z').count())
+        })
+        .collect();
+    let triangles: usize = fills.iter().map(|f| f.1).sum();
+    assert!(fills.len() >= 2, "distinct fills: {fills:?}");
+    // most triangles are within [4/5, 4/3] of the field: the neutral fill
+    let neutral = fills.iter().find(|f| f.0 == "#f7f7f7").map_or(0, |f| f.1);
+    assert!(2 * neutral > triangles, "{fills:?}");
+    // the mesh as written: as many triangles
+    let stats = succeeds(
+        bin()
+            .arg(&plate)
+            .arg("-o")
+            .arg(out.join("plate-plain.msh"))
+            .args(graded)
+            .arg("--preview")
+            .arg(&plain)
+            .arg("--stats"),
+        "plain preview",
+    );
+    let stats: serde_json::Value = serde_json::from_slice(&stats.stdout).unwrap();
+    assert_eq!(
+        stats["output"]["triangles"].as_u64(),
+        Some(triangles as u64)
+    );
+    // without the flag: region colours, no legend
+    let svg = std::fs::read_to_string(&plain).unwrap();
+    assert!(!svg.contains("size-legend") && svg.contains("<path fill=\"#4060a0"));
+    // the flag needs a preview
+    let run = bin()
+        .arg(&plate)
+        .arg("-o")
+        .arg(&msh)
+        .arg("--preview-size")
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+}

@@ -12,7 +12,7 @@ mod support;
 
 use kurbo::Point;
 use triwild::{
-    ErrorKind, FemMesh, Length, Meshed, MshOptions, Order, Params, RegionOptions, SizeSpec,
+    ErrorKind, FemMesh, Length, Meshed, MshOptions, Order, Params, RegionOptions, SizeFn, SizeSpec,
 };
 
 const PLATE: &str = include_str!("fixtures/plate.svg");
@@ -324,6 +324,80 @@ fn every_field_gives_the_same_bytes_on_one_and_two_threads() {
             out
         };
         assert!(bytes(1) == bytes(2), "field {k}: threads change the mesh");
+    }
+}
+
+#[test]
+fn a_size_function_gives_the_mesh_of_its_formula_in_batches() {
+    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let batches = std::sync::Arc::new(std::sync::Mutex::new(Vec::<usize>::new()));
+    let seen = std::sync::Arc::clone(&batches);
+    let f = SizeFn::new(move |xs: &[f64], ys: &[f64]| {
+        assert_eq!(xs.len(), ys.len());
+        seen.lock().unwrap().push(xs.len());
+        Ok(xs.iter().map(|x| 0.5 + 0.05 * x).collect())
+    });
+    let bytes = |spec: SizeSpec, threads: usize| {
+        let p = params(spec).with_threads(threads);
+        let m = triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).unwrap();
+        let mut out = Vec::new();
+        triwild::write_msh_to(&m.mesh, &mut out, MshOptions::DEFAULT).unwrap();
+        out
+    };
+    let by_fn = bytes(SizeSpec::DEFAULT.with_function(f.clone()), 1);
+    let by_expr = bytes(SizeSpec::DEFAULT.with_expr("0.5 + 0.05*x"), 1);
+    assert!(
+        by_fn == by_expr,
+        "the function and the formula give other meshes"
+    );
+    assert!(
+        bytes(SizeSpec::DEFAULT.with_function(f), 2) == by_fn,
+        "threads change the mesh"
+    );
+    let batches = batches.lock().unwrap();
+    println!("size function: {} calls, {batches:?} points", batches.len());
+    assert!(batches.iter().all(|&n| n > 0) && batches.iter().any(|&n| n > 1));
+}
+
+#[test]
+fn a_failing_size_function_is_one_clear_error_naming_the_point() {
+    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let run = |f: SizeFn| {
+        let p = params(SizeSpec::DEFAULT.with_function(f));
+        triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT)
+            .map(|_| ())
+            .unwrap_err()
+    };
+    let cases: [(SizeFn, &str); 4] = [
+        (
+            SizeFn::new(|_, _| Err("ValueError: no".into())),
+            "the size function failed on a batch of",
+        ),
+        (
+            SizeFn::new(|xs, _| Ok(vec![1.0; xs.len() - 1])),
+            "values for a batch of",
+        ),
+        (
+            SizeFn::new(|xs, _| {
+                Ok(xs
+                    .iter()
+                    .map(|&x| if x > 50.0 { f64::NAN } else { 1.0 })
+                    .collect())
+            }),
+            "gave NaN at (",
+        ),
+        (
+            SizeFn::new(|xs, _| Ok(xs.iter().map(|&x| 20.0 - x).collect())),
+            "not a positive finite size",
+        ),
+    ];
+    for (f, says) in cases {
+        let e = run(f);
+        assert_eq!(e.kind(), ErrorKind::BadInput, "{e}");
+        let msg = e.to_string();
+        assert!(msg.contains(says), "{msg:?} should say {says:?}");
+        assert!(msg.contains(" at ("), "{msg:?} names a point");
+        assert!(!msg.contains('\n'), "one line: {msg:?}");
     }
 }
 

@@ -7,7 +7,8 @@
 //! memory (MSH 2.2 binary: nodes in tag order) and read back with the library's
 //! reader. Arrays cross as little-endian bytes; the Python layer wraps them in
 //! numpy. The GIL is released while meshing, writing and checking, and a Rust
-//! panic becomes a `triwild.Error`, never an abort.
+//! panic becomes a `triwild.Error`, never an abort. A size function (`size_fn`)
+//! is called back in batches of points, with the GIL taken again for each call.
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
@@ -18,8 +19,9 @@ use std::ffi::OsString;
 use std::io::Write;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use triwild::{ErrorKind, FemMesh, MshOptions, MshVersion};
+use triwild::{ErrorKind, FemMesh, MshOptions, MshVersion, SizeFn};
 
 create_exception!(
     triwild,
@@ -252,23 +254,62 @@ impl MeshData {
     }
 }
 
+/// The first exception a size function raised, kept to become the cause of
+/// the `triwild.Error` the failed run raises.
+type Raised = Arc<Mutex<Option<PyErr>>>;
+
+/// The library's size function over `call`, a Python callable taking a batch's
+/// x and y as little-endian float64 bytes and returning the sizes the same way
+/// (the package's wrapper around the user's `size_fn`). It runs while meshing,
+/// without the GIL, so each call takes the GIL again. An exception becomes the
+/// library's error message (one line) and is kept in `raised`.
+fn size_function(call: Py<PyAny>, raised: Raised) -> SizeFn {
+    SizeFn::new(move |xs: &[f64], ys: &[f64]| {
+        Python::attach(|py| {
+            let x = PyBytes::new(py, &le_bytes(xs, f64::to_le_bytes));
+            let y = PyBytes::new(py, &le_bytes(ys, f64::to_le_bytes));
+            let answer = call.call1(py, (x, y)).and_then(|h| {
+                let h = h.bind(py).cast::<PyBytes>().map_err(PyErr::from)?;
+                Ok(h.as_bytes()
+                    .chunks_exact(8)
+                    .map(|c| f64::from_le_bytes(c.try_into().expect("internal: 8 bytes")))
+                    .collect::<Vec<f64>>())
+            });
+            answer.map_err(|e| {
+                let msg = e.to_string().replace(['\r', '\n'], " ");
+                let mut first = raised.lock().unwrap_or_else(|p| p.into_inner());
+                first.get_or_insert(e);
+                msg
+            })
+        })
+    })
+}
+
 /// Mesh the SVG file `path` or the SVG document `data` with the single-file
-/// command's `flags` (`--edge-length 0.05`, …).
+/// command's `flags` (`--edge-length 0.05`, …) and, if given, the size
+/// function `size_fn` (see [`size_function`]).
 #[pyfunction]
-#[pyo3(signature = (path, data, flags))]
+#[pyo3(signature = (path, data, flags, size_fn=None))]
 fn mesh(
     py: Python<'_>,
     path: Option<PathBuf>,
     data: Option<&Bound<'_, PyBytes>>,
     flags: Vec<String>,
+    size_fn: Option<Py<PyAny>>,
 ) -> PyResult<MeshData> {
     let data: Option<Vec<u8>> = data.map(|b| b.as_bytes().to_vec());
-    py.detach(move || {
+    let raised = Raised::default();
+    let function = size_fn.map(|f| size_function(f, Arc::clone(&raised)));
+    let result = py.detach(move || {
         guarded(|| {
             let t0 = Instant::now();
-            let (params, regions, paint) =
+            let (mut params, regions, paint) =
                 triwild::cli::mesh_options(flags.into_iter().map(OsString::from))
                     .map_err(Failure::Flag)?;
+            if let Some(f) = function {
+                let size = params.size.clone().with_function(f);
+                params = params.with_size(size);
+            }
             params.validate().map_err(|e| Failure::Lib(e, None))?;
             let drawing = match (&path, &data) {
                 (Some(p), _) => triwild::load_file_params(p, &params, &paint),
@@ -293,8 +334,16 @@ fn mesh(
                 arrays,
             })
         })
+    });
+    result.map_err(|failure| {
+        let err = failure.into_py();
+        // the size function's exception, as the cause of the error it led to
+        let cause = raised.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let Some(cause) = cause {
+            err.set_cause(py, Some(cause));
+        }
+        err
     })
-    .map_err(Failure::into_py)
 }
 
 /// The long names of the flags `mesh` takes.

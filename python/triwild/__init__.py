@@ -8,6 +8,11 @@ flags. Every keyword argument is the command line's flag of the same name
 the signature (``eps``, ``stop_after``, ``edge_length_abs``, ...) are
 accepted as ``**advanced`` keywords.
 
+The size field takes Python forms beside the flags' strings: ``size={"steel":
+0.5}``, ``size_near={"steel": (0.5, 10)}``, ``size_box=[(x0, y0, x1, y1, L)]``
+(one flag per entry), and a function ``size_fn(x, y) -> h`` of numpy arrays,
+called in batches of points while meshing.
+
 Errors are exceptions: :class:`BadInput` (the command line's exit code 2),
 :class:`MeshingError` (3) and :class:`IoError` (4), all subclasses of
 :class:`Error`, with the command line's one-line messages. The GIL is released
@@ -19,7 +24,7 @@ from __future__ import annotations
 import json
 import numbers
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -163,6 +168,68 @@ def _flag_value(value: Any) -> str:
     return str(value)
 
 
+def _is_number(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
+def _size_flags(name: str, value: Any) -> List[str]:
+    """``--size``, ``--size-near``, ``--size-box`` (repeatable): a string is one
+    flag as the command line writes it; a mapping (``size``, ``size_near``) or a
+    sequence gives one flag per entry."""
+    if isinstance(value, str):
+        return [f"--{name}={value}"]
+    out: List[str] = []
+    if name in ("size", "size-near") and isinstance(value, Mapping):
+        for region, size in value.items():
+            if not isinstance(region, str):
+                raise TypeError(f"{name.replace('-', '_')}: a region name is a string, not {region!r}")
+            if name == "size-near" and not _is_number(size):
+                try:
+                    size, dist = size
+                except (TypeError, ValueError):
+                    raise TypeError(
+                        f"size_near[{region!r}]: expected a size L or a pair (L, DIST), got {size!r}"
+                    ) from None
+                out.append(f"--{name}={region}={_flag_value(size)}:{_flag_value(dist)}")
+            else:
+                out.append(f"--{name}={region}={_flag_value(size)}")
+        return out
+    if name == "size-box" and len(value) == 5 and all(_is_number(v) for v in value):
+        value = [value]  # one box
+    for entry in value:
+        if isinstance(entry, str):
+            out.append(f"--{name}={entry}")
+        elif name == "size-box" and len(entry) == 5 and all(_is_number(v) for v in entry):
+            *corners, size = entry
+            out.append(f"--{name}=" + ",".join(map(_flag_value, corners)) + f"={_flag_value(size)}")
+        else:
+            want = {
+                "size": "NAME=L strings",
+                "size-near": "NAME=L[:DIST] strings",
+                "size-box": "(x0, y0, x1, y1, L) tuples or X0,Y0,X1,Y1=L strings",
+            }[name]
+            raise TypeError(f"{name.replace('-', '_')}: expected a mapping or {want}, got {entry!r}")
+    return out
+
+
+def _size_callback(size_fn: Callable[[np.ndarray, np.ndarray], Any]) -> Callable[[bytes, bytes], bytes]:
+    """The native module's view of ``size_fn``: a batch's x and y as float64
+    bytes in, the sizes as float64 bytes out (the native side checks the count
+    and the values, and names the point)."""
+    if not callable(size_fn):
+        raise TypeError(f"size_fn must be callable as size_fn(x, y), not {type(size_fn).__name__}")
+
+    def call(xb: bytes, yb: bytes) -> bytes:
+        x = np.frombuffer(xb, dtype="<f8").astype(np.float64)  # writable copies
+        y = np.frombuffer(yb, dtype="<f8").astype(np.float64)
+        h = np.asarray(size_fn(x, y), dtype=np.float64)
+        if h.ndim > 1:
+            raise ValueError(f"size_fn returned an array of shape {h.shape}, not one value per point")
+        return h.reshape(-1).astype("<f8", copy=False).tobytes()
+
+    return call
+
+
 def _flags(kwargs: Dict[str, Any]) -> List[str]:
     """Keyword arguments -> the command line's flags."""
     out: List[str] = []
@@ -182,6 +249,8 @@ def _flags(kwargs: Dict[str, Any]) -> List[str]:
             for point in value:
                 x, y = point
                 out.append(f"--hole={_flag_value(x)},{_flag_value(y)}")
+        elif name in ("size", "size-near", "size-box"):
+            out.extend(_size_flags(name, value))
         else:
             out.append(f"--{name}={_flag_value(value)}")
     return out
@@ -199,6 +268,7 @@ def mesh(
     linear: bool = False,
     mesher: str = "triwild",
     units: str = "user",
+    size_fn: Optional[Callable[[np.ndarray, np.ndarray], Any]] = None,
     **advanced: Any,
 ) -> Mesh:
     """Mesh an SVG drawing, as ``triwild SVG [flags]`` does.
@@ -220,16 +290,34 @@ def mesh(
         linear: stop after the optimization (straight triangles).
         mesher: ``"triwild"`` or ``"cdt"`` (the linear baseline).
         units: ``"user"`` (the root viewBox's units) or ``"px"``.
+        size_fn: the mesh size as a function ``size_fn(x, y) -> h``: ``x``
+            and ``y`` are float64 numpy arrays of output coordinates (y up),
+            ``h`` an array-like of as many sizes, positive and finite, in
+            output units. It is called in batches of points (never point by
+            point) while the size field is built, with the GIL taken again for
+            each call. It bounds the size like the other fields (the minimum
+            wins): ``size_fn=lambda x, y: 0.5 + 0.05 * x`` gives the mesh of
+            ``size_expr="0.5 + 0.05*x"``. An exception, a wrong number of
+            values, or a non-finite or non-positive value raises
+            :class:`BadInput` naming the point (the exception as its cause).
         **advanced: any other flag of the command line, by its long name with
             ``_`` for ``-`` (``eps=1e-3``, ``stop_after="bsp"``,
-            ``scale=2.0``, ``max_passes=10``, ...).
+            ``scale=2.0``, ``max_passes=10``, ...). The repeatable size flags
+            also take Python forms: ``size={"steel": 0.5}`` (``--size
+            steel=0.5``), ``size_near={"steel": 0.5}`` or ``{"steel": (0.5,
+            10)}`` (``--size-near steel=0.5:10``), ``size_box=[(x0, y0, x1,
+            y1, L), ...]``; or a list of the flags' strings. Their lengths
+            are relative to the drawing's diagonal, or in output units with
+            ``edge_length_abs``.
 
     Returns:
         The :class:`Mesh`.
 
     Raises:
         BadInput: a missing or unreadable-as-SVG input, a drawing with nothing
-            to mesh, non-finite coordinates, a bad parameter value.
+            to mesh, non-finite coordinates, a bad parameter value, a size
+            field that cannot be used (``size_fn`` raising or giving bad
+            values, an unknown region name, ...).
         MeshingError: meshing failed.
         IoError: the input could not be read.
         TypeError: an unknown keyword argument.
@@ -260,7 +348,8 @@ def mesh(
         path = os.fspath(svg)
     else:
         raise TypeError(f"svg must be a path, bytes or an SVG string, not {type(svg).__name__}")
-    return Mesh(_triwild.mesh(path, data, flags))
+    callback = None if size_fn is None else _size_callback(size_fn)
+    return Mesh(_triwild.mesh(path, data, flags, callback))
 
 
 def check(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:

@@ -1,7 +1,7 @@
 """Type stubs of the native module ``triwild._triwild`` (PyO3). Use the
 ``triwild`` package's API; this module is its implementation."""
 
-from typing import Dict, List, Optional, Union
+from typing import Callable, Dict, List, Optional, Union
 
 __version__: str
 
@@ -25,7 +25,16 @@ class MeshData:
     def arrays(self) -> Dict[str, Union[bytes, List[str], int]]: ...
     def write(self, path: str, version: str, binary: bool) -> None: ...
 
-def mesh(path: Optional[str], data: Optional[bytes], flags: List[str]) -> MeshData: ...
+def mesh(
+    path: Optional[str],
+    data: Optional[bytes],
+    flags: List[str],
+    size_fn: Optional[Callable[[bytes, bytes], bytes]] = None,
+) -> MeshData:
+    """Mesh ``path`` or ``data`` with the command line's ``flags``.
+    ``size_fn`` takes a batch's x and y as little-endian float64 bytes and
+    returns the sizes the same way; it is called with the GIL taken again
+    while meshing, and its exception becomes the cause of the error raised."""
 def mesh_flags() -> List[str]: ...
 def check(path: str) -> str: ...
 def cli(argv: List[str], child: List[str]) -> int: ...

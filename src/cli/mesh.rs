@@ -1,5 +1,5 @@
-//! The single-file command: `triwild IN.svg [-o OUT.msh] [--preview OUT.svg]
-//! [--stats]`.
+//! The single-file command: `triwild IN.svg [-o OUT.msh] [--preview OUT.svg
+//! [--preview-size]] [--stats]`.
 
 use super::args::{FormatArgs, ParamArgs, RegionArgs};
 use crate::cli::console::{errln, outln};
@@ -21,6 +21,11 @@ pub(crate) struct MeshArgs {
     /// Also write an SVG drawing of the mesh.
     #[arg(long, value_name = "OUT.svg")]
     preview: Option<PathBuf>,
+    /// Fill the preview's triangles by how their size matches the size field:
+    /// mean edge length over h at the centroid, blue below 4/5, neutral within
+    /// [4/5, 4/3], red above 4/3 (with a legend), instead of by region colour.
+    #[arg(long, requires = "preview")]
+    preview_size: bool,
     /// Print one JSON object of statistics on stdout.
     #[arg(long)]
     stats: bool,
@@ -50,6 +55,7 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     let opts = RunOptions::new(args.params.to_params())
         .with_msh(args.format.to_options())
         .with_preview(args.preview.clone())
+        .with_preview_size(args.preview_size)
         .with_regions(args.regions.to_options())
         .with_paint(args.regions.paint_options());
     // The library's write errors do not say which file; an unwritable preview

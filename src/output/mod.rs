@@ -140,7 +140,22 @@ pub fn write_preview_coloured(
     path: &Path,
 ) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
-    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours))
+    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours, None))
+}
+
+/// [`write_preview`] with each triangle filled by how its size matches the
+/// size field `h` (`--preview-size`): its mean edge length over h at its
+/// centroid, blue below 4/5, neutral within [4/5, 4/3], red above, with a legend.
+///
+/// # Errors
+/// As [`write_msh`].
+pub(crate) fn write_preview_sized(
+    mesh: &FemMesh,
+    h: &dyn Fn(kurbo::Point) -> f64,
+    path: &Path,
+) -> Result<()> {
+    msh::validate(mesh).map_err(Error::Write)?;
+    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, &[], Some(h)))
 }
 
 /// Check that a file can be created at `path` (its directory exists and is

@@ -4,6 +4,12 @@
 //! red, secondary green, constraint blue). Curved elements are drawn exactly: a
 //! quadratic or cubic Lagrange edge is converted to the Bézier curve it is.
 //! y is flipped back (SVG y = −y), so the preview looks like the input drawing.
+//!
+//! Triangles are filled either with their region's colour or, with a size
+//! field (`--preview-size`), by how their size matches it: the mean of the
+//! three corner-to-corner edge lengths over h at the corners' centroid, on a
+//! diverging scale (blue below 4/5, neutral within [4/5, 4/3], the band the
+//! optimizer aims for, red above 4/3), with a legend to the right.
 
 use crate::FemMesh;
 use crate::element::lagrange;
@@ -20,6 +26,39 @@ const FEATURE_STROKE_REL: f64 = 2e-3;
 const MARGIN_REL: f64 = 0.02;
 /// Size in pixels of the longer side of the picture.
 const PIXELS: f64 = 1000.0;
+
+/// The classes of edge / h: `(lower bound, fill, label as SVG text)`, smallest first. The
+/// neutral class is the optimizer's band [4/5, 4/3]; each step away from it is
+/// a factor 1.5 (colours: ColorBrewer's 7-class RdBu, blue for small).
+const SIZE_CLASSES: [(f64, &str, &str); 7] = [
+    (0.0, "#2166ac", "&lt; 0.36"),
+    (0.8 / 2.25, "#67a9cf", "0.36 \u{2013} 0.53"),
+    (0.8 / 1.5, "#d1e5f0", "0.53 \u{2013} 0.8"),
+    (0.8, "#f7f7f7", "0.8 \u{2013} 1.33"),
+    (4.0 / 3.0, "#fddbc7", "1.33 \u{2013} 2"),
+    (2.0, "#ef8a62", "2 \u{2013} 3"),
+    (3.0, "#b2182b", "\u{2265} 3"),
+];
+/// The legend's width and row height, in pixels.
+const LEGEND_WIDTH_PX: f64 = 190.0;
+const LEGEND_ROW_PX: f64 = 22.0;
+
+/// The class of `ratio` (edge / h) in [`SIZE_CLASSES`].
+fn size_class(ratio: f64) -> usize {
+    SIZE_CLASSES[1..]
+        .iter()
+        .take_while(|c| ratio >= c.0)
+        .count()
+}
+
+/// A triangle's mean corner-to-corner edge length over `h` at its corners'
+/// centroid.
+fn size_ratio(tri: &[u32], node: &impl Fn(u32) -> Point, h: &dyn Fn(Point) -> f64) -> f64 {
+    let [a, b, c] = [tri[0], tri[1], tri[2]].map(node);
+    let mean = (a.distance(b) + b.distance(c) + c.distance(a)) / 3.0;
+    let centroid = Point::new((a.x + b.x + c.x) / 3.0, (a.y + b.y + c.y) / 3.0);
+    mean / h(centroid)
+}
 
 /// An edge of an element as the curve it is: end points and Bézier controls.
 enum Curve {
@@ -77,11 +116,14 @@ impl PathData {
     }
 }
 
-/// Write the preview. The mesh must have passed `msh::validate`.
+/// Write the preview: triangles filled with their surface's colour
+/// (`colours[s]`), or by edge / h when `size` gives h. The mesh must have
+/// passed `msh::validate`.
 pub(crate) fn write_svg<W: Write>(
     w: &mut W,
     mesh: &FemMesh,
     colours: &[Option<String>],
+    size: Option<&dyn Fn(Point) -> f64>,
 ) -> io::Result<()> {
     let order = mesh.order();
     let node = |i: u32| mesh.nodes[i as usize];
@@ -104,8 +146,16 @@ pub(crate) fn write_svg<W: Write>(
     }
     let margin = MARGIN_REL * diag;
     let (vx, vy) = (lo.x - margin, -hi.y - margin);
-    let (vw, vh) = (hi.x - lo.x + 2.0 * margin, hi.y - lo.y + 2.0 * margin);
-    let scale = PIXELS / vw.max(vh);
+    let (mesh_w, mesh_h) = (hi.x - lo.x + 2.0 * margin, hi.y - lo.y + 2.0 * margin);
+    let scale = PIXELS / mesh_w.max(mesh_h);
+    // the legend sits to the right of the mesh, as tall as it needs
+    let (vw, vh) = match size {
+        Some(_) => (
+            mesh_w + LEGEND_WIDTH_PX / scale,
+            mesh_h.max((SIZE_CLASSES.len() + 3) as f64 * LEGEND_ROW_PX / scale),
+        ),
+        None => (mesh_w, mesh_h),
+    };
 
     writeln!(
         w,
@@ -119,30 +169,41 @@ pub(crate) fn write_svg<W: Write>(
         "<rect x=\"{vx:?}\" y=\"{vy:?}\" width=\"{vw:?}\" height=\"{vh:?}\" fill=\"white\"/>"
     )?;
 
-    // Region colours: each triangle filled, one path per surface (its curved
-    // edges as the curves they are).
-    for (g, colour) in colours.iter().enumerate() {
-        let Some(colour) = colour.as_deref().filter(|c| is_css_hex(c)) else {
-            continue;
-        };
-        let mut d = String::new();
-        for t in (0..mesh.triangle_count()).filter(|&t| mesh.triangle_group[t] as usize == g) {
-            let tri = mesh.triangle(t);
-            let mut fill = PathData { d: String::new() };
-            fill.d.push('M');
-            fill.pt(node(tri[0]));
-            for k in 0..3 {
-                inner_nodes(order, k, tri, &node, &mut fill);
-                fill.pt(node(tri[(k + 1) % 3]));
+    // Fills: by edge / h with a size field, else by region colour; one path
+    // per colour (curved edges as the curves they are).
+    let mut counts = [0usize; SIZE_CLASSES.len()];
+    let fills: Vec<(&str, Vec<usize>)> = match size {
+        Some(h) => {
+            let mut by_class = vec![Vec::new(); SIZE_CLASSES.len()];
+            for t in 0..mesh.triangle_count() {
+                let class = size_class(size_ratio(mesh.triangle(t), &node, h));
+                by_class[class].push(t);
+                counts[class] += 1;
             }
-            fill.d.push('Z');
-            d.push_str(&fill.d);
+            SIZE_CLASSES.iter().map(|c| c.1).zip(by_class).collect()
         }
-        if !d.is_empty() {
+        None => colours
+            .iter()
+            .enumerate()
+            .filter_map(|(g, colour)| {
+                let colour = colour.as_deref().filter(|c| is_css_hex(c))?;
+                let members = (0..mesh.triangle_count())
+                    .filter(|&t| mesh.triangle_group[t] as usize == g)
+                    .collect();
+                Some((colour, members))
+            })
+            .collect(),
+    };
+    for (colour, members) in fills {
+        let mut fill = PathData { d: String::new() };
+        for t in members {
+            triangle_outline(order, mesh.triangle(t), &node, &mut fill);
+        }
+        if !fill.d.is_empty() {
             writeln!(
                 w,
                 "<path fill=\"{colour}\" stroke=\"none\" d=\"{}\"/>",
-                d.trim_end()
+                fill.d.trim_end()
             )?;
         }
     }
@@ -202,7 +263,76 @@ pub(crate) fn write_svg<W: Write>(
         }
         write_path(w, &path.d, colour, FEATURE_STROKE_REL * diag)?;
     }
+    if size.is_some() {
+        write_legend(w, (vx + mesh_w, vy), 1.0 / scale, &counts)?;
+    }
     w.write_all(b"</svg>\n")
+}
+
+/// The legend of the size shading at `at` (its top left corner, SVG
+/// coordinates), `px` user units a pixel: a title, then a swatch, the class's
+/// range of edge / h and its number of triangles per class.
+fn write_legend<W: Write>(
+    w: &mut W,
+    at: (f64, f64),
+    px: f64,
+    counts: &[usize; SIZE_CLASSES.len()],
+) -> io::Result<()> {
+    let (x, y) = (at.0 + 10.0 * px, at.1 + 10.0 * px);
+    let row = LEGEND_ROW_PX * px;
+    writeln!(
+        w,
+        "<g id=\"size-legend\" font-family=\"sans-serif\" font-size=\"{:?}\" fill=\"#202020\">",
+        13.0 * px
+    )?;
+    writeln!(
+        w,
+        "<text x=\"{x:?}\" y=\"{:?}\" font-weight=\"bold\">edge / h</text>",
+        y + 0.7 * row
+    )?;
+    for (k, ((_, colour, label), n)) in SIZE_CLASSES.iter().zip(counts).enumerate() {
+        let top = y + (k + 1) as f64 * row;
+        writeln!(
+            w,
+            "<rect x=\"{x:?}\" y=\"{top:?}\" width=\"{:?}\" height=\"{:?}\" fill=\"{colour}\" \
+             stroke=\"#808080\" stroke-width=\"{:?}\"/>",
+            16.0 * px,
+            16.0 * px,
+            px
+        )?;
+        writeln!(
+            w,
+            "<text x=\"{:?}\" y=\"{:?}\">{label}</text><text x=\"{:?}\" y=\"{:?}\" \
+             text-anchor=\"end\">{n}</text>",
+            x + 24.0 * px,
+            top + 13.0 * px,
+            x + 170.0 * px,
+            top + 13.0 * px
+        )?;
+    }
+    writeln!(
+        w,
+        "<text x=\"{x:?}\" y=\"{:?}\" font-size=\"{:?}\">mean edge / h at the centroid</text>",
+        y + (SIZE_CLASSES.len() + 1) as f64 * row + 12.0 * px,
+        11.0 * px
+    )?;
+    writeln!(w, "</g>")
+}
+
+/// A closed path around a triangle (its curved edges as the curves they are).
+fn triangle_outline(
+    order: crate::element::Order,
+    tri: &[u32],
+    node: &impl Fn(u32) -> Point,
+    fill: &mut PathData,
+) {
+    fill.d.push('M');
+    fill.pt(node(tri[0]));
+    for k in 0..3 {
+        inner_nodes(order, k, tri, node, fill);
+        fill.pt(node(tri[(k + 1) % 3]));
+    }
+    fill.d.push('Z');
 }
 
 /// Whether `c` is `#` and 6 or 8 hex digits (nothing else reaches the SVG).
@@ -312,7 +442,7 @@ mod tests {
             curves: vec!["c".into()],
         };
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[]).expect("write");
+        write_svg(&mut buf, &mesh, &[], None).expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         assert!(s.contains("#d62728") && s.contains("#2ca02c") && !s.contains("#1f77b4"));
         assert!(s.contains("0.0 -2.0"), "{s}");
@@ -326,7 +456,7 @@ mod tests {
         // with colours: the surface's triangles filled, one closed outline each;
         // anything but a hex colour never reaches the SVG
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[Some("#ff000080".into())]).expect("write");
+        write_svg(&mut buf, &mesh, &[Some("#ff000080".into())], None).expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         let fill = s
             .lines()
@@ -337,7 +467,65 @@ mod tests {
             (1, 1)
         );
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[Some("red\" onload=\"x".into())]).expect("write");
+        write_svg(&mut buf, &mesh, &[Some("red\" onload=\"x".into())], None).expect("write");
         assert!(!String::from_utf8(buf).expect("utf8").contains("onload"));
+    }
+
+    #[test]
+    fn size_classes_are_split_at_four_fifths_and_four_thirds() {
+        let neutral = size_class(1.0);
+        assert_eq!(SIZE_CLASSES[neutral].1, "#f7f7f7");
+        assert_eq!(size_class(0.8), neutral);
+        assert_eq!(size_class(4.0 / 3.0 - 1e-12), neutral);
+        assert!(size_class(0.8 - 1e-12) < neutral);
+        assert!(size_class(4.0 / 3.0) > neutral);
+        assert_eq!(size_class(0.0), 0);
+        assert_eq!(size_class(100.0), SIZE_CLASSES.len() - 1);
+        for k in 1..SIZE_CLASSES.len() {
+            assert!(SIZE_CLASSES[k - 1].0 < SIZE_CLASSES[k].0);
+        }
+    }
+
+    #[test]
+    fn size_shading_fills_by_edge_over_h_with_a_legend() {
+        // two right triangles of legs 1: mean edge (2 + √2) / 3 ≈ 1.14
+        let mesh = FemMesh {
+            order: Some(crate::element::Order::Linear),
+            nodes: vec![
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.0, 1.0),
+                Point::new(1.0, 1.0),
+            ],
+            triangles: vec![0, 1, 2, 1, 3, 2],
+            triangle_group: vec![0, 0],
+            surfaces: vec!["s".into()],
+            lines: vec![],
+            line_group: vec![],
+            line_kind: vec![],
+            curves: vec![],
+        };
+        // h = 1 on the left half, 0.25 on the right: one neutral, one red triangle
+        let h = |p: Point| if p.x < 0.5 { 1.0 } else { 0.25 };
+        let mut buf = Vec::new();
+        write_svg(&mut buf, &mesh, &[Some("#ff0000".into())], Some(&h)).expect("write");
+        let s = String::from_utf8(buf).expect("utf8");
+        assert!(
+            s.contains("id=\"size-legend\"") && s.contains("edge / h"),
+            "{s}"
+        );
+        usvg::Tree::from_str(&s, &usvg::Options::default()).expect("valid SVG");
+        // the size shading replaces the region colours
+        assert!(!s.contains("#ff0000"), "{s}");
+        let filled = |colour: &str| {
+            s.lines()
+                .filter(|l| l.starts_with("<path") && l.contains(&format!("fill=\"{colour}\"")))
+                .map(|l| l.matches('Z').count())
+                .sum::<usize>()
+        };
+        assert_eq!(filled("#f7f7f7"), 1, "{s}");
+        assert_eq!(filled("#b2182b"), 1, "{s}"); // 1.14 / 0.25 ≈ 4.6
+        // the legend counts them
+        assert!(s.contains(">1</text>"), "{s}");
     }
 }

@@ -42,6 +42,10 @@ pub struct RunOptions {
     pub msh: MshOptions,
     /// Where to write an SVG preview, if anywhere.
     pub preview: Option<PathBuf>,
+    /// Fill the preview's triangles by edge / h (their mean edge length over
+    /// the size field at their centroid) instead of by region colour
+    /// (`--preview-size`). Default `false`.
+    pub preview_size: bool,
     /// Physical surfaces and dropped regions (default: one surface per filled shape).
     pub regions: RegionOptions,
     /// How SVG's paint model is read (strokes, opacity); its hairline width is
@@ -56,6 +60,7 @@ impl RunOptions {
             params,
             msh: MshOptions::DEFAULT,
             preview: None,
+            preview_size: false,
             regions: RegionOptions::DEFAULT,
             paint: PaintOptions::DEFAULT,
         }
@@ -73,6 +78,11 @@ impl RunOptions {
     /// Write a preview to `path`.
     pub fn with_preview(mut self, path: Option<PathBuf>) -> Self {
         self.preview = path;
+        self
+    }
+    /// Shade the preview by edge / h (see [`RunOptions::preview_size`]).
+    pub fn with_preview_size(mut self, on: bool) -> Self {
+        self.preview_size = on;
         self
     }
     /// Set the region options.
@@ -347,7 +357,7 @@ fn mesh_within(
     deadline: Deadline,
 ) -> Result<Meshed> {
     let meshed = with_threads(params.threads, || {
-        mesh_stages(drawing, params, regions, deadline)
+        mesh_stages(drawing, params, regions, deadline).map(|(m, _)| m)
     });
     deadline.finish();
     meshed
@@ -369,13 +379,14 @@ fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
     }
 }
 
-/// The stages of [`mesh_within`], on the current thread pool.
+/// The stages of [`mesh_within`], on the current thread pool; with the size
+/// field they met (the CDT baseline's: `l` everywhere).
 fn mesh_stages(
     drawing: &Drawing,
     params: &Params,
     regions: &RegionOptions,
     deadline: Deadline,
-) -> Result<Meshed> {
+) -> Result<(Meshed, SizeField)> {
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
@@ -495,11 +506,13 @@ fn mesh_stages(
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
     let quality = times.time("quality", || Quality::of(&mesh));
-    let sizing = field.map(|f| {
+    let sizing = field.as_ref().map(|f| {
         let mut report = f.report().clone();
-        report.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, &f, &refined)));
+        report.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, f, &refined)));
         report
     });
+    let field = field
+        .unwrap_or_else(|| SizeField::uniform(resolved.l, padded_box(drawing, resolved.padding)));
     if let Some(c) = &mut curve {
         c.min_jacobian_ratio = quality.min_jacobian_ratio;
     }
@@ -522,7 +535,7 @@ fn mesh_stages(
         warnings,
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
-    Ok(Meshed { mesh, report })
+    Ok((Meshed { mesh, report }, field))
 }
 
 /// The name of each shape's region as the .msh will write it under `regions`'
@@ -831,10 +844,13 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     // Meshing and writing on one pool: the writer formats in parallel too,
     // on no more threads than the mesher was given.
     let written = with_threads(params.threads, || -> Result<(Report, f64)> {
-        let Meshed { mesh, report } = mesh_stages(&drawing, params, &opts.regions, deadline)?;
+        let (Meshed { mesh, report }, field) =
+            mesh_stages(&drawing, params, &opts.regions, deadline)?;
         let t = Instant::now();
         output::write_msh(&mesh, output, opts.msh)?;
-        if let Some(p) = &opts.preview {
+        if let Some(p) = opts.preview.as_ref().filter(|_| opts.preview_size) {
+            output::write_preview_sized(&mesh, &|x| field.at(x), p)?;
+        } else if let Some(p) = &opts.preview {
             let colours: Vec<Option<String>> = report
                 .regions
                 .surfaces

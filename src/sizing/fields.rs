@@ -339,13 +339,25 @@ impl<'a> PointFields<'a> {
         if let Some(f) = self.function {
             let xs: Vec<f64> = pts.iter().map(|p| p.x).collect();
             let ys: Vec<f64> = pts.iter().map(|p| p.y).collect();
-            let vals = (f.0)(&xs, &ys)
-                .map_err(|e| Error::InvalidParams(format!("the size function failed: {e}")))?;
+            // The function answers for a whole batch: a failure of the batch
+            // names its first point (a value's failure names its own point).
+            let batch = || match pts.first() {
+                Some(p) => format!(
+                    "a batch of {} points (the first at ({}, {}))",
+                    pts.len(),
+                    p.x,
+                    p.y
+                ),
+                None => "no points".to_owned(),
+            };
+            let vals = (f.0)(&xs, &ys).map_err(|e| {
+                Error::InvalidParams(format!("the size function failed on {}: {e}", batch()))
+            })?;
             if vals.len() != pts.len() {
                 return Err(Error::InvalidParams(format!(
-                    "the size function returned {} values for {} points",
+                    "the size function returned {} values for {}",
                     vals.len(),
-                    pts.len()
+                    batch()
                 )));
             }
             for ((h, v), p) in out.iter_mut().zip(vals).zip(pts) {
