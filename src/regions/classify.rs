@@ -3,7 +3,7 @@
 
 use super::element::{element_area, element_point};
 use crate::fem::FemMesh;
-use crate::svg::winding::PaintTest;
+use crate::svg::winding::Painting;
 use crate::svg::{Drawing, Segment, ShapeId};
 use kurbo::Point;
 use rayon::prelude::*;
@@ -91,57 +91,6 @@ const SAMPLES: [[f64; 3]; 7] = [
     [0.4, 0.2, 0.4],
     [0.4, 0.4, 0.2],
 ];
-
-/// One filled shape ready for point queries.
-struct Layer {
-    id: ShapeId,
-    test: PaintTest,
-}
-
-/// The filled shapes, topmost first, ready for point queries.
-pub(crate) struct Painting {
-    layers: Vec<Layer>,
-}
-
-impl Painting {
-    pub(crate) fn new(drawing: &Drawing) -> Painting {
-        let mut layers: Vec<(u32, Layer)> = drawing
-            .shapes
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.filled)
-            .map(|(i, s)| {
-                (
-                    s.paint_order,
-                    Layer {
-                        id: ShapeId(i as u32),
-                        test: PaintTest::new(s),
-                    },
-                )
-            })
-            .filter(|l| l.1.test.bbox().is_some())
-            .collect();
-        // Topmost first; equal paint orders fall back to document order.
-        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1.id)));
-        Painting {
-            layers: layers.into_iter().map(|(_, l)| l).collect(),
-        }
-    }
-
-    /// The topmost shape covering `p`, and whether that answer is certain: it is
-    /// unless `p` is near the outline of a shape at or above the answer.
-    pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
-        let mut clear = true;
-        for layer in &self.layers {
-            let (inside, layer_clear) = layer.test.paints(p, eps_abs);
-            clear &= layer_clear;
-            if inside {
-                return (Some(layer.id), clear);
-            }
-        }
-        (None, clear)
-    }
-}
 
 /// Classify every triangle of `mesh` by the fills of `drawing`.
 ///
@@ -257,12 +206,7 @@ fn lost_shapes(
 ) -> Vec<ShapeId> {
     let kept: HashSet<ShapeId> = owner.iter().flatten().copied().collect();
     let (step, eps_abs) = (opts.probe_step, opts.eps_abs);
-    let candidates: Vec<ShapeId> = painting
-        .layers
-        .iter()
-        .map(|l| l.id)
-        .filter(|id| !kept.contains(id))
-        .collect();
+    let candidates: Vec<ShapeId> = painting.shapes().filter(|id| !kept.contains(id)).collect();
     let mut lost: Vec<ShapeId> = candidates
         .into_par_iter()
         .filter(|&id| {

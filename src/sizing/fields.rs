@@ -4,49 +4,10 @@
 //! (`∞` where none sets a size).
 
 use super::FieldInput;
-use crate::svg::winding::PaintTest;
-use crate::svg::{Drawing, ShapeId};
+use crate::svg::winding::Painting;
 use crate::{Error, Result};
 use exmex::prelude::*;
 use kurbo::{Point, Rect};
-
-/// The topmost filled shape at a point, for the per-region sizes: filled shapes,
-/// topmost first (the order `regions` classifies in).
-struct Painting {
-    layers: Vec<(ShapeId, PaintTest, Rect)>,
-    eps: f64,
-}
-
-impl Painting {
-    fn new(drawing: &Drawing, eps: f64) -> Painting {
-        let mut layers: Vec<(u32, ShapeId, PaintTest, Rect)> = drawing
-            .shapes
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.filled)
-            .filter_map(|(i, s)| {
-                let t = PaintTest::new(s);
-                let bb = t.bbox()?;
-                Some((s.paint_order, ShapeId(i as u32), t, bb))
-            })
-            .collect();
-        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
-        Painting {
-            layers: layers
-                .into_iter()
-                .map(|(_, id, t, bb)| (id, t, bb))
-                .collect(),
-            eps,
-        }
-    }
-
-    fn owner_at(&self, p: Point) -> Option<ShapeId> {
-        self.layers
-            .iter()
-            .find(|(_, t, bb)| bb.contains(p) && t.paints(p, self.eps).0)
-            .map(|l| l.0)
-    }
-}
 
 /// The bucket of coordinate `x` on an axis from `lo` of width `w` in `n` buckets.
 fn cell(x: f64, lo: f64, w: f64, n: usize) -> usize {
@@ -231,6 +192,8 @@ pub(super) struct PointFields<'a> {
     /// The background's size (`∞`: none).
     background_size: f64,
     painting: Option<Painting>,
+    /// How near an outline a point may be and still be inside (eps_m).
+    eps: f64,
     formula: Option<Formula>,
     mesh: Option<Background>,
     /// Where the background mesh must cover: the drawing's extent.
@@ -262,8 +225,8 @@ impl<'a> PointFields<'a> {
                 region_size[s.index()] = region_size[s.index()].min(size);
             }
         }
-        let painting =
-            (!spec.regions.is_empty()).then(|| Painting::new(input.drawing, input.resolved.eps_m));
+        let painting = (!spec.regions.is_empty()).then(|| Painting::new(input.drawing));
+        let eps = input.resolved.eps_m;
         let formula = spec.expr.as_deref().map(Formula::parse).transpose()?;
         let mesh = spec
             .background
@@ -275,6 +238,7 @@ impl<'a> PointFields<'a> {
             region_size,
             background_size,
             painting,
+            eps,
             formula,
             mesh,
             extent: input.drawing.extent(),
@@ -313,7 +277,7 @@ impl<'a> PointFields<'a> {
                 }
             }
             if let Some(painting) = &self.painting {
-                let size = match painting.owner_at(p) {
+                let size = match painting.owner_at(p, self.eps).0 {
                     Some(s) => self.region_size[s.index()],
                     None => self.background_size,
                 };

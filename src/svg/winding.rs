@@ -29,7 +29,7 @@
 //! number, and the caller picks another point.
 
 use super::drawing::Conic;
-use super::{Clip, FillRule, Segment, Shape, Subpath};
+use super::{Clip, Drawing, FillRule, Segment, Shape, ShapeId, Subpath};
 use crate::exact::{Orientation, orient2d};
 use kurbo::{CubicBez, Point, Rect};
 
@@ -346,6 +346,67 @@ impl PaintTest {
         }
         let (inside, clip_clear) = all_contain(&self.clips, p, eps_abs);
         (inside, w.is_clear() && clip_clear)
+    }
+}
+
+/// The filled shapes of a drawing, topmost first, ready for point queries:
+/// which shape paints a point (what `regions` labels a triangle with, and where
+/// `sizing` applies a per-region size).
+pub(crate) struct Painting {
+    /// Each filled shape's test and the bounding box of its outline.
+    layers: Vec<(ShapeId, PaintTest, Rect)>,
+}
+
+impl Painting {
+    /// The filled shapes of `drawing` with a non-empty outline; topmost first,
+    /// equal paint orders falling back to document order.
+    pub(crate) fn new(drawing: &Drawing) -> Painting {
+        let mut layers: Vec<(u32, ShapeId, PaintTest, Rect)> = drawing
+            .shapes
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.filled)
+            .filter_map(|(i, s)| {
+                let t = PaintTest::new(s);
+                let bb = t.bbox()?;
+                Some((s.paint_order, ShapeId(i as u32), t, bb))
+            })
+            .collect();
+        layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
+        Painting {
+            layers: layers
+                .into_iter()
+                .map(|(_, id, t, bb)| (id, t, bb))
+                .collect(),
+        }
+    }
+
+    /// The shapes, topmost first.
+    pub(crate) fn shapes(&self) -> impl Iterator<Item = ShapeId> + '_ {
+        self.layers.iter().map(|l| l.0)
+    }
+
+    /// The topmost shape covering `p`, and whether that answer is certain: it is
+    /// unless `p` is within `eps_abs` of the outline of a shape at or above the
+    /// answer. A shape whose outline's box, grown by `eps_abs`, misses `p` is
+    /// skipped: it neither paints `p` nor passes near it.
+    pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
+        let mut clear = true;
+        for (id, test, bb) in &self.layers {
+            let near_box = p.x >= bb.x0 - eps_abs
+                && p.x <= bb.x1 + eps_abs
+                && p.y >= bb.y0 - eps_abs
+                && p.y <= bb.y1 + eps_abs;
+            if !near_box {
+                continue;
+            }
+            let (inside, layer_clear) = test.paints(p, eps_abs);
+            clear &= layer_clear;
+            if inside {
+                return (Some(*id), clear);
+            }
+        }
+        (None, clear)
     }
 }
 
