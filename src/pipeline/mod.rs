@@ -400,8 +400,9 @@ fn mesh_stages(
     let delivered = match params.mesher {
         Mesher::Cdt => {
             check_deadline(&deadline, Stage::Baseline)?;
-            let linear =
-                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
+            let linear = times.time("baseline", || {
+                crate::baseline::triangulate(drawing, params, &field)
+            })?;
             check_deadline(&deadline, Stage::Baseline)?;
             Delivered::Linear(linear)
         }
