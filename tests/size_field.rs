@@ -257,7 +257,8 @@ fn the_cdt_baseline_follows_the_field_too() {
     let change = (n(&steel, "rubber") - n(&plain, "rubber")).abs() / n(&plain, "rubber");
     assert!(change < 0.3, "rubber changed by {change}");
     // The report measures the baseline's edges against the field: none is
-    // longer than 4/3 h (the refinement's bound), most are within [4/5, 4/3] h.
+    // longer than 4/3 h (the refinement's bound), most are within [4/5, 4/3] h
+    // (with no optimizer to coarsen, the rest are mostly within [1/2, 4/5) h).
     for (name, m) in [("steel", &steel), ("expr", &expr)] {
         let sizing = m.report.sizing.as_ref().expect("a sizing report");
         let e = sizing.edges.as_ref().expect("an edge match");
@@ -266,7 +267,8 @@ fn the_cdt_baseline_follows_the_field_too() {
             e.matched, e.median_ratio, e.histogram
         );
         assert_eq!(e.histogram[4..].iter().sum::<usize>(), 0, "{name}: {e:?}");
-        assert!(e.matched >= 0.55, "{name}: {e:?}");
+        // Measured: 0.553 (steel), 0.643 (expr).
+        assert!(e.matched >= 0.5, "{name}: {e:?}");
     }
     // Graded: h = 0.5 + 0.05 x goes from about 0.5 to 5 across the plate.
     let mean_edge = |x0: f64, x1: f64| {

@@ -1,6 +1,5 @@
-//! The baseline's planar input: the feature soup flattened to polylines, cut to the
-//! size field, scaled by a power of two into the range spade accepts, with
-//! near-duplicate points merged.
+//! The baseline's planar input: the feature soup flattened to polylines, scaled by a
+//! power of two into the range spade accepts, with near-duplicate points merged.
 
 use crate::svg::drawing::Conic;
 use crate::svg::{Drawing, FeatureGeom, ShapeId};
@@ -9,10 +8,6 @@ use kurbo::{CubicBez, PathEl, Point, Rect};
 /// Most segments one cubic is flattened into. Bounds the work of a cubic whose
 /// tolerance is tiny compared with its size (an absolute `--mu` on a huge drawing).
 const MAX_PIECES_PER_CUBIC: f64 = 4096.0;
-
-/// Most pieces one flattened segment is cut into for the size field (as many as
-/// the features' resampling cuts from one line).
-const MAX_PIECES_PER_SEGMENT: f64 = 65536.0;
 
 /// Scaling by an exact power of two: `scaled = user · 2^k`.
 ///
@@ -115,14 +110,8 @@ pub(super) struct FlattenParams {
 }
 
 impl PlanarInput {
-    /// Flatten every feature of `drawing` and cut each flattened segment into
-    /// equal pieces no longer than the size field `size` (scaled units, at a
-    /// scaled point) at its ends and middle.
-    pub(super) fn new(
-        drawing: &Drawing,
-        fp: FlattenParams,
-        size: &dyn Fn(Point) -> f64,
-    ) -> PlanarInput {
+    /// Flatten every feature of `drawing`.
+    pub(super) fn new(drawing: &Drawing, fp: FlattenParams) -> PlanarInput {
         let s = fp.scale;
         let accuracy = s.length(fp.accuracy).max(f64::MIN_POSITIVE);
         let mut merger = Merger::new(s.length(fp.merge_distance));
@@ -145,7 +134,6 @@ impl PlanarInput {
                     flatten_conic(c, accuracy, &mut polyline);
                 }
             }
-            cut_to_size(&mut polyline, size);
             let mut prev: Option<u32> = None;
             for &p in &polyline {
                 let v = merger.insert(spade_safe(p));
@@ -173,54 +161,6 @@ impl PlanarInput {
             dropped_pieces,
         }
     }
-}
-
-/// Cut every segment of `polyline` into the fewest pieces no longer than the
-/// size field `size` along them, graded with it: the segment's length in units
-/// of h (`N = ∫ ds / h`, by the trapezoid rule on samples half an h apart) is
-/// rounded up to `n` pieces of `N / n` each, at most [`MAX_PIECES_PER_SEGMENT`].
-/// The polyline's points stay, in order. (The features' resampling cuts a line
-/// into equal pieces and lets the optimizer grade them; the baseline has no
-/// optimizer, so its pieces follow h themselves.)
-fn cut_to_size(polyline: &mut Vec<Point>, size: &dyn Fn(Point) -> f64) {
-    if polyline.len() < 2 {
-        return;
-    }
-    let mut out = Vec::with_capacity(polyline.len());
-    // (t, ∫_0^t ds / h) along the current segment.
-    let mut samples: Vec<(f64, f64)> = Vec::new();
-    out.push(polyline[0]);
-    for w in polyline.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let len = a.distance(b);
-        let density = |t: f64| len / size(a.lerp(b, t));
-        samples.clear();
-        let (mut t, mut f, mut n_units) = (0.0f64, density(0.0), 0.0f64);
-        samples.push((0.0, 0.0));
-        while t < 1.0 && n_units.is_finite() {
-            let dt = (0.5 / f).max(1.0 / MAX_PIECES_PER_SEGMENT).min(1.0 - t);
-            let f1 = density(t + dt);
-            n_units += 0.5 * (f + f1) * dt;
-            t += dt;
-            f = f1;
-            samples.push((t, n_units));
-        }
-        let n = n_units.ceil().clamp(1.0, MAX_PIECES_PER_SEGMENT);
-        if n > 1.0 && n_units.is_finite() {
-            let mut i = 0;
-            for k in 1..n as u32 {
-                let target = n_units * f64::from(k) / n;
-                while samples[i + 1].1 < target {
-                    i += 1;
-                }
-                let ((t0, c0), (t1, c1)) = (samples[i], samples[i + 1]);
-                let t = t0 + (t1 - t0) * (target - c0) / (c1 - c0);
-                out.push(a.lerp(b, t));
-            }
-        }
-        out.push(b);
-    }
-    *polyline = out;
 }
 
 /// Flush coordinates too small for spade (below [`spade::MIN_ALLOWED_VALUE`], 2^-142)
