@@ -4,7 +4,9 @@
 //! meshes' area must be the drawing's. Two domains: a blob bounded by four cubic Bézier
 //! arcs (which the cubic meshes represent exactly), and a plain SVG `<circle>` (an
 //! exact conic, which no polynomial element represents: the order-k boundary
-//! interpolates it, and the rates must still be optimal).
+//! interpolates it, and the rates must still be optimal). The circle is also meshed
+//! graded by a size field (issue 37: h from l/3 to l across the disk, `--size-expr`),
+//! where the rates must be optimal too.
 //!
 //! The problem is `−Δu = f` with the manufactured solution
 //! `u = eˣ sin y + (x² + y²)/4` (`f = −1`), Dirichlet data interpolated at the boundary
@@ -21,7 +23,9 @@ mod support;
 
 use kurbo::{CubicBez, ParamCurveArea};
 use support::fem::{Problem, Solution, solve};
-use triwild::{Drawing, FemMesh, Length, MshOptions, Order, Params, RegionMode, RegionOptions};
+use triwild::{
+    Drawing, FemMesh, Length, MshOptions, Order, Params, RegionMode, RegionOptions, SizeSpec,
+};
 
 /// A G1 blob of four cubic arcs (control points in a 2 × 2 view box), closed exactly on
 /// its start. Every coordinate is a multiple of 1/256, so the SVG loader's `f32` holds
@@ -81,9 +85,20 @@ fn problem() -> Problem<'static> {
     }
 }
 
-/// `drawing` meshed at `level` and `order`, the background cut away, written to
-/// `target/test-out/fem/`.
-fn mesh(name: &str, drawing: &Drawing, level: f64, order: u8) -> FemMesh {
+/// The size fields of a study at a level: none (the size is `l` everywhere).
+fn uniform(_level: f64) -> SizeSpec {
+    SizeSpec::DEFAULT
+}
+
+/// `drawing` meshed at `level` and `order` with the size fields `size(level)`,
+/// the background cut away, written to `target/test-out/fem/`.
+fn mesh(
+    name: &str,
+    drawing: &Drawing,
+    level: f64,
+    order: u8,
+    size: &dyn Fn(f64) -> SizeSpec,
+) -> FemMesh {
     let element_order = match order {
         1 => Order::Linear,
         2 => Order::Quadratic,
@@ -91,7 +106,8 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: u8) -> FemMesh {
     };
     let params = Params::DEFAULT
         .with_l(Length::Rel(level))
-        .with_order(element_order);
+        .with_order(element_order)
+        .with_size(size(level));
     let regions = RegionOptions::DEFAULT
         .with_mode(RegionMode::Shape)
         .with_cut_outside(true);
@@ -174,19 +190,26 @@ fn print_table(name: &str, rows: &[Solution]) {
     );
 }
 
-/// Mesh `drawing` at every level and order 1–3, solve, print the tables and return
+/// Mesh `drawing` at every level and order 1–3 (with the size fields `size(level)`),
+/// solve, print the tables and return
 /// every failed expectation (so a regression shows its whole picture): L2 rates at
 /// least k + 0.6, h falling at every level, the order-3 area within `area_tol`
 /// (relative) of `exact_area`, and P2 on the cubic meshes as accurate as on the
 /// quadratic ones.
-fn study(name: &str, drawing: &Drawing, exact_area: f64, area_tol: f64) -> Vec<String> {
+fn study(
+    name: &str,
+    drawing: &Drawing,
+    size: &dyn Fn(f64) -> SizeSpec,
+    exact_area: f64,
+    area_tol: f64,
+) -> Vec<String> {
     let mut failed = Vec::new();
     let mut p2_on_3 = Vec::new();
     let mut tables = Vec::new();
     for order in [1u8, 2, 3] {
         let mut rows = Vec::new();
         for level in LEVELS {
-            let m = mesh(name, drawing, level, order);
+            let m = mesh(name, drawing, level, order, size);
             let s = run(&m, order as usize);
             if order == 3 {
                 let rel = (s.area - exact_area).abs() / exact_area;
@@ -237,7 +260,7 @@ fn study(name: &str, drawing: &Drawing, exact_area: f64, area_tol: f64) -> Vec<S
 #[test]
 fn isoparametric_fem_converges_at_optimal_rates() {
     let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
-    let failed = study("blob", &drawing, blob_area(), 1e-12);
+    let failed = study("blob", &drawing, &uniform, blob_area(), 1e-12);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
@@ -247,7 +270,26 @@ fn a_circle_converges_at_optimal_rates() {
     // is never stopped by the geometry (as four cubics it stalled at L2 ≈ 3e-5).
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;
     let drawing = triwild::load_bytes(svg.as_bytes()).expect("the disk loads");
-    let failed = study("circle", &drawing, std::f64::consts::PI, 1e-10);
+    let failed = study("circle", &drawing, &uniform, std::f64::consts::PI, 1e-10);
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+fn a_circle_graded_by_a_size_field_converges_at_optimal_rates() {
+    // Issue 37: a mesh graded by `--size-expr` keeps the optimal rates. h = l (1 + x)/3
+    // (output units: the disk spans x in [0, 2]) goes from l/3 on the left to l on the
+    // right, a fixed grading at every level, so the levels are a refinement family.
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;
+    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the disk loads");
+    let d = drawing.diagonal();
+    let graded = |level: f64| SizeSpec::DEFAULT.with_expr(format!("{}*(1 + x)/3", level * d));
+    let failed = study(
+        "circle-graded",
+        &drawing,
+        &graded,
+        std::f64::consts::PI,
+        1e-10,
+    );
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
@@ -262,7 +304,7 @@ fn linear_functions_are_reproduced_on_curved_meshes() {
         f: &|_, _| 0.0,
     };
     for order in [2u8, 3] {
-        let m = mesh("blob", &drawing, 0.2, order);
+        let m = mesh("blob", &drawing, 0.2, order, &uniform);
         let nodes: Vec<[f64; 2]> = m.nodes.iter().map(|q| [q.x, q.y]).collect();
         let tris: Vec<Vec<u32>> = (0..m.triangle_count())
             .map(|i| m.triangle(i).to_vec())

@@ -1,4 +1,5 @@
-//! The size field (issue 37), tried as an FEM user would: a 100 × 100 plate with
+//! The size field (issue 37), tried as an FEM user would (the TriWild mesher, and
+//! the CDT baseline in one test): a 100 × 100 plate with
 //! a steel disk (r = 15) and a rubber ellipse (20 × 10 semi-axes), the background
 //! cut away, the global size 5 (absolute), and each field on top of it. Every
 //! mesh is written under `target/test-out/size_field/` for the independent checker.
@@ -12,7 +13,8 @@ mod support;
 
 use kurbo::Point;
 use triwild::{
-    ErrorKind, FemMesh, Length, Meshed, MshOptions, Order, Params, RegionOptions, SizeFn, SizeSpec,
+    ErrorKind, FemMesh, Length, Meshed, Mesher, MshOptions, Order, Params, RegionOptions, SizeFn,
+    SizeSpec,
 };
 
 const PLATE: &str = include_str!("fixtures/plate.svg");
@@ -215,6 +217,72 @@ fn a_formula_and_a_box_are_followed_away_from_the_features() {
     let share = matched(&away, |_| 1.0);
     println!("box: {:.3} of {} edges matched", share, away.len());
     assert!(share >= 0.75, "box: {share}");
+}
+
+#[test]
+fn the_cdt_baseline_follows_the_field_too() {
+    let cdt = |spec: SizeSpec| params(spec).with_mesher(Mesher::Cdt);
+    let plain = mesh("cdt-plain", &cdt(SizeSpec::DEFAULT));
+    let steel = mesh(
+        "cdt-steel-1",
+        &cdt(SizeSpec::DEFAULT.with_region("steel", Length::Abs(1.0))),
+    );
+    let expr = mesh(
+        "cdt-expr",
+        &cdt(SizeSpec::DEFAULT.with_expr("0.5 + 0.05*x")),
+    );
+    let dir = support::out_dir("size_field");
+    for name in ["cdt-plain", "cdt-steel-1", "cdt-expr"] {
+        support::check_msh(&dir.join(format!("{name}.msh"))).assert_valid(name);
+    }
+    for m in [&plain, &steel, &expr] {
+        assert!(
+            m.report.quality.min_angle_deg >= 25.0,
+            "{:?}",
+            m.report.quality
+        );
+    }
+    // Finer in the steel, about as the field asks; the rubber as before.
+    let area = std::f64::consts::PI * STEEL.1 * STEEL.1;
+    let ideal = area / (0.433 * 1.0);
+    let n = |m: &Meshed, r: &str| region_triangles(&m.mesh, r) as f64;
+    println!(
+        "cdt steel=1: steel {} -> {} triangles (ideal {ideal:.0}), rubber {} -> {}",
+        n(&plain, "steel"),
+        n(&steel, "steel"),
+        n(&plain, "rubber"),
+        n(&steel, "rubber")
+    );
+    assert!(n(&steel, "steel") > 10.0 * n(&plain, "steel"));
+    assert!((0.7 * ideal..=1.6 * ideal).contains(&n(&steel, "steel")));
+    let change = (n(&steel, "rubber") - n(&plain, "rubber")).abs() / n(&plain, "rubber");
+    assert!(change < 0.3, "rubber changed by {change}");
+    // The report measures the baseline's edges against the field: none is
+    // longer than 4/3 h (the refinement's bound), most are within [4/5, 4/3] h
+    // (with no optimizer to coarsen, the rest are mostly within [1/2, 4/5) h).
+    for (name, m) in [("steel", &steel), ("expr", &expr)] {
+        let sizing = m.report.sizing.as_ref().expect("a sizing report");
+        let e = sizing.edges.as_ref().expect("an edge match");
+        println!(
+            "cdt {name}: matched {:.3}, median {:.2}, histogram {:?}",
+            e.matched, e.median_ratio, e.histogram
+        );
+        assert_eq!(e.histogram[4..].iter().sum::<usize>(), 0, "{name}: {e:?}");
+        // Measured: 0.553 (steel), 0.643 (expr).
+        assert!(e.matched >= 0.5, "{name}: {e:?}");
+    }
+    // Graded: h = 0.5 + 0.05 x goes from about 0.5 to 5 across the plate.
+    let mean_edge = |x0: f64, x1: f64| {
+        let e: Vec<f64> = edges(&expr.mesh)
+            .into_iter()
+            .filter(|(a, b)| (x0..x1).contains(&a.midpoint(*b).x))
+            .map(|(a, b)| a.distance(b))
+            .collect();
+        e.iter().sum::<f64>() / e.len() as f64
+    };
+    let (left, right) = (mean_edge(0.0, 10.0), mean_edge(90.0, 100.0));
+    println!("cdt expr: mean edge {left:.3} at x < 10, {right:.3} at x > 90");
+    assert!(left < 1.0 && right > 3.0, "{left} .. {right}");
 }
 
 /// A gmsh mesh (4.1, ASCII) of the square `[x0, x1] × [y0, y1]` in `n × n`

@@ -3,9 +3,14 @@
 //!
 //! Owns: flattening the feature soup to polylines within the feature envelope μ,
 //! merging points closer than ε_m, and a constrained Delaunay triangulation of the
-//! padded box whose constraints are those polylines (crossings split), refined by
-//! spade to a minimum angle ([`Params::cdt_min_angle_deg`]) and the target edge
-//! length l within the vertex budget [`Params::max_vertices`].
+//! padded box whose constraints are those polylines (crossings split), refined to a
+//! minimum angle ([`Params::cdt_min_angle_deg`]) and to the size field within the
+//! vertex budget [`Params::max_vertices`]. Spade's refinement takes one area bound for
+//! the whole mesh (that of h's largest value, l): a uniform field is that bound alone,
+//! as before the field existed. The smaller sizes of a graded field are reached in
+//! rounds ([`refine_to_size`]): every triangle with an edge longer than 4/3·h at the
+//! edge's midpoint (the optimizer's split bound) gets a point, its circumcentre or one
+//! that splits that edge, then spade refines to the angle again.
 //!
 //! Guarantees to the next stage (a [`LinearMesh`]):
 //! - the triangles tile the padded box (their areas sum to its area, up to an ulp
@@ -17,8 +22,9 @@
 //! - every input point and polyline vertex is a mesh vertex (up to the ε_m merge),
 //!   and every constraint piece is a chain of mesh edges, listed in
 //!   [`LinearMesh::edges`] once per shape with [`LineKind::Constraint`];
-//! - termination: spade's refinement stops at the vertex budget; when it does,
-//!   the mesh is valid, only coarser than asked (logged at info).
+//! - termination: spade's refinement and the size rounds stop at the vertex
+//!   budget (and the rounds after [`MAX_SIZE_ROUNDS`]); when they do, the mesh is
+//!   valid, only coarser than asked (logged at info).
 //!
 //! Spade validates coordinates (`spade::validate_coordinate`: finite, magnitude in
 //! `[2^-142, 2^201]` or zero). The input is scaled by a power of two, which is exact
@@ -30,6 +36,7 @@ mod snap;
 
 use crate::exact::{Orientation, orient2d};
 use crate::fem::{FeatureEdge, LineKind};
+use crate::sizing::SizeField;
 use crate::stage::Stage;
 use crate::svg::ShapeId;
 use crate::{Drawing, Error, LinearMesh, Params, Result};
@@ -37,24 +44,32 @@ use input::{FlattenParams, PlanarInput, Pow2Scale};
 use kurbo::Point;
 use spade::handles::FixedVertexHandle;
 use spade::{
-    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, PositionInTriangulation,
+    RefinementParameters, Triangulation,
 };
 use std::collections::HashSet;
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
+type CdtEdgeHandle<'a> =
+    spade::handles::DirectedEdgeHandle<'a, Point2<f64>, (), spade::CdtEdge<()>, ()>;
 
 /// Area of the equilateral triangle of side `l`.
 fn equilateral_area(l: f64) -> f64 {
     3f64.sqrt() / 4.0 * l * l
 }
 
-/// Mesh a drawing with the CDT baseline.
+/// Mesh a drawing with the CDT baseline, to the size field `field` (the
+/// pipeline's, built for this drawing and `params`).
 ///
 /// # Errors
 /// [`crate::Error::Meshing`] (stage `baseline`) if spade rejects the input or the
 /// result is not a valid counter-clockwise triangulation; neither happens for a
 /// drawing that keeps the loader's guarantees.
-pub(crate) fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMesh> {
+pub(crate) fn triangulate(
+    drawing: &Drawing,
+    params: &Params,
+    field: &SizeField,
+) -> Result<LinearMesh> {
     let r = params.resolve(drawing.diagonal());
     let bx = input::padded_box(drawing, r.padding);
     let magnitude = [bx.x0, bx.y0, bx.x1, bx.y1]
@@ -67,6 +82,16 @@ pub(crate) fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMe
         ));
     }
     let scale = Pow2Scale::normalizing(magnitude);
+    let s = |l: f64| scale.length(l);
+    // The size field in scaled units, at a scaled point; `None` where it is l
+    // everywhere (spade's area bound is all it takes).
+    let size = |p: Point| scale.length(field.at(scale.unpoint(p)));
+    let graded = (!field.is_uniform()).then_some(&size as &dyn Fn(Point) -> f64);
+    // The outlines are not cut to the field here: spade splits them, keeping
+    // track of the pieces it makes of one input segment, which is what stops
+    // its refinement between two segments at a small angle (cut beforehand,
+    // the pieces are input segments of their own: the stroke field of
+    // data/svg/folder-emoji.svg then took 29346 triangles instead of 12711).
     let flat = PlanarInput::new(
         drawing,
         FlattenParams {
@@ -83,7 +108,6 @@ pub(crate) fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMe
         scale_exp = scale.k,
         "baseline: flattened input"
     );
-    let s = |l: f64| scale.length(l);
     let mut last = (0, 0);
     // Snap to a grid of pitch δ ≈ 1e-9 d; should the result still fail the gmsh-side
     // validity criteria, retry with a coarser grid (δ · 16, three times at most).
@@ -99,7 +123,13 @@ pub(crate) fn triangulate(drawing: &Drawing, params: &Params) -> Result<LinearMe
             pieces = snapped.planar.pieces.len(),
             "baseline: snap rounded"
         );
-        let mesh = mesh_planar(&snapped.planar, bx, scale, params, &r)?;
+        let sizing = Sizing {
+            size: graded,
+            l: s(field.l()),
+            l_min: s(r.l_min),
+            round_floor: s(SIDE_SPACING * field.report().min_size),
+        };
+        let mesh = mesh_planar(&snapped.planar, bx, scale, params, &sizing, s(r.eps_m))?;
         let defects = gmsh_defects(&mesh);
         if defects == (0, 0) {
             tracing::debug!(
@@ -134,14 +164,65 @@ const SNAP_REL: f64 = 1e-9;
 /// triangles), as gmsh-side validity checks use it.
 const VALIDITY_REL: f64 = 1e-12;
 
-/// Triangulate snapped input: constraints added without splitting, refinement,
-/// extraction with the exact CCW check and feature-edge recovery.
+/// Rounds of refinement to the size field at most: each halves, about, the
+/// triangles still too large for it, so this covers a field spanning 2^64.
+const MAX_SIZE_ROUNDS: usize = 64;
+
+/// A triangle is too large for the field where one of its edges is longer than
+/// this times h at the edge's midpoint (the optimizer's split bound).
+const SPLIT_ABOVE: f64 = 4.0 / 3.0;
+
+/// A point inserted for the size field keeps at least this times h at the point
+/// from every corner of the triangle it falls in (a fresh circumcentre of a
+/// Delaunay triangle is at its circumradius, above 2/3 h, from every vertex: this
+/// only keeps the points of one round apart).
+const MIN_SPACING: f64 = 0.5;
+
+/// The spacing of a point put inside a triangle to split its side that cannot
+/// flip ([`SIDE_OFFSET`] of the side from its midpoint): the triangle's other
+/// corner is at least a quarter of the side, a third of h, away from it when
+/// it does not encroach on the side, and spade would have split the side if
+/// it did.
+const SIDE_SPACING: f64 = 0.25;
+
+/// How far inside its triangle, in lengths of the side, a point that splits a
+/// side that cannot flip is put from the side's midpoint: within the triangle
+/// when the side's angles are above 21.8° (the refinement's minimum is 25°).
+const SIDE_OFFSET: f64 = 0.2;
+
+/// A point for the size field near a side that cannot flip (a constraint or
+/// the box) is kept at least this times the side's length from it when it
+/// encroaches on the side (lies in its diametral circle): spade's next
+/// refinement splits that side, and the point makes no sliver with its halves.
+const SIDE_CLEARANCE: f64 = 0.15;
+
+/// The size field as the refinement reads it, in scaled units.
+struct Sizing<'a> {
+    /// h at a scaled point, scaled; `None` where it is `l` everywhere.
+    size: Option<&'a dyn Fn(Point) -> f64>,
+    /// The largest size (spade's global area bound).
+    l: f64,
+    /// The smallest size (below its area spade refines no further).
+    l_min: f64,
+    /// Below the area of this size spade's refinements after the size rounds
+    /// leave triangles alone. The first refinement has brought them to the
+    /// angle already where it can: around a small input angle it stops, knowing
+    /// which vertices it put on which input segment; a later refinement no
+    /// longer knows, and would refine there down to `l_min` (a point of the
+    /// rounds never makes triangles this small).
+    round_floor: f64,
+}
+
+/// Triangulate snapped input: constraints added without splitting, refinement
+/// (angle and size field), extraction with the exact CCW check and feature-edge
+/// recovery.
 fn mesh_planar(
     planar: &PlanarInput,
     bx: kurbo::Rect,
     scale: Pow2Scale,
     params: &Params,
-    r: &crate::params::Resolved,
+    sizing: &Sizing<'_>,
+    merge_distance: f64,
 ) -> Result<LinearMesh> {
     // Box corners first (indices 0..4), then the input points.
     let corners = [
@@ -163,20 +244,28 @@ fn mesh_planar(
         );
         vertices.push(Point2::new(p.x, p.y));
     }
-    let s = |l: f64| scale.length(l);
     let (min_angle, max_vertices) = (params.cdt_min_angle_deg, params.max_vertices as usize);
-    let refinement = |n: usize| {
+    // After `n` vertices, ignoring triangles below the area of `floor`.
+    let refinement = |n: usize, floor: f64| {
         RefinementParameters::<f64>::new()
             .with_angle_limit(AngleLimit::from_deg(min_angle))
-            .with_max_allowed_area(equilateral_area(s(r.l)))
-            .with_min_required_area(equilateral_area(s(r.l_min)))
+            .with_max_allowed_area(equilateral_area(sizing.l))
+            .with_min_required_area(equilateral_area(floor))
             .with_max_additional_vertices(max_vertices.saturating_sub(n))
     };
+    let first = |n: usize| refinement(n, sizing.l_min);
+    let later = |n: usize| refinement(n, sizing.round_floor.max(sizing.l_min));
     // Snap rounding leaves no crossing, so constraints go in without splitting; a
-    // panic inside spade is still caught rather than taking the process down.
-    let built = std::panic::catch_unwind(|| {
-        build_cdt(&vertices, &planar.pieces, n_corners, false, &refinement)
-    });
+    // panic inside spade is still caught rather than taking the process down
+    // (unwind safe: the triangulation is dropped with the panic, and the size
+    // field is only read).
+    let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let (mut cdt, skipped) = build_cdt(&vertices, &planar.pieces, n_corners, false, &first)?;
+        if let Some(size) = sizing.size {
+            refine_to_size(&mut cdt, size, &later, max_vertices);
+        }
+        Ok::<_, Error>((cdt, skipped))
+    }));
     let Ok(built) = built else {
         return Err(Error::meshing(
             Stage::Baseline,
@@ -190,7 +279,7 @@ fn mesh_planar(
             "baseline: spade could not insert some snapped pieces; they are left out"
         );
     }
-    extract(&cdt, scale, planar, n_corners, s(r.eps_m), skipped == 0)
+    extract(&cdt, scale, planar, n_corners, merge_distance, skipped == 0)
 }
 
 /// The acceptance checker's two criteria on a linear mesh: used nodes sharing a
@@ -294,6 +383,149 @@ fn build_cdt(
         "baseline: refined"
     );
     Ok((cdt, skipped))
+}
+
+/// A triangle too large for the size field: where to put a point in it.
+struct Oversized {
+    /// Its worst edge's length over [`SPLIT_ABOVE`]·h at the edge's midpoint (> 1).
+    excess: f64,
+    /// The circumcentre, then a point for the worst edge: its midpoint, or for
+    /// a side that cannot flip, a point [`SIDE_OFFSET`] of its length inside
+    /// the triangle from its midpoint (which makes spade's next refinement
+    /// split the side exactly: a midpoint computed here need not lie on it);
+    /// each with its spacing. The first that [`can_insert`] allows is inserted.
+    sites: [(Point, f64); 2],
+}
+
+/// Refine `cdt` to the size field `size` (scaled units, at a scaled point) in
+/// rounds: every triangle with an edge longer than [`SPLIT_ABOVE`]·h at the
+/// edge's midpoint gets a point (its circumcentre, else one that splits that
+/// edge: see [`Oversized::sites`]; where [`can_insert`] allows, the largest
+/// excess first), then spade refines to the angle again (`refinement`). Stops when no triangle is too large or none of
+/// them can take a point, at the vertex budget, or after [`MAX_SIZE_ROUNDS`].
+fn refine_to_size(
+    cdt: &mut Cdt,
+    size: &dyn Fn(Point) -> f64,
+    refinement: &dyn Fn(usize) -> RefinementParameters<f64>,
+    max_vertices: usize,
+) {
+    let start = cdt.num_vertices();
+    for round in 0..MAX_SIZE_ROUNDS {
+        let mut oversized = oversized_faces(cdt, size);
+        if oversized.is_empty() {
+            break;
+        }
+        oversized.sort_by(|a, b| b.excess.total_cmp(&a.excess));
+        let mut inserted = 0usize;
+        for o in &oversized {
+            if cdt.num_vertices() >= max_vertices {
+                break;
+            }
+            let site = o
+                .sites
+                .into_iter()
+                .find(|&(p, spacing)| can_insert(cdt, p, spacing * size(p)));
+            if let Some((p, _)) = site {
+                if cdt.insert(Point2::new(p.x, p.y)).is_ok() {
+                    inserted += 1;
+                }
+            }
+        }
+        tracing::debug!(
+            round,
+            oversized = oversized.len(),
+            inserted,
+            vertices = cdt.num_vertices(),
+            "baseline: size round"
+        );
+        if inserted == 0 {
+            break;
+        }
+        let result = cdt.refine(refinement(cdt.num_vertices()));
+        if !result.refinement_complete || cdt.num_vertices() >= max_vertices {
+            tracing::info!(
+                vertices = cdt.num_vertices(),
+                "baseline: vertex budget reached, the mesh is coarser than the size field asks"
+            );
+            break;
+        }
+    }
+    tracing::debug!(
+        vertices = cdt.num_vertices() - start,
+        "baseline: refined to the size field"
+    );
+}
+
+/// The triangles of `cdt` with an edge longer than [`SPLIT_ABOVE`]·h at the
+/// edge's midpoint.
+fn oversized_faces(cdt: &Cdt, size: &dyn Fn(Point) -> f64) -> Vec<Oversized> {
+    let pt = |p: Point2<f64>| Point::new(p.x, p.y);
+    let mut out = Vec::new();
+    for f in cdt.inner_faces() {
+        let mut worst: Option<(f64, (Point, f64))> = None;
+        // The face is on the left of its edges (counter-clockwise).
+        for e in f.adjacent_edges() {
+            let (a, b) = (pt(e.from().position()), pt(e.to().position()));
+            let mid = a.midpoint(b);
+            let excess = a.distance(b) / (SPLIT_ABOVE * size(mid));
+            if excess > 1.0 && worst.is_none_or(|(w, _)| excess > w) {
+                let site = if is_fixed(e) {
+                    (mid + SIDE_OFFSET * (b - a).turn_90(), SIDE_SPACING)
+                } else {
+                    (mid, MIN_SPACING)
+                };
+                worst = Some((excess, site));
+            }
+        }
+        if let Some((excess, site)) = worst {
+            out.push(Oversized {
+                excess,
+                sites: [(pt(f.circumcenter()), MIN_SPACING), site],
+            });
+        }
+    }
+    out
+}
+
+/// Whether an edge cannot flip: a constraint or a side of the box.
+fn is_fixed(e: CdtEdgeHandle<'_>) -> bool {
+    e.is_constraint_edge() || e.as_undirected().is_part_of_convex_hull()
+}
+
+/// Whether a point for the size field may go at `p`: inside the triangulation
+/// (not on a vertex), at least `spacing` from the corners of the
+/// triangle or edge it falls on, and, inside a triangle, clear of each side of
+/// it that cannot flip (a constraint or the box): outside its diametral circle,
+/// or at least [`SIDE_CLEARANCE`] times its length from it (spade's next
+/// refinement then splits the side; closer, the point would leave slivers). A
+/// point exactly on such a side splits it and is allowed.
+fn can_insert(cdt: &Cdt, p: Point, spacing: f64) -> bool {
+    if !p.is_finite() {
+        return false;
+    }
+    let pt = |q: Point2<f64>| Point::new(q.x, q.y);
+    let far_from = |q: Point| q.distance(p) >= spacing;
+    match cdt.locate(Point2::new(p.x, p.y)) {
+        PositionInTriangulation::OnEdge(e) => {
+            let e = cdt.directed_edge(e);
+            far_from(pt(e.from().position())) && far_from(pt(e.to().position()))
+        }
+        PositionInTriangulation::OnFace(f) => {
+            let f = cdt.face(f);
+            f.vertices().iter().all(|v| far_from(pt(v.position())))
+                && f.adjacent_edges().iter().all(|&e| {
+                    let (a, b) = (pt(e.from().position()), pt(e.to().position()));
+                    // Inside the diametral circle: the angle at p is obtuse.
+                    let encroaches = (a - p).dot(b - p) <= 0.0;
+                    let clear = crate::mesh::point_segment_distance(p, kurbo::Line::new(a, b))
+                        >= SIDE_CLEARANCE * a.distance(b);
+                    !is_fixed(e) || !encroaches || clear
+                })
+        }
+        PositionInTriangulation::OnVertex(_)
+        | PositionInTriangulation::OutsideOfConvexHull(_)
+        | PositionInTriangulation::NoTriangulation => false,
+    }
 }
 
 /// Turn the refined triangulation back into user units and check it.

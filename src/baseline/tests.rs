@@ -1,4 +1,5 @@
-//! Tests of the CDT baseline through [`triangulate`].
+//! Tests of the CDT baseline through [`triangulate`], with the size field the
+//! pipeline would build ([`baseline`]).
 
 use super::*;
 use crate::FemMesh;
@@ -54,6 +55,31 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
         precision: Default::default(),
         paint: Default::default(),
     }
+}
+
+/// The size field of `d` and `params` as the pipeline builds it (each filled
+/// shape a region named as `--regions shape` names it; no time limit).
+fn field(d: &Drawing, params: &Params) -> SizeField {
+    let r = params.resolve(d.diagonal());
+    let names: Vec<Option<String>> = d
+        .shapes
+        .iter()
+        .map(|s| s.filled.then(|| s.name()))
+        .collect();
+    SizeField::build(&crate::sizing::FieldInput {
+        drawing: d,
+        resolved: &r,
+        spec: &params.size,
+        region_names: &names,
+        bounds: input::padded_box(d, r.padding),
+        deadline: crate::budget::Deadline::NONE,
+    })
+    .expect("the tests' size fields build")
+}
+
+/// [`triangulate`] with the size field of `params`.
+fn baseline(d: &Drawing, params: &Params) -> Result<LinearMesh> {
+    triangulate(d, params, &field(d, params))
 }
 
 fn line(a: (f64, f64), b: (f64, f64)) -> FeatureGeom {
@@ -198,7 +224,7 @@ fn feature_length(mesh: &LinearMesh, shape: u32) -> f64 {
 #[test]
 fn unit_square_meets_the_angle_and_conforms() {
     let d = drawing(&square(1.0));
-    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &Params::DEFAULT).unwrap();
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
     // The four sides are covered exactly by feature edges.
@@ -222,7 +248,7 @@ fn crossing_lines_are_split_at_the_crossing() {
         (0, line((0.0, 0.0), (1.0, 1.0))),
         (1, line((0.0, 1.0), (1.0, 0.0))),
     ]);
-    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &Params::DEFAULT).unwrap();
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
     let centre = Point::new(0.5, 0.5);
@@ -246,7 +272,7 @@ fn an_edge_shared_by_two_shapes_is_listed_for_each() {
     let mut f = square(1.0);
     f.push((1, line((1.0, 1.0), (1.0, 0.0)))); // shape 1 repeats the right side, reversed
     let d = drawing(&f);
-    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &Params::DEFAULT).unwrap();
     check(&d, &Params::DEFAULT, &mesh);
     assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12);
     assert!((feature_length(&mesh, 1) - 1.0).abs() < 1e-12);
@@ -266,7 +292,7 @@ fn an_edge_shared_by_two_shapes_is_listed_for_each() {
 #[test]
 fn a_single_point_gets_a_box() {
     let d = drawing(&[(0, FeatureGeom::Point(Point::new(3.0, -2.0)))]);
-    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &Params::DEFAULT).unwrap();
     let q = check(&d, &Params::DEFAULT, &mesh);
     assert!(mesh.edges.is_empty());
     assert!(q.min_angle_deg >= 25.0, "{q:?}");
@@ -294,7 +320,7 @@ fn circle(r: f64) -> Vec<(u32, FeatureGeom)> {
 fn a_circle_of_cubics_is_flattened_within_mu() {
     let d = drawing(&circle(1.0));
     let params = Params::DEFAULT;
-    let mesh = triangulate(&d, &params).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
     let quality = check(&d, &params, &mesh);
     assert!(quality.min_angle_deg >= 25.0, "{quality:?}");
     let mu = params.resolve(d.diagonal()).mu;
@@ -320,7 +346,7 @@ fn tiny_and_huge_coordinates() {
         f.push((1, line((0.0, scale), (scale, 0.0))));
         f.push((2, FeatureGeom::Point(Point::new(0.3 * scale, 0.6 * scale))));
         let d = drawing(&f);
-        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        let mesh = baseline(&d, &Params::DEFAULT).unwrap();
         let q = check(&d, &Params::DEFAULT, &mesh);
         assert!(q.min_angle_deg >= 20.0, "{scale}: {q:?}");
         // Snap rounding moves points by up to δ ≤ 1e-9 d.
@@ -341,7 +367,7 @@ fn tiny_and_huge_coordinates() {
             })
             .collect();
         let d = drawing(&f);
-        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        let mesh = baseline(&d, &Params::DEFAULT).unwrap();
         check(&d, &Params::DEFAULT, &mesh);
     }
 }
@@ -350,7 +376,7 @@ fn tiny_and_huge_coordinates() {
 fn the_vertex_budget_stops_refinement_with_a_valid_mesh() {
     let d = drawing(&circle(1.0));
     let params = Params::DEFAULT.with_max_vertices(200);
-    let mesh = triangulate(&d, &params).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
     check(&d, &params, &mesh);
     assert!(mesh.vertices.len() <= 200, "{}", mesh.vertices.len());
 }
@@ -421,7 +447,29 @@ proptest! {
         let d = drawing(&features);
         // A smaller budget keeps the test fast; refinement must stop cleanly at it.
         let params = Params::DEFAULT.with_max_vertices(5_000);
-        let mesh = triangulate(&d, &params).unwrap();
+        let mesh = baseline(&d, &params).unwrap();
+        check(&d, &params, &mesh);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 48,
+        failure_persistence: None,
+        rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+        ..ProptestConfig::default()
+    })]
+
+    /// The same soups with a size field ten times finer than l over a quarter
+    /// of the drawing: the size rounds keep every promise too.
+    #[test]
+    fn soups_mesh_to_a_size_field(features in soup()) {
+        let d = drawing(&features);
+        let b = d.bbox;
+        let corners = [b.x0, b.y0, b.x0 + 0.5 * b.width(), b.y0 + 0.5 * b.height()];
+        let spec = crate::SizeSpec::DEFAULT.with_box(corners, crate::Length::Rel(0.005));
+        let params = Params::DEFAULT.with_max_vertices(5_000).with_size(spec);
+        let mesh = baseline(&d, &params).unwrap();
         check(&d, &params, &mesh);
     }
 }
@@ -445,7 +493,7 @@ fn report_default_parameters() {
     for (name, f) in cases {
         let d = drawing(&f);
         let t = std::time::Instant::now();
-        let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+        let mesh = baseline(&d, &Params::DEFAULT).unwrap();
         let dt = t.elapsed().as_secs_f64();
         let q = check(&d, &Params::DEFAULT, &mesh);
         eprintln!(
@@ -477,7 +525,7 @@ fn report_default_parameters() {
         .collect();
     let d = drawing(&f);
     let t = std::time::Instant::now();
-    let mesh = triangulate(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &Params::DEFAULT).unwrap();
     let dt = t.elapsed().as_secs_f64();
     let q = check(&d, &Params::DEFAULT, &mesh);
     eprintln!(
@@ -517,7 +565,7 @@ fn regression_spade_split_assertion() {
     ];
     let d = drawing(&f);
     let params = Params::DEFAULT.with_max_vertices(5_000);
-    let mesh = triangulate(&d, &params).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
     check(&d, &params, &mesh);
 }
 
@@ -550,7 +598,7 @@ fn regression_near_collinear_overlap() {
     ];
     let d = drawing(&f);
     let params = Params::DEFAULT.with_max_vertices(5_000);
-    let mesh = triangulate(&d, &params).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
     check(&d, &params, &mesh);
 }
 
@@ -605,7 +653,7 @@ fn snap_rounding_cases_pass_the_checker() {
     ];
     for (name, f, lengths) in cases {
         let d = drawing(&f);
-        let mesh = triangulate(&d, &Params::DEFAULT).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let mesh = baseline(&d, &Params::DEFAULT).unwrap_or_else(|e| panic!("{name}: {e}"));
         check(&d, &Params::DEFAULT, &mesh);
         for (s, &len) in lengths.iter().enumerate() {
             let got = feature_length(&mesh, s as u32);
@@ -630,6 +678,142 @@ fn a_fan_of_nearly_coincident_segments_passes_the_checker() {
     }
     let d = drawing(&f);
     let params = Params::DEFAULT.with_max_vertices(20_000);
-    let mesh = triangulate(&d, &params).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
     check(&d, &params, &mesh);
+}
+
+/// Every edge of `mesh`'s triangles once, as its length over the size field at
+/// its midpoint.
+fn size_ratios(mesh: &LinearMesh, field: &SizeField) -> Vec<(Point, f64)> {
+    let mut edges: Vec<(u32, u32)> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+        .into_iter()
+        .map(|(a, b)| {
+            let (a, b) = (mesh.vertices[a as usize], mesh.vertices[b as usize]);
+            let mid = a.midpoint(b);
+            (mid, a.distance(b) / field.at(mid))
+        })
+        .collect()
+}
+
+#[test]
+fn a_size_box_refines_inside_it_and_no_edge_passes_the_split_bound() {
+    let d = drawing(&square(1.0));
+    // h = d/200 on the left half of the square, l = d/20 elsewhere (graded).
+    let spec = crate::SizeSpec::DEFAULT.with_box([0.0, 0.0, 0.5, 1.0], crate::Length::Rel(0.005));
+    let params = Params::DEFAULT.with_size(spec);
+    let f = field(&d, &params);
+    assert!(!f.is_uniform());
+    let plain = baseline(&d, &Params::DEFAULT).unwrap();
+    let mesh = baseline(&d, &params).unwrap();
+    let q = check(&d, &params, &mesh);
+    assert!(q.min_angle_deg >= 25.0, "{q:?}");
+    // The four sides are still covered exactly by feature edges.
+    assert!((feature_length(&mesh, 0) - 4.0).abs() < 1e-12);
+    let ratios = size_ratios(&mesh, &f);
+    let worst = ratios.iter().map(|r| r.1).fold(0.0, f64::max);
+    assert!(worst <= 4.0 / 3.0 + 1e-9, "an edge of {worst} h");
+    // Finer in the box: the ideal count there is its area over that of an
+    // equilateral triangle of side h.
+    let h = 0.005 * d.diagonal();
+    let in_box = |m: &LinearMesh| {
+        m.triangles
+            .iter()
+            .filter(|t| {
+                let c = t.map(|i| m.vertices[i as usize]);
+                (c[0].x + c[1].x + c[2].x) / 3.0 < 0.45
+            })
+            .count() as f64
+    };
+    let ideal = 0.45 / equilateral_area(h);
+    let (before, after) = (in_box(&plain), in_box(&mesh));
+    assert!(after > 10.0 * before, "{before} -> {after}");
+    assert!(
+        (0.7 * ideal..=2.5 * ideal).contains(&after),
+        "{after} vs {ideal}"
+    );
+    let matched = ratios
+        .iter()
+        .filter(|r| (0.8..=4.0 / 3.0).contains(&r.1))
+        .count();
+    assert!(
+        matched as f64 >= 0.5 * ratios.len() as f64,
+        "{matched} of {}",
+        ratios.len()
+    );
+}
+
+#[test]
+fn a_graded_formula_grades_the_mesh() {
+    let d = drawing(&square(1.0));
+    // h from d/100 at x = 0 to d/25 at x = 1.
+    let dd = d.diagonal();
+    let expr = format!("{} * (1 + 3 * x)", dd / 100.0);
+    let params = Params::DEFAULT.with_size(crate::SizeSpec::DEFAULT.with_expr(expr));
+    let f = field(&d, &params);
+    let mesh = baseline(&d, &params).unwrap();
+    check(&d, &params, &mesh);
+    let ratios = size_ratios(&mesh, &f);
+    let worst = ratios.iter().map(|r| r.1).fold(0.0, f64::max);
+    assert!(worst <= 4.0 / 3.0 + 1e-9, "an edge of {worst} h");
+    // Mean edge length in the left and right tenths: about 4 times apart.
+    let mean_len = |x0: f64, x1: f64| {
+        let sel: Vec<f64> = ratios
+            .iter()
+            .filter(|(m, _)| (x0..x1).contains(&m.x))
+            .map(|(m, r)| r * f.at(*m))
+            .collect();
+        sel.iter().sum::<f64>() / sel.len() as f64
+    };
+    let (left, right) = (mean_len(0.0, 0.1), mean_len(0.9, 1.0));
+    assert!((2.5..6.0).contains(&(right / left)), "{left} .. {right}");
+}
+
+#[test]
+fn outlines_are_split_to_the_size_field() {
+    // A line of length 1 with h = 0.01 at its start, growing to 0.1 at its end:
+    // spade splits it (as a constraint, knowing its pieces), the size rounds make
+    // it split every piece longer than 4/3 h, so the pieces grow with h.
+    let d = drawing(&[(0, line((0.0, 0.0), (1.0, 0.0)))]);
+    let expr = "0.01 + 0.09 * x";
+    let params = Params::DEFAULT
+        .with_l(crate::Length::Abs(0.1))
+        .with_size(crate::SizeSpec::DEFAULT.with_expr(expr));
+    let f = field(&d, &params);
+    let mesh = baseline(&d, &params).unwrap();
+    check(&d, &params, &mesh);
+    let mut pieces: Vec<(f64, f64)> = mesh
+        .edges
+        .iter()
+        .map(|e| {
+            let (a, b) = (
+                mesh.vertices[e.v[0] as usize],
+                mesh.vertices[e.v[1] as usize],
+            );
+            (a.x.min(b.x), a.distance(b))
+        })
+        .collect();
+    pieces.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = pieces.iter().map(|p| p.1).sum();
+    assert!((total - 1.0).abs() < 1e-12, "{total}");
+    for &(x, len) in &pieces {
+        let h = f.at(Point::new(x + 0.5 * len, 0.0));
+        assert!(len <= 4.0 / 3.0 * h, "a piece of {len} at {x}, h {h}");
+    }
+    // ∫_0^1 dx / (0.01 + 0.09 x) = ln(10) / 0.09 ≈ 25.6 pieces of h; no piece
+    // longer than 4/3 h takes at least 20.
+    let n = pieces.len();
+    assert!((20..=60).contains(&n), "{n} pieces");
+    let mean = |p: &[(f64, f64)]| p.iter().map(|q| q.1).sum::<f64>() / p.len() as f64;
+    assert!(
+        mean(&pieces[n - 5..]) > 4.0 * mean(&pieces[..5]),
+        "{pieces:?}"
+    );
 }

@@ -207,7 +207,8 @@ pub struct Report {
     /// dropped any elements), equal to `quality.min_jacobian_ratio`.
     pub curve: Option<CurveStats>,
     /// The size field: the fields applied, the grading, and how well the
-    /// mesh's edges match it (`--mesher triwild`).
+    /// mesh's edges match it (either mesher; always present since the CDT
+    /// baseline reads the field too).
     pub sizing: Option<SizingReport>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
@@ -394,31 +395,30 @@ fn mesh_stages(
     let mut optimize = None;
     let mut warnings = drawing.warnings.clone();
     let mut curve = None;
-    let mut field: Option<SizeField> = None;
     let mut refined: Vec<kurbo::Point> = Vec::new();
+    // One size field for either mesher, built before any meshing.
+    let names = region_names(drawing, regions);
+    let field = times.time("sizing", || {
+        SizeField::build(&FieldInput {
+            drawing,
+            resolved: &resolved,
+            spec: &params.size,
+            region_names: &names,
+            bounds: padded_box(drawing, resolved.padding),
+            deadline,
+        })
+    })?;
     let delivered = match params.mesher {
         Mesher::Cdt => {
             check_deadline(&deadline, Stage::Baseline)?;
-            let linear =
-                times.time("baseline", || crate::baseline::triangulate(drawing, params))?;
+            let linear = times.time("baseline", || {
+                crate::baseline::triangulate(drawing, params, &field)
+            })?;
             check_deadline(&deadline, Stage::Baseline)?;
             Delivered::Linear(linear)
         }
         Mesher::TriWild => {
-            let names = region_names(drawing, regions);
-            let bounds = padded_box(drawing, resolved.padding);
-            let built = times.time("sizing", || {
-                SizeField::build(&FieldInput {
-                    drawing,
-                    resolved: &resolved,
-                    spec: &params.size,
-                    region_names: &names,
-                    bounds,
-                    deadline,
-                })
-            })?;
-            field = Some(built);
-            let field = field.as_ref().expect("internal: just built");
+            let field = &field;
             check_deadline(&deadline, Stage::Features)?;
             let fs = times.time("features", || {
                 FeatureSet::build_sized(drawing, &resolved, &deadline, &|p| field.at(p))
@@ -506,13 +506,9 @@ fn mesh_stages(
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
     let quality = times.time("quality", || Quality::of(&mesh));
-    let sizing = field.as_ref().map(|f| {
-        let mut report = f.report().clone();
-        report.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, f, &refined)));
-        report
-    });
-    let field = field
-        .unwrap_or_else(|| SizeField::uniform(resolved.l, padded_box(drawing, resolved.padding)));
+    let mut sizing = field.report().clone();
+    sizing.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, &field, &refined)));
+    let sizing = Some(sizing);
     if let Some(c) = &mut curve {
         c.min_jacobian_ratio = quality.min_jacobian_ratio;
     }
