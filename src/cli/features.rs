@@ -49,7 +49,10 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
             errln!("warning: {}: {w}", input.display());
         }
     }
-    let analysis = FeatureAnalysis::new(&drawing, &params);
+    let analysis = match FeatureAnalysis::new(&drawing, &params) {
+        Ok(a) => a,
+        Err(e) => return fail(input, e),
+    };
     let output = args
         .output
         .clone()

@@ -472,10 +472,13 @@ fn ms(since: Instant) -> f64 {
 
 impl FeatureSet {
     /// Preprocess the features of `drawing` with the absolute parameters `params`
-    /// (`Params::resolve(drawing.diagonal())`).
+    /// (`Params::resolve(drawing.diagonal())`) and the uniform size `l` (the
+    /// tests' shorthand: the pipeline resamples against its size field, see
+    /// [`FeatureSet::build_sized`]).
     ///
     /// Never fails and always terminates: every refinement loop has a budget; what exceeds
     /// it is made secondary.
+    #[cfg(test)]
     pub(crate) fn build(drawing: &Drawing, params: &Resolved) -> FeatureSet {
         Self::build_within(drawing, params, &Deadline::NONE)
     }
@@ -500,6 +503,7 @@ impl FeatureSet {
 
     /// [`FeatureSet::build`] that gives up once `deadline` has passed: the
     /// set is then incomplete (the caller checks the deadline and discards it).
+    #[cfg(test)]
     pub(crate) fn build_within(
         drawing: &Drawing,
         params: &Resolved,
@@ -508,8 +512,11 @@ impl FeatureSet {
         Self::build_sized(drawing, params, deadline, &|_| params.l)
     }
 
-    /// [`FeatureSet::build_within`] with the size field `size` (output units,
-    /// at most `params.l`): curves are resampled into sections no longer than
+    /// Preprocess the features of `drawing` against the size field `size`
+    /// (output units, at most `params.l`), giving up once `deadline` has passed
+    /// (the set is then incomplete: the caller checks the deadline and discards
+    /// it). Never fails and always terminates: every refinement loop has a
+    /// budget; what exceeds it is made secondary. Curves are resampled into sections no longer than
     /// the size along them.
     pub(crate) fn build_sized(
         drawing: &Drawing,

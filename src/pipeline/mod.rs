@@ -249,11 +249,18 @@ pub struct FeatureAnalysis {
 }
 
 impl FeatureAnalysis {
-    /// Analyse `drawing` with `params`' lengths.
-    pub fn new(drawing: &Drawing, params: &Params) -> FeatureAnalysis {
-        FeatureAnalysis {
-            set: FeatureSet::build(drawing, &params.resolve(drawing.diagonal())),
-        }
+    /// Analyse `drawing` with `params`' lengths, the features resampled against
+    /// the size field the mesh would use (regions named as by default).
+    ///
+    /// # Errors
+    /// [`crate::ErrorKind::BadInput`] for a size field naming no region, a
+    /// formula that does not parse, a background mesh that cannot be read.
+    pub fn new(drawing: &Drawing, params: &Params) -> Result<FeatureAnalysis> {
+        let resolved = params.resolve(drawing.diagonal());
+        let field = default_field(drawing, params, Deadline::NONE)?;
+        Ok(FeatureAnalysis {
+            set: FeatureSet::build_sized(drawing, &resolved, &Deadline::NONE, &|p| field.at(p)),
+        })
     }
 
     /// The feature set as JSON (docs/features-json.md describes the format).
@@ -672,13 +679,12 @@ pub(crate) fn bsp_stage(
     Ok((mesh, fs, ctx))
 }
 
-/// The size field of `drawing` as the pipeline builds it (default region names,
-/// no time limit), for the stage functions of the tests.
+/// The size field of `drawing` as the pipeline builds it with the default
+/// region names (what `triwild features` and the tests' stage functions use).
 ///
 /// # Errors
 /// As [`SizeField::build`].
-#[cfg(test)]
-fn test_field(drawing: &Drawing, params: &Params) -> Result<SizeField> {
+fn default_field(drawing: &Drawing, params: &Params, deadline: Deadline) -> Result<SizeField> {
     let resolved = params.resolve(drawing.diagonal());
     SizeField::build(&FieldInput {
         drawing,
@@ -686,8 +692,17 @@ fn test_field(drawing: &Drawing, params: &Params) -> Result<SizeField> {
         spec: &params.size,
         region_names: &region_names(drawing, &RegionOptions::DEFAULT),
         bounds: padded_box(drawing, resolved.padding),
-        deadline: Deadline::NONE,
+        deadline,
     })
+}
+
+/// [`default_field`] with no time limit, for the stage functions of the tests.
+///
+/// # Errors
+/// As [`SizeField::build`].
+#[cfg(test)]
+fn test_field(drawing: &Drawing, params: &Params) -> Result<SizeField> {
+    default_field(drawing, params, Deadline::NONE)
 }
 
 /// The features of `drawing` as the pipeline builds them: resampled against

@@ -67,10 +67,10 @@ impl SizeField {
     /// Build the field (see the module doc).
     ///
     /// # Errors
-    /// [`Error::InvalidParams`] for a field that names no region, a formula that
+    /// [`crate::Error::InvalidParams`] for a field that names no region, a formula that
     /// does not parse or gives a non-finite value, a background mesh that cannot
     /// be read or does not cover the drawing, a function that fails or gives a
-    /// non-finite value (each naming the point); [`Error::TimeLimit`] past the deadline.
+    /// non-finite value (each naming the point); [`crate::Error::TimeLimit`] past the deadline.
     pub(crate) fn build(input: &FieldInput<'_>) -> Result<SizeField> {
         let r = input.resolved;
         let l = r.l;
