@@ -1,0 +1,318 @@
+//! The collapse pass: rounds of shortest-first collapses of the edges below
+//! their target, refusals remembered until the neighbourhood changes, the
+//! collapses planned ahead in parallel.
+
+use super::queue::{PlanAhead, Popped, ShortestFirst, sort_unstable};
+use super::sizing::lengths_kept;
+use super::{
+    COLLAPSE_BUDGET_EXTRA, COLLAPSE_BUDGET_PER_EDGE, COLLAPSE_ROUNDS, FailedCollapse, PLAN_AHEAD,
+    STAGE_MIN, STAGE_PAR_MIN, Schedule,
+};
+use crate::mesh::{EdgeKey, TriMesh, VertexId};
+use crate::ops::{CollapsePlan, Outcome, Reject, collapse_refusal, try_collapse_planned};
+use rayon::prelude::*;
+
+/// One direction of a collapse planned ([`Schedule::plan_collapse`]).
+enum CollapseDirection {
+    /// Its refusal by the role rules is remembered, and v's faces are
+    /// unchanged since ([`Schedule::role_refused`]): the same refusal,
+    /// without planning it again.
+    Remembered(Reject),
+    /// The length rule refused it.
+    Length,
+    /// [`CollapsePlan::new`] on v's ring, with [`CollapsePlan::verdict`]
+    /// (boxed: plans are moved through the window and the round).
+    Plan(Box<PlannedCollapse>),
+    /// The plan or its verdict refused it (as `try_collapse_planned` would,
+    /// with whether by the role rules).
+    Refused(Reject, bool),
+}
+
+/// [`CollapseDirection::Plan`]'s plan and verdict.
+type PlannedCollapse = (
+    Result<CollapsePlan, (Reject, bool)>,
+    Option<Result<(), Reject>>,
+);
+
+/// A collapse of an edge planned ahead at clock `at`, both directions in the
+/// collapse round's order: it stands while neither end's stamp has passed
+/// `at` (no face around either end changed, no neighbour of either moved; the
+/// plans read nothing else that a pass changes, the reasoning of
+/// [`Schedule::failed_collapse`]).
+struct CollapseAhead {
+    at: u64,
+    /// `None`: the round skips the edge (an end is dead, its length changed
+    /// or is long enough, or its refusal is remembered).
+    directions: Option<[CollapseDirection; 2]>,
+}
+
+impl Schedule<'_> {
+    /// Collapse edges shorter than `factor` times their mean target, shortest first.
+    pub(crate) fn collapse_pass(&mut self, factor: f64) -> u64 {
+        // Refused collapses are retried (in a new round) once a collapse has
+        // changed their neighbourhood, as long as rounds make progress.
+        let mut total = 0;
+        let mut since = None;
+        for _ in 0..COLLAPSE_ROUNDS {
+            let start = self.clock;
+            let n = self.collapse_round(factor, since);
+            total += n;
+            if n == 0 {
+                break;
+            }
+            since = Some(start);
+        }
+        total
+    }
+
+    /// One round of [`Self::collapse_pass`]: every short edge once, shortest
+    /// first. With `since`, only the edges at a vertex whose faces changed
+    /// after that clock: a refused collapse elsewhere would be refused again
+    /// (its memo in `failed_collapse` still holds, and a collapse pass changes
+    /// no length or target), so the round skips the scan of the whole mesh.
+    fn collapse_round(&mut self, factor: f64, since: Option<u64>) -> u64 {
+        // Shortest first, by the bits of the (non-negative) length, which
+        // order like the lengths: the short edges sorted once, and a min-heap
+        // for the edges queued again during the round, popped together in
+        // one order.
+        let mut queue = ShortestFirst::default();
+        let edges: Vec<EdgeKey> = match since {
+            None => self.mesh.edge_list(),
+            Some(at) => {
+                // The edges at the vertices stamped since `at`, found in
+                // parallel and sorted (the queue's order does not depend on
+                // how they were found).
+                let mesh: &TriMesh = self.mesh;
+                let touched: Vec<VertexId> =
+                    mesh.vertices().filter(|&v| self.stamp_of(v) > at).collect();
+                let mut edges: Vec<EdgeKey> = touched
+                    .into_par_iter()
+                    .fold(Vec::new, |mut edges, v| {
+                        let ring = crate::mesh::ScratchRing::of(mesh, v);
+                        edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
+                        edges
+                    })
+                    .reduce(Vec::new, |mut a, mut b| {
+                        a.append(&mut b);
+                        a
+                    });
+                sort_unstable(&mut edges);
+                edges.dedup();
+                edges
+            }
+        };
+        queue.sorted = edges
+            .into_par_iter()
+            .filter_map(|k| {
+                let len = self.mesh.distance(k.lo, k.hi);
+                (len < factor * self.edge_target(k)).then_some((len.to_bits(), k))
+            })
+            .collect();
+        queue.sort();
+        let mut budget = COLLAPSE_BUDGET_PER_EDGE * queue.sorted.len() + COLLAPSE_BUDGET_EXTRA;
+        let mut applied = 0;
+        // With more than one thread, the next `PLAN_AHEAD` edges of the sorted
+        // queue are planned at once in parallel; a plan is used below only
+        // while neither end has changed since, so the round does exactly what
+        // it does planning each collapse when it gets to it.
+        // The edges queued again are planned ahead too, a batch of the
+        // smallest at a time (`ShortestFirst::stage`), under the same rule.
+        let mut ahead = PlanAhead::new();
+        loop {
+            if ahead.parallel && queue.again.len() >= STAGE_MIN && queue.next_is_unstaged() {
+                let batch = queue.stage(PLAN_AHEAD);
+                let this = &*self;
+                let plan = |&(b, e): &(u64, EdgeKey)| this.plan_collapse(b, e, factor);
+                let plans: Vec<CollapseAhead> = if batch.len() >= STAGE_PAR_MIN {
+                    batch.par_iter().map(plan).collect()
+                } else {
+                    batch.iter().map(plan).collect()
+                };
+                queue.push_staged(
+                    batch
+                        .into_iter()
+                        .zip(plans)
+                        .map(|((b, e), plan)| (b, e, Some(plan))),
+                );
+            }
+            let Some((bits, k, popped)) = queue.pop_indexed() else {
+                break;
+            };
+            if budget == 0 {
+                break;
+            }
+            budget -= 1;
+            let this = &*self;
+            let from_sorted = matches!(popped, Popped::Sorted(_));
+            let planned = match popped {
+                Popped::Sorted(i) => ahead.take(i, &queue.sorted, |&(b, e)| {
+                    Some(this.plan_collapse(b, e, factor))
+                }),
+                Popped::Staged(plan) => {
+                    #[cfg(test)]
+                    {
+                        self.staged_tally += usize::from(plan.is_some());
+                    }
+                    plan
+                }
+                Popped::Again => None,
+            }
+            .filter(|a: &CollapseAhead| {
+                // (An edge queued twice may have been refused since its plan;
+                // a plan that skips the edge needs no look: with both ends
+                // unchanged since, such a refusal makes the round skip it too.
+                // Nor does an edge popped from `sorted`: `push_again` queued
+                // no copy of it while it was ahead there, so this is its
+                // first pop since its plan. A hash lookup per pop saved.)
+                let refused_since =
+                    |s: &Self| matches!(s.failed_collapse.get(&k), Some(f) if f.at >= a.at);
+                debug_assert!(
+                    !(from_sorted && a.directions.is_some() && refused_since(self)),
+                    "an edge popped from `sorted` refused since its plan"
+                );
+                self.fresh(a.at, &[k.lo, k.hi])
+                    && (a.directions.is_none() || from_sorted || !refused_since(self))
+            });
+            // A plan that stands already made the round's checks; without
+            // one, the edge is planned now, by the same function (the checks,
+            // then the plan and its verdict: a refusal only reads the mesh,
+            // and a decided collapse commits without a journal). Both
+            // directions are planned on the mesh as it is: the first changes
+            // nothing unless it is applied, and then the second is not tried.
+            let planned = planned.unwrap_or_else(|| self.plan_collapse(bits, k, factor));
+            let Some(directions) = planned.directions else {
+                continue;
+            };
+            let mut applied_now = false;
+            let mut tried = false;
+            let mut by_length = false;
+            let ends = [(k.lo, k.hi), (k.hi, k.lo)];
+            for ((u, v), direction) in ends.into_iter().zip(directions) {
+                let (out, by_role) = match direction {
+                    CollapseDirection::Remembered(reason) => {
+                        tried = true;
+                        self.stats.collapse.record(&Outcome::Rejected(reason));
+                        continue;
+                    }
+                    CollapseDirection::Length => {
+                        by_length = true;
+                        continue;
+                    }
+                    CollapseDirection::Plan(planned) => {
+                        tried = true;
+                        let (plan, verdict) = *planned;
+                        try_collapse_planned(self.mesh, self.ctx, plan, verdict)
+                    }
+                    CollapseDirection::Refused(r, by_role) => {
+                        tried = true;
+                        (Outcome::Rejected(r), by_role)
+                    }
+                };
+                self.touch(&out, true);
+                if let Outcome::Rejected(reason) = out
+                    && by_role
+                {
+                    self.role_refused.insert((u, v), (self.clock, reason));
+                }
+                if self.stats.collapse.record(&out) {
+                    applied_now = true;
+                    break;
+                }
+            }
+            if !tried {
+                self.stats
+                    .collapse
+                    .record(&Outcome::Rejected(Reject::EdgeLength));
+            }
+            if !applied_now {
+                let at = self.clock;
+                self.failed_collapse
+                    .insert(k, FailedCollapse { at, by_length });
+            }
+            if applied_now {
+                applied += 1;
+                let u = if self.mesh.is_vertex_alive(k.lo) {
+                    k.lo
+                } else {
+                    k.hi
+                };
+                let ring = crate::mesh::ScratchRing::of(self.mesh, u);
+                for &w in &ring.neighbours {
+                    let e = EdgeKey::new(u, w);
+                    let len = self.mesh.distance(e.lo, e.hi);
+                    if len < factor * self.edge_target(e) {
+                        queue.push_again((len.to_bits(), e));
+                    }
+                }
+            }
+        }
+        applied
+    }
+
+    /// Plan the collapse of `k` (popped with `bits`) on the mesh as it is,
+    /// ahead or when popped without a plan that stands: what the collapse
+    /// round would do with it now, short of applying it.
+    fn plan_collapse(&self, bits: u64, k: EdgeKey, factor: f64) -> CollapseAhead {
+        CollapseAhead {
+            at: self.clock,
+            directions: self.plan_directions(bits, k, factor),
+        }
+    }
+
+    /// [`Self::plan_collapse`]'s two directions, or `None` where the round
+    /// skips the edge.
+    fn plan_directions(
+        &self,
+        bits: u64,
+        k: EdgeKey,
+        factor: f64,
+    ) -> Option<[CollapseDirection; 2]> {
+        let mesh: &TriMesh = self.mesh;
+        if !self.collapse_due(bits, k, factor) {
+            return None;
+        }
+        let direction = |u: VertexId, v: VertexId| {
+            if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
+                && self.topo_stamp_of(v) <= at
+            {
+                return CollapseDirection::Remembered(reason);
+            }
+            let ring_v = crate::mesh::ScratchRing::of(mesh, v);
+            if !lengths_kept(
+                mesh,
+                |a, b| self.pair_target(a, b),
+                self.opts.l,
+                self.max_stretch,
+                self.field.is_asked(),
+                u,
+                &ring_v,
+            ) {
+                return CollapseDirection::Length;
+            }
+            let plan = CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v));
+            let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
+            // A refused plan is dropped here, in parallel, not on the
+            // pipeline's thread (most plans are refused).
+            match collapse_refusal(&plan, verdict) {
+                Some((r, by_role)) => CollapseDirection::Refused(r, by_role),
+                None => CollapseDirection::Plan(Box::new((plan, verdict))),
+            }
+        };
+        Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
+    }
+
+    /// Whether the collapse round tries `k` (popped with `bits`) now: both
+    /// ends alive, the length as queued and still short, no refusal of it
+    /// remembered.
+    fn collapse_due(&self, bits: u64, k: EdgeKey, factor: f64) -> bool {
+        if !(self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi)) {
+            return false;
+        }
+        let len = self.mesh.distance(k.lo, k.hi);
+        if len.to_bits() != bits || len >= factor * self.edge_target(k) {
+            return false;
+        }
+        !matches!(self.failed_collapse.get(&k), Some(&FailedCollapse { at, .. })
+            if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at)
+    }
+}

@@ -1,0 +1,356 @@
+//! The schedule's driver: its options, the entry points
+//! ([`optimize_with_field`], and `optimize` for the tests), the main passes
+//! with their stop rules, then the coarsening, the polish, the min-max polish,
+//! the envelope stages and the final statistics.
+
+use super::smooth::off_curve_vertices;
+use super::stats::{Measure, OptimizeStats, StopReason, measure};
+use super::{
+    COARSEN_ENERGY, COARSEN_FACTOR, COARSEN_STRETCH, COLLAPSE_FACTOR, ENVELOPE_EPS,
+    ENVELOPE_ROUNDS, ENVELOPE_SPACING, FIELD_SPLIT_PASSES, MINMAX_MIN_GAIN, MINMAX_PASSES,
+    POLISH_MIN_GAIN, POLISH_PASSES, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, STALL_PASSES,
+    STALL_TOLERANCE, STOP_STRETCH, Schedule,
+};
+use crate::budget::Deadline;
+use crate::mesh::{TriMesh, VertexId};
+use crate::ops::invariants::on_curve;
+use crate::ops::{Context, Objective};
+use crate::sizing::SizeField;
+
+/// Parameters of the schedule, in user units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct OptimizeOptions {
+    /// Target edge length `l`: the sizing field's upper bound.
+    pub l: f64,
+    /// Lower bound of the sizing field (the thesis uses ε).
+    pub l_floor: f64,
+    /// AMIPS energy (1 for equilateral) below which a mesh is good enough.
+    pub stop_energy: f64,
+    /// Minimum angle, degrees, above which a mesh is good enough.
+    pub alpha_deg: f64,
+    /// Maximum number of passes.
+    pub max_passes: u32,
+    /// No split once the mesh has this many vertices.
+    pub max_vertices: usize,
+    /// The run's wall-clock limit: past it the schedule stops at the next
+    /// pass ([`StopReason::TimeLimit`]).
+    pub deadline: Deadline,
+}
+
+impl OptimizeOptions {
+    /// Set [`OptimizeOptions::deadline`].
+    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
+        self.deadline = deadline;
+        self
+    }
+}
+
+/// Improve `mesh` in place (see the module doc) with the size `opts.l`
+/// everywhere. `ctx.envelope` may be restaged (denser sampling, larger ε) when
+/// rational vertices are left.
+#[cfg(test)]
+pub(crate) fn optimize(
+    mesh: &mut TriMesh,
+    ctx: &mut Context,
+    opts: &OptimizeOptions,
+) -> OptimizeStats {
+    let field = SizeField::uniform(opts.l, mesh_bounds(mesh));
+    optimize_with_field(mesh, ctx, opts, &field).0
+}
+
+/// The bounding box of a mesh's vertices.
+#[cfg(test)]
+pub(super) fn mesh_bounds(mesh: &TriMesh) -> kurbo::Rect {
+    mesh.vertices()
+        .map(|v| mesh.position(v))
+        .fold(None, |r: Option<kurbo::Rect>, p| {
+            Some(r.map_or(kurbo::Rect::from_points(p, p), |r| r.union_pt(p)))
+        })
+        .unwrap_or_default()
+}
+
+/// The optimization (the module doc) against the size field `field`: every
+/// target starts at the field (`opts.l` is its largest value); split passes
+/// resolve it before the main passes where it asks for sizes below the BSP
+/// mesh's edges. Returns the statistics and the positions of the vertices the
+/// optimizer refined below the field (the size report leaves their edges out).
+pub(crate) fn optimize_with_field(
+    mesh: &mut TriMesh,
+    ctx: &mut Context,
+    opts: &OptimizeOptions,
+    field: &SizeField,
+) -> (OptimizeStats, Vec<kurbo::Point>) {
+    let mut ever_off = Vec::new();
+    let mut s = Schedule::new(mesh, ctx, opts, SEED, field);
+    let rational = s.improve(&mut ever_off);
+    if s.stats().stop == StopReason::TimeLimit {
+        return (s.stats().clone(), Vec::new());
+    }
+    // From here on no operation stretches an edge past 2 l: the coarsening's
+    // collapses by their length rule, smoothing and swaps by the context's bound.
+    s.ctx.max_new_edge = STOP_STRETCH * opts.l;
+    s.coarsen();
+    s.polish();
+    // The min-max polish lifts the worst triangles: quality first.
+    s.ctx.max_new_edge = f64::INFINITY;
+    s.minmax_polish();
+    let rational = s.envelope_stages(rational);
+    let refined: Vec<kurbo::Point> = s
+        .mesh
+        .vertices()
+        .filter(|&v| s.is_refined(v))
+        .map(|v| s.mesh.position(v))
+        .collect();
+    (s.finish(rational, &mut ever_off), refined)
+}
+
+/// Whether the quality goal is met: every vertex in `f64` and on its curve, no
+/// edge longer than `2 l`, and the minimum angle above α or the maximum energy
+/// below the stop energy (over the triangles not locked).
+fn quality_reached(
+    m: &Measure,
+    opts: &OptimizeOptions,
+    rational: usize,
+    off: usize,
+    stretch: impl FnOnce() -> f64,
+) -> bool {
+    let good = m.min_angle > opts.alpha_deg || m.max_energy < opts.stop_energy;
+    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * opts.l && {
+        stretch() <= STOP_STRETCH
+    }
+}
+
+/// Whether a pass from `last` to `now` paid off too little at the current
+/// sizes (then the sizing field is refined).
+fn paid_off_little(last: &Measure, now: &Measure) -> bool {
+    last.max_energy - now.max_energy < SIZING_STALL_MAX
+        && last.mean_energy - now.mean_energy < SIZING_STALL_MEAN
+}
+
+/// Whether the last ten passes of `history` (maximum and mean energy after
+/// each pass) improved neither.
+fn stalled(history: &[(f64, f64)]) -> bool {
+    let n = history.len();
+    n > STALL_PASSES
+        && (n - STALL_PASSES..n).all(|i| {
+            history[i].0 - history[i - 1].0 >= -STALL_TOLERANCE
+                && history[i].1 - history[i - 1].1 >= -STALL_TOLERANCE
+        })
+}
+
+impl Schedule<'_> {
+    /// Whether the deadline has passed (then the stop reason says so).
+    fn out_of_time(&mut self) -> bool {
+        let expired = self.opts.deadline.expired();
+        if expired {
+            self.stats.stop = StopReason::TimeLimit;
+        }
+        expired
+    }
+
+    /// The main passes (split, collapse, swap, smooth, round, project), the
+    /// sizing field refined when they stop paying off, until a stop rule holds
+    /// or the pass limit. Returns how many vertices stay rational.
+    fn improve(&mut self, ever_off: &mut Vec<VertexId>) -> usize {
+        let opts = self.opts;
+        let mut rational = self.round_all();
+        let mut off = self.project_all(ever_off);
+        let mut last = measure(self.mesh);
+        let mut just_updated = false;
+        let mut hit_floor = false;
+        let mut history: Vec<(f64, f64)> = Vec::new();
+        // Splits applied by the last pass: once none is, the stretch against
+        // the field is as good as the splits can make it (the rest are refused).
+        let mut last_splits = u64::MAX;
+        // Where the field asks for sizes well below the BSP mesh's edges (thin
+        // strokes, the user's fields), split down to them first: the main
+        // passes then work at those sizes.
+        for _ in 0..FIELD_SPLIT_PASSES {
+            if !self.sizes_pending() || self.out_of_time() {
+                break;
+            }
+            self.split_pass();
+        }
+        for pass in 0..opts.max_passes {
+            if opts.deadline.expired() {
+                self.stats.stop = StopReason::TimeLimit;
+                break;
+            }
+            let uniform = self.field.is_uniform();
+            if quality_reached(&last, &opts, rational, off, || {
+                if uniform || last_splits == 0 {
+                    0.0
+                } else {
+                    self.longest_stretch()
+                }
+            }) {
+                self.stats.stop = StopReason::Quality;
+                break;
+            }
+            self.stats.passes = pass + 1;
+            self.refresh_bases();
+            // The deadline is also checked between the sub-passes: one pass of
+            // a large mesh can take seconds, more on a loaded machine.
+            let (long, splits) = self.split_pass();
+            last_splits = splits;
+            if self.out_of_time() {
+                break;
+            }
+            let collapses = self.collapse_pass(COLLAPSE_FACTOR);
+            if self.out_of_time() {
+                break;
+            }
+            let swaps = self.swap_pass();
+            if self.out_of_time() {
+                break;
+            }
+            let smooths = self.smooth_pass();
+            rational = self.round_all();
+            off = self.project_all(ever_off);
+            let now = measure(self.mesh);
+            tracing::debug!(
+                pass,
+                long,
+                splits,
+                collapses,
+                swaps,
+                smooths,
+                rational,
+                off,
+                min_angle = now.min_angle,
+                max_energy = now.max_energy,
+                mean_energy = now.mean_energy,
+                faces = self.mesh.num_faces(),
+                "optimization pass"
+            );
+            // Refine the sizing field only when the operations stop paying off
+            // at the current sizes (then give them a pass to use the new sizes).
+            if !just_updated && paid_off_little(&last, &now) {
+                hit_floor |= self.update_sizing(now.max_energy);
+                just_updated = true;
+            } else {
+                just_updated = false;
+            }
+            last = now;
+            history.push((now.max_energy, now.mean_energy));
+            // Once the sizes are at their floor, ten passes without any gain end it.
+            if hit_floor && rational == 0 && off == 0 && stalled(&history) {
+                self.stats.stop = StopReason::Stalled;
+                break;
+            }
+        }
+        rational
+    }
+
+    /// Coarsen where the sizing field was refined for nothing: targets back to
+    /// `l`, one collapse pass of every edge whose collapse makes no edge longer
+    /// than [`COARSEN_STRETCH`] `l` (collapses never make the local worst
+    /// triangle worse).
+    fn coarsen(&mut self) {
+        self.refresh_bases();
+        let all: Vec<VertexId> = self.mesh.vertices().collect();
+        for v in all {
+            let b = self.base_of(v);
+            self.set_target(v, b);
+        }
+        self.failed_collapse.clear();
+        self.max_stretch = COARSEN_STRETCH;
+        // Coarsening may make a ring worse, up to the stop energy (the quality
+        // asked for) but never worse than the mesh's worst triangle (outside the
+        // locked ones) or COARSEN_ENERGY, whichever is larger: the quality the goal
+        // measured holds, and how far a good mesh coarsens depends on l, not on
+        // how good its worst triangle happened to be.
+        self.ctx.energy_floor = measure(self.mesh)
+            .max_energy
+            .max(COARSEN_ENERGY)
+            .min(self.opts.stop_energy);
+        self.collapse_pass(COARSEN_FACTOR);
+        self.ctx.energy_floor = 0.0;
+    }
+
+    /// Polish: swaps and smoothing only (no change of size), each never making
+    /// a local worst triangle worse, while they still improve the mean energy.
+    fn polish(&mut self) {
+        let mut before = measure(self.mesh);
+        for _ in 0..POLISH_PASSES {
+            let changed = self.swap_pass() + self.smooth_pass();
+            let now = measure(self.mesh);
+            let gain = before.mean_energy - now.mean_energy;
+            before = now;
+            if changed == 0 || gain < POLISH_MIN_GAIN * now.mean_energy {
+                break;
+            }
+        }
+    }
+
+    /// Min-max polish: smoothing that lowers each ring's largest energy (and
+    /// swaps), while the worst triangle still improves.
+    fn minmax_polish(&mut self) {
+        self.failed_smooth.clear();
+        let mut worst = measure(self.mesh).max_energy;
+        for _ in 0..MINMAX_PASSES {
+            let changed = self.smooth_pass_with(Objective::MinMax) + self.swap_pass();
+            let now = measure(self.mesh).max_energy;
+            let gain = worst - now;
+            worst = now;
+            if changed == 0 || gain < MINMAX_MIN_GAIN * now {
+                break;
+            }
+        }
+    }
+
+    /// Envelope stages (§2.3.4) while `rational` vertices are left: each gives
+    /// them more room (denser sampling, then a larger ε) and smooths and
+    /// rounds again. Returns how many stay rational.
+    fn envelope_stages(&mut self, mut rational: usize) -> usize {
+        let base = self.ctx.envelope.eps();
+        let spacing = self.ctx.envelope.spacing();
+        for scale in ENVELOPE_EPS {
+            let (eps, sp) = (scale * base, ENVELOPE_SPACING * spacing);
+            if rational == 0 {
+                break;
+            }
+            self.stats.envelope_stages += 1;
+            self.ctx.envelope = self.ctx.envelope.restaged(eps, sp);
+            for _ in 0..ENVELOPE_ROUNDS {
+                self.smooth_pass();
+                rational = self.round_all();
+                if rational == 0 {
+                    break;
+                }
+            }
+        }
+        rational
+    }
+
+    /// The last projection of off-curve primary vertices, and the final
+    /// statistics (`rational` vertices left; `ever_off`: the primary vertices
+    /// that were ever off their curve).
+    fn finish(mut self, rational: usize, ever_off: &mut Vec<VertexId>) -> OptimizeStats {
+        let off = self.project_all(ever_off);
+        let (min_angle, max_e) = measure(self.mesh).all;
+        self.stats.rational_left = rational;
+        self.stats.off_curve_left = off;
+        if off > 0 {
+            for v in off_curve_vertices(self.mesh, self.ctx) {
+                tracing::debug!(
+                    vertex = ?self.mesh.position(v),
+                    off = ?on_curve::off_curve(self.mesh, self.ctx, v),
+                    tag = ?self.mesh.vertex_tag(v),
+                    "primary vertex left off its curve"
+                );
+            }
+        }
+        self.stats.projected_vertices = ever_off
+            .iter()
+            .filter(|&&v| {
+                self.mesh.is_vertex_alive(v)
+                    && on_curve::off_curve(self.mesh, self.ctx, v).unwrap_or(0.0)
+                        <= self.ctx.on_curve_abs
+            })
+            .count();
+        self.stats.min_angle_deg = min_angle;
+        self.stats.max_amips = max_e;
+        self.stats
+    }
+}

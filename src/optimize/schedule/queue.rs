@@ -1,0 +1,450 @@
+//! The passes' queues: the collapse round's shortest-first edge queue
+//! ([`ShortestFirst`], with batches of the edges queued again staged to be
+//! planned together) and the plans made ahead in parallel for the next items
+//! of a pass ([`PlanAhead`]). A plan made ahead is used only while what it
+//! read is unchanged, so a pass does the same for any number of threads.
+
+use super::{PLAN_AHEAD, SUMMARY_STEP};
+use crate::mesh::EdgeKey;
+use rayon::prelude::*;
+use std::collections::{BinaryHeap, VecDeque};
+
+/// The collapse round's queue: edges by the bits of their length (which order
+/// like the lengths), then by key. The edges short at the start of the round
+/// are sorted once (cheaper than a heap of all of them); the edges queued
+/// again after a collapse go to a heap; with more than one thread, the
+/// smallest of those are taken from the heap a batch at a time
+/// ([`ShortestFirst::stage`]) to be planned together, each batch kept in order
+/// with its plans. `pop` takes the smallest of the three heads, so the order
+/// is that of one heap holding them all.
+pub(super) struct ShortestFirst<P = ()> {
+    pub(super) sorted: Vec<(u64, EdgeKey)>,
+    next: usize,
+    /// Every [`SUMMARY_STEP`]-th entry of `sorted` (from its first), made by
+    /// [`Self::sort`]: [`Self::is_ahead`] searches this first (a sixteenth of
+    /// `sorted`, it stays in cache), then one block of `sorted`.
+    summary: Vec<(u64, EdgeKey)>,
+    pub(super) again: BinaryHeap<std::cmp::Reverse<(u64, EdgeKey)>>,
+    /// Edges taken from `again` in order, each with its plan made ahead.
+    staged: VecDeque<(u64, EdgeKey, Option<P>)>,
+}
+
+impl<P> Default for ShortestFirst<P> {
+    fn default() -> Self {
+        ShortestFirst {
+            sorted: Vec::new(),
+            next: 0,
+            summary: Vec::new(),
+            again: BinaryHeap::new(),
+            staged: VecDeque::new(),
+        }
+    }
+}
+
+/// Sort `v`, in parallel when the pool has more than one thread (a
+/// parallel sort on one thread only costs more).
+pub(super) fn sort_unstable<T: Ord + Send>(v: &mut [T]) {
+    if rayon::current_num_threads() > 1 {
+        v.par_sort_unstable();
+    } else {
+        v.sort_unstable();
+    }
+}
+
+/// Where [`ShortestFirst::pop_indexed`] took an edge from.
+pub(super) enum Popped<P> {
+    /// `sorted`, at this index.
+    Sorted(usize),
+    /// `staged`, with its plan.
+    Staged(Option<P>),
+    /// `again`: not planned.
+    Again,
+}
+
+impl<P> ShortestFirst<P> {
+    pub(super) fn sort(&mut self) {
+        sort_unstable(&mut self.sorted);
+        self.next = 0;
+        self.summary.clear();
+        self.summary
+            .extend(self.sorted.iter().step_by(SUMMARY_STEP).copied());
+    }
+
+    /// Whether `key` is in `sorted[next..]`. A binary search of all of
+    /// `sorted` (over a megabyte on organ) missed the cache at most of its
+    /// steps, on the pipeline's thread, for every edge queued again: 3-4 % of
+    /// that thread's time on renault. Below the head nothing is ahead (most
+    /// of the edges queued again that are not duplicates); otherwise the
+    /// summary's search finds the block of `sorted` that holds `key`'s place.
+    fn is_ahead(&self, key: (u64, EdgeKey)) -> bool {
+        match self.sorted.get(self.next) {
+            Some(&head) if head <= key => {}
+            _ => return false,
+        }
+        // summary[j - 1] = sorted[(j - 1) · step] < key <= sorted[j · step]
+        // (where those exist): key's place in `sorted` is in between.
+        let j = self.summary.partition_point(|s| *s < key);
+        let lo = if j == 0 {
+            0
+        } else {
+            (j - 1) * SUMMARY_STEP + 1
+        };
+        let hi = (j * SUMMARY_STEP).min(self.sorted.len());
+        let at = lo + self.sorted[lo..hi].partition_point(|s| *s < key);
+        at >= self.next && self.sorted.get(at) == Some(&key)
+    }
+
+    /// Which head is the smallest: 0 `sorted`, 1 `staged`, 2 `again` (on a tie
+    /// the first; equal heads are the same edge). On every pop: compared by
+    /// hand, not through a `min_by_key` over three options.
+    fn smallest(&self) -> Option<usize> {
+        let heads = [
+            self.sorted.get(self.next).copied(),
+            self.staged.front().map(|&(b, k, _)| (b, k)),
+            self.again.peek().map(|r| r.0),
+        ];
+        let mut which = None;
+        let mut best = None;
+        for (i, head) in heads.into_iter().enumerate() {
+            if let Some(h) = head
+                && best.is_none_or(|b| h < b)
+            {
+                (which, best) = (Some(i), Some(h));
+            }
+        }
+        which
+    }
+
+    /// Whether the next edge comes from `again`: the moment to
+    /// [`Self::stage`] a batch (before what is staged already: a collapse
+    /// queues the short edges at its vertex, shorter than the staged ones
+    /// more often than not; waiting until the staged batch ran out left
+    /// organ's and the emoji's edges queued again planned one by one, 260-300
+    /// thousand of them, on the pipeline's thread).
+    pub(super) fn next_is_unstaged(&self) -> bool {
+        self.smallest() == Some(2)
+    }
+
+    /// Take the `n` smallest edges of `again` (fewer if it holds fewer, and
+    /// only those before the first staged edge), in order, for the caller to
+    /// plan and [`Self::push_staged`].
+    pub(super) fn stage(&mut self, n: usize) -> Vec<(u64, EdgeKey)> {
+        let bound = self.staged.front().map(|&(b, k, _)| (b, k));
+        let mut batch = Vec::new();
+        while batch.len() < n
+            && let Some(r) = self.again.peek()
+            && bound.is_none_or(|b| r.0 < b)
+        {
+            batch.push(r.0);
+            self.again.pop();
+        }
+        batch
+    }
+
+    /// Queue `key` again, unless it is still ahead in `sorted`: that copy
+    /// comes first (on a tie `sorted` wins) and the copy queued again would
+    /// come right after it, with nothing changed in between, only to be
+    /// skipped. Half the edges queued again after a collapse are such
+    /// duplicates (organ 62 %, the emoji 45 %): the round's positions do
+    /// not change, so an edge of u's ring kept its length and its key.
+    pub(super) fn push_again(&mut self, key: (u64, EdgeKey)) {
+        if !self.is_ahead(key) {
+            self.again.push(std::cmp::Reverse(key));
+        }
+    }
+
+    /// Put staged edges (the output of [`Self::stage`], in its order) with
+    /// their plans before those staged already.
+    pub(super) fn push_staged(
+        &mut self,
+        batch: impl IntoIterator<Item = (u64, EdgeKey, Option<P>)>,
+    ) {
+        let batch: Vec<_> = batch.into_iter().collect();
+        for item in batch.into_iter().rev() {
+            self.staged.push_front(item);
+        }
+    }
+
+    /// The next edge, with where it came from.
+    pub(super) fn pop_indexed(&mut self) -> Option<(u64, EdgeKey, Popped<P>)> {
+        match self.smallest()? {
+            0 => {
+                self.next += 1;
+                let (b, k) = self.sorted[self.next - 1];
+                Some((b, k, Popped::Sorted(self.next - 1)))
+            }
+            1 => self
+                .staged
+                .pop_front()
+                .map(|(b, k, plan)| (b, k, Popped::Staged(plan))),
+            _ => self.again.pop().map(|r| (r.0.0, r.0.1, Popped::Again)),
+        }
+    }
+}
+
+/// Plans made ahead, in parallel, for the next [`PLAN_AHEAD`] items of a
+/// pass's queue (see [`Schedule::collapse_round`](super::Schedule::collapse_round)); none with one thread.
+pub(super) struct PlanAhead<T> {
+    pub(super) parallel: bool,
+    /// The queue index of `plans[0]`.
+    from: usize,
+    plans: Vec<Option<T>>,
+}
+
+impl<T: Send> PlanAhead<T> {
+    pub(super) fn new() -> Self {
+        PlanAhead {
+            parallel: rayon::current_num_threads() > 1,
+            from: 0,
+            plans: Vec::new(),
+        }
+    }
+
+    /// The plan of `items[n]`, planning `items[n..n + PLAN_AHEAD]` at once
+    /// first when `n` is past the window planned; `None` with one thread
+    /// (and where `plan` made none).
+    pub(super) fn take<I: Sync>(
+        &mut self,
+        n: usize,
+        items: &[I],
+        plan: impl Fn(&I) -> Option<T> + Sync + Send,
+    ) -> Option<T> {
+        if !self.parallel {
+            return None;
+        }
+        if n >= self.from + self.plans.len() {
+            let end = (n + PLAN_AHEAD).min(items.len());
+            // Into the same buffer: organ plans some twelve thousand windows.
+            self.plans.clear();
+            self.plans.par_extend(items[n..end].par_iter().map(plan));
+            self.from = n;
+        }
+        self.plans.get_mut(n - self.from).and_then(Option::take)
+    }
+}
+
+#[cfg(test)]
+mod queue_tests {
+    use super::*;
+    use crate::mesh::VertexId;
+    use proptest::prelude::*;
+
+    fn key(a: usize, b: usize) -> EdgeKey {
+        EdgeKey::new(VertexId::from_index(a), VertexId::from_index(b + 100))
+    }
+
+    proptest! {
+        /// The collapse round's queue pops what one min-heap holding all its
+        /// parts would, pushes during the pops included (duplicates too), and
+        /// batches staged from the heap at any step.
+        #[test]
+        fn the_queue_pops_like_one_heap(
+            start in prop::collection::vec((0u64..20, 0usize..5, 0usize..5), 0..40),
+            pushes in prop::collection::vec((0usize..60, 0u64..20, 0usize..5, 0usize..5), 0..30),
+            stages in prop::collection::vec((0usize..60, 1usize..6), 0..10),
+        ) {
+            let mut q = ShortestFirst::<u64>::default();
+            let mut heap = BinaryHeap::new();
+            for &(bits, a, b) in &start {
+                q.sorted.push((bits, key(a, b)));
+                heap.push(std::cmp::Reverse((bits, key(a, b))));
+            }
+            q.sort();
+            let mut step = 0;
+            loop {
+                for &(at, bits, a, b) in &pushes {
+                    if at == step {
+                        q.again.push(std::cmp::Reverse((bits, key(a, b))));
+                        heap.push(std::cmp::Reverse((bits, key(a, b))));
+                    }
+                }
+                for &(at, n) in &stages {
+                    if at == step && q.next_is_unstaged() {
+                        // The plan of a staged edge is its bits: it must come
+                        // back with its own edge.
+                        let batch = q.stage(n);
+                        q.push_staged(batch.into_iter().map(|(b, k)| (b, k, Some(b))));
+                    }
+                }
+                let popped = q.pop_indexed();
+                if let Some((b, _, Popped::Staged(plan))) = &popped {
+                    prop_assert_eq!(*plan, Some(*b));
+                }
+                let (x, y) = (popped.map(|(b, k, _)| (b, k)), heap.pop().map(|r| r.0));
+                prop_assert_eq!(x, y);
+                if x.is_none() && step > 60 {
+                    break;
+                }
+                step += 1;
+            }
+        }
+
+        /// Queued with `push_again`, an edge still ahead in `sorted` is not
+        /// queued at all; anything else is, as in one heap: the queue pops
+        /// what one min-heap would with that rule applied to each push (its
+        /// own record of the sorted edges not yet popped), batches staged at
+        /// any step included.
+        #[test]
+        fn pushing_again_skips_the_edges_still_ahead_in_sorted(
+            start in prop::collection::vec((0u64..20, 0usize..5, 0usize..5), 0..40),
+            pushes in prop::collection::vec((0usize..60, 0u64..20, 0usize..5, 0usize..5), 0..30),
+            stages in prop::collection::vec((0usize..60, 1usize..6), 0..10),
+        ) {
+            // The round's sorted edges are distinct.
+            let start: std::collections::BTreeSet<(u64, EdgeKey)> =
+                start.iter().map(|&(bits, a, b)| (bits, key(a, b))).collect();
+            let mut q = ShortestFirst::<u64>::default();
+            let mut heap = BinaryHeap::new();
+            let mut ahead = start.clone();
+            for &k in &start {
+                q.sorted.push(k);
+                heap.push(std::cmp::Reverse((k, true)));
+            }
+            q.sort();
+            for step in 0..200 {
+                for &(at, bits, a, b) in &pushes {
+                    if at == step {
+                        let k = (bits, key(a, b));
+                        q.push_again(k);
+                        if !ahead.contains(&k) {
+                            heap.push(std::cmp::Reverse((k, false)));
+                        }
+                    }
+                }
+                for &(at, n) in &stages {
+                    if at == step && q.next_is_unstaged() {
+                        let batch = q.stage(n);
+                        q.push_staged(batch.into_iter().map(|(b, k)| (b, k, Some(b))));
+                    }
+                }
+                let x = q.pop_indexed().map(|(b, k, _)| (b, k));
+                let y = heap.pop().map(|r| {
+                    if r.0.1 {
+                        ahead.remove(&r.0.0);
+                    }
+                    r.0.0
+                });
+                prop_assert_eq!(x, y);
+            }
+        }
+    }
+
+    proptest! {
+        /// `is_ahead` (the summary, then a block) answers what a search of
+        /// `sorted[next..]` does, on lists of many blocks, with runs of
+        /// equal bits, for keys in the list, between its entries and beyond
+        /// both ends, at any `next`.
+        #[test]
+        fn is_ahead_finds_what_a_search_of_the_rest_finds(
+            start in prop::collection::btree_set((0u64..400, 0usize..8, 0usize..8), 0..700),
+            next_at in 0.0f64..1.0,
+            probes in prop::collection::vec((0u64..420, 0usize..8, 0usize..8), 1..60),
+            from_list in prop::collection::vec(any::<prop::sample::Index>(), 0..60),
+        ) {
+            let mut q = ShortestFirst::<u64> {
+                sorted: start.iter().map(|&(bits, a, b)| (bits, key(a, b))).collect(),
+                ..ShortestFirst::default()
+            };
+            q.sort();
+            let n = q.sorted.len();
+            q.next = ((n as f64) * next_at) as usize;
+            let mut keys: Vec<(u64, EdgeKey)> =
+                probes.iter().map(|&(bits, a, b)| (bits, key(a, b))).collect();
+            if n > 0 {
+                keys.extend(from_list.iter().map(|i| q.sorted[i.index(n)]));
+            }
+            for k in keys {
+                prop_assert_eq!(
+                    q.is_ahead(k),
+                    q.sorted[q.next..].binary_search(&k).is_ok(),
+                    "{:?} with next {} of {}", k, q.next, n
+                );
+            }
+        }
+    }
+
+    /// The rule of `push_again` itself: an edge still ahead in `sorted` is
+    /// not queued; one popped already is, and so is one never sorted.
+    #[test]
+    fn an_edge_still_ahead_is_not_queued_again() {
+        let mut q = ShortestFirst::<u64> {
+            sorted: vec![(1, key(0, 0)), (2, key(1, 1))],
+            ..ShortestFirst::default()
+        };
+        q.sort();
+        q.push_again((2, key(1, 1)));
+        assert!(q.again.is_empty());
+        assert_eq!(
+            q.pop_indexed().map(|(b, k, _)| (b, k)),
+            Some((1, key(0, 0)))
+        );
+        q.push_again((1, key(0, 0)));
+        q.push_again((2, key(0, 0)));
+        assert_eq!(q.again.len(), 2);
+    }
+}
+
+#[cfg(test)]
+mod plan_ahead_tests {
+    use crate::mesh::TriMesh;
+    use crate::ops::EnergyRule;
+    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
+    use crate::ops::{Context, Objective};
+    use crate::optimize::schedule::driver::mesh_bounds;
+    use crate::optimize::schedule::stats::measure;
+    use crate::optimize::schedule::{COARSEN_FACTOR, Schedule, test_options};
+    use crate::sizing::SizeField;
+
+    /// The passes with their plans made ahead on two threads do exactly what
+    /// they do on one (same mesh, same tallies), and the plans were used and
+    /// some found stale (else the check would be vacuous).
+    #[test]
+    fn planning_ahead_on_two_threads_changes_nothing() {
+        let meshes: Vec<_> = (0..3)
+            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
+            .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)))
+            .collect();
+        let opts = test_options();
+        let run = |threads: usize, mesh: &TriMesh, ctx: &Context| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool");
+            pool.install(|| {
+                let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
+                let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
+                for pass in 0..6 {
+                    s.split_pass();
+                    s.collapse_pass(if pass < 3 { 0.8 } else { COARSEN_FACTOR });
+                    s.swap_pass();
+                    s.smooth_pass();
+                    s.smooth_pass_with(Objective::MinMax);
+                    let worst = measure(s.mesh).max_energy;
+                    s.update_sizing(worst);
+                }
+                let (stats, tally) = (s.stats().clone(), (s.ahead_tally, s.staged_tally));
+                (mesh, stats, tally)
+            })
+        };
+        let (mut used, mut stale, mut staged) = (0, 0, 0);
+        for (i, (mesh, ctx)) in meshes.iter().enumerate() {
+            let (one, stats_one, tally_one) = run(1, mesh, ctx);
+            let (two, stats_two, tally_two) = run(2, mesh, ctx);
+            assert!(one == two, "mesh {i}: two threads made another mesh");
+            assert_eq!(stats_one, stats_two, "mesh {i}");
+            assert_eq!(
+                tally_one,
+                ((0, 0), 0),
+                "mesh {i}: one thread plans nothing ahead"
+            );
+            used += tally_two.0.0;
+            stale += tally_two.0.1;
+            staged += tally_two.1;
+        }
+        assert!(
+            used > 1000 && stale > 10 && staged > 100,
+            "{used} plans used, {stale} stale, {staged} staged"
+        );
+    }
+}

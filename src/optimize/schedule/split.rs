@@ -1,0 +1,66 @@
+//! The split pass: every edge longer than 4/3 of its target once, longest
+//! first; the new vertex gets the field at it, refined as its edge's ends were.
+
+use super::queue::PlanAhead;
+use super::{SPLIT_ABOVE, Schedule, slot};
+use crate::mesh::{EdgeKey, VertexId};
+use crate::ops::{Outcome, SplitPlan, try_split, try_split_planned};
+use rayon::prelude::*;
+
+impl Schedule<'_> {
+    /// Split every edge longer than 4/3 of its mean target once, longest first.
+    /// Returns the number of candidates and of splits applied.
+    pub(super) fn split_pass(&mut self) -> (usize, u64) {
+        let edges: Vec<EdgeKey> = self.mesh.edge_list();
+        let mut cands: Vec<(f64, EdgeKey, f64)> = edges
+            .into_par_iter()
+            .filter_map(|k| {
+                let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
+                (len > SPLIT_ABOVE * t).then_some((len, k, t))
+            })
+            .collect();
+        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let n = cands.len();
+        let mut applied = 0;
+        // As in the collapse round: with more than one thread the next
+        // `PLAN_AHEAD` splits are planned at once in parallel (the plan reads
+        // the faces and tags of the edge), and a plan is used only while
+        // neither end has changed since.
+        let mut ahead = PlanAhead::new();
+        for (i, &(_, k, t)) in cands.iter().enumerate() {
+            if self.mesh.num_vertices() >= self.opts.max_vertices {
+                break;
+            }
+            let this = &*self;
+            let planned = ahead
+                .take(i, &cands, |&(_, e, _)| {
+                    Some((this.clock, SplitPlan::new(this.mesh, this.ctx, e.lo, e.hi)))
+                })
+                .filter(|(at, _)| self.fresh(*at, &[k.lo, k.hi]));
+            let out = match planned {
+                Some((_, plan)) => try_split_planned(self.mesh, self.ctx, plan),
+                None => try_split(self.mesh, self.ctx, k.lo, k.hi),
+            };
+            self.touch(&out, true);
+            if let Outcome::Applied(ch) = &out {
+                if let Some(m) = ch.new_vertex {
+                    if self.field.is_uniform() {
+                        self.set_target(m, t);
+                    } else {
+                        // the field at the new vertex, refined as its edge's ends were
+                        let ratio = |s: &Self, v: VertexId| s.target_of(v) / s.base_of(v);
+                        let r = 0.5 * (ratio(self, k.lo) + ratio(self, k.hi));
+                        let h = self.field.at(self.mesh.position(m));
+                        self.set_base(m, h);
+                        self.set_target(m, h * r);
+                    }
+                    let refined = self.is_refined(k.lo) || self.is_refined(k.hi);
+                    *slot(&mut self.refined, m, false) = refined;
+                }
+                applied += 1;
+            }
+            self.stats.split.record(&out);
+        }
+        (n, applied)
+    }
+}
