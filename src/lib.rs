@@ -148,4 +148,24 @@ pub mod __bench {
         };
         crate::bsp::build(&input, bbox, &BspOptions::DEFAULT).map(|(_, stats)| stats)
     }
+
+    /// The size field of `drawing` under `params` (default region names), as
+    /// the pipeline builds it, for timing its construction and its lookups.
+    pub struct SizeFieldProbe(crate::sizing::SizeField);
+
+    impl SizeFieldProbe {
+        /// Build the field.
+        ///
+        /// # Errors
+        /// As the pipeline: a size field naming no region, a bad formula.
+        pub fn build(drawing: &crate::Drawing, params: &crate::Params) -> crate::Result<Self> {
+            crate::pipeline::default_field(drawing, params, crate::budget::Deadline::NONE)
+                .map(SizeFieldProbe)
+        }
+
+        /// h at `p`.
+        pub fn at(&self, p: kurbo::Point) -> f64 {
+            self.0.at(p)
+        }
+    }
 }

@@ -684,7 +684,11 @@ pub(crate) fn bsp_stage(
 ///
 /// # Errors
 /// As [`SizeField::build`].
-fn default_field(drawing: &Drawing, params: &Params, deadline: Deadline) -> Result<SizeField> {
+pub(crate) fn default_field(
+    drawing: &Drawing,
+    params: &Params,
+    deadline: Deadline,
+) -> Result<SizeField> {
     let resolved = params.resolve(drawing.diagonal());
     SizeField::build(&FieldInput {
         drawing,
