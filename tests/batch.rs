@@ -423,6 +423,7 @@ fn polling_memory_guard_kills() {
         timeout: std::time::Duration::from_secs(60),
         memory: &guard,
         preview: false,
+        preview_size: false,
     };
     let row = batch::run_child(
         &spec,
@@ -454,4 +455,39 @@ fn hooks_are_not_built_in() {
     let o = triwild(&[&"batch", &"--help"], &[]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     assert!(!String::from_utf8_lossy(&o.stdout).contains("TRIWILD_TEST"));
+}
+
+#[test]
+fn batch_previews_can_shade_triangles_by_size() {
+    let base = out_dir("preview_size");
+    let (input, out) = (base.join("in"), base.join("out"));
+    write(&input, "square.svg", SQUARE.as_bytes());
+    let o = triwild(
+        &[
+            &"batch",
+            &input,
+            &"-o",
+            &out,
+            &"-j",
+            &"1",
+            &"--preview-size",
+        ],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let svg = std::fs::read_to_string(out.join("square.preview.svg")).expect("the preview");
+    assert!(svg.contains("id=\"size-legend\""), "no size legend");
+    // Without the page there are no previews to shade: a usage error.
+    let o = triwild(
+        &[
+            &"batch",
+            &input,
+            &"-o",
+            &base.join("x"),
+            &"--no-html",
+            &"--preview-size",
+        ],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }

@@ -34,12 +34,13 @@ fn curving_never_makes_needles_on_a_flag_of_albania() {
     // The flag is still followed: no curved edge was left straight. The
     // largest distance is a fitted element's (4 here: its curved edge is
     // pulled off the curve to be certified), so it moves with the linear
-    // mesh: measured 8.7e-5 (8b28e63) and 1.2e-4 (the smoothing's Newton
-    // decrement), against 1.4e-3 for the quadratic mesh and 1.6e-3 for the
-    // straight one.
+    // mesh: measured 8.7e-5 (8b28e63), 1.2e-4 (the smoothing's Newton
+    // decrement) and 6.2e-4 (the equalisation after the coarsening: 6 fitted
+    // elements instead of 4, none on a 20-drawing dev sample), against 1.4e-3
+    // for the quadratic mesh and 1.6e-3 for the straight one.
     assert_eq!(curve.straight_triangles, 0);
     assert!(
-        curve.max_curve_distance_rel < 2.5e-4,
+        curve.max_curve_distance_rel < 1e-3,
         "{}",
         curve.max_curve_distance_rel
     );

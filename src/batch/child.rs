@@ -132,6 +132,8 @@ pub struct ChildSpec<'a> {
     /// ([`super::page::preview_path`]: `x/y.msh` → `x/y.preview.svg`), for
     /// the report page.
     pub preview: bool,
+    /// The preview shades triangles by edge length over the size field.
+    pub preview_size: bool,
 }
 
 /// The longest message kept from a child's stderr.
@@ -341,6 +343,9 @@ pub fn run_child(
     cmd.args(spec.args).arg("-o").arg(output);
     if let Some(p) = &preview {
         cmd.arg("--preview").arg(p);
+        if spec.preview_size {
+            cmd.arg("--preview-size");
+        }
     }
     cmd.arg("--stats")
         .arg("--")
@@ -586,6 +591,7 @@ mod tests {
                 timeout: Duration::from_secs_f64(secs),
                 memory: &none,
                 preview: false,
+                preview_size: false,
             };
             run_child(&spec, "x.svg", Path::new("x.svg"), &out, "x.msh")
         };

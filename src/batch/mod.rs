@@ -77,6 +77,9 @@ pub struct BatchOptions {
     /// Have each child write its mesh's SVG preview beside the mesh
     /// ([`preview_path`]), for the report page. Default on.
     pub previews: bool,
+    /// Fill the previews' triangles by how their size matches the size field
+    /// (the single-file command's `--preview-size`). Default off.
+    pub preview_size: bool,
 }
 
 impl BatchOptions {
@@ -97,6 +100,7 @@ impl BatchOptions {
             shard: None,
             flags: Vec::new(),
             previews: true,
+            preview_size: false,
         }
     }
     /// Set the flags passed to every child.
@@ -137,6 +141,11 @@ impl BatchOptions {
     /// Write (or not) a preview beside each mesh.
     pub fn with_previews(mut self, previews: bool) -> Self {
         self.previews = previews;
+        self
+    }
+    /// Shade the previews by edge length over the size field (or not).
+    pub fn with_preview_size(mut self, on: bool) -> Self {
+        self.preview_size = on;
         self
     }
 
@@ -285,6 +294,7 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
         timeout: opts.timeout,
         memory: &opts.memory,
         preview: opts.previews,
+        preview_size: opts.preview_size,
     };
     let build = build_name();
     let next = AtomicUsize::new(0);

@@ -92,6 +92,10 @@ pub(crate) struct BatchArgs {
     /// report.shard-K-of-N.html for a shard) nor the mesh previews it shows.
     #[arg(long)]
     no_html: bool,
+    /// Fill the previews' triangles by how their size matches the size field
+    /// (edge / h, as `triwild IN.svg --preview OUT.svg --preview-size`).
+    #[arg(long, conflicts_with = "no_html")]
+    preview_size: bool,
     #[command(flatten)]
     format: FormatArgs,
     #[command(flatten)]
@@ -203,6 +207,7 @@ pub(crate) fn run(
         .with_child_args(leading)
         .with_flags(recorded)
         .with_previews(!args.no_html)
+        .with_preview_size(args.preview_size)
         .with_timeout(Duration::from_secs_f64(args.timeout))
         .with_memory(MemoryGuard::detect(memory_limit(args, matches)))
         .with_resume(args.resume)

@@ -39,7 +39,7 @@ use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
 use crate::ops::{self, Context};
 use crate::optimize::OptimizeOptions;
-use crate::optimize::schedule::{EnergyMeasure, OpTally, Schedule, measure_energy};
+use crate::optimize::schedule::{EnergyMeasure, OpTally, Phase, Schedule, measure_energy};
 use crate::sizing::SizeField;
 
 /// Collapse edges shorter than this fraction of `l` (the shared schedule's
@@ -160,6 +160,8 @@ pub(crate) fn optimize_curved(
         }
     };
     let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED, field);
+    // Its own bounds, not the linear stage's last ones.
+    s.enter(Phase::Curved);
     let mut pass = |s: &mut Schedule<'_>| {
         let collapses = s.collapse_pass(COLLAPSE_BELOW);
         let swaps = s.swap_pass();

@@ -450,3 +450,21 @@ pub(crate) struct CurveBudget {
     pub(crate) vertex: VertexId,
     pub(crate) max_off: f64,
 }
+
+/// Whether one of `faces` has an edge on a curved primary section (a cubic or
+/// conic, not a straight one): a move that ignores the curves' bulge (the
+/// equalisation's relaxation toward the neighbours' mean) leaves such a ring
+/// alone.
+pub(crate) fn faces_a_curve(mesh: &TriMesh, ctx: &Context, faces: &[FaceId]) -> bool {
+    faces.iter().any(|&f| {
+        let [a, b, c] = mesh.face(f);
+        [(a, b), (b, c), (c, a)].into_iter().any(|(x, y)| {
+            mesh.edge_tags(x, y).iter().any(|t| match t {
+                FeatureOn::Primary { section, .. } => ctx
+                    .section(*section)
+                    .is_none_or(|s| !matches!(s.parent, crate::features::Parent::Line(_))),
+                FeatureOn::Secondary { .. } => false,
+            })
+        })
+    })
+}

@@ -50,6 +50,10 @@ pub(crate) enum Objective {
     /// before the move: a smooth stand-in for the largest energy (min-max
     /// smoothing, which lifts the worst angle of the ring).
     MinMax,
+    /// Tangential relaxation: a free vertex moves to the mean of its
+    /// neighbours (the length-equalising step of isotropic remeshing), its
+    /// ring's largest energy allowed up to the context's `energy_floor`.
+    Relax,
 }
 
 /// The power of [`Objective::MinMax`].
@@ -74,7 +78,7 @@ fn ring_energy(
         let e = amips_free(p, b, c)?;
         sum = sum
             + match objective {
-                Objective::Sum => e,
+                Objective::Sum | Objective::Relax => e,
                 Objective::MinMax => e.powered(MINMAX_POWER, scale),
             };
     }
@@ -230,7 +234,7 @@ impl SmoothPlan {
         let r = crate::mesh::ScratchRing::of(mesh, v);
         let faces = r.faces.clone();
         let scale = match objective {
-            Objective::Sum => 1.0,
+            Objective::Sum | Objective::Relax => 1.0,
             Objective::MinMax => {
                 // The linear energies' maximum: the objective's own scale.
                 let m = faces
@@ -247,7 +251,36 @@ impl SmoothPlan {
             }
         };
         let energy = |p: Point| ring_energy(mesh, v, &faces, p, objective, scale);
-        let (pos, t) = match role(mesh, v, &r) {
+        let role = role(mesh, v, &r);
+        if objective == Objective::Relax {
+            if role != Role::Free || r.neighbours.is_empty() {
+                return Err(Reject::FixedVertex);
+            }
+            // A vertex facing a curved section stays: the curved edge bulges
+            // toward it, and the mean of its neighbours ignores that.
+            let faces_a_curve = super::faces_a_curve(mesh, ctx, &r.faces);
+            if faces_a_curve {
+                return Err(Reject::FixedVertex);
+            }
+            let n = r.neighbours.len() as f64;
+            let (sx, sy) = r.neighbours.iter().fold((0.0, 0.0), |(x, y), &w| {
+                let q = mesh.position(w);
+                (x + q.x, y + q.y)
+            });
+            let pos = Point::new(sx / n, sy / n);
+            if pos == mesh.position(v) && !mesh.is_rational(v) {
+                return Err(Reject::NoChange);
+            }
+            return Ok(SmoothPlan {
+                v,
+                old_max_energy: max_energy(mesh, ctx, &faces).max(ctx.energy_floor),
+                old_corner_energy: corner_energy(mesh, ctx, &faces),
+                faces,
+                pos,
+                t: None,
+            });
+        }
+        let (pos, t) = match role {
             Role::Fixed | Role::SecondaryJunction => {
                 return Err(Reject::FixedVertex);
             }

@@ -533,6 +533,48 @@ fn smoothing_improves_a_bad_free_vertex() {
     assert!(applied >= 1 || e0 < 1.5, "{e0}");
 }
 
+#[test]
+fn relaxation_moves_a_free_vertex_to_its_neighbours_mean_within_the_floor() {
+    for seed in 0..6 {
+        let (mut mesh, mut ctx) = delaunay_mesh(seed, EnergyRule::NoWorseMax);
+        let verts: Vec<VertexId> = mesh.vertices().collect();
+        let mut moved = 0;
+        for v in verts {
+            let ring = mesh.vertex_ring(v);
+            let free = role(&mesh, v, &ring) == Role::Free;
+            let mean = ring
+                .neighbours
+                .iter()
+                .map(|&w| mesh.position(w).to_vec2())
+                .fold(kurbo::Vec2::ZERO, |a, b| a + b)
+                / ring.neighbours.len() as f64;
+            // Without a floor, the ring's worst energy may not grow; with
+            // one, up to it.
+            for floor in [0.0, 3.0] {
+                ctx.energy_floor = floor;
+                let e0 = max_energy(&mesh, &ctx, &ring.faces);
+                let out = super::smooth::try_smooth_with(&mut mesh, &ctx, v, Objective::Relax);
+                if !free {
+                    assert!(
+                        matches!(out, Outcome::Rejected(Reject::FixedVertex)),
+                        "seed {seed}"
+                    );
+                    continue;
+                }
+                if out.is_applied() {
+                    moved += 1;
+                    assert!(mesh.position(v).distance(mean.to_point()) < 1e-12);
+                    assert!(max_energy(&mesh, &ctx, &ring.faces) <= e0.max(floor) + 1e-12);
+                    break;
+                }
+            }
+        }
+        ctx.energy_floor = 0.0;
+        assert!(moved > 0, "seed {seed}: no free vertex relaxed");
+        assert_invariants(&mesh, &ctx, &mut HashMap::new(), "relaxation");
+    }
+}
+
 /// Three secondary features, `a b` and `a k b` with `k` at height `h` above
 /// `a b`: the BSP mesh holds the sliver `(a, b, k)`, whose three edges are
 /// features.

@@ -282,8 +282,7 @@ impl Schedule<'_> {
                 mesh,
                 |a, b| self.pair_target(a, b),
                 self.opts.l,
-                self.max_stretch,
-                self.field.is_asked(),
+                self.stretch,
                 u,
                 &ring_v,
             ) {
@@ -312,6 +311,7 @@ impl Schedule<'_> {
         if len.to_bits() != bits || len >= factor * self.edge_target(k) {
             return false;
         }
+
         !matches!(self.failed_collapse.get(&k), Some(&FailedCollapse { at, .. })
             if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at)
     }

@@ -7,9 +7,10 @@ use super::smooth::off_curve_vertices;
 use super::stats::{Measure, OptimizeStats, StopReason, measure};
 use super::{
     COARSEN_ENERGY, COARSEN_FACTOR, COARSEN_STRETCH, COLLAPSE_FACTOR, ENVELOPE_EPS,
-    ENVELOPE_ROUNDS, ENVELOPE_SPACING, FIELD_SPLIT_PASSES, MINMAX_MIN_GAIN, MINMAX_PASSES,
-    POLISH_MIN_GAIN, POLISH_PASSES, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, STALL_PASSES,
-    STALL_TOLERANCE, STOP_STRETCH, Schedule,
+    ENVELOPE_ROUNDS, ENVELOPE_SPACING, EQUALIZE_COLLAPSE, EQUALIZE_ROUNDS, EQUALIZE_STRETCH,
+    FIELD_SPLIT_PASSES, MINMAX_MIN_GAIN, MINMAX_PASSES, OPEN_STRETCH, POLISH_MIN_GAIN,
+    POLISH_PASSES, Phase, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, SPLIT_ABOVE, STALL_PASSES,
+    STALL_TOLERANCE, STOP_STRETCH, Schedule, Stretch,
 };
 use crate::budget::Deadline;
 use crate::mesh::{TriMesh, VertexId};
@@ -86,14 +87,11 @@ pub(crate) fn optimize_with_field(
     if s.stats().stop == StopReason::TimeLimit {
         return (s.stats().clone(), Vec::new());
     }
-    // From here on no operation stretches an edge past 2 l: the coarsening's
-    // collapses by their length rule, smoothing and swaps by the context's bound.
-    s.ctx.max_new_edge = STOP_STRETCH * opts.l;
     s.coarsen();
+    s.equalize();
     s.polish();
-    // The min-max polish lifts the worst triangles: quality first.
-    s.ctx.max_new_edge = f64::INFINITY;
     s.minmax_polish();
+    s.enter(Phase::Main);
     let rational = s.envelope_stages(rational);
     let refined: Vec<kurbo::Point> = s
         .mesh
@@ -243,9 +241,11 @@ impl Schedule<'_> {
     }
 
     /// Coarsen where the sizing field was refined for nothing: targets back to
-    /// `l`, one collapse pass of every edge whose collapse makes no edge longer
-    /// than [`COARSEN_STRETCH`] `l` (collapses never make the local worst
-    /// triangle worse).
+    /// the field, one collapse pass of every edge whose collapse makes no edge
+    /// longer than [`OPEN_STRETCH`] times its target where the field is at `l`,
+    /// and [`COARSEN_STRETCH`] below it (the split bound there too when the
+    /// user asked for sizes). Collapses never make the local worst triangle
+    /// worse than the floor below.
     fn coarsen(&mut self) {
         self.refresh_bases();
         let all: Vec<VertexId> = self.mesh.vertices().collect();
@@ -254,23 +254,91 @@ impl Schedule<'_> {
             self.set_target(v, b);
         }
         self.failed_collapse.clear();
-        self.max_stretch = COARSEN_STRETCH;
-        // Coarsening may make a ring worse, up to the stop energy (the quality
-        // asked for) but never worse than the mesh's worst triangle (outside the
-        // locked ones) or COARSEN_ENERGY, whichever is larger: the quality the goal
-        // measured holds, and how far a good mesh coarsens depends on l, not on
-        // how good its worst triangle happened to be.
-        self.ctx.energy_floor = measure(self.mesh)
-            .max_energy
-            .max(COARSEN_ENERGY)
-            .min(self.opts.stop_energy);
+        self.enter(Phase::Coarsen);
         self.collapse_pass(COARSEN_FACTOR);
-        self.ctx.energy_floor = 0.0;
+    }
+
+    /// Equalise edge lengths against the field (isotropic remeshing's
+    /// rounds): free vertices relaxed to their neighbours' mean, edges below
+    /// [`EQUALIZE_COLLAPSE`] of their target collapsed where no edge gets past
+    /// [`EQUALIZE_STRETCH`] of its own (the split bound near the user's size
+    /// sources), swaps; rings may get as bad as the coarsening allows.
+    fn equalize(&mut self) {
+        self.enter(Phase::Equalize);
+        for _ in 0..EQUALIZE_ROUNDS {
+            if self.out_of_time() {
+                break;
+            }
+            self.failed_smooth.clear();
+            let relaxed = self.smooth_pass_with(Objective::Relax);
+            self.failed_collapse.clear();
+            let collapsed = self.collapse_pass(EQUALIZE_COLLAPSE);
+            let swaps = self.swap_pass();
+            tracing::debug!(relaxed, collapsed, swaps, "equalize round");
+            if relaxed + collapsed == 0 {
+                break;
+            }
+        }
+        self.failed_smooth.clear();
+    }
+
+    /// Enter `phase`: its energy floor, its longest new edge and its
+    /// collapses' stretch (see [`Phase`]).
+    pub(crate) fn enter(&mut self, phase: Phase) {
+        // The floor of the phases that coarsen: a ring may get as bad as the
+        // stop energy (the quality asked for) but never worse than the mesh's
+        // worst triangle (outside the locked ones) or COARSEN_ENERGY,
+        // whichever is larger: the quality the goal measured holds, and how
+        // far a good mesh coarsens depends on l, not on how good its worst
+        // triangle happened to be.
+        let coarsen_floor = || {
+            measure(self.mesh)
+                .max_energy
+                .max(COARSEN_ENERGY)
+                .min(self.opts.stop_energy)
+        };
+        // Near size sources the user asked for, collapses keep the split
+        // bound in every phase; near the drawing's own (thin strokes) the
+        // coarsening stretches as it did before the size field.
+        let asked = self.field.is_asked();
+        let below = |s: f64| if asked { SPLIT_ABOVE } else { s };
+        // After the main passes no operation stretches an edge past 2 l (the
+        // collapses by their length rule, smoothing and swaps by the
+        // context's bound), except the min-max polish: quality first.
+        let (floor, max_new_edge, stretch) = match phase {
+            Phase::Main | Phase::Curved => (0.0, f64::INFINITY, Stretch::uniform(SPLIT_ABOVE)),
+            Phase::Coarsen => (
+                coarsen_floor(),
+                STOP_STRETCH * self.opts.l,
+                Stretch {
+                    open: OPEN_STRETCH,
+                    below: below(COARSEN_STRETCH),
+                },
+            ),
+            Phase::Equalize => (
+                coarsen_floor(),
+                STOP_STRETCH * self.opts.l,
+                Stretch {
+                    open: EQUALIZE_STRETCH,
+                    below: below(EQUALIZE_STRETCH),
+                },
+            ),
+            Phase::Polish => (
+                0.0,
+                STOP_STRETCH * self.opts.l,
+                Stretch::uniform(SPLIT_ABOVE),
+            ),
+            Phase::MinMax => (0.0, f64::INFINITY, Stretch::uniform(SPLIT_ABOVE)),
+        };
+        self.ctx.energy_floor = floor;
+        self.ctx.max_new_edge = max_new_edge;
+        self.stretch = stretch;
     }
 
     /// Polish: swaps and smoothing only (no change of size), each never making
     /// a local worst triangle worse, while they still improve the mean energy.
     fn polish(&mut self) {
+        self.enter(Phase::Polish);
         let mut before = measure(self.mesh);
         for _ in 0..POLISH_PASSES {
             let changed = self.swap_pass() + self.smooth_pass();
@@ -286,6 +354,7 @@ impl Schedule<'_> {
     /// Min-max polish: smoothing that lowers each ring's largest energy (and
     /// swaps), while the worst triangle still improves.
     fn minmax_polish(&mut self) {
+        self.enter(Phase::MinMax);
         self.failed_smooth.clear();
         let mut worst = measure(self.mesh).max_energy;
         for _ in 0..MINMAX_PASSES {

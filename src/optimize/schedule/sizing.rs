@@ -6,26 +6,24 @@
 use super::stats::locked;
 use super::{
     FIELD_LINEAR, REFINED_BELOW, SIZING_RADIUS, SIZING_REFINE, SIZING_RELAX, SIZING_STOP_FRACTION,
-    SIZING_WORST_DIVISOR, SPLIT_ABOVE, Schedule, slot,
+    SIZING_WORST_DIVISOR, SPLIT_ABOVE, Schedule, Stretch, slot,
 };
 use crate::element::energy::amips;
 use crate::mesh::{EdgeKey, TriMesh, VertexId, VertexRing};
 use crate::sizing::SizeField;
 use rayon::prelude::*;
 
-/// Whether collapsing `v` into `u` makes no edge longer than `max_stretch`
-/// times its target (`target(u, w)`: what the split pass would compare it
-/// with), `ring_v` being v's ring. Else the split pass would cut such an
-/// edge again (4/3 of its target): the two passes would undo each other
-/// forever. Where the user's size field asks for less than `l` (`strict`),
-/// no collapse stretches an edge past the split bound; at `l`, and without a
-/// field of the user's, the coarsening may (see [`COARSEN_STRETCH`](super::COARSEN_STRETCH)).
+/// Whether collapsing `v` into `u` makes no edge longer than `stretch` times
+/// its target (`target(u, w)`: what the split pass would compare it with;
+/// `stretch.open` where the target is `l`, `stretch.below` elsewhere), `ring_v`
+/// being v's ring. In the main passes both are the split bound: else the
+/// split pass would cut such an edge again and the two passes would undo each
+/// other forever.
 pub(super) fn lengths_kept(
     mesh: &TriMesh,
     target: impl Fn(VertexId, VertexId) -> f64,
     l: f64,
-    max_stretch: f64,
-    strict: bool,
+    stretch: Stretch,
     u: VertexId,
     ring_v: &VertexRing,
 ) -> bool {
@@ -35,12 +33,12 @@ pub(super) fn lengths_kept(
             return true;
         }
         let t = target(u, w);
-        let stretch = if strict && t < l * REFINED_BELOW {
-            max_stretch.min(SPLIT_ABOVE)
+        let s = if t >= l * REFINED_BELOW {
+            stretch.open
         } else {
-            max_stretch
+            stretch.below
         };
-        pu.distance(mesh.position(w)) <= stretch * t
+        pu.distance(mesh.position(w)) <= s * t
     })
 }
 
