@@ -20,6 +20,7 @@ mod preview;
 
 use crate::{Error, FemMesh, Result};
 pub use atomic::remove_temporaries;
+pub(crate) use preview::PreviewMarks;
 use std::path::Path;
 
 /// gmsh file format version.
@@ -139,8 +140,22 @@ pub fn write_preview_coloured(
     colours: &[Option<String>],
     path: &Path,
 ) -> Result<()> {
+    write_preview_marked(mesh, colours, &PreviewMarks::default(), path)
+}
+
+/// [`write_preview_coloured`] with `marks` drawn over it (`--preview`:
+/// forced corners, the worst unforced element).
+///
+/// # Errors
+/// As [`write_msh`].
+pub(crate) fn write_preview_marked(
+    mesh: &FemMesh,
+    colours: &[Option<String>],
+    marks: &PreviewMarks,
+    path: &Path,
+) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
-    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours, None))
+    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours, None, marks))
 }
 
 /// [`write_preview`] with each triangle filled by how its size matches the
@@ -155,7 +170,9 @@ pub(crate) fn write_preview_sized(
     path: &Path,
 ) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
-    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, &[], Some(h)))
+    atomic::write_atomic(path, |w| {
+        preview::write_svg(w, mesh, &[], Some(h), &PreviewMarks::default())
+    })
 }
 
 /// Check that a file can be created at `path` (its directory exists and is

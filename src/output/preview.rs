@@ -10,6 +10,11 @@
 //! three corner-to-corner edge lengths over h at the corners' centroid, on a
 //! diverging scale (blue below 4/5, neutral within [4/5, 4/3], the band the
 //! optimizer aims for, red above 4/3), with a legend to the right.
+//!
+//! [`PreviewMarks`] adds the element-quality marks of `--preview` (issue 38):
+//! an orange dot in each forced corner (a little inside the triangle, so the
+//! two corners of a wedge's vertex are told apart) and a blue ring around the
+//! worst unforced element.
 
 use crate::FemMesh;
 use crate::element::lagrange;
@@ -42,6 +47,20 @@ const SIZE_CLASSES: [(f64, &str, &str); 7] = [
 /// The legend's width and row height, in pixels.
 const LEGEND_WIDTH_PX: f64 = 190.0;
 const LEGEND_ROW_PX: f64 = 22.0;
+
+/// Radius of a forced corner's dot and the ring's smallest radius, as
+/// fractions of the bounding-box diagonal.
+const MARK_DOT_REL: f64 = 2.5e-3;
+const MARK_RING_REL: f64 = 1.5e-2;
+
+/// Marks drawn over the mesh: forced corners and the worst unforced element.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct PreviewMarks {
+    /// Forced corners as (triangle, corner 0..3).
+    pub forced: Vec<(usize, usize)>,
+    /// The worst unforced triangle.
+    pub worst: Option<usize>,
+}
 
 /// The class of `ratio` (edge / h) in [`SIZE_CLASSES`].
 fn size_class(ratio: f64) -> usize {
@@ -124,6 +143,7 @@ pub(crate) fn write_svg<W: Write>(
     mesh: &FemMesh,
     colours: &[Option<String>],
     size: Option<&dyn Fn(Point) -> f64>,
+    marks: &PreviewMarks,
 ) -> io::Result<()> {
     let order = mesh.order();
     let node = |i: u32| mesh.nodes[i as usize];
@@ -263,10 +283,77 @@ pub(crate) fn write_svg<W: Write>(
         }
         write_path(w, &path.d, colour, FEATURE_STROKE_REL * diag)?;
     }
+    write_marks(w, mesh, marks, diag)?;
     if size.is_some() {
         write_legend(w, (vx + mesh_w, vy), 1.0 / scale, &counts)?;
     }
     w.write_all(b"</svg>\n")
+}
+
+/// The forced corners' dots and the worst unforced element's ring (y flipped
+/// like everything else).
+fn write_marks<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    marks: &PreviewMarks,
+    diag: f64,
+) -> io::Result<()> {
+    let dot = MARK_DOT_REL * diag;
+    let mut d = String::new();
+    for &(t, k) in &marks.forced {
+        if t >= mesh.triangle_count() || k > 2 {
+            continue;
+        }
+        let c = mesh.corners(t);
+        let centroid = Point::new(
+            (c[0].x + c[1].x + c[2].x) / 3.0,
+            (c[0].y + c[1].y + c[2].y) / 3.0,
+        );
+        // A little into the triangle from the corner, never past its centroid.
+        let v = c[k];
+        let towards = centroid - v;
+        let step = towards.hypot().min(2.0 * dot);
+        let p = if towards.hypot() > 0.0 {
+            v + towards * (step / towards.hypot())
+        } else {
+            v
+        };
+        d.push_str(&format!(
+            "M{:?} {:?}m{:?} 0a{dot:?} {dot:?} 0 1 0 {:?} 0a{dot:?} {dot:?} 0 1 0 {:?} 0",
+            p.x,
+            -p.y,
+            -dot,
+            2.0 * dot,
+            -2.0 * dot
+        ));
+    }
+    if !d.is_empty() {
+        writeln!(
+            w,
+            "<path fill=\"#ff7f0e\" fill-opacity=\"0.8\" stroke=\"none\" d=\"{d}\"/>"
+        )?;
+    }
+    if let Some(t) = marks.worst.filter(|&t| t < mesh.triangle_count()) {
+        let c = mesh.corners(t);
+        let centroid = Point::new(
+            (c[0].x + c[1].x + c[2].x) / 3.0,
+            (c[0].y + c[1].y + c[2].y) / 3.0,
+        );
+        let r = c
+            .iter()
+            .map(|p| p.distance(centroid))
+            .fold(MARK_RING_REL * diag, f64::max)
+            * 1.2;
+        writeln!(
+            w,
+            "<circle cx=\"{:?}\" cy=\"{:?}\" r=\"{r:?}\" fill=\"none\" stroke=\"#1f3fff\" \
+             stroke-width=\"{:?}\"><title>worst unforced element</title></circle>",
+            centroid.x,
+            -centroid.y,
+            FEATURE_STROKE_REL * diag
+        )?;
+    }
+    Ok(())
 }
 
 /// The legend of the size shading at `at` (its top left corner, SVG
@@ -442,7 +529,7 @@ mod tests {
             curves: vec!["c".into()],
         };
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[], None).expect("write");
+        write_svg(&mut buf, &mesh, &[], None, &PreviewMarks::default()).expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         assert!(s.contains("#d62728") && s.contains("#2ca02c") && !s.contains("#1f77b4"));
         assert!(s.contains("0.0 -2.0"), "{s}");
@@ -456,7 +543,14 @@ mod tests {
         // with colours: the surface's triangles filled, one closed outline each;
         // anything but a hex colour never reaches the SVG
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[Some("#ff000080".into())], None).expect("write");
+        write_svg(
+            &mut buf,
+            &mesh,
+            &[Some("#ff000080".into())],
+            None,
+            &PreviewMarks::default(),
+        )
+        .expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         let fill = s
             .lines()
@@ -467,7 +561,14 @@ mod tests {
             (1, 1)
         );
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[Some("red\" onload=\"x".into())], None).expect("write");
+        write_svg(
+            &mut buf,
+            &mesh,
+            &[Some("red\" onload=\"x".into())],
+            None,
+            &PreviewMarks::default(),
+        )
+        .expect("write");
         assert!(!String::from_utf8(buf).expect("utf8").contains("onload"));
     }
 
@@ -508,7 +609,14 @@ mod tests {
         // h = 1 on the left half, 0.25 on the right: one neutral, one red triangle
         let h = |p: Point| if p.x < 0.5 { 1.0 } else { 0.25 };
         let mut buf = Vec::new();
-        write_svg(&mut buf, &mesh, &[Some("#ff0000".into())], Some(&h)).expect("write");
+        write_svg(
+            &mut buf,
+            &mesh,
+            &[Some("#ff0000".into())],
+            Some(&h),
+            &PreviewMarks::default(),
+        )
+        .expect("write");
         let s = String::from_utf8(buf).expect("utf8");
         assert!(
             s.contains("id=\"size-legend\"") && s.contains("edge / h"),

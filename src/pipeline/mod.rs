@@ -27,6 +27,7 @@ use crate::regions::{RegionOptions, RegionReport};
 use crate::sizing::{FieldInput, SizeField, SizingReport};
 use crate::svg::{self, Drawing, FeatureGeom, PaintOptions};
 use crate::{Error, Result};
+use forced::ForcedCorners;
 use kurbo::Rect;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -365,7 +366,7 @@ fn mesh_within(
     deadline: Deadline,
 ) -> Result<Meshed> {
     let meshed = with_threads(params.threads, || {
-        mesh_stages(drawing, params, regions, deadline).map(|(m, _)| m)
+        mesh_stages(drawing, params, regions, deadline).map(|(m, _, _)| m)
     });
     deadline.finish();
     meshed
@@ -388,13 +389,15 @@ fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 }
 
 /// The stages of [`mesh_within`], on the current thread pool; with the size
-/// field they met (the CDT baseline's: `l` everywhere).
+/// field they met (the CDT baseline's: `l` everywhere) and each delivered
+/// triangle's mask of forced corners (empty for the CDT baseline; see
+/// [`forced`]).
 fn mesh_stages(
     drawing: &Drawing,
     params: &Params,
     regions: &RegionOptions,
     deadline: Deadline,
-) -> Result<(Meshed, SizeField)> {
+) -> Result<(Meshed, SizeField, Vec<u8>)> {
     let mut times = Times::default();
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
@@ -402,6 +405,7 @@ fn mesh_stages(
     let mut optimize = None;
     let mut warnings = drawing.warnings.clone();
     let mut curve = None;
+    let mut forced: Option<ForcedCorners> = None;
     let mut refined: Vec<kurbo::Point> = Vec::new();
     // One size field for either mesher, built before any meshing.
     let names = region_names(drawing, regions);
@@ -426,6 +430,13 @@ fn mesh_stages(
         }
         Mesher::TriWild => {
             let field = &field;
+            let l_floor = resolved.eps.min(resolved.l);
+            let h_min = |p: kurbo::Point| l_floor.min(field.at(p));
+            let mut classify = |mesh: &TriMesh, ctx: &Context, times: &mut Times| {
+                forced = Some(times.time("forced", || {
+                    ForcedCorners::classify(mesh, ctx, resolved.alpha, &h_min)
+                }));
+            };
             check_deadline(&deadline, Stage::Features)?;
             let fs = times.time("features", || {
                 FeatureSet::build_sized(drawing, &resolved, &deadline, &|p| field.at(p))
@@ -448,6 +459,7 @@ fn mesh_stages(
                     s.vertices = mesh.num_vertices();
                     s.triangles = mesh.num_faces();
                 }
+                classify(&mesh, &ctx, &mut times);
                 Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Bsp, &mut times)?)
             } else {
                 let opts = optimize_options(params, &resolved).with_deadline(deadline);
@@ -467,6 +479,7 @@ fn mesh_stages(
                 }
                 optimize = Some(stats);
                 if params.stop_after == Some(Stage::Optimize) {
+                    classify(&mesh, &ctx, &mut times);
                     Delivered::Linear(to_linear(&mesh, &fs, &ctx, Stage::Optimize, &mut times)?)
                 } else {
                     let (cm, cs) = times.time("curve", || {
@@ -479,6 +492,7 @@ fn mesh_stages(
                         curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;
                     check_deadline(&deadline, Stage::Curve)?;
+                    classify(&mesh, &ctx, &mut times);
                     curve = Some(cs);
                     Delivered::Curved(cm)
                 }
@@ -512,7 +526,13 @@ fn mesh_stages(
     }
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
-    let quality = times.time("quality", || Quality::of(&mesh));
+    let mask = forced.map(|f| f.mask(&mesh)).unwrap_or_default();
+    let quality = times.time("quality", || match params.mesher {
+        Mesher::TriWild => Quality::of_classified(&mesh, &mask, params.alpha_deg),
+        Mesher::Cdt => Quality::of(&mesh),
+    });
+    let mut region_report = region_report;
+    region_report.small = crate::regions::SmallRegions::of(&region_report.surfaces);
     let mut sizing = field.report().clone();
     sizing.edges = Some(times.time("sizing", || mesh_edge_match(&mesh, &field, &refined)));
     let sizing = Some(sizing);
@@ -538,7 +558,7 @@ fn mesh_stages(
         warnings,
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
-    Ok((Meshed { mesh, report }, field))
+    Ok((Meshed { mesh, report }, field, mask))
 }
 
 /// The name of each shape's region as the .msh will write it under `regions`'
@@ -859,7 +879,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     // Meshing and writing on one pool: the writer formats in parallel too,
     // on no more threads than the mesher was given.
     let written = with_threads(params.threads, || -> Result<(Report, f64)> {
-        let (Meshed { mesh, report }, field) =
+        let (Meshed { mesh, report }, field, mask) =
             mesh_stages(&drawing, params, &opts.regions, deadline)?;
         let t = Instant::now();
         output::write_msh(&mesh, output, opts.msh)?;
@@ -872,7 +892,18 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
                 .iter()
                 .map(|s| s.colour.clone())
                 .collect();
-            output::write_preview_coloured(&mesh, &colours, p)?;
+            let marks = output::PreviewMarks {
+                forced: (0..mask.len())
+                    .flat_map(|t| (0..3).map(move |k| (t, k)))
+                    .filter(|&(t, k)| mask[t] & (0b1001 << k) != 0)
+                    .collect(),
+                worst: report
+                    .quality
+                    .unforced
+                    .and_then(|u| u.worst)
+                    .map(|w| w.element),
+            };
+            output::write_preview_marked(&mesh, &colours, &marks, p)?;
         }
         Ok((report, t.elapsed().as_secs_f64()))
     });
@@ -885,6 +916,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     Ok(report)
 }
 
+mod forced;
 mod snap;
 #[cfg(test)]
 mod tests;

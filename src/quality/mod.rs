@@ -39,7 +39,62 @@ pub struct Quality {
     /// elements as written (1 when all are straight; ≤ 0 if one is invalid):
     /// `triwild check`'s `min_detj_ratio` of the written file.
     pub min_jacobian_ratio: f64,
+    /// The same numbers left to the optimizer: over the corners and elements
+    /// the drawing does not force (issue 38; the TriWild mesher only, `None`
+    /// for the CDT baseline). See [`Unforced`].
+    pub unforced: Option<Unforced>,
 }
+
+/// Quality over what the drawing does not force. A corner is forced when the
+/// input features leave no room for a good angle there (a wedge between two
+/// features meeting below α, or a feature closer to another than the sizes
+/// resolve; the pipeline decides it from the input, never from the mesh's
+/// angles); an element is forced when one of its corners is.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Unforced {
+    /// Smallest angle over the unforced corners, degrees (180 if every corner
+    /// is forced).
+    pub min_angle_deg: f64,
+    /// Smallest certified Jacobian ratio over the unforced elements (1 if
+    /// there is none).
+    pub min_jacobian_ratio: f64,
+    /// Unforced corners below α.
+    pub below_alpha: usize,
+    /// Forced corners.
+    pub forced_corners: usize,
+    /// Of those, forced by a wedge between features meeting below α.
+    pub forced_by_angle: usize,
+    /// Of those, forced by a feature closer than the sizes resolve.
+    pub forced_by_proximity: usize,
+    /// All corners (three per triangle).
+    pub corners: usize,
+    /// Forced elements.
+    pub forced_elements: usize,
+    /// The unforced element with the smallest angle, if any.
+    pub worst: Option<WorstElement>,
+}
+
+/// Where the worst unforced element is and how bad.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct WorstElement {
+    /// Its index among the written triangles.
+    pub element: usize,
+    /// Centroid of its corners, x (the mesh's coordinates, y up as written).
+    pub x: f64,
+    /// Centroid of its corners, y.
+    pub y: f64,
+    /// Its smallest angle, degrees.
+    pub min_angle_deg: f64,
+    /// Its certified Jacobian ratio.
+    pub jacobian_ratio: f64,
+}
+
+/// Bits of a triangle's forced-corner mask ([`Quality::of_classified`]):
+/// corner `k` forced by a wedge sets `FORCED_BY_ANGLE << k`, by proximity
+/// `FORCED_BY_PROXIMITY << k`.
+pub(crate) const FORCED_BY_ANGLE: u8 = 1;
+/// See [`FORCED_BY_ANGLE`].
+pub(crate) const FORCED_BY_PROXIMITY: u8 = 8;
 
 impl Quality {
     /// The summary of a mesh without triangles.
@@ -50,19 +105,84 @@ impl Quality {
         mean_amips: 0.0,
         area: 0.0,
         min_jacobian_ratio: 0.0,
+        unforced: None,
     };
 
     /// Measure `mesh`'s elements: angles and energies of the straight triangles
     /// spanned by their corners, area and certified Jacobian ratio of the
     /// elements themselves (curved or not).
     pub fn of(mesh: &FemMesh) -> Quality {
+        Quality::measure(mesh).0
+    }
+
+    /// [`Quality::of`] plus [`Quality::unforced`]: `forced[i]` is triangle
+    /// `i`'s mask of forced corners ([`FORCED_BY_ANGLE`],
+    /// [`FORCED_BY_PROXIMITY`]; a missing entry: none), `alpha_deg` the α the
+    /// corners below it are counted against.
+    pub(crate) fn of_classified(mesh: &FemMesh, forced: &[u8], alpha_deg: f64) -> Quality {
+        let (mut q, ratios) = Quality::measure(mesh);
+        let mut u = Unforced {
+            min_angle_deg: 180.0,
+            min_jacobian_ratio: 1.0,
+            below_alpha: 0,
+            forced_corners: 0,
+            forced_by_angle: 0,
+            forced_by_proximity: 0,
+            corners: 3 * mesh.triangle_count(),
+            forced_elements: 0,
+            worst: None,
+        };
+        for (i, &ratio) in ratios.iter().enumerate() {
+            let m = forced.get(i).copied().unwrap_or(0);
+            let corners = mesh.corners(i);
+            let angles = corner_angles(corners).map(f64::to_degrees);
+            let mut element_forced = false;
+            for (k, &a) in angles.iter().enumerate() {
+                let (by_angle, by_near) = (
+                    m & (FORCED_BY_ANGLE << k) != 0,
+                    m & (FORCED_BY_PROXIMITY << k) != 0,
+                );
+                if by_angle || by_near {
+                    element_forced = true;
+                    u.forced_corners += 1;
+                    u.forced_by_angle += usize::from(by_angle);
+                    u.forced_by_proximity += usize::from(by_near);
+                } else {
+                    u.min_angle_deg = u.min_angle_deg.min(a);
+                    u.below_alpha += usize::from(a < alpha_deg);
+                }
+            }
+            if element_forced {
+                u.forced_elements += 1;
+                continue;
+            }
+            u.min_jacobian_ratio = u.min_jacobian_ratio.min(ratio);
+            let min = angles.iter().copied().fold(f64::INFINITY, f64::min);
+            if u.worst.is_none_or(|w| min < w.min_angle_deg) {
+                let [a, b, c] = corners;
+                u.worst = Some(WorstElement {
+                    element: i,
+                    x: (a.x + b.x + c.x) / 3.0,
+                    y: (a.y + b.y + c.y) / 3.0,
+                    min_angle_deg: min,
+                    jacobian_ratio: ratio,
+                });
+            }
+        }
+        q.unforced = Some(u);
+        q
+    }
+
+    /// The summary and each element's certified Jacobian ratio.
+    fn measure(mesh: &FemMesh) -> (Quality, Vec<f64>) {
         let mut q = Quality::of_triangles((0..mesh.triangle_count()).map(|i| mesh.corners(i)));
         if mesh.triangle_count() == 0 {
-            return q;
+            return (q, Vec::new());
         }
         let order = mesh.order();
         let opts = CertifyOptions::DEFAULT;
         let mut pts = Vec::with_capacity(order.triangle_nodes());
+        let mut ratios = Vec::with_capacity(mesh.triangle_count());
         q.area = 0.0;
         q.min_jacobian_ratio = f64::INFINITY;
         for i in 0..mesh.triangle_count() {
@@ -70,13 +190,15 @@ impl Quality {
             pts.extend(mesh.triangle(i).iter().map(|&v| mesh.nodes[v as usize]));
             let Some(det) = jacobian::det_lagrange(order, &pts) else {
                 q.min_jacobian_ratio = f64::NEG_INFINITY;
+                ratios.push(f64::NEG_INFINITY);
                 continue;
             };
             q.area += jacobian::area(&det);
             let cert = jacobian::certify(&det, jacobian::zero_abs(&pts, opts.zero_rel), &opts);
             q.min_jacobian_ratio = q.min_jacobian_ratio.min(cert.ratio());
+            ratios.push(cert.ratio());
         }
-        q
+        (q, ratios)
     }
 
     /// Measure a set of straight triangles given by their corners
@@ -90,6 +212,7 @@ impl Quality {
             mean_amips: 0.0,
             area: 0.0,
             min_jacobian_ratio: 1.0,
+            unforced: None,
         };
         let mut amips_sum = 0.0;
         for corners in triangles {
@@ -252,6 +375,46 @@ mod tests {
         );
         assert!(close(q.area, 1.0), "{q:?}");
         assert_eq!(Quality::per_triangle(&mesh).len(), 2);
+    }
+
+    #[test]
+    fn forced_corners_are_left_out_of_the_unforced_summary() {
+        // A sliver (corner 0 about 1.1°) beside a right triangle.
+        let linear = LinearMesh {
+            vertices: vec![
+                Point::ZERO,
+                Point::new(1.0, 0.0),
+                Point::new(1.0, 0.02),
+                Point::new(1.0, 1.0),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            edges: vec![],
+        };
+        let mesh = FemMesh::from_linear(&linear, "domain", |_| String::new());
+        let none = Quality::of_classified(&mesh, &[], 10.0);
+        let u = none.unforced.expect("classified");
+        assert_eq!((u.forced_corners, u.corners, u.forced_elements), (0, 6, 0));
+        assert!(close(u.min_angle_deg, none.min_angle_deg), "{u:?}");
+        assert_eq!(u.below_alpha, 1);
+        assert_eq!(u.worst.map(|w| w.element), Some(0));
+        // Corner 0 of the sliver forced by a wedge: the sliver's other corners
+        // still count, the element does not; the worst is the other one.
+        let q = Quality::of_classified(&mesh, &[FORCED_BY_ANGLE], 10.0);
+        let u = q.unforced.expect("classified");
+        assert_eq!(
+            (u.forced_corners, u.forced_by_angle, u.forced_by_proximity),
+            (1, 1, 0)
+        );
+        assert_eq!((u.forced_elements, u.below_alpha), (1, 0));
+        assert!(u.min_angle_deg > 10.0 && q.min_angle_deg < 2.0, "{q:?}");
+        let w = u.worst.expect("an unforced element");
+        assert_eq!(w.element, 1);
+        assert!(close(w.x, 2.0 / 3.0) && close(w.y, 1.02 / 3.0), "{w:?}");
+        assert!(close(w.jacobian_ratio, 1.0), "{w:?}");
+        // Proximity bits count as forced too.
+        let p = Quality::of_classified(&mesh, &[FORCED_BY_PROXIMITY << 1], 10.0);
+        assert_eq!(p.unforced.map(|u| u.forced_by_proximity), Some(1));
+        assert_eq!(Quality::of(&mesh).unforced, None);
     }
 
     #[test]

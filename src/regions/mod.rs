@@ -78,6 +78,65 @@ pub struct RegionReport {
     /// triangle once each face took its majority label (their outlines are
     /// closer than the mesh resolves; `--stats` warns with their names).
     pub lost_shapes: usize,
+    /// Surfaces of at most [`SmallRegions::MAX_TRIANGLES`] triangles, which a
+    /// solver meets as a material of a handful of elements.
+    pub small: SmallRegions,
+}
+
+/// The physical surfaces of a few triangles at most (issue 38): how many, and
+/// the smallest ones by area.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SmallRegions {
+    /// Surfaces with at most [`SmallRegions::MAX_TRIANGLES`] triangles.
+    pub count: usize,
+    /// The smallest of them by area (at most [`SmallRegions::LISTED`]),
+    /// smallest first: name, triangles, area.
+    pub smallest: Vec<SmallRegion>,
+}
+
+/// One small surface.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SmallRegion {
+    /// Surface name.
+    pub name: String,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Area.
+    pub area: f64,
+}
+
+impl SmallRegions {
+    /// A surface of at most this many triangles is small.
+    pub const MAX_TRIANGLES: usize = 4;
+    /// How many of the smallest are named.
+    pub const LISTED: usize = 5;
+
+    /// The small surfaces among `surfaces` (a surface with no triangle is not
+    /// in the mesh and is not counted).
+    pub(crate) fn of(surfaces: &[RegionStat]) -> SmallRegions {
+        let mut small: Vec<&RegionStat> = surfaces
+            .iter()
+            .filter(|s| s.triangles > 0 && s.triangles <= Self::MAX_TRIANGLES)
+            .collect();
+        small.sort_by(|a, b| {
+            a.area
+                .abs()
+                .total_cmp(&b.area.abs())
+                .then(a.name.cmp(&b.name))
+        });
+        SmallRegions {
+            count: small.len(),
+            smallest: small
+                .iter()
+                .take(Self::LISTED)
+                .map(|s| SmallRegion {
+                    name: s.name.clone(),
+                    triangles: s.triangles,
+                    area: s.area,
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Classify `mesh` by the fills of `drawing` and make the surfaces `opts` asks
@@ -128,6 +187,7 @@ pub(crate) fn tag(
             relabelled: asg.relabelled,
             relabelled_area: asg.relabelled_area,
             lost_shapes: asg.lost.len(),
+            small: SmallRegions::default(),
         },
         asg.lost,
     ))

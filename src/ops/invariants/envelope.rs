@@ -184,6 +184,34 @@ impl Envelope {
         best
     }
 
+    /// The input segments of polyline `polyline` within `r ≤ ε` of `p`, each
+    /// once, into `out` (cleared first): what the polyline looks like at `p`
+    /// (the forced-corner classification reads the drawing's directions there).
+    pub(crate) fn segments_near(&self, p: Point, polyline: u32, r: f64, out: &mut Vec<Line>) {
+        out.clear();
+        let r = r.min(self.eps);
+        let range = self.ranges.get(polyline as usize).cloned().unwrap_or(0..0);
+        let mut push = |k: u32| {
+            let l = self.segments[k as usize].0;
+            if point_segment_distance(p, l) <= r && !out.contains(&l) {
+                out.push(l);
+            }
+        };
+        if range.len() <= SCAN_WHOLE as usize {
+            range.for_each(&mut push);
+            return;
+        }
+        let (x0, y0) = self.key(Point::new(p.x - r, p.y - r));
+        let (x1, y1) = self.key(Point::new(p.x + r, p.y + r));
+        for x in x0..=x1.min(x0.saturating_add(4)) {
+            for y in y0..=y1.min(y0.saturating_add(4)) {
+                if let Some(bucket) = self.grid.get(&(x, y, polyline)) {
+                    bucket.iter().copied().for_each(&mut push);
+                }
+            }
+        }
+    }
+
     /// Whether the segment `a b` lies within ε of polyline `polyline`,
     /// decided conservatively (see the module doc). Rejects when unsure.
     pub(crate) fn contains_segment(&self, a: Point, b: Point, polyline: u32) -> bool {
