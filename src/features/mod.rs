@@ -30,8 +30,11 @@
 //! 4. `separation`: μ-separation (Definition 4.1), decided conservatively on the sections'
 //!    control hulls with a uniform grid; a primary section shorter than μ that shares no end
 //!    point with another primary section is demoted too (its fixed ends, within μ of the
-//!    secondary features around it, would only force slivers); then the secondary
-//!    simplification (endpoints closer than μ collapse to their barycentre).
+//!    secondary features around it, would only force slivers); runs of secondary
+//!    sections cut finer than a secondary section needs (the size field gives a thin
+//!    stroke's size to its own outline only where that outline may be primary) are cut
+//!    again at their secondary size; then the secondary simplification (endpoints
+//!    closer than μ collapse to their barycentre).
 //!
 //! Guarantees to the next stage (checked by the property tests with an independent checker):
 //! every primary section has constant-sign curvature, turns less than α, is no longer than
@@ -68,6 +71,15 @@ use std::time::Instant;
 /// that joins them (`continuation`): far below the 1e-9·d to which nodes must lie on the
 /// drawing's curves, far above the rounding of the pieces' own evaluation.
 const JOIN_TOL_REL: f64 = 1e-11;
+
+/// What a section's size is asked for (see [`FeatureSet::build_sized`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum CutFor {
+    /// Any section, before μ-separation decides which are primary.
+    Any,
+    /// A run of secondary sections, after it: never smaller than for `Any`.
+    Secondary,
+}
 
 /// Index of a primary section in [`FeatureSet::primary`].
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -509,7 +521,7 @@ impl FeatureSet {
         params: &Resolved,
         deadline: &Deadline,
     ) -> FeatureSet {
-        Self::build_sized(drawing, params, deadline, &|_| params.l)
+        Self::build_sized(drawing, params, deadline, &|_, _, _| params.l)
     }
 
     /// Preprocess the features of `drawing` against the size field `size`
@@ -517,12 +529,16 @@ impl FeatureSet {
     /// (the set is then incomplete: the caller checks the deadline and discards
     /// it). Never fails and always terminates: every refinement loop has a
     /// budget; what exceeds it is made secondary. Curves are resampled into sections no longer than
-    /// the size along them.
+    /// the size along them: `size(p, source, CutFor::Any)` is the size at `p` for a section of the
+    /// input feature `source`; after μ-separation, runs of secondary sections are cut again
+    /// where `size(p, source, CutFor::Secondary)` is larger (the pipeline gives a thin
+    /// stroke's size to the stroke's own outline only, and only where it is primary:
+    /// `SizeField::for_curve`).
     pub(crate) fn build_sized(
         drawing: &Drawing,
         params: &Resolved,
         deadline: &Deadline,
-        size: &(dyn Fn(kurbo::Point) -> f64 + Sync),
+        size: &(dyn Fn(kurbo::Point, FeatureSource, CutFor) -> f64 + Sync),
     ) -> FeatureSet {
         let _span = tracing::debug_span!("features").entered();
         let start = Instant::now();
@@ -657,12 +673,16 @@ impl FeatureSet {
         // resampling.
         let t = Instant::now();
         let mut sections = Vec::new();
+        // By section: whether it starts a window (a crossing or a trimmed piece before it).
+        let mut window_start = Vec::new();
         for (idx, (k, piece)) in flat.iter().enumerate() {
             let (i, parent) = (pieces[*k].0, &pieces[*k].1);
             let mut cuts = vec![piece.t[0]];
             cuts.extend(found.splits[idx].iter().copied());
             cuts.push(piece.t[1]);
-            let shape = drawing.features[i as usize].source.shape;
+            let source = drawing.features[i as usize].source;
+            let shape = source.shape;
+            let size = |p: Point| size(p, source, CutFor::Any);
             for w in cuts.windows(2) {
                 if let Some(trimmer) = &trimmer
                     && !trimmer.keeps(shape, parent, as_drawn[*k].as_ref(), w[0], w[1])
@@ -670,7 +690,11 @@ impl FeatureSet {
                     counts.trimmed_pieces += 1;
                     continue;
                 }
-                for p in resample::resample(parent, w[0], w[1], params, size) {
+                for (n, p) in resample::resample(parent, w[0], w[1], params, &size)
+                    .into_iter()
+                    .enumerate()
+                {
+                    window_start.push(n == 0);
                     let mut ctrl = p.ctrl;
                     // Sections meeting at a crossing share its point exactly.
                     if let Some(&x) = found.points.get(&(idx, p.t0.to_bits())) {
@@ -709,6 +733,14 @@ impl FeatureSet {
             .count();
         counts.short_isolated =
             separation::demote_short_isolated(&sections, &mut primary, params.mu);
+        // 4b. Runs of secondary sections cut finer than a secondary section
+        // needs (a thin stroke's own outline where it is not kept apart) are cut
+        // again at their secondary size.
+        let source = |s: &Section| drawing.features[s.feature as usize].source;
+        let (sections, mut primary, recut) =
+            resample::recut_secondary(sections, primary, &window_start, params, &|s, p, cut| {
+                size(p, source(s), cut)
+            });
         timing.separation_ms = ms(t);
 
         // 5. Secondary simplification and assembly.
@@ -720,6 +752,7 @@ impl FeatureSet {
             &mut points,
             params.mu,
             params.alpha,
+            &recut,
         );
         counts.collapsed_vertices = simplified.collapsed;
         counts.demoted_after_simplify = simplified.demoted;

@@ -15,8 +15,8 @@
 //! primary section its two fixed end points would force a sliver of that size into the
 //! mesh. A depth and count budget bounds the work on any input.
 
-use super::Parent;
 use super::split::{end_tangent, start_tangent};
+use super::{CutFor, Parent, Section};
 use crate::mesh::{angle_between, point_segment_distance};
 use crate::params::Resolved;
 use kurbo::{CubicBez, Line, ParamCurveCurvature};
@@ -147,6 +147,88 @@ pub(super) fn resample(
         }
     }
     out
+}
+
+/// Runs of consecutive secondary sections (one feature, one parent, one window
+/// between crossings: `window_start` by section) cut finer than a secondary
+/// section needs (`size(section, p, CutFor::Secondary)` above
+/// `size(section, p, CutFor::Any)` at some section's midpoint), cut again at
+/// their secondary size; each run keeps its end points. Returns the sections,
+/// whether each is primary, and whether each was cut again.
+pub(super) fn recut_secondary(
+    sections: Vec<Section>,
+    primary: Vec<bool>,
+    window_start: &[bool],
+    r: &Resolved,
+    size: &dyn Fn(&Section, kurbo::Point, CutFor) -> f64,
+) -> (Vec<Section>, Vec<bool>, Vec<bool>) {
+    let finer = |s: &Section| {
+        let m = s.ctrl.p0.midpoint(s.ctrl.p3);
+        size(s, m, CutFor::Secondary) > size(s, m, CutFor::Any)
+    };
+    if !sections.iter().zip(&primary).any(|(s, p)| !p && finer(s)) {
+        return (sections, primary, Vec::new());
+    }
+    let mut out = Vec::with_capacity(sections.len());
+    let mut out_primary = Vec::with_capacity(sections.len());
+    let mut recut = Vec::with_capacity(sections.len());
+    let mut i = 0;
+    while i < sections.len() {
+        let first = sections[i];
+        if primary[i] {
+            out.push(first);
+            out_primary.push(true);
+            recut.push(false);
+            i += 1;
+            continue;
+        }
+        let mut j = i + 1;
+        while j < sections.len()
+            && !primary[j]
+            && !window_start[j]
+            && sections[j].feature == first.feature
+            && sections[j].parent == first.parent
+            && sections[j].t0 == sections[j - 1].t1
+            && sections[j].ctrl.p0 == sections[j - 1].ctrl.p3
+        {
+            j += 1;
+        }
+        if j - i >= 2 && sections[i..j].iter().any(finer) {
+            let last = sections[j - 1];
+            let pieces = resample(&first.parent, first.t0, last.t1, r, &|p| {
+                size(&first, p, CutFor::Secondary)
+            });
+            if pieces.len() < j - i {
+                let n = pieces.len();
+                for (k, p) in pieces.into_iter().enumerate() {
+                    let mut ctrl = p.ctrl;
+                    if k == 0 {
+                        ctrl.p0 = first.ctrl.p0;
+                    }
+                    if k + 1 == n {
+                        ctrl.p3 = last.ctrl.p3;
+                    }
+                    out.push(Section {
+                        feature: first.feature,
+                        parent: first.parent,
+                        t0: p.t0,
+                        t1: p.t1,
+                        ctrl,
+                        eligible: p.eligible,
+                    });
+                    out_primary.push(false);
+                    recut.push(true);
+                }
+                i = j;
+                continue;
+            }
+        }
+        out.extend_from_slice(&sections[i..j]);
+        out_primary.extend(std::iter::repeat_n(false, j - i));
+        recut.extend(std::iter::repeat_n(false, j - i));
+        i = j;
+    }
+    (out, out_primary, recut)
 }
 
 #[cfg(test)]

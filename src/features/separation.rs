@@ -375,9 +375,10 @@ pub(super) struct Simplified {
 }
 
 /// Build the secondary polylines (runs of consecutive secondary sections of one input
-/// feature), collapse close vertices, re-check primary sections against the moved
-/// segments (demoting offenders in `primary`), and turn polylines that collapsed to one
-/// point into isolated points.
+/// feature), collapse close vertices, re-check primary sections against the
+/// segments when some moved (else against those of the sections `recut` after the
+/// separation test, [`super::resample::recut_secondary`]), demoting offenders in
+/// `primary`, and turn polylines that collapsed to one point into isolated points.
 pub(super) fn simplify(
     sections: &[Section],
     primary: &mut [bool],
@@ -385,9 +386,12 @@ pub(super) fn simplify(
     points: &mut Vec<FeaturePoint>,
     mu: f64,
     alpha: f64,
+    recut: &[bool],
 ) -> Simplified {
     // Runs of secondary sections.
     let mut runs: Vec<(u32, Vec<Point>)> = Vec::new();
+    // By segment of the runs, in order: whether its section was cut again.
+    let mut seg_recut: Vec<bool> = Vec::new();
     let mut prev: Option<usize> = None;
     for (i, s) in sections.iter().enumerate() {
         if primary[i] {
@@ -400,6 +404,7 @@ pub(super) fn simplify(
             Some((_, pts)) if continues => pts.push(s.ctrl.p3),
             _ => runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3])),
         }
+        seg_recut.push(recut.get(i).copied().unwrap_or(false));
         prev = Some(i);
     }
     // Collapse free vertices.
@@ -422,13 +427,18 @@ pub(super) fn simplify(
             k += 1;
         }
     }
-    // Re-check primary sections against the (possibly moved) secondary segments.
-    let segs: Vec<Line> = runs
+    // Re-check primary sections against the (possibly moved) secondary segments,
+    // or, when none moved, against those cut again after the separation test.
+    let mut segs: Vec<Line> = runs
         .iter()
         .flat_map(|(_, pts)| pts.windows(2).map(|w| Line::new(w[0], w[1])))
         .collect();
+    if clusters.moved == 0 {
+        let mut flags = seg_recut.iter();
+        segs.retain(|_| flags.next().copied().unwrap_or(false));
+    }
     let mut demoted = 0;
-    if clusters.moved > 0 {
+    if !segs.is_empty() {
         let boxes = segs.iter().map(|l| Rect::from_points(l.p0, l.p1));
         let grid = grid_for(boxes, segs.len(), mu);
         for (i, s) in sections.iter().enumerate() {

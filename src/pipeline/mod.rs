@@ -260,7 +260,9 @@ impl FeatureAnalysis {
         let resolved = params.resolve(drawing.diagonal());
         let field = default_field(drawing, params, Deadline::NONE)?;
         Ok(FeatureAnalysis {
-            set: FeatureSet::build_sized(drawing, &resolved, &Deadline::NONE, &|p| field.at(p)),
+            set: FeatureSet::build_sized(drawing, &resolved, &Deadline::NONE, &|p, source, cut| {
+                field.for_curve(p, source.shape, cut)
+            }),
         })
     }
 
@@ -439,7 +441,9 @@ fn mesh_stages(
             };
             check_deadline(&deadline, Stage::Features)?;
             let fs = times.time("features", || {
-                FeatureSet::build_sized(drawing, &resolved, &deadline, &|p| field.at(p))
+                FeatureSet::build_sized(drawing, &resolved, &deadline, &|p, source, cut| {
+                    field.for_curve(p, source.shape, cut)
+                })
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
@@ -742,7 +746,7 @@ pub(crate) fn sized_features(drawing: &Drawing, params: &Params) -> Result<Featu
         drawing,
         &resolved,
         &Deadline::NONE,
-        &|p| field.at(p),
+        &|p, source, cut| field.for_curve(p, source.shape, cut),
     ))
 }
 

@@ -5,7 +5,7 @@
 
 use super::FieldInput;
 use super::tree::Source;
-use crate::svg::{Drawing, FeatureGeom, Segment, ShapeId, Subpath};
+use crate::svg::{Drawing, FeatureGeom, Segment, Shape, ShapeId, Subpath};
 use crate::{Error, Result};
 use kurbo::{ParamCurve, ParamCurveCurvature, ParamCurveDeriv, Point, Rect, Vec2};
 use rayon::prelude::*;
@@ -131,8 +131,7 @@ fn along(drawing: &Drawing, shapes: &[ShapeId], h: f64, slope: f64, out: &mut Ve
 pub(super) fn strokes(drawing: &Drawing, mu: f64, slope: f64) -> Vec<Source> {
     let mut out = Vec::new();
     for (i, s) in drawing.shapes.iter().enumerate() {
-        if let Some(w) = s.paint.stroke_width.filter(|&w| w >= mu) {
-            let h = STROKE_SIZE_PER_WIDTH * w;
+        if let Some(h) = stroke_size(s, mu) {
             along(
                 drawing,
                 &[ShapeId(i as u32)],
@@ -143,6 +142,14 @@ pub(super) fn strokes(drawing: &Drawing, mu: f64, slope: f64) -> Vec<Source> {
         }
     }
     out
+}
+
+/// The size a thin stroke meshed as an area asks for on its own outline
+/// ([`STROKE_SIZE_PER_WIDTH`] times its width; see [`strokes`]), `None` for
+/// any other shape and for a stroke narrower than `mu`.
+pub(super) fn stroke_size(shape: &Shape, mu: f64) -> Option<f64> {
+    let w = shape.paint.stroke_width.filter(|&w| w >= mu)?;
+    Some(STROKE_SIZE_PER_WIDTH * w)
 }
 
 /// The shapes whose region is `name` (none for [`BACKGROUND`]).
