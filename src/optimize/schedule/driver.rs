@@ -10,7 +10,7 @@ use super::{
     ENVELOPE_ROUNDS, ENVELOPE_SPACING, EQUALIZE_COLLAPSE, EQUALIZE_ROUNDS, EQUALIZE_STRETCH,
     FIELD_SPLIT_PASSES, MINMAX_MIN_GAIN, MINMAX_PASSES, OPEN_STRETCH, POLISH_MIN_GAIN,
     POLISH_PASSES, Phase, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, SPLIT_ABOVE, STALL_PASSES,
-    STALL_TOLERANCE, STOP_STRETCH, Schedule, Stretch,
+    STALL_TOLERANCE, STOP_STRETCH, Schedule, Stretch, UNDONE_PASSES,
 };
 use crate::budget::Deadline;
 use crate::mesh::{TriMesh, VertexId};
@@ -160,6 +160,13 @@ impl Schedule<'_> {
         // Splits applied by the last pass: once none is, the stretch against
         // the field is as good as the splits can make it (the rest are refused).
         let mut last_splits = u64::MAX;
+        // Passes in a row whose splits the collapses undid: as many of each,
+        // and the mesh's size and worst energy as after the pass before. The
+        // remaining long edges are then ones the collapses will not keep
+        // split (on a flag of Aquitaine, 9 splits and 9 collapses in each of
+        // 60 passes, to the pass limit).
+        let mut undone = 0usize;
+        let mut last_faces = usize::MAX;
         // Where the field asks for sizes well below the BSP mesh's edges (thin
         // strokes, the user's fields), split down to them first: the main
         // passes then work at those sizes.
@@ -176,7 +183,7 @@ impl Schedule<'_> {
             }
             let uniform = self.field.is_uniform();
             if quality_reached(&last, &opts, rational, off, || {
-                if uniform || last_splits == 0 {
+                if uniform || last_splits == 0 || undone >= UNDONE_PASSES {
                     0.0
                 } else {
                     self.longest_stretch()
@@ -191,6 +198,7 @@ impl Schedule<'_> {
             // a large mesh can take seconds, more on a loaded machine.
             let (long, splits) = self.split_pass();
             last_splits = splits;
+            let splits_of_pass = splits;
             if self.out_of_time() {
                 break;
             }
@@ -206,6 +214,14 @@ impl Schedule<'_> {
             rational = self.round_all();
             off = self.project_all(ever_off);
             let now = measure(self.mesh);
+            let faces = self.mesh.num_faces();
+            let same = faces == last_faces && now.max_energy == last.max_energy;
+            undone = if splits_of_pass > 0 && splits_of_pass == collapses && same {
+                undone + 1
+            } else {
+                0
+            };
+            last_faces = faces;
             tracing::debug!(
                 pass,
                 long,

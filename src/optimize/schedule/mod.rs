@@ -124,6 +124,9 @@ const EQUALIZE_STRETCH: f64 = 1.5;
 /// triangles at `-l 0.05, 0.025, 0.0125`; with 2, 219, 788 and 3125 (issue 14).
 /// Our value: 1.5 left the jump, 2 and 2.5 measured alike on the disk.
 const COARSEN_ENERGY: f64 = 2.0;
+/// After this many passes in a row whose splits the collapses undid (see
+/// `driver`), the stop rule no longer asks for the stretch against the field.
+const UNDONE_PASSES: usize = 3;
 /// At most this many min-max polishing passes (min-max smoothing and swaps).
 /// Empirical, introduced in 8f4bc8a.
 const MINMAX_PASSES: usize = 10;
