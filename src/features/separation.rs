@@ -26,7 +26,7 @@ use super::grid::Grid;
 use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
 use crate::budget::Deadline;
-use crate::mesh::{angle_between, point_segment_distance};
+use crate::mesh::{angle_between, point_segment_distance, segment_distance};
 use crate::svg::Drawing;
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;
@@ -47,25 +47,6 @@ fn ctrl_box(c: &CubicBez) -> Rect {
     ps[1..]
         .iter()
         .fold(Rect::from_points(ps[0], ps[0]), |r, p| r.union_pt(*p))
-}
-
-/// Distance between two segments (0 if they cross or touch).
-///
-/// A measurement, not a decision: the crossing test only short-cuts to 0, and where
-/// float rounding could get it wrong the segments nearly cross, so the endpoint
-/// distances below are within rounding of 0 too. Plain products keep this hot loop
-/// of the μ-separation cheap (the exact predicate doubled the stage's time).
-pub(super) fn segment_distance(a: Line, b: Line) -> f64 {
-    let side = |p: Point, q: Point, r: Point| (q - p).cross(r - p);
-    let (d1, d2) = (side(a.p0, a.p1, b.p0), side(a.p0, a.p1, b.p1));
-    let (d3, d4) = (side(b.p0, b.p1, a.p0), side(b.p0, b.p1, a.p1));
-    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
-        return 0.0;
-    }
-    point_segment_distance(a.p0, b)
-        .min(point_segment_distance(a.p1, b))
-        .min(point_segment_distance(b.p0, a))
-        .min(point_segment_distance(b.p1, a))
 }
 
 /// Whether `p` is in the triangle `a b c` (a control-hull proximity test of the

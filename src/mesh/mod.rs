@@ -21,7 +21,9 @@ mod storage;
 mod topology;
 mod transaction;
 
-pub(crate) use geometry::{angle_between, corner_angles, min_angle_deg, point_segment_distance};
+pub(crate) use geometry::{
+    angle_between, corner_angles, min_angle_deg, point_segment_distance, segment_distance,
+};
 pub(crate) use ids::{FaceId, VertexId};
 pub(crate) use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
 pub(crate) use topology::{EdgeQuad, ScratchRing, VertexRing};

@@ -45,7 +45,9 @@
 //! and input distances with δ*, never a triangle's angle.
 
 use crate::fem::FemMesh;
-use crate::mesh::{EdgeKey, FeatureOn, TriMesh, VertexId, point_segment_distance};
+use crate::mesh::{
+    EdgeKey, FeatureOn, TriMesh, VertexId, point_segment_distance, segment_distance,
+};
 use crate::ops::{Context, t_at};
 use crate::quality::{FORCED_BY_ANGLE as BY_ANGLE, FORCED_BY_PROXIMITY as BY_NEAR};
 use kurbo::{Line, Point, Vec2};
@@ -260,20 +262,6 @@ impl ForcedCorners {
             })
             .collect()
     }
-}
-
-/// Distance between two segments (0 when they cross).
-fn segment_distance(a: Line, b: Line) -> f64 {
-    let side = |p: Point, q: Point, r: Point| (q - p).cross(r - p);
-    let (d1, d2) = (side(a.p0, a.p1, b.p0), side(a.p0, a.p1, b.p1));
-    let (d3, d4) = (side(b.p0, b.p1, a.p0), side(b.p0, b.p1, a.p1));
-    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
-        return 0.0;
-    }
-    point_segment_distance(a.p0, b)
-        .min(point_segment_distance(a.p1, b))
-        .min(point_segment_distance(b.p0, a))
-        .min(point_segment_distance(b.p1, a))
 }
 
 /// The direction of the input feature `tag` at `v`, the way the mesh edge
