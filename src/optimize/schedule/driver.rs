@@ -281,13 +281,16 @@ impl Schedule<'_> {
     /// sources), swaps; rings may get as bad as the coarsening allows.
     fn equalize(&mut self) {
         self.enter(Phase::Equalize);
+        // Refusals under the earlier phases' rules are forgotten once; within
+        // the rounds a refusal stands until its vertices move or their faces
+        // change (the memos' stamps).
+        self.failed_smooth.clear();
+        self.failed_collapse.clear();
         for _ in 0..EQUALIZE_ROUNDS {
             if self.out_of_time() {
                 break;
             }
-            self.failed_smooth.clear();
             let relaxed = self.smooth_pass_with(Objective::Relax);
-            self.failed_collapse.clear();
             let collapsed = self.collapse_pass(EQUALIZE_COLLAPSE);
             let swaps = self.swap_pass();
             tracing::debug!(relaxed, collapsed, swaps, "equalize round");
