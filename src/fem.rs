@@ -149,10 +149,10 @@ impl LinearMesh {
     /// # Errors
     /// [`Error::Meshing`] in `stage` if some vertex still has a rational position
     /// (DESIGN "Exactness": such a mesh is never written).
-    pub(crate) fn from_trimesh(
+    pub(crate) fn from_trimesh<I: IntoIterator<Item = (crate::svg::ShapeId, LineKind)>>(
         mesh: &TriMesh,
         stage: Stage,
-        feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
+        feature: impl Fn(&FeatureOn) -> I,
     ) -> Result<LinearMesh> {
         require_f64(mesh, stage)?;
         let (numbers, vertices) = VertexNumbers::of(mesh);
@@ -224,12 +224,13 @@ impl VertexNumbers {
 }
 
 /// The feature lines of a [`TriMesh`]: one per tagged edge and distinct
-/// `(shape, kind)` that `feature` assigns to its tags (in tag order), edges in
+/// `(shape, kind)` that `feature` assigns to its tags (in tag order; a tag
+/// may stand for several shapes' outlines, `features::coincide`), edges in
 /// key order. Every mesh delivered from a `TriMesh` writes its lines in this
 /// order.
-pub(crate) fn feature_lines(
+pub(crate) fn feature_lines<I: IntoIterator<Item = (crate::svg::ShapeId, LineKind)>>(
     mesh: &TriMesh,
-    feature: impl Fn(&FeatureOn) -> (crate::svg::ShapeId, LineKind),
+    feature: impl Fn(&FeatureOn) -> I,
 ) -> Vec<(EdgeKey, (crate::svg::ShapeId, LineKind))> {
     let mut tagged: Vec<_> = mesh.tagged_edges().collect();
     tagged.sort_unstable_by_key(|(k, _)| *k);
@@ -238,9 +239,11 @@ pub(crate) fn feature_lines(
     for (k, tags) in tagged {
         let first = lines.len();
         for t in tags {
-            let line = (k, feature(t));
-            if !lines[first..].contains(&line) {
-                lines.push(line);
+            for f in feature(t) {
+                let line = (k, f);
+                if !lines[first..].contains(&line) {
+                    lines.push(line);
+                }
             }
         }
     }

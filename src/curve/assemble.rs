@@ -27,11 +27,11 @@ const DISTANCE_ACCURACY_REL: f64 = 1e-14;
 /// Number the nodes (the vertices as every mesh delivered from a `TriMesh`
 /// numbers them, [`VertexNumbers`]; then edge and centre nodes) and write the
 /// elements and the feature lines ([`feature_lines`]).
-pub(super) fn assemble(
+pub(super) fn assemble<I: IntoIterator<Item = (ShapeId, LineKind)>>(
     mesh: &TriMesh,
     order: Order,
     shape: &Bend,
-    feature: impl Fn(&FeatureOn) -> (ShapeId, LineKind),
+    feature: impl Fn(&FeatureOn) -> I,
 ) -> CurvedMesh {
     let (numbers, mut nodes) = VertexNumbers::of(mesh);
     let next =

@@ -243,11 +243,11 @@ impl CurvedMesh {
 /// element cannot be certified even straight: a sliver of the linear mesh,
 /// exactly positive but with `det J` within the zero tolerance, that no local
 /// operation could remove (e.g. between two features 1e-16 apart).
-pub(crate) fn curve_mesh(
+pub(crate) fn curve_mesh<I: IntoIterator<Item = (ShapeId, LineKind)>>(
     mesh: &mut TriMesh,
     ctx: &Context,
     opts: &CurveOptions,
-    feature: impl Fn(&FeatureOn) -> (ShapeId, LineKind),
+    feature: impl Fn(&FeatureOn) -> I,
 ) -> Result<(CurvedMesh, CurveStats)> {
     let _span = tracing::info_span!("curve", order = opts.order as u8).entered();
     round_all(mesh, ctx)?;
@@ -323,6 +323,7 @@ mod tests {
                     parent: Parent::Cubic(c),
                     t: [0.0, 1.0],
                     source: None,
+                    shared: None,
                 })
                 .collect(),
             envelope: Envelope::new(&[], 1e-3, 1e-3),
@@ -335,8 +336,8 @@ mod tests {
         }
     }
 
-    fn feature(_: &FeatureOn) -> (ShapeId, LineKind) {
-        (ShapeId(0), LineKind::Primary)
+    fn feature(_: &FeatureOn) -> [(ShapeId, LineKind); 1] {
+        [(ShapeId(0), LineKind::Primary)]
     }
 
     /// Two triangles on the primary edge (0,0)–(1,0) (the cubic `c`), apex at

@@ -4,7 +4,9 @@
 //! ([`orient2d`] for `f64` points, [`orient2d_q`] for rational points, both
 //! returning an [`Orientation`]), exact line/segment intersections
 //! ([`line_intersection`], [`segment_intersection`]) and the
-//! barycentre of a convex polygon ([`PointQ::barycentre`]).
+//! barycentre of a convex polygon ([`PointQ::barycentre`]), and two tolerance
+//! tests decided exactly ([`near_line`], [`within`]: is a point within a distance
+//! of a line, of another point).
 //!
 //! Guarantees: every answer is exact. Predicates run a float filter first
 //! whose error bound is proven (outward-rounded interval arithmetic over
@@ -26,5 +28,5 @@ pub(crate) mod predicates;
 pub(crate) mod rational;
 
 pub(crate) use intersect::{SegmentIntersection, line_intersection, segment_intersection};
-pub(crate) use predicates::{Orientation, orient2d, orient2d_q};
+pub(crate) use predicates::{Orientation, near_line, orient2d, orient2d_q, within};
 pub(crate) use rational::PointQ;

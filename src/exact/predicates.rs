@@ -284,3 +284,69 @@ mod tests {
         }
     }
 }
+
+/// Whether `c` lies within `tol` of the line through `a` and `b` (`a ≠ b`),
+/// decided exactly: `orient(a, b, c)² ≤ tol² · |b − a|²` in rationals (the
+/// orientation determinant is twice the triangle's area, `|b − a|` times the
+/// distance). `tol` must be finite and non-negative.
+pub(crate) fn near_line(a: Point, b: Point, c: Point, tol: f64) -> bool {
+    let q = |v: f64| Rational::from_f64(v).expect("internal: coordinates are finite");
+    let (ax, ay, bx, by, cx, cy) = (q(a.x), q(a.y), q(b.x), q(b.y), q(c.x), q(c.y));
+    let (ux, uy) = (Rational::from(&bx - &ax), Rational::from(&by - &ay));
+    let (vx, vy) = (Rational::from(&cx - &ax), Rational::from(&cy - &ay));
+    let det = Rational::from(&ux * &vy) - Rational::from(&uy * &vx);
+    let len2 = Rational::from(&ux * &ux) + Rational::from(&uy * &uy);
+    let t = q(tol);
+    let lhs = Rational::from(&det * &det);
+    let rhs = Rational::from(&t * &t) * len2;
+    lhs <= rhs
+}
+
+/// Whether `|a − b| ≤ tol`, decided exactly. `tol` must be finite and
+/// non-negative.
+pub(crate) fn within(a: Point, b: Point, tol: f64) -> bool {
+    if a == b {
+        return true;
+    }
+    let q = |v: f64| Rational::from_f64(v).expect("internal: coordinates are finite");
+    let dx = q(a.x) - q(b.x);
+    let dy = q(a.y) - q(b.y);
+    let t = q(tol);
+    Rational::from(&dx * &dx) + Rational::from(&dy * &dy) <= Rational::from(&t * &t)
+}
+
+#[cfg(test)]
+mod near_tests {
+    use super::*;
+
+    #[test]
+    fn near_line_decides_at_the_tolerance_exactly() {
+        let (a, b) = (Point::new(0.0, 0.0), Point::new(4.0, 0.0));
+        assert!(near_line(a, b, Point::new(2.0, 0.5), 0.5));
+        assert!(!near_line(a, b, Point::new(2.0, 0.5f64.next_up()), 0.5));
+        // beyond the segment's ends still measures to the infinite line
+        assert!(near_line(a, b, Point::new(-7.0, -0.25), 0.5));
+        // a slanted line: (1, 1) direction, point at distance sqrt(2)/2 exactly
+        let (c, d) = (Point::new(0.0, 0.0), Point::new(3.0, 3.0));
+        assert!(near_line(
+            c,
+            d,
+            Point::new(1.0, 0.0),
+            0.5f64.sqrt().next_up()
+        ));
+        assert!(!near_line(
+            c,
+            d,
+            Point::new(1.0, 0.0),
+            0.5f64.sqrt().next_down()
+        ));
+    }
+
+    #[test]
+    fn within_is_the_euclidean_distance_exactly() {
+        let (a, b) = (Point::new(1.0, 1.0), Point::new(4.0, 5.0));
+        assert!(within(a, b, 5.0));
+        assert!(!within(a, b, 5.0f64.next_down()));
+        assert!(within(a, a, 0.0));
+    }
+}

@@ -22,6 +22,9 @@ pub(crate) struct PrimaryChain {
     pub t: [f64; 2],
     /// The input feature it came from.
     pub source: FeatureSource,
+    /// The other shapes whose outlines run along it (see
+    /// [`super::PrimarySection::shared`]).
+    pub shared: Option<u32>,
     /// The chain's end points (`parent` at `t[0]` and `t[1]`): the only fixed vertices.
     pub ends: [Point; 2],
 }
@@ -44,7 +47,7 @@ impl FeatureSet {
         let continues = |a: usize, b: usize| {
             // b follows a on the same curve.
             let (sa, sb) = (&self.primary[a], &self.primary[b]);
-            sa.parent == sb.parent && sa.t[1] == sb.t[0] && a != b
+            sa.parent == sb.parent && sa.shared == sb.shared && sa.t[1] == sb.t[0] && a != b
         };
         let mut chain_of = vec![u32::MAX; n];
         let mut chains = Vec::new();
@@ -85,6 +88,7 @@ impl FeatureSet {
                 parent: a.parent,
                 t: [a.t[0], b.t[1]],
                 source: a.source,
+                shared: a.shared,
                 ends: [a.ctrl.p0, b.ctrl.p3],
             });
         }

@@ -24,6 +24,10 @@
 //!    piece (an ellipse arc of at most 90° of its parameter, or any rational quadratic of
 //!    positive weight) has neither inflection nor cusp and turns less than 180°: it is only
 //!    split where the turn limit of this stage requires it.
+//!    Then `coincide`: outlines that coincide (equal curves, collinear segments
+//!    overlapping, within ε_m, decided exactly) become one feature whose shapes
+//!    share it (`FeatureSet::sharers`), so a shared boundary stays exact instead
+//!    of two copies closer than μ demoting each other; then `crossings`.
 //! 3. `resample`: pieces are halved until each is shorter than l, within μ of its chord and
 //!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m, and windows shorter
 //!    than l_m (a cut next to a curve's end), are not eligible.
@@ -45,6 +49,7 @@
 
 mod chains;
 mod classify;
+mod coincide;
 mod continuation;
 mod crossings;
 mod grid;
@@ -322,6 +327,9 @@ pub(crate) struct PrimarySection {
     pub parent: Parent,
     /// The input feature it came from.
     pub source: FeatureSource,
+    /// The other shapes whose outlines run along it, if any (an index into
+    /// [`FeatureSet::sharers`]).
+    pub shared: Option<u32>,
     /// Parameter interval `[t0, t1]` on `parent`, `t0 < t1`.
     pub t: [f64; 2],
     /// Control polygon of the section itself: `parent` restricted to `t`
@@ -351,6 +359,9 @@ pub(crate) struct SecondaryPolyline {
     pub points: Vec<Point>,
     /// The input feature it came from.
     pub source: FeatureSource,
+    /// The other shapes whose outlines run along it, if any (an index into
+    /// [`FeatureSet::sharers`]).
+    pub shared: Option<u32>,
 }
 
 /// What a segment of [`ConformingInput`] represents.
@@ -402,6 +413,12 @@ pub struct FeatureCounts {
     pub inflection_splits: usize,
     /// Splits that halve a total curvature of 180° or more.
     pub curvature_splits: usize,
+    /// Straight pieces split where another straight piece overlaps them
+    /// (`coincide`).
+    pub coincident_splits: usize,
+    /// Pieces that coincided with an earlier one and went: their shapes share
+    /// its feature (`coincide`).
+    pub coincident_merged: usize,
     /// Transversal crossings of two curves where both were split (so the
     /// sections around a crossing share its point).
     pub crossing_splits: usize,
@@ -459,6 +476,10 @@ pub(crate) struct FeatureSet {
     pub primary: Vec<PrimarySection>,
     /// Secondary polylines.
     pub secondary: Vec<SecondaryPolyline>,
+    /// Lists of shapes whose outlines run along a feature besides its own
+    /// source's (`coincide`: copies merged into it), indexed by the
+    /// features' `shared`; ascending, each once.
+    pub sharers: Vec<Vec<crate::svg::ShapeId>>,
     /// Counts.
     pub counts: FeatureCounts,
     /// Per-stage timing.
@@ -470,6 +491,9 @@ pub(crate) struct FeatureSet {
 struct Section {
     /// Index into `Drawing::features`.
     feature: u32,
+    /// Other shapes whose outlines run along it (index into
+    /// [`FeatureSet::sharers`]; `coincide`).
+    shared: Option<u32>,
     parent: Parent,
     t0: f64,
     t1: f64,
@@ -508,6 +532,7 @@ impl FeatureSet {
             points,
             primary: Vec::new(),
             secondary: Vec::new(),
+            sharers: Vec::new(),
             counts,
             timing,
         }
@@ -639,6 +664,23 @@ impl FeatureSet {
                 }
             }
         }
+        // 2a. Coincident outlines: collinear overlaps split, equal pieces once.
+        let coincident = coincide::merge(
+            pieces,
+            as_drawn,
+            &drawing.features,
+            params.eps_m,
+            params.l_min,
+        );
+        counts.coincident_splits = coincident.splits;
+        counts.coincident_merged = coincident.merged;
+        let coincide::Merged {
+            pieces,
+            as_drawn,
+            shared,
+            sharers,
+            ..
+        } = coincident;
         // 2b. Crossings: split both curves where they cross transversally.
         let flat: Vec<(usize, crossings::Piece)> = pieces
             .iter()
@@ -653,7 +695,11 @@ impl FeatureSet {
         let trimmable: Vec<bool> = match &trimmer {
             Some(tr) => flat
                 .iter()
-                .map(|(k, _)| tr.trims(drawing.features[pieces[*k].0 as usize].source.shape))
+                .map(|(k, _)| {
+                    tr.trims(drawing.features[pieces[*k].0 as usize].source.shape)
+                        && shared[*k]
+                            .is_none_or(|g| sharers[g as usize].iter().all(|&s| tr.trims(s)))
+                })
                 .collect(),
             None => Vec::new(),
         };
@@ -685,7 +731,13 @@ impl FeatureSet {
             let size = |p: Point| size(p, source, CutFor::Any);
             for w in cuts.windows(2) {
                 if let Some(trimmer) = &trimmer
-                    && !trimmer.keeps(shape, parent, as_drawn[*k].as_ref(), w[0], w[1])
+                    && !std::iter::once(shape)
+                        .chain(
+                            shared[*k]
+                                .iter()
+                                .flat_map(|&g| sharers[g as usize].iter().copied()),
+                        )
+                        .any(|s| trimmer.keeps(s, parent, as_drawn[*k].as_ref(), w[0], w[1]))
                 {
                     counts.trimmed_pieces += 1;
                     continue;
@@ -705,6 +757,7 @@ impl FeatureSet {
                     }
                     sections.push(Section {
                         feature: i,
+                        shared: shared[*k],
                         parent: *parent,
                         t0: p.t0,
                         t1: p.t1,
@@ -774,6 +827,7 @@ impl FeatureSet {
             points,
             primary: primary_sections,
             secondary: simplified.polylines,
+            sharers,
             counts,
             timing,
         }
@@ -817,6 +871,7 @@ fn assemble_primary(
             out.push(PrimarySection {
                 parent: s.parent,
                 source: drawing.features[s.feature as usize].source,
+                shared: s.shared,
                 t: [s.t0, s.t1],
                 ctrl: s.ctrl,
                 prev: None,

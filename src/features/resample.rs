@@ -210,6 +210,7 @@ pub(super) fn recut_secondary(
                     }
                     out.push(Section {
                         feature: first.feature,
+                        shared: first.shared,
                         parent: first.parent,
                         t0: p.t0,
                         t1: p.t1,

@@ -370,7 +370,9 @@ pub(super) fn simplify(
     recut: &[bool],
 ) -> Simplified {
     // Runs of secondary sections.
-    let mut runs: Vec<(u32, Vec<Point>)> = Vec::new();
+    // A run's feature and sharers, and its points.
+    type Run = ((u32, Option<u32>), Vec<Point>);
+    let mut runs: Vec<Run> = Vec::new();
     // By segment of the runs, in order: whether its section was cut again.
     let mut seg_recut: Vec<bool> = Vec::new();
     let mut prev: Option<usize> = None;
@@ -379,11 +381,14 @@ pub(super) fn simplify(
             prev = None;
             continue;
         }
-        let continues = prev
-            .is_some_and(|p| sections[p].feature == s.feature && sections[p].ctrl.p3 == s.ctrl.p0);
+        let continues = prev.is_some_and(|p| {
+            sections[p].feature == s.feature
+                && sections[p].shared == s.shared
+                && sections[p].ctrl.p3 == s.ctrl.p0
+        });
         match runs.last_mut() {
             Some((_, pts)) if continues => pts.push(s.ctrl.p3),
-            _ => runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3])),
+            _ => runs.push(((s.feature, s.shared), vec![s.ctrl.p0, s.ctrl.p3])),
         }
         seg_recut.push(recut.get(i).copied().unwrap_or(false));
         prev = Some(i);
@@ -440,7 +445,7 @@ pub(super) fn simplify(
             if bad {
                 primary[i] = false;
                 demoted += 1;
-                runs.push((s.feature, vec![s.ctrl.p0, s.ctrl.p3]));
+                runs.push(((s.feature, s.shared), vec![s.ctrl.p0, s.ctrl.p3]));
             }
         }
     }
@@ -449,7 +454,7 @@ pub(super) fn simplify(
     // The points so far, by value (+0.0 makes −0.0 and 0.0, equal points, one key).
     let point_key = |p: Point| key(Point::new(p.x + 0.0, p.y + 0.0));
     let mut known: HashSet<(u64, u64)> = points.iter().map(|p| point_key(p.pos)).collect();
-    for (feature, mut pts) in runs {
+    for ((feature, shared), mut pts) in runs {
         pts.dedup();
         let source = drawing.features[feature as usize].source;
         if pts.len() < 2 {
@@ -463,6 +468,7 @@ pub(super) fn simplify(
             polylines.push(SecondaryPolyline {
                 points: pts,
                 source,
+                shared,
             });
         }
     }
@@ -488,6 +494,7 @@ mod tests {
             let (pa, pb) = (Point::from(a), Point::from(b));
             Section {
                 feature: 0,
+                shared: None,
                 parent: super::super::Parent::Line(Line::new(pa, pb)),
                 t0: 0.0,
                 t1: 1.0,
@@ -533,6 +540,7 @@ mod tests {
                     at = from + kurbo::Vec2::new(dx, dy);
                     Section {
                         feature: 0,
+                        shared: None,
                         parent: super::super::Parent::Line(Line::new(from, at)),
                         t0: 0.0,
                         t1: 1.0,

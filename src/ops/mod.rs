@@ -226,6 +226,9 @@ pub(crate) struct CurveSection {
     pub t: [f64; 2],
     /// The input feature it came from (`None` where no drawing is behind it).
     pub source: Option<crate::svg::FeatureSource>,
+    /// The other shapes whose outlines run along it, if any (an index into
+    /// [`FeatureSet::sharers`]).
+    pub shared: Option<u32>,
 }
 
 /// Everything the operations need besides the mesh: the curves that primary
@@ -278,6 +281,7 @@ impl Context {
                 parent: c.parent,
                 t: c.t,
                 source: Some(c.source),
+                shared: c.shared,
             })
             .collect();
         let polylines: Vec<Vec<kurbo::Point>> = features

@@ -54,11 +54,13 @@ fn delaunay_mesh_on(seed: u64, energy: EnergyRule, parent: Parent) -> (TriMesh, 
             parent,
             t: [0.0, 0.5],
             source: None,
+            shared: None,
         },
         CurveSection {
             parent,
             t: [0.5, 1.0],
             source: None,
+            shared: None,
         },
     ];
     let polyline: Vec<Point> = [(0.1, 0.7), (0.3, 0.75), (0.5, 0.65), (0.7, 0.8), (0.9, 0.7)]
@@ -196,6 +198,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
                 parent: Parent::Line(Line::new(a, b)),
                 t: [0.0, 1.0],
                 source: None,
+                shared: None,
             });
             input.section_endpoints.extend([a, b]);
             SegmentTag::Primary {
@@ -895,6 +898,7 @@ fn curved_mode_relaxes_the_turn_bound_only() {
             )),
             t: [0.0, 1.0],
             source: None,
+            shared: None,
         }],
         ..ctx
     };

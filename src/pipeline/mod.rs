@@ -833,25 +833,29 @@ fn to_linear(
     })
 }
 
-/// The source shape and kind of the feature a tag stands for (primary tags
-/// index `ctx.sections`, secondary ones `fs.secondary`).
-pub(crate) fn feature_of(
-    fs: &FeatureSet,
+/// The source shapes and kind of the feature a tag stands for (primary tags
+/// index `ctx.sections`, secondary ones `fs.secondary`): its own source's
+/// shape, then the shapes whose outlines coincide with it (`fs.sharers`).
+pub(crate) fn feature_of<'a>(
+    fs: &'a FeatureSet,
     ctx: &Context,
     tag: &FeatureOn,
-) -> (crate::svg::ShapeId, LineKind) {
-    match *tag {
+) -> impl Iterator<Item = (crate::svg::ShapeId, LineKind)> + use<'a> {
+    let (shape, kind, shared) = match *tag {
         FeatureOn::Primary { section, .. } => {
-            let source = ctx.sections[section as usize]
+            let s = &ctx.sections[section as usize];
+            let source = s
                 .source
                 .expect("internal: the pipeline's sections name their source");
-            (source.shape, LineKind::Primary)
+            (source.shape, LineKind::Primary, s.shared)
         }
-        FeatureOn::Secondary { polyline } => (
-            fs.secondary[polyline as usize].source.shape,
-            LineKind::Secondary,
-        ),
-    }
+        FeatureOn::Secondary { polyline } => {
+            let p = &fs.secondary[polyline as usize];
+            (p.source.shape, LineKind::Secondary, p.shared)
+        }
+    };
+    let others = shared.map_or(&[][..], |g| fs.sharers[g as usize].as_slice());
+    std::iter::once((shape, kind)).chain(others.iter().map(move |&s| (s, kind)))
 }
 
 /// What the mesher hands to the FEM conversion.
