@@ -21,6 +21,22 @@ l_m, so each stroke is its centre line, a feature without a region):
   segment longer than mu (all primary);
 - duplicates: one filled path (a cubic blob) repeated 3000 times, the same
   paint, plus 3000 copies of a stroked curve.
+
+Issue 41 (point 4) adds series whose strokes are meshed as areas (wide enough
+to be kept apart: the paint model's default), and the memory:
+
+- hatch N: N parallel stroked lines across the box, spacing 900/N, width a
+  quarter of the spacing;
+- stroked-path N: the serpentine's one polyline of N segments, stroked at a
+  quarter of its row gap;
+- stroked-soup N: the soup's straight segments (N of them), stroked at a
+  width of 1 (they cross and overlap as in the fuzz findings' soups);
+- shapes N (sizes from --shape-sizes): N filled circles with a stroke of
+  another colour, on a square grid.
+
+Each row gives wall and CPU time, the stages' times, triangles, and the peak
+resident memory the run reports (`peak_memory_mb`); each series ends with the
+least-squares exponents of wall time, CPU time and memory against its size.
 """
 
 import argparse
@@ -81,6 +97,53 @@ def serpentine(n):
     return HEAD + f'<path {STROKE} d="M{"L".join(pts)}"/>\n</svg>\n'
 
 
+def hatch(n):
+    gap = 900.0 / n
+    out = [HEAD]
+    for k in range(n):
+        y = 50 + gap * (k + 0.5)
+        out.append(
+            f'<path fill="none" stroke="#000" stroke-width="{gap / 4:.6g}" d="M50 {y:.6f}H950"/>\n'
+        )
+    out.append("</svg>\n")
+    return "".join(out)
+
+
+def stroked_path(n):
+    rows = max(1, int(math.sqrt(n / 2)))
+    width = 0.25 * 0.4 * 900.0 / rows
+    text = serpentine(n)
+    return text.replace(STROKE, f'fill="none" stroke="#000" stroke-width="{width:.6g}"')
+
+
+def stroked_soup(n, seed=1):
+    rnd = random.Random(seed)
+    ln = 3000.0 / math.sqrt(n)
+    out = [HEAD]
+    for _ in range(n):
+        x, y = rnd.uniform(50, 950), rnd.uniform(50, 950)
+        a = rnd.uniform(0, 2 * math.pi)
+        x1 = min(max(x + ln * math.cos(a), 0), 1000)
+        y1 = min(max(y + ln * math.sin(a), 0), 1000)
+        out.append(f'<path fill="none" stroke="#000" stroke-width="1" d="M{x:.4f} {y:.4f}L{x1:.4f} {y1:.4f}"/>\n')
+    out.append("</svg>\n")
+    return "".join(out)
+
+
+def shapes(n):
+    side = max(1, math.ceil(math.sqrt(n)))
+    cell = 900.0 / side
+    out = [HEAD]
+    for k in range(n):
+        cx, cy = 50 + cell * (k % side + 0.5), 50 + cell * (k // side + 0.5)
+        out.append(
+            f'<circle cx="{cx:.6f}" cy="{cy:.6f}" r="{0.35 * cell:.6f}" fill="#3366cc" '
+            f'stroke="#cc3333" stroke-width="{0.05 * cell:.6f}"/>\n'
+        )
+    out.append("</svg>\n")
+    return "".join(out)
+
+
 def duplicates(copies=3000):
     blob = "M300 300C400 200 600 200 700 300C800 400 800 600 700 700C600 800 400 800 300 700Z"
     curve = "M100 900C300 800 700 950 900 850"
@@ -128,20 +191,39 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bin", default="target/release/triwild")
     ap.add_argument("--sizes", default="1000,3000,10000,30000,100000")
-    ap.add_argument("--cases", default="soup,zigzag,serpentine,duplicates")
+    ap.add_argument("--shape-sizes", default="100,300,1000,3000,10000")
+    ap.add_argument(
+        "--cases",
+        default="soup,zigzag,serpentine,duplicates,hatch,stroked-path,stroked-soup,shapes",
+    )
     ap.add_argument("--keep", help="directory to keep the inputs and meshes in")
     ap.add_argument("--time-limit", default="600")
     a = ap.parse_args()
     sizes = [int(s) for s in a.sizes.split(",")]
+    shape_sizes = [int(s) for s in a.shape_sizes.split(",")]
     cases = a.cases.split(",")
     if a.keep:
         os.makedirs(a.keep, exist_ok=True)
-    gens = {"soup": soup, "zigzag": zigzag, "serpentine": serpentine}
+    gens = {
+        "soup": soup,
+        "zigzag": zigzag,
+        "serpentine": serpentine,
+        "hatch": hatch,
+        "stroked-path": stroked_path,
+        "stroked-soup": stroked_soup,
+        "shapes": shapes,
+    }
     stages = ["load", "features", "bsp", "optimize", "curve", "regions"]
-    print("| input | segments | exit | wall s | cpu s | " + " | ".join(f"{k} s" for k in stages) + " | triangles | merged dups |")
-    print("|---|---|---|---|---|" + "---|" * len(stages) + "---|---|")
+    print(
+        "| input | size | segments | exit | wall s | cpu s | "
+        + " | ".join(f"{k} s" for k in stages)
+        + " | triangles | peak MB | merged dups |"
+    )
+    print("|---|---|---|---|---|---|" + "---|" * len(stages) + "---|---|---|")
     series = {}
-    todo = [(c, n) for c in cases if c in gens for n in sizes]
+    todo = [
+        (c, n) for c in cases if c in gens for n in (shape_sizes if c == "shapes" else sizes)
+    ]
     if "duplicates" in cases:
         todo.append(("duplicates", 3000))
     for case, n in todo:
@@ -152,23 +234,24 @@ def main():
         segs = inp.get("lines", 0) + inp.get("cubics", 0) + inp.get("conics", 0)
         times = st.get("times", {})
         tris = st.get("output", {}).get("triangles", "")
+        peak = st.get("peak_memory_mb")
         merged = inp.get("paint", {}).get("duplicates_merged", "")
         f = lambda k: f"{times[k]:.2f}" if k in times else ""
-        label = f"{case} x{n}" if case == "duplicates" else case
         print(
-            f"| {label} | {segs or n} | {code} | {wall:.2f} | {cpu:.2f} | "
+            f"| {case} | {n} | {segs or ''} | {code} | {wall:.2f} | {cpu:.2f} | "
             + " | ".join(f(k) for k in stages)
-            + f" | {tris} | {merged} |",
+            + f" | {tris} | {'' if peak is None else round(peak)} | {merged} |",
             flush=True,
         )
         if code == 0 and case != "duplicates":
-            series.setdefault(case, []).append((segs or n, wall, cpu))
+            series.setdefault(case, []).append((n, wall, cpu, peak))
     for case, rows in series.items():
-        k_wall = exponent([(n, w) for n, w, _ in rows])
-        k_cpu = exponent([(n, c) for n, _, c in rows])
+        k_wall = exponent([(n, w) for n, w, _, _ in rows])
+        k_cpu = exponent([(n, c) for n, _, c, _ in rows])
+        k_mem = exponent([(n, m) for n, _, _, m in rows if m])
         print(
-            f"exponent ({case}, {rows[0][0]}..{rows[-1][0]} segments): "
-            f"wall {k_wall:.2f}, cpu {k_cpu:.2f}"
+            f"exponent ({case}, {rows[0][0]}..{rows[-1][0]}): "
+            f"wall {k_wall:.2f}, cpu {k_cpu:.2f}, memory {k_mem:.2f}"
         )
     return 0
 
