@@ -66,7 +66,6 @@ fn a_thin_wedge_between_two_features_is_forced_and_left_out_of_the_unforced_mini
             "below_alpha",
             "forced_corners",
             "forced_by_angle",
-            "forced_by_proximity",
             "corners",
             "forced_elements",
             "worst",
@@ -90,6 +89,32 @@ fn a_thin_wedge_between_two_features_is_forced_and_left_out_of_the_unforced_mini
         assert!(svg.contains("#ff7f0e"), "{name}: forced corners marked");
         assert!(svg.contains("worst unforced element"), "{name}: ring");
     }
+}
+
+/// A whisker (an open centre line) ending 0.01 from a square's edge in a
+/// 100-unit drawing, with μ small enough (`--mu 1e-5`) that both stay primary:
+/// the end forces small elements under it, not small angles (see
+/// `pipeline::forced`), so nothing is forced and the mesh's angles there are
+/// good.
+const WHISKER: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
+  <rect id="square" x="10" y="10" width="80" height="80" fill="#3366cc"/>
+  <path id="whisker" d="M 50 40 L 50 10.01" fill="none" stroke="#000000" stroke-width="0.001"/>
+</svg>"##;
+
+#[test]
+fn a_vertex_close_to_a_feature_forces_no_corner() {
+    let (stats, _) = mesh("whisker", WHISKER, &["--mu", "1e-5", "--strokes", "line"]);
+    let feats = &stats["features"];
+    assert_eq!(
+        f(&feats["secondary_segments"]),
+        0.0,
+        "both primary: {feats}"
+    );
+    let q = &stats["quality"];
+    let u = &q["unforced"];
+    assert_eq!(f(&u["forced_corners"]), 0.0, "{u}");
+    // The mesh resolves the gap with good triangles.
+    assert!(f(&q["min_angle_deg"]) >= 10.0, "{q}");
 }
 
 const SQUARE: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">

@@ -432,11 +432,9 @@ fn mesh_stages(
         }
         Mesher::TriWild => {
             let field = &field;
-            let l_floor = resolved.eps.min(resolved.l);
-            let h_min = |p: kurbo::Point| l_floor.min(field.at(p));
             let mut classify = |mesh: &TriMesh, ctx: &Context, times: &mut Times| {
                 forced = Some(times.time("forced", || {
-                    ForcedCorners::classify(mesh, ctx, resolved.alpha, &h_min)
+                    ForcedCorners::classify(mesh, ctx, resolved.alpha)
                 }));
             };
             check_deadline(&deadline, Stage::Features)?;

@@ -62,10 +62,9 @@ pub struct Unforced {
     pub below_alpha: usize,
     /// Forced corners.
     pub forced_corners: usize,
-    /// Of those, forced by a wedge between features meeting below α.
+    /// Of those, forced by a wedge between features meeting below α (the one
+    /// rule: see `pipeline::forced`).
     pub forced_by_angle: usize,
-    /// Of those, forced by a feature closer than the sizes resolve.
-    pub forced_by_proximity: usize,
     /// All corners (three per triangle).
     pub corners: usize,
     /// Forced elements.
@@ -90,11 +89,8 @@ pub struct WorstElement {
 }
 
 /// Bits of a triangle's forced-corner mask ([`Quality::of_classified`]):
-/// corner `k` forced by a wedge sets `FORCED_BY_ANGLE << k`, by proximity
-/// `FORCED_BY_PROXIMITY << k`.
+/// corner `k` forced by a wedge sets `FORCED_BY_ANGLE << k`.
 pub(crate) const FORCED_BY_ANGLE: u8 = 1;
-/// See [`FORCED_BY_ANGLE`].
-pub(crate) const FORCED_BY_PROXIMITY: u8 = 8;
 
 impl Quality {
     /// The summary of a mesh without triangles.
@@ -116,8 +112,8 @@ impl Quality {
     }
 
     /// [`Quality::of`] plus [`Quality::unforced`]: `forced[i]` is triangle
-    /// `i`'s mask of forced corners ([`FORCED_BY_ANGLE`],
-    /// [`FORCED_BY_PROXIMITY`]; a missing entry: none), `alpha_deg` the α the
+    /// `i`'s mask of forced corners ([`FORCED_BY_ANGLE`]; a missing entry:
+    /// none), `alpha_deg` the α the
     /// corners below it are counted against.
     pub(crate) fn of_classified(mesh: &FemMesh, forced: &[u8], alpha_deg: f64) -> Quality {
         let (mut q, ratios) = Quality::measure(mesh);
@@ -127,7 +123,6 @@ impl Quality {
             below_alpha: 0,
             forced_corners: 0,
             forced_by_angle: 0,
-            forced_by_proximity: 0,
             corners: 3 * mesh.triangle_count(),
             forced_elements: 0,
             worst: None,
@@ -138,15 +133,10 @@ impl Quality {
             let angles = corner_angles(corners).map(f64::to_degrees);
             let mut element_forced = false;
             for (k, &a) in angles.iter().enumerate() {
-                let (by_angle, by_near) = (
-                    m & (FORCED_BY_ANGLE << k) != 0,
-                    m & (FORCED_BY_PROXIMITY << k) != 0,
-                );
-                if by_angle || by_near {
+                if m & (FORCED_BY_ANGLE << k) != 0 {
                     element_forced = true;
                     u.forced_corners += 1;
-                    u.forced_by_angle += usize::from(by_angle);
-                    u.forced_by_proximity += usize::from(by_near);
+                    u.forced_by_angle += 1;
                 } else {
                     u.min_angle_deg = u.min_angle_deg.min(a);
                     u.below_alpha += usize::from(a < alpha_deg);
@@ -401,19 +391,13 @@ mod tests {
         // still count, the element does not; the worst is the other one.
         let q = Quality::of_classified(&mesh, &[FORCED_BY_ANGLE], 10.0);
         let u = q.unforced.expect("classified");
-        assert_eq!(
-            (u.forced_corners, u.forced_by_angle, u.forced_by_proximity),
-            (1, 1, 0)
-        );
+        assert_eq!((u.forced_corners, u.forced_by_angle), (1, 1));
         assert_eq!((u.forced_elements, u.below_alpha), (1, 0));
         assert!(u.min_angle_deg > 10.0 && q.min_angle_deg < 2.0, "{q:?}");
         let w = u.worst.expect("an unforced element");
         assert_eq!(w.element, 1);
         assert!(close(w.x, 2.0 / 3.0) && close(w.y, 1.02 / 3.0), "{w:?}");
         assert!(close(w.jacobian_ratio, 1.0), "{w:?}");
-        // Proximity bits count as forced too.
-        let p = Quality::of_classified(&mesh, &[FORCED_BY_PROXIMITY << 1], 10.0);
-        assert_eq!(p.unforced.map(|u| u.forced_by_proximity), Some(1));
         assert_eq!(Quality::of(&mesh).unforced, None);
     }
 
