@@ -73,7 +73,21 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
             name.push_str("-curve");
         }
         if let Err(e) = find_chain(line, &name, tol, &pos, &by_pos, &adj, &line_names) {
-            defects.push(format!("{tag:?} {line:?} of {name}: {e}"));
+            // A secondary feature is kept within its ε-envelope, not exactly: the
+            // clean-up of degenerate rounded triangles may move its vertices
+            // (issue 17), so its ends need only a node of its curve within ε.
+            let within_envelope = matches!(tag, SegmentTag::Secondary { .. })
+                && [line.p0, line.p1].iter().all(|p| {
+                    line_names.iter().any(|(&(a, b), names)| {
+                        names.contains(name.as_str())
+                            && [a, b].iter().any(|t| {
+                                Point::new(pos[t][0], pos[t][1]).distance(*p) <= fs.params.eps
+                            })
+                    })
+                });
+            if !within_envelope {
+                defects.push(format!("{tag:?} {line:?} of {name}: {e}"));
+            }
         }
     }
     defects
@@ -339,7 +353,8 @@ fn rejected_by_gmsh(nodes: &[Point], triangles: &[[Point; 3]]) -> (usize, usize)
 /// has neither (they are collapsed, swapped or smoothed away). (The first
 /// fixture, a noto-emoji whose two rounded squares share edges, stopped
 /// producing them once coincident outlines became one feature, issue 39; this
-/// one is a skewed thick line, found by scanning the dev set's raw BSP meshes.)
+/// one, resvg's `M L M Z` path (a thick stroke over its own zero-area fill),
+/// was found by scanning the dev set's raw BSP meshes.)
 #[test]
 fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
     let f =
