@@ -97,7 +97,12 @@ fn a_stroked_ring_and_its_fill_are_exact_with_curved_outlines() {
         let d = load(&circle("#000000", width, ""));
         assert_eq!(d.paint.strokes_as_areas, 1);
         assert_eq!(d.paint.exact_stroke_subpaths, 1, "width {width}");
-        let m = mesh(&d, Order::Cubic, RegionMode::Shape, &format!("ring-{width}"));
+        let m = mesh(
+            &d,
+            Order::Cubic,
+            RegionMode::Shape,
+            &format!("ring-{width}"),
+        );
         assert_eq!(names(&m), ["disk", "disk-stroke"]);
         let (inner, outer) = (R - 0.5 * width, R + 0.5 * width);
         assert_rel(area(&m, "disk"), PI * inner * inner, 1e-6, "fill");
@@ -122,7 +127,12 @@ fn a_stroke_of_the_fill_colour_joins_its_region_and_costs_less() {
     assert!(curved_edges_on(&joined.mesh, 30.5) >= 8);
     assert_eq!(curved_edges_on(&joined.mesh, 29.5), 0);
     assert_eq!(curved_edges_on(&joined.mesh, 30.0), 0);
-    let by_colour = mesh(&same, Order::Cubic, RegionMode::Colour, "same-colour-by-colour");
+    let by_colour = mesh(
+        &same,
+        Order::Cubic,
+        RegionMode::Colour,
+        "same-colour-by-colour",
+    );
     assert_eq!(names(&by_colour), ["fill-#88ccff"]);
 
     let other = load(&circle("#000000", 1.0, ""));

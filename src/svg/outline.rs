@@ -260,7 +260,7 @@ pub(super) fn collect(
             Step::Visit(usvg::Node::Image(_), _, _, _) => images += 1,
         }
     }
-    out.shapes = resolve_items(items, opts, &mut out.paint)?;
+    out.shapes = resolve_items(items, opts, &mut out.paint, &mut out.warnings)?;
     add_clip_outlines(&mut out.shapes, paths);
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
     // usvg keeps an image node only for data it could decode (never, here)
@@ -692,6 +692,8 @@ fn opaque(alpha: f32) -> bool {
 /// ([`PaintOptions::mu`]) becomes its centre lines; a wider one its area, to
 /// [`PaintOptions::stroke_accuracy`].
 ///
+/// Strokes kept as lines for being narrower than μ are named in a warning.
+///
 /// # Errors
 /// [`Error::BadCoordinate`] when a stroke's area reaches beyond
 /// [`super::Drawing::MAX_COORD`].
@@ -699,6 +701,7 @@ fn resolve_items(
     items: Vec<Item>,
     opts: &PaintOptions,
     counts: &mut PaintCounts,
+    warnings: &mut Vec<String>,
 ) -> Result<Vec<Shape>> {
     let mut bbox: Option<kurbo::Rect> = None;
     let mut add = |s: &Shape| {
@@ -722,6 +725,7 @@ fn resolve_items(
     let mu = absolute(opts.mu, opts.mu_relative);
     let accuracy = opts.stroke_accuracy * d;
     let mut shapes = Vec::with_capacity(items.len());
+    let mut below_mu: Vec<String> = Vec::new();
     for item in items {
         let shape = match item {
             Item::Shape(s) => Some(s),
@@ -751,6 +755,7 @@ fn resolve_items(
                         counts.strokes_as_lines += 1;
                         if width >= hairline && width < mu {
                             counts.strokes_below_mu += 1;
+                            below_mu.push(area.name());
                         }
                         centre
                     }
@@ -761,6 +766,17 @@ fn resolve_items(
             s.paint_order = u32::try_from(shapes.len()).unwrap_or(u32::MAX);
             shapes.push(s);
         }
+    }
+    if !below_mu.is_empty() {
+        const LISTED: usize = 5;
+        let more = if below_mu.len() > LISTED { ", ..." } else { "" };
+        let n = below_mu.len();
+        below_mu.truncate(LISTED);
+        warnings.push(format!(
+            "{n} stroke(s) narrower than the feature envelope μ = {mu:.3e} kept as centre \
+             lines (their two outlines would be closer than μ): {}{more}",
+            below_mu.join(", ")
+        ));
     }
     Ok(shapes)
 }
