@@ -1,6 +1,8 @@
 //! SVG's paint model beyond flat fills: what is painted at all (visibility,
-//! opacity), strokes as the areas they cover (kurbo's stroke expansion), and
-//! paint servers (gradients) summarised by their mean opacity and colour.
+//! opacity), strokes as the areas they cover (exact offsets where the path is
+//! a smooth closed chain of lines and circular arcs, else kurbo's stroke
+//! expansion far below μ), and paint servers (gradients) summarised by their
+//! mean opacity and colour.
 
 use super::conic::Conic;
 use super::drawing::{Segment, Subpath};
@@ -13,7 +15,9 @@ use kurbo::{Affine, BezPath, ParamCurve, PathEl, Point, Vec2};
 pub enum StrokeMode {
     /// A stroke is the area it paints: a shape of its own (`<name>-stroke`),
     /// right after (or, with `paint-order: stroke`, before) its fill. Strokes
-    /// thinner than [`PaintOptions::min_stroke_width`] stay centre lines.
+    /// thinner than [`PaintOptions::min_stroke_width`] or [`PaintOptions::mu`]
+    /// stay centre lines; a stroke of its fill's opaque paint joins the fill's
+    /// region ([`crate::ShapePaint::joins_fill`]).
     Area,
     /// A stroke is its centre line: feature geometry, no region.
     Line,
@@ -44,16 +48,17 @@ pub struct PaintOptions {
     /// The feature envelope μ (output units, or a fraction of the diagonal when
     /// `mu_relative`): a stroke narrower stays its centre line, since its two
     /// outlines would be closer than μ and the features stage would not keep
-    /// them apart (counted in [`super::PaintCounts::strokes_below_mu`]).
+    /// them apart (counted in [`crate::PaintCounts::strokes_below_mu`]).
     /// Default 1e-3 of the diagonal (the default μ).
     pub mu: f64,
     /// Whether `mu` is a fraction of the diagonal.
     pub mu_relative: bool,
     /// How far a stroke's outlines may lie from the exact offset curves, as a
     /// fraction of the diagonal (and never more than 1/200 of the width).
-    /// Default 1e-7: far below μ, so a stroke's area and the fill it borders
-    /// come out as exact as any other curve's (issue 39: 1e-6 relative on a
-    /// thin ring); circles, arcs and lines joined smoothly are offset exactly.
+    /// Default 1e-6, a thousandth of the default μ (circles, arcs and lines
+    /// joined smoothly are offset exactly whatever it is). On 20 stroked dev
+    /// drawings 1e-7 cost 2 % more triangles than kurbo's old 1/200 of the
+    /// width, 1e-6 none (0.7 % fewer), 1e-5 2 % fewer.
     pub stroke_accuracy: f64,
 }
 
@@ -68,7 +73,7 @@ impl PaintOptions {
         min_stroke_relative: true,
         mu: 1e-3,
         mu_relative: true,
-        stroke_accuracy: 1e-7,
+        stroke_accuracy: 1e-6,
     };
     /// Every outline as written: strokes as centre lines, no decoration (only
     /// what is not painted at all is left out); the loader's geometry tests.
@@ -81,7 +86,7 @@ impl PaintOptions {
         min_stroke_relative: true,
         mu: 1e-3,
         mu_relative: true,
-        stroke_accuracy: 1e-7,
+        stroke_accuracy: 1e-6,
     };
     /// Set what strokes become.
     pub fn with_strokes(mut self, strokes: StrokeMode) -> Self {
