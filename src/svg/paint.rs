@@ -370,7 +370,7 @@ fn circular(c: &Conic) -> Option<(Point, f64, f64)> {
 /// or dashed path, a corner, a cubic or elliptic piece, or an arc whose
 /// inner offset would vanish (radius ≤ `half`).
 fn exact_offsets(sp: &Subpath, half: f64) -> Option<Vec<Verb>> {
-    if !sp.closed || sp.segments.is_empty() || !(half > 0.0) {
+    if !sp.closed || sp.segments.is_empty() || half.is_nan() || half <= 0.0 {
         return None;
     }
     let n = sp.segments.len();
