@@ -162,3 +162,17 @@ fn a_stroke_narrower_than_mu_is_its_centre_line() {
     assert_eq!(names(&m), ["disk"]);
     assert_rel(area(&m, "disk"), PI * R * R, 1e-9, "fill");
 }
+
+#[test]
+fn a_rounded_rectangle_stroke_is_offset_exactly() {
+    // lines and quarter circles joined smoothly: parallel lines, concentric arcs
+    let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><title>a stroked rounded rectangle</title><rect id="rr" x="20" y="30" width="60" height="40" rx="10" fill="#ffcc00" stroke="#000000" stroke-width="2"/></svg>"##;
+    let d = load(svg);
+    assert_eq!(d.paint.exact_stroke_subpaths, 1);
+    let m = mesh(&d, Order::Cubic, RegionMode::Shape, "rounded-rect");
+    let rounded = |w: f64, h: f64, r: f64| w * h - (4.0 - PI) * r * r;
+    let inner = rounded(58.0, 38.0, 9.0);
+    assert_rel(area(&m, "rr"), inner, 1e-9, "fill");
+    let ring = rounded(62.0, 42.0, 11.0) - inner;
+    assert_rel(area(&m, "rr-stroke"), ring, 1e-9, "ring");
+}
