@@ -33,13 +33,16 @@
 //!
 //! What is judged:
 //! - a stroke area ([`ShapeKind::Stroke`]) and a clipped fill: by its own test;
+//! - a stroke that joins its element's fill ([`crate::svg::ShapePaint::joins_fill`])
+//!   and that fill: by the union of their tests (one region): the fill's
+//!   outline under the stroke and the stroke's inner outline bound nothing;
 //! - a clip or mask outline ([`ShapeKind::ClipOutline`]): by the tests of the
 //!   filled shapes painted through that clip (kept where any of them changes);
 //! - a clipped centre line (an unfilled element): kept where it lies inside its
 //!   clips.
 //!
-//! Unclipped fills and centre lines are never trimmed: every input curve of
-//! the drawing stays a feature, as in TriWild.
+//! Other unclipped fills and centre lines are never trimmed: every input curve
+//! of the drawing stays a feature, as in TriWild.
 
 use super::Parent;
 use crate::svg::drawing::{ShapeKind, collect_clips};
@@ -62,6 +65,9 @@ enum Judge {
     Keep,
     /// Kept where the test differs across the piece.
     Boundary(Vec<u32>),
+    /// Kept where the union of the tests differs across the piece (a stroke
+    /// and the fill it joins).
+    Union(Vec<u32>),
     /// Kept where the piece lies inside these clips (a clipped centre line).
     Inside(Vec<ClipTest>),
 }
@@ -87,13 +93,22 @@ impl Trimmer {
         }
         let mut tests: Vec<PaintTest> = Vec::new();
         let mut own: Vec<Option<u32>> = vec![None; drawing.shapes.len()];
+        // Each joined stroke and the fill it joins: (fill, stroke).
+        let joined: Vec<(usize, usize)> = (0..drawing.shapes.len())
+            .filter_map(|i| {
+                let stroke = ShapeId(u32::try_from(i).ok()?);
+                drawing.joined_fill(stroke).map(|f| (f.index(), i))
+            })
+            .collect();
         // The filled shapes painted through each clip (by pointer), for clip outlines.
         let mut through: Vec<(*const Clip, Vec<u32>)> = Vec::new();
         for (i, s) in drawing.shapes.iter().enumerate() {
             if !s.filled {
                 continue;
             }
-            let needs_own = s.paint.kind == ShapeKind::Stroke || !s.paint.clips.is_empty();
+            let needs_own = s.paint.kind == ShapeKind::Stroke
+                || !s.paint.clips.is_empty()
+                || joined.iter().any(|&(f, _)| f == i);
             if !needs_own {
                 continue;
             }
@@ -116,11 +131,19 @@ impl Trimmer {
                 }
             }
         }
+        let union_of = |i: usize| {
+            let &(f, st) = joined.iter().find(|&&(f, st)| f == i || st == i)?;
+            Some(vec![own[f]?, own[st]?])
+        };
         let judges = drawing
             .shapes
             .iter()
             .zip(&own)
-            .map(|(s, own)| match (s.paint.kind, own) {
+            .enumerate()
+            .map(|(i, (s, own))| match (s.paint.kind, own) {
+                (_, Some(_)) if union_of(i).is_some() => {
+                    Judge::Union(union_of(i).expect("internal: checked"))
+                }
                 (ShapeKind::ClipOutline, _) => {
                     let shapes = s
                         .paint
@@ -208,6 +231,29 @@ impl Trimmer {
                     let (ib, cb) = test.paints(b, self.eps_abs);
                     !(ca && cb) || ia != ib
                 })
+            }),
+            Judge::Union(list) => SAMPLES.iter().any(|&f| {
+                let t = t0 + f * (t1 - t0);
+                let Some(n) = normal(curve, t) else {
+                    return true;
+                };
+                let p = curve.eval(t);
+                // certainly painted by one of them, certainly by none, or unsure
+                let side = |q| {
+                    let mut all_clear = true;
+                    for &k in list {
+                        let (inside, clear) = self.tests[k as usize].paints(q, self.eps_abs);
+                        if inside && clear {
+                            return Some(true);
+                        }
+                        all_clear &= clear;
+                    }
+                    all_clear.then_some(false)
+                };
+                match (side(p + n * step), side(p - n * step)) {
+                    (Some(a), Some(b)) => a != b,
+                    _ => true,
+                }
             }),
         }
     }

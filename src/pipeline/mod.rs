@@ -326,8 +326,13 @@ pub fn load_bytes_params(data: &[u8], params: &Params, paint: &PaintOptions) -> 
         .map(|(drawing, _)| drawing)
 }
 
-/// `paint` with strokes narrower than `params.l_min` kept as lines (hairlines).
+/// `paint` with strokes narrower than `params.l_min` (hairlines) or than
+/// `params.mu` (outlines the features stage would not keep apart) kept as lines.
 fn hairlines_below_l_min(params: &Params, paint: &PaintOptions) -> PaintOptions {
+    let paint = match params.mu {
+        Length::Rel(r) => paint.with_mu(r, true),
+        Length::Abs(a) => paint.with_mu(a, false),
+    };
     match params.l_min {
         Length::Rel(r) => paint.with_min_stroke_width(r, true),
         Length::Abs(a) => paint.with_min_stroke_width(a, false),

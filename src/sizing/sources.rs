@@ -146,8 +146,12 @@ pub(super) fn strokes(drawing: &Drawing, mu: f64, slope: f64) -> Vec<Source> {
 
 /// The size a thin stroke meshed as an area asks for on its own outline
 /// ([`STROKE_SIZE_PER_WIDTH`] times its width; see [`strokes`]), `None` for
-/// any other shape and for a stroke narrower than `mu`.
+/// any other shape, for a stroke narrower than `mu`, and for a stroke that
+/// joins its fill's region (its inner outline bounds nothing: no band to fit).
 pub(super) fn stroke_size(shape: &Shape, mu: f64) -> Option<f64> {
+    if shape.paint.joins_fill {
+        return None;
+    }
     let w = shape.paint.stroke_width.filter(|&w| w >= mu)?;
     Some(STROKE_SIZE_PER_WIDTH * w)
 }

@@ -86,6 +86,13 @@ pub struct ShapePaint {
     /// For a [`ShapeKind::Stroke`], the stroke's width in output units (the
     /// optimizer sizes the mesh of a thin stroke by it).
     pub stroke_width: Option<f64>,
+    /// For a [`ShapeKind::Stroke`], whether its paint equals its element's fill
+    /// (one opaque colour, or the same paint server, both opaque, painted
+    /// through the same clips): the stroke's area joins the fill's region (the
+    /// fill's name, [`Shape::name`]), and the outlines between the two (the
+    /// fill's outline under the stroke, the stroke's inner outline) bound
+    /// nothing, so no band is meshed (issue 39, part 4).
+    pub joins_fill: bool,
     /// Clip regions the shape is painted through (all of them at once).
     #[serde(skip)]
     pub clips: Vec<std::sync::Arc<Clip>>,
@@ -104,6 +111,7 @@ impl Default for ShapePaint {
             average_colour: None,
             filtered: false,
             stroke_width: None,
+            joins_fill: false,
             clips: Vec::new(),
             outlined_clip: None,
         }
@@ -153,14 +161,16 @@ pub(crate) fn collect_clips(c: &std::sync::Arc<Clip>, all: &mut Vec<std::sync::A
 }
 
 impl Shape {
-    /// The name used for physical groups: the SVG id, else `shape-N` (N = element index).
+    /// The name used for physical groups: the SVG id, else `shape-N` (N = element
+    /// index); a stroke's area adds `-stroke` unless it joins its fill's region
+    /// ([`ShapePaint::joins_fill`]).
     pub fn name(&self) -> String {
         let base = match &self.svg_id {
             Some(id) if !id.is_empty() => id.clone(),
             _ => format!("shape-{}", self.element_index),
         };
         match self.paint.kind {
-            ShapeKind::Stroke => format!("{base}-stroke"),
+            ShapeKind::Stroke if !self.paint.joins_fill => format!("{base}-stroke"),
             _ => base,
         }
     }
@@ -201,6 +211,22 @@ impl Segment {
             Segment::Line(l) => vec![l.p0, l.p1],
             Segment::Cubic(c) => vec![c.p0, c.p1, c.p2, c.p3],
             Segment::Conic(c) => c.control_points().to_vec(),
+        }
+    }
+    /// The image under an affine map (exact for every kind: a conic keeps its weight).
+    pub fn transform(&self, a: kurbo::Affine) -> Segment {
+        match self {
+            Segment::Line(l) => Segment::Line(Line::new(a * l.p0, a * l.p1)),
+            Segment::Cubic(c) => Segment::Cubic(a * *c),
+            Segment::Conic(c) => Segment::Conic(c.transform(a)),
+        }
+    }
+    /// The same curve run the other way.
+    pub fn reverse(&self) -> Segment {
+        match self {
+            Segment::Line(l) => Segment::Line(Line::new(l.p1, l.p0)),
+            Segment::Cubic(c) => Segment::Cubic(CubicBez::new(c.p3, c.p2, c.p1, c.p0)),
+            Segment::Conic(c) => Segment::Conic(c.reverse()),
         }
     }
     /// The segment as a cubic (a line becomes a cubic with controls at 1/3 and 2/3;
@@ -332,8 +358,21 @@ pub struct Drawing {
 pub struct PaintCounts {
     /// Strokes meshed as the area they paint.
     pub strokes_as_areas: usize,
-    /// Strokes kept as centre lines (`--strokes line`, or hairlines thinner than l_min).
+    /// Strokes kept as centre lines (`--strokes line`, or hairlines thinner than
+    /// l_min or than the feature envelope μ).
     pub strokes_as_lines: usize,
+    /// Of the strokes kept as lines, those at least l_min wide but narrower than
+    /// μ: their two outlines would be closer than the feature envelope, which
+    /// does not keep them apart (a band of secondary features, its area off by
+    /// up to ε times its length), so the stroke is its centre line instead.
+    pub strokes_below_mu: usize,
+    /// Of the strokes meshed as areas, those whose paint equals their element's
+    /// fill ([`ShapePaint::joins_fill`]): one region with the fill, no band.
+    pub strokes_joined: usize,
+    /// Of the strokes meshed as areas, the closed subpaths whose outlines are
+    /// the exact offsets (concentric conics, parallel lines); the others are
+    /// kurbo's stroke expansion to a tolerance far below μ.
+    pub exact_stroke_subpaths: usize,
     /// Strokes left out (`--strokes ignore`, or invisible).
     pub strokes_ignored: usize,
     /// Shapes (fills and stroke areas) painted through a clip path or mask.
@@ -357,6 +396,30 @@ pub struct PaintCounts {
 }
 
 impl Drawing {
+    /// The fill whose region the stroke area `stroke` joins
+    /// ([`ShapePaint::joins_fill`]): its element's fill, next to it in paint
+    /// order. `None` for any other shape, or when that fill is not there (a
+    /// copy painted on top replaced it).
+    pub fn joined_fill(&self, stroke: ShapeId) -> Option<ShapeId> {
+        let s = self.shapes.get(stroke.index())?;
+        if s.paint.kind != ShapeKind::Stroke || !s.paint.joins_fill {
+            return None;
+        }
+        let i = stroke.index();
+        [i.checked_sub(1), i.checked_add(1)]
+            .into_iter()
+            .flatten()
+            .find(|&j| {
+                self.shapes.get(j).is_some_and(|f| {
+                    f.paint.kind == ShapeKind::Element
+                        && f.filled
+                        && f.element_index == s.element_index
+                        && f.svg_id == s.svg_id
+                })
+            })
+            .map(|j| ShapeId(u32::try_from(j).expect("internal: shape count fits u32")))
+    }
+
     /// Largest accepted coordinate magnitude (output units, after `--units` and
     /// `--scale`). Far beyond any drawing,
     /// and small enough that squares and products stay finite in f64.

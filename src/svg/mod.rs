@@ -295,6 +295,14 @@ pub(crate) fn load_limited(
     let mut drawing = soup::assemble(shapes, outlines.warnings)?;
     drawing.paint = outlines.paint;
     drawing.paint.duplicates_merged = merged;
+    // A stroke whose fill a copy on top replaced is its own region again.
+    for i in 0..drawing.shapes.len() {
+        let id = ShapeId(u32::try_from(i).expect("internal: shape count fits u32"));
+        if drawing.shapes[i].paint.joins_fill && drawing.joined_fill(id).is_none() {
+            drawing.shapes[i].paint.joins_fill = false;
+            drawing.paint.strokes_joined -= 1;
+        }
+    }
     let d = drawing.diagonal();
     if d < Drawing::MIN_DIAGONAL {
         let cause = format!(

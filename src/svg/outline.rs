@@ -85,18 +85,28 @@ impl Ctx {
     }
 }
 
-/// One painted element before strokes are resolved (the hairline width needs
-/// the drawing's size).
+/// One painted element before strokes are resolved (the hairline width and
+/// the outlines' accuracy need the drawing's size).
 enum Item {
     /// A shape as it is.
     Shape(Shape),
-    /// A stroke's area, and what replaces it if it is a hairline: its centre
-    /// lines (`None` when the element's fill already carries them).
-    Stroke {
-        area: Shape,
-        centre: Option<Shape>,
-        width: f64,
-    },
+    /// A stroke to expand into its area, and what replaces it if it is too
+    /// thin: its centre lines (`None` when the element's fill already carries them).
+    Stroke(Box<PendingStroke>),
+}
+
+/// A stroke whose area is computed once the drawing's size is known.
+struct PendingStroke {
+    /// The area's shape, its subpaths still the centre line (output coordinates).
+    area: Shape,
+    /// The stroke's style (width, joins, caps, dashes in user space).
+    stroke: usvg::Stroke,
+    /// The path's user space to output coordinates.
+    to_output: Affine,
+    /// The centre lines that replace a stroke too thin to mesh as an area.
+    centre: Option<Shape>,
+    /// The width in output units.
+    width: f64,
 }
 
 /// Where a usvg node sits: in the document, in a `<use>` instance (index into the
@@ -250,7 +260,7 @@ pub(super) fn collect(
             Step::Visit(usvg::Node::Image(_), _, _, _) => images += 1,
         }
     }
-    out.shapes = resolve_items(items, opts, &mut out.paint);
+    out.shapes = resolve_items(items, opts, &mut out.paint, &mut out.warnings)?;
     add_clip_outlines(&mut out.shapes, paths);
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
     // usvg keeps an image node only for data it could decode (never, here)
@@ -617,40 +627,47 @@ fn paint_items(
             let to_output = Affine::new([sx, -ky, kx, -sy, tx, -ty]);
             let width = f64::from(s.width().get()) * to_output.determinant().abs().sqrt();
             let centre_shape = (!fill_is_region).then(|| centre(&shape));
-            match paint::stroke_area(&shape.subpaths, s, to_output) {
-                Some(area) => {
-                    let colour = match s.paint() {
-                        usvg::Paint::Color(c) => Some([c.red, c.green, c.blue]),
-                        _ => None,
+            let colour = match s.paint() {
+                usvg::Paint::Color(c) => Some([c.red, c.green, c.blue]),
+                _ => None,
+            };
+            let server = servers[1].clone().or_else(|| paint::server_id(s.paint()));
+            let alpha = stroke_alpha.unwrap_or(1.0);
+            // the fill's own paint, opaque on both: the stroke changes nothing
+            // where it overlaps the fill, and beyond it paints what the fill does
+            let joins_fill = match (&fill_item, p.fill()) {
+                (Some(Item::Shape(fill)), Some(f)) if fill_is_region => {
+                    let same = match (f.paint(), s.paint()) {
+                        (usvg::Paint::Color(a), usvg::Paint::Color(b)) => a == b,
+                        _ => fill.paint.server.is_some() && fill.paint.server == server,
                     };
-                    let area = Shape {
-                        filled: true,
-                        stroked: false,
-                        fill_rule: FillRule::NonZero,
-                        fill_colour: colour,
-                        subpaths: area,
-                        paint: ShapePaint {
-                            kind: ShapeKind::Stroke,
-                            stroke_width: Some(width),
-                            alpha: stroke_alpha.unwrap_or(1.0),
-                            server: servers[1].clone().or_else(|| paint::server_id(s.paint())),
-                            average_colour: paint::average_colour(s.paint()),
-                            ..base_paint.clone()
-                        },
-                        ..shape.clone()
-                    };
-                    check_coordinates(&area)?;
-                    stroke_item = Some(Item::Stroke {
-                        area,
-                        centre: centre_shape,
-                        width,
-                    });
+                    same && opaque(fill.paint.alpha) && opaque(alpha)
                 }
-                None => {
-                    counts.strokes_as_lines += 1;
-                    stroke_item = centre_shape.map(Item::Shape);
-                }
-            }
+                _ => false,
+            };
+            let area = Shape {
+                filled: true,
+                stroked: false,
+                fill_rule: FillRule::NonZero,
+                fill_colour: colour,
+                paint: ShapePaint {
+                    kind: ShapeKind::Stroke,
+                    stroke_width: Some(width),
+                    alpha,
+                    server,
+                    average_colour: paint::average_colour(s.paint()),
+                    joins_fill,
+                    ..base_paint.clone()
+                },
+                ..shape.clone()
+            };
+            stroke_item = Some(Item::Stroke(Box::new(PendingStroke {
+                area,
+                stroke: s.clone(),
+                to_output,
+                centre: centre_shape,
+                width,
+            })));
         }
     }
     let stroke_first = p.paint_order() == usvg::PaintOrder::StrokeAndFill;
@@ -664,46 +681,84 @@ fn paint_items(
     Ok([fill_fate, stroke_result])
 }
 
+/// Whether an effective opacity is opaque as a region name writes it (alpha
+/// rounds to 255, as `fill-#rrggbb`).
+fn opaque(alpha: f32) -> bool {
+    alpha.clamp(0.0, 1.0) * 255.0 >= 254.5
+}
+
 /// Items → shapes in paint order: a stroke narrower than the hairline width
-/// (see [`PaintOptions::min_stroke_width`]) becomes its centre lines.
-fn resolve_items(items: Vec<Item>, opts: &PaintOptions, counts: &mut PaintCounts) -> Vec<Shape> {
-    let hairline = if opts.min_stroke_relative {
-        let mut bbox: Option<kurbo::Rect> = None;
-        let mut add = |s: &Shape| {
-            for sp in &s.subpaths {
-                let pts = std::iter::once(sp.start)
-                    .chain(sp.segments.iter().flat_map(Segment::control_points));
-                for p in pts {
-                    bbox = Some(bbox.map_or(kurbo::Rect::from_points(p, p), |b| b.union_pt(p)));
-                }
-            }
-        };
-        for item in &items {
-            match item {
-                Item::Shape(s) => add(s),
-                Item::Stroke { area, centre, .. } => add(centre.as_ref().unwrap_or(area)),
+/// (see [`PaintOptions::min_stroke_width`]) or than the feature envelope
+/// ([`PaintOptions::mu`]) becomes its centre lines; a wider one its area, to
+/// [`PaintOptions::stroke_accuracy`].
+///
+/// Strokes kept as lines for being narrower than μ are named in a warning.
+///
+/// # Errors
+/// [`Error::BadCoordinate`] when a stroke's area reaches beyond
+/// [`super::Drawing::MAX_COORD`].
+fn resolve_items(
+    items: Vec<Item>,
+    opts: &PaintOptions,
+    counts: &mut PaintCounts,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Shape>> {
+    let mut bbox: Option<kurbo::Rect> = None;
+    let mut add = |s: &Shape| {
+        for sp in &s.subpaths {
+            let pts = std::iter::once(sp.start)
+                .chain(sp.segments.iter().flat_map(Segment::control_points));
+            for p in pts {
+                bbox = Some(bbox.map_or(kurbo::Rect::from_points(p, p), |b| b.union_pt(p)));
             }
         }
-        let d = bbox.map_or(0.0, |b| b.width().hypot(b.height()));
-        opts.min_stroke_width * d
-    } else {
-        opts.min_stroke_width
     };
+    for item in &items {
+        match item {
+            Item::Shape(s) => add(s),
+            Item::Stroke(p) => add(&p.area),
+        }
+    }
+    let d = bbox.map_or(0.0, |b| b.width().hypot(b.height()));
+    let absolute = |value: f64, relative: bool| if relative { value * d } else { value };
+    let hairline = absolute(opts.min_stroke_width, opts.min_stroke_relative);
+    let mu = absolute(opts.mu, opts.mu_relative);
+    let accuracy = opts.stroke_accuracy * d;
     let mut shapes = Vec::with_capacity(items.len());
+    let mut below_mu: Vec<String> = Vec::new();
     for item in items {
         let shape = match item {
             Item::Shape(s) => Some(s),
-            Item::Stroke {
-                area,
-                centre,
-                width,
-            } => {
-                if width < hairline {
-                    counts.strokes_as_lines += 1;
-                    centre
-                } else {
-                    counts.strokes_as_areas += 1;
-                    Some(area)
+            Item::Stroke(p) => {
+                let PendingStroke {
+                    mut area,
+                    stroke,
+                    to_output,
+                    centre,
+                    width,
+                } = *p;
+                let expanded = (width >= hairline && width >= mu)
+                    .then(|| paint::stroke_area(&area.subpaths, &stroke, to_output, accuracy))
+                    .flatten();
+                match expanded {
+                    Some(expanded) => {
+                        counts.strokes_as_areas += 1;
+                        counts.exact_stroke_subpaths += expanded.exact;
+                        if area.paint.joins_fill {
+                            counts.strokes_joined += 1;
+                        }
+                        area.subpaths = expanded.subpaths;
+                        check_coordinates(&area)?;
+                        Some(area)
+                    }
+                    None => {
+                        counts.strokes_as_lines += 1;
+                        if width >= hairline && width < mu {
+                            counts.strokes_below_mu += 1;
+                            below_mu.push(area.name());
+                        }
+                        centre
+                    }
                 }
             }
         };
@@ -712,7 +767,18 @@ fn resolve_items(items: Vec<Item>, opts: &PaintOptions, counts: &mut PaintCounts
             shapes.push(s);
         }
     }
-    shapes
+    if !below_mu.is_empty() {
+        const LISTED: usize = 5;
+        let more = if below_mu.len() > LISTED { ", ..." } else { "" };
+        let n = below_mu.len();
+        below_mu.truncate(LISTED);
+        warnings.push(format!(
+            "{n} stroke(s) narrower than the feature envelope μ = {mu:.3e} kept as centre \
+             lines (their two outlines would be closer than μ): {}{more}",
+            below_mu.join(", ")
+        ));
+    }
+    Ok(shapes)
 }
 
 /// The outlines of the clips that limit a region, as feature geometry (one

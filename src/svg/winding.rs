@@ -353,8 +353,10 @@ impl PaintTest {
 /// which shape paints a point (what `regions` labels a triangle with, and where
 /// `sizing` applies a per-region size).
 pub(crate) struct Painting {
-    /// Each filled shape's test and the bounding box of its outline.
-    layers: Vec<(ShapeId, PaintTest, Rect)>,
+    /// Each filled shape's test and the bounding box of its outline, with the
+    /// shape whose region it paints (itself, or for a stroke that joins its
+    /// fill, [`Drawing::joined_fill`], that fill).
+    layers: Vec<(ShapeId, ShapeId, PaintTest, Rect)>,
 }
 
 impl Painting {
@@ -376,23 +378,25 @@ impl Painting {
         Painting {
             layers: layers
                 .into_iter()
-                .map(|(_, id, t, bb)| (id, t, bb))
+                .map(|(_, id, t, bb)| (drawing.joined_fill(id).unwrap_or(id), id, t, bb))
                 .collect(),
         }
     }
 
-    /// The shapes, topmost first.
+    /// The shapes that own a region, topmost first (a stroke that joins its
+    /// fill is not one: its area is the fill's region).
     pub(crate) fn shapes(&self) -> impl Iterator<Item = ShapeId> + '_ {
-        self.layers.iter().map(|l| l.0)
+        self.layers.iter().filter(|l| l.0 == l.1).map(|l| l.0)
     }
 
-    /// The topmost shape covering `p`, and whether that answer is certain: it is
+    /// The topmost region covering `p` (a shape, or the fill a stroke joins),
+    /// and whether that answer is certain: it is
     /// unless `p` is within `eps_abs` of the outline of a shape at or above the
     /// answer. A shape whose outline's box, grown by `eps_abs`, misses `p` is
     /// skipped: it neither paints `p` nor passes near it.
     pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
         let mut clear = true;
-        for (id, test, bb) in &self.layers {
+        for (id, _, test, bb) in &self.layers {
             let near_box = p.x >= bb.x0 - eps_abs
                 && p.x <= bb.x1 + eps_abs
                 && p.y >= bb.y0 - eps_abs
