@@ -141,7 +141,7 @@ impl Cells {
         let bb = outline.bbox?;
         let n = outline.pieces.len();
         let margin = eps_abs * 0.25;
-        if n == 0 || !(margin >= 0.0) || !margin.is_finite() {
+        if n == 0 || margin.is_nan() || margin < 0.0 || !margin.is_finite() {
             return None;
         }
         let size = bb.width().max(bb.height());
