@@ -258,6 +258,7 @@ impl FeatureAnalysis {
     /// formula that does not parse, a background mesh that cannot be read.
     pub fn new(drawing: &Drawing, params: &Params) -> Result<FeatureAnalysis> {
         let resolved = params.resolve(drawing.diagonal());
+        density::check(drawing, resolved.mu)?;
         let field = default_field(drawing, params, Deadline::NONE)?;
         Ok(FeatureAnalysis {
             set: FeatureSet::build_sized(drawing, &resolved, &Deadline::NONE, &|p, source, cut| {
@@ -443,6 +444,7 @@ fn mesh_stages(
                 }));
             };
             check_deadline(&deadline, Stage::Features)?;
+            density::check(drawing, resolved.mu)?;
             let fs = times.time("features", || {
                 FeatureSet::build_sized(drawing, &resolved, &deadline, &|p, source, cut| {
                     field.for_curve(p, source.shape, cut)
@@ -927,6 +929,7 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     Ok(report)
 }
 
+mod density;
 mod forced;
 mod snap;
 #[cfg(test)]

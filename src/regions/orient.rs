@@ -50,13 +50,16 @@ pub(crate) fn orient_lines(
             own.entry(f.source.shape).or_default().push(f.geom);
         }
     }
+    // The nearest-point accuracy, from the drawing's diagonal found once (it scans
+    // every feature: per chain, a drawing of many small shapes spent minutes here).
+    let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
     for s in shapes {
         let own = own.get(&s).map_or(&[][..], Vec::as_slice);
         for chain in chains(mesh, &by_shape[&s]) {
             if deadline.expired() {
                 return;
             }
-            orient_chain(drawing, mesh, own, &chain);
+            orient_chain(accuracy, mesh, own, &chain);
         }
     }
 }
@@ -134,8 +137,9 @@ fn chains(mesh: &FemMesh, lines: &[usize]) -> Vec<Chain> {
 
 /// Make the elements of `chain` run one way, in the direction the module docs
 /// give.
-/// `own`: the features of the chain's shape.
-fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, own: &[FeatureGeom], chain: &Chain) {
+/// `own`: the features of the chain's shape; `accuracy`: of the nearest-point
+/// searches (user units).
+fn orient_chain(accuracy: f64, mesh: &mut FemMesh, own: &[FeatureGeom], chain: &Chain) {
     let lines = &chain.lines;
     // Consecutive: each element starts where the previous one ends.
     for k in 0..lines.len() {
@@ -166,7 +170,7 @@ fn orient_chain(drawing: &Drawing, mesh: &mut FemMesh, own: &[FeatureGeom], chai
             .sum();
         area2 < 0.0
     } else {
-        runs_backwards(drawing, mesh, own, lines)
+        runs_backwards(accuracy, mesh, own, lines)
     };
     if reverse {
         for &l in lines {
@@ -184,8 +188,7 @@ const DIRECTION_VOTES: usize = 5;
 /// midpoint (the branch the element lies on, even next to a place where the source crosses itself), the parameter
 /// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
 /// feature or the projections coincide.
-fn runs_along(drawing: &Drawing, own: &[FeatureGeom], a: Point, b: Point) -> Option<bool> {
-    let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
+fn runs_along(accuracy: f64, own: &[FeatureGeom], a: Point, b: Point) -> Option<bool> {
     let mid = a.midpoint(b);
     let t = |f: &FeatureGeom, p: Point| match *f {
         FeatureGeom::Point(_) => None,
@@ -204,7 +207,7 @@ fn runs_along(drawing: &Drawing, own: &[FeatureGeom], a: Point, b: Point) -> Opt
 /// Whether the consecutive open chain `lines` runs against its source's
 /// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
 /// elements nearest the chain's middle (no verdict: as it is).
-fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, own: &[FeatureGeom], lines: &[usize]) -> bool {
+fn runs_backwards(accuracy: f64, mesh: &FemMesh, own: &[FeatureGeom], lines: &[usize]) -> bool {
     let mid = lines.len() / 2;
     let mut order: Vec<usize> = (0..lines.len()).collect();
     order.sort_by_key(|&k| k.abs_diff(mid));
@@ -212,7 +215,7 @@ fn runs_backwards(drawing: &Drawing, mesh: &FemMesh, own: &[FeatureGeom], lines:
     for k in order.into_iter().take(DIRECTION_VOTES) {
         let v = mesh.line(lines[k]);
         let (a, b) = (mesh.nodes[v[0] as usize], mesh.nodes[v[1] as usize]);
-        match runs_along(drawing, own, a, b) {
+        match runs_along(accuracy, own, a, b) {
             Some(true) => along += 1,
             Some(false) => against += 1,
             None => {}

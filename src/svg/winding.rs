@@ -28,6 +28,8 @@
 //! subdivision stops), is reported as [`Winding::Near`] with a best-effort
 //! number, and the caller picks another point.
 
+mod cells;
+
 use super::drawing::Conic;
 use super::{Clip, Drawing, FillRule, Segment, Shape, ShapeId, Subpath};
 use crate::exact::{Orientation, orient2d};
@@ -38,6 +40,9 @@ const MAX_DEPTH: u32 = 60;
 /// Total number of pieces examined per cubic or conic before giving up (keeps
 /// pathological, self-overlapping curves bounded).
 const MAX_PIECES: u32 = 4096;
+/// Outlines of at least this many pieces answer queries from a grid of cells
+/// ([`cells`]) rather than from their horizontal bands alone.
+const CELLS_MIN_PIECES: usize = 1024;
 
 /// The winding number of a point, and whether it is certain.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,7 +105,9 @@ fn conic_bbox(c: &Conic) -> Rect {
 
 /// A shape's closed outline, prepared for many winding queries: its pieces
 /// bucketed into horizontal bands, so a query only looks at the pieces whose
-/// vertical extent holds the query point.
+/// vertical extent holds the query point; a large outline also answers from a
+/// grid of cells with known winding numbers ([`cells`], built at the first query),
+/// so a query looks only at the pieces near it.
 #[derive(Clone, Debug)]
 pub(crate) struct Outline {
     pieces: Vec<Piece>,
@@ -108,6 +115,7 @@ pub(crate) struct Outline {
     band_y0: f64,
     band_h: f64,
     bands: Vec<Vec<u32>>,
+    cells: std::sync::OnceLock<Option<cells::Cells>>,
 }
 
 impl Outline {
@@ -144,6 +152,7 @@ impl Outline {
             band_y0: 0.0,
             band_h: 1.0,
             bands: Vec::new(),
+            cells: std::sync::OnceLock::new(),
         };
         outline.build_bands();
         outline
@@ -218,7 +227,35 @@ impl Outline {
 
     /// The winding number of `p` around the outline. `eps_abs` (user units, > 0)
     /// is the distance to a curve below which the answer is only a best guess.
+    ///
+    /// A large outline builds its grid of cells for the `eps_abs` of its first query
+    /// and answers from it the queries with no larger `eps_abs` whose cell can tell;
+    /// the answer is always the one the full ray cast gives.
     pub(crate) fn winding(&self, p: Point, eps_abs: f64) -> Winding {
+        if self.pieces.len() >= CELLS_MIN_PIECES
+            && self.is_near_box(p, eps_abs * 0.25)
+            && let Some(cells) = self
+                .cells
+                .get_or_init(|| cells::Cells::build(self, eps_abs))
+            && let Some(w) = cells.winding(self, p, eps_abs)
+        {
+            return w;
+        }
+        self.winding_banded(p, eps_abs)
+    }
+
+    /// Whether `p` is within `margin` of the outline's box.
+    fn is_near_box(&self, p: Point, margin: f64) -> bool {
+        self.bbox.is_some_and(|bb| {
+            p.x >= bb.x0 - margin
+                && p.x <= bb.x1 + margin
+                && p.y >= bb.y0 - margin
+                && p.y <= bb.y1 + margin
+        })
+    }
+
+    /// [`Outline::winding`] by the full ray cast (the pieces of `p`'s band).
+    fn winding_banded(&self, p: Point, eps_abs: f64) -> Winding {
         let margin = eps_abs * 0.25;
         let Some(bb) = self.bbox else {
             return Winding::Clear(0);
