@@ -54,16 +54,22 @@ HEAD = '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1000">\n'
 STROKE = 'fill="none" stroke="#000" stroke-width="0.01"'
 
 
+def random_segment(rnd, ln):
+    """A segment of length about `ln` (clipped to the box) at a random place
+    and direction."""
+    x, y = rnd.uniform(50, 950), rnd.uniform(50, 950)
+    a = rnd.uniform(0, 2 * math.pi)
+    x1 = min(max(x + ln * math.cos(a), 0), 1000)
+    y1 = min(max(y + ln * math.sin(a), 0), 1000)
+    return x, y, x1, y1
+
+
 def soup(n, seed=1):
     rnd = random.Random(seed)
     ln = 3000.0 / math.sqrt(n)
     out = [HEAD]
     for k in range(n):
-        x, y = rnd.uniform(50, 950), rnd.uniform(50, 950)
-        a = rnd.uniform(0, 2 * math.pi)
-        dx, dy = ln * math.cos(a), ln * math.sin(a)
-        x1 = min(max(x + dx, 0), 1000)
-        y1 = min(max(y + dy, 0), 1000)
+        x, y, x1, y1 = random_segment(rnd, ln)
         if k % 2 == 0:
             d = f"M{x:.4f} {y:.4f}L{x1:.4f} {y1:.4f}"
         else:
@@ -121,10 +127,7 @@ def stroked_soup(n, seed=1):
     ln = 3000.0 / math.sqrt(n)
     out = [HEAD]
     for _ in range(n):
-        x, y = rnd.uniform(50, 950), rnd.uniform(50, 950)
-        a = rnd.uniform(0, 2 * math.pi)
-        x1 = min(max(x + ln * math.cos(a), 0), 1000)
-        y1 = min(max(y + ln * math.sin(a), 0), 1000)
+        x, y, x1, y1 = random_segment(rnd, ln)
         out.append(f'<path fill="none" stroke="#000" stroke-width="1" d="M{x:.4f} {y:.4f}L{x1:.4f} {y1:.4f}"/>\n')
     out.append("</svg>\n")
     return "".join(out)
