@@ -527,7 +527,7 @@ fn d_does_not_depend_on_rotation() {
     assert!((d0 - 120.0 * 2f64.sqrt()).abs() < 1e-9 * d0, "{d0}");
 }
 
-/// A thin stroke meshed as an area sizes its outline (twice its width); one
+/// A thin stroke meshed as an area sizes its outline (six times its width); one
 /// narrower than the feature envelope mu gets no size of its own (its outlines
 /// are not kept apart, so no element could fit it: on a dev flag with 0.1-wide
 /// strokes sizing them gave 12x the triangles and 50 s).
@@ -544,10 +544,10 @@ fn a_stroke_is_sized_only_when_its_outlines_are_kept_apart() {
         triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).expect("meshes")
     };
     // mu is 1e-3 of the diagonal (0.14 here) by default.
-    let (thin, wide) = (run(0.05), run(1.5));
+    let (thin, wide) = (run(0.05), run(0.8));
     let fields = |m: &Meshed| m.report.sizing.as_ref().map(|s| s.fields.clone());
     println!(
-        "stroke 0.05: {} triangles, fields {:?}; stroke 1.5: {} triangles, fields {:?}",
+        "stroke 0.05: {} triangles, fields {:?}; stroke 0.8: {} triangles, fields {:?}",
         thin.mesh.triangle_count(),
         fields(&thin),
         wide.mesh.triangle_count(),

@@ -24,15 +24,15 @@ fn field_of(drawing: &Drawing, r: &Resolved, spec: &SizeSpec) -> SizeField {
 }
 
 /// A thin stroke's size goes to its own outline only (issue 37): the edge of
-/// another shape running 0.5 from the stroke is resampled at the size it had
+/// another shape running 0.75 from the stroke is resampled at the size it had
 /// without the stroke (`l`), not at the field there (the stroke's size grown
-/// by 0.5), while the stroke's own outline is cut at twice its width. The
+/// by 0.75), while the stroke's own outline is cut at its own size. The
 /// optimizer still reads the whole field.
 #[test]
 fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
-        <path d="M 10 38.5 H 90" stroke="#000" stroke-width="1" fill="none"/></svg>"##;
+        <path d="M 10 39.1 H 90" stroke="#000" stroke-width="0.3" fill="none"/></svg>"##;
     let drawing = crate::svg::load_bytes(svg).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     let field = default_field(&drawing, &r);
@@ -41,7 +41,7 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
         drawing
             .shapes
             .iter()
-            .position(|s| s.paint.stroke_width == Some(1.0))
+            .position(|s| s.paint.stroke_width.is_some_and(|w| (w - 0.3).abs() < 1e-6))
             .expect("the stroke is meshed as an area") as u32,
     );
     let rect = ShapeId(
@@ -51,9 +51,10 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
             .position(|s| s.filled && s.paint.stroke_width.is_none())
             .expect("the rect") as u32,
     );
-    let h_stroke = sources::STROKE_SIZE_PER_WIDTH * 1.0;
+    let width = drawing.shapes[stroke.index()].paint.stroke_width;
+    let h_stroke = sources::STROKE_SIZE_PER_WIDTH * width.expect("a stroke");
     assert!(
-        h_stroke + 0.5 < 0.75 * r.l,
+        h_stroke + 0.75 < 0.75 * r.l,
         "the test needs the stroke's size well below l"
     );
 
@@ -73,7 +74,7 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
     }
     let of = |shape: ShapeId| chords.iter().filter(move |c| c.0 == shape);
     // The stroke's own outline: cut at its size.
-    assert!(of(stroke).count() >= 2 * 80 / 2);
+    assert!(of(stroke).count() as f64 >= 2.0 * 80.0 / h_stroke);
     for &(_, a, b) in of(stroke) {
         assert!(a.distance(b) <= h_stroke * (1.0 + 1e-9), "{a:?} {b:?}");
         assert_eq!(
@@ -81,8 +82,8 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
             h_stroke
         );
     }
-    // The rect's edge along the stroke (its chords 0.5 to 1.5 from the stroke's
-    // outline): cut at l, far above the field there.
+    // The rect's edge along the stroke (its chords 0.75 to 1.25 from the
+    // stroke's outline): cut at l, far above the field there.
     let stroke_y: f64 = of(stroke).map(|c| c.1.y).sum::<f64>() / of(stroke).count() as f64;
     let along: Vec<_> = of(rect)
         .filter(|c| c.1.y == c.2.y && (c.1.y - stroke_y).abs() < 2.0)
@@ -126,7 +127,7 @@ fn without_strokes_the_curves_read_the_field() {
 fn beside_a_stroke_the_curves_read_the_users_field() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
-        <path d="M 10 38.5 H 90" stroke="#000" stroke-width="1" fill="none"/></svg>"##;
+        <path d="M 10 38.5 H 90" stroke="#000" stroke-width="0.25" fill="none"/></svg>"##;
     let drawing = crate::svg::load_bytes(svg).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     // A box of size 3 over everything, a box of size 1.5 far from the stroke.
@@ -156,7 +157,10 @@ fn beside_a_stroke_the_curves_read_the_users_field() {
                 at <= 3.0 && (other - 3.0).abs() < 1e-9,
                 "{p:?}: {at} {other}"
             );
-            assert_eq!(field.for_curve(p, ShapeId(stroke as u32), CutFor::Any), 2.0);
+            assert_eq!(
+                field.for_curve(p, ShapeId(stroke as u32), CutFor::Any),
+                sources::STROKE_SIZE_PER_WIDTH * 0.25
+            );
         }
     }
     assert!(
