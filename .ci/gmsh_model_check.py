@@ -6,8 +6,9 @@ For every .msh file under the given directories (default: target/test-out/
 gmsh_model, where tests/gmsh_model.rs writes its meshes), open it with gmsh
 and check (MSH 2.2 files with gmsh's Mesh.CreateTopologyMsh2 set, as the
 format has no entities of its own):
-- every surface entity has nodes (gmsh.model.mesh.getNodes(2, tag)) and
-  bounding curves (gmsh.model.getBoundary);
+- every surface entity has elements, nodes (gmsh.model.mesh.getNodes(2,
+  tag), its boundary's included: a surface of a few triangles may have all
+  its nodes on its curves) and bounding curves (gmsh.model.getBoundary);
 - a physical curve named "boundary" exists and its line elements run with
   the domain on their left: the area they enclose (sum over their chords of
   (x_a y_b - x_b y_a) / 2) equals the area of the straight triangles on the
@@ -71,9 +72,14 @@ def check(path: Path) -> list[str]:
     if not surfaces:
         problems.append("no surface entity")
     for _, tag in surfaces:
-        nodes, _, _ = gmsh.model.mesh.getNodes(2, tag)
+        # A surface of a few triangles may have every node on its bounding
+        # curves, where gmsh classifies them (on the curve entities), so its
+        # nodes are asked for with its boundary's; it must have elements too.
+        nodes, _, _ = gmsh.model.mesh.getNodes(2, tag, includeBoundary=True)
         if len(nodes) == 0:
             problems.append(f"surface {tag}: getNodes(2, {tag}) returns no node")
+        if not any(len(e) for e in gmsh.model.mesh.getElements(2, tag)[1]):
+            problems.append(f"surface {tag}: getElements(2, {tag}) returns no element")
         bound = gmsh.model.getBoundary([(2, tag)], combined=False, oriented=False)
         if not bound:
             problems.append(f"surface {tag}: getBoundary gives no curve")
