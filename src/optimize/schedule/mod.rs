@@ -53,6 +53,7 @@
 mod collapse;
 mod driver;
 mod queue;
+mod repair;
 mod sizing;
 mod smooth;
 mod split;
@@ -293,6 +294,12 @@ pub(crate) struct Schedule<'a> {
     /// found a gain on: an edge whose ends' faces have not changed since
     /// (so neither has its quad) and that had no gain then has none now.
     swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
+    /// In the worst-element phase (`repair.rs`), by vertex slot: the vertices
+    /// whose edges and moves the passes consider (`None`: every vertex).
+    region: Option<Vec<bool>>,
+    /// In the worst-element phase: splits may not make their faces worse
+    /// than before or than a corner of α allows (`repair.rs`).
+    split_bounded: bool,
     /// Tests: the plans made ahead that were used, and those found stale.
     #[cfg(test)]
     ahead_tally: (usize, usize),
@@ -354,6 +361,7 @@ impl<'a> Schedule<'a> {
                 off_curve_left: 0,
                 rational_left: 0,
                 envelope_stages: 0,
+                bad_corners_left: 0,
                 min_angle_deg: 0.0,
                 max_amips: 0.0,
             },
@@ -366,6 +374,8 @@ impl<'a> Schedule<'a> {
             role_refused: rustc_hash::FxHashMap::default(),
             stretch: Stretch::uniform(SPLIT_ABOVE),
             swap_scan: None,
+            region: None,
+            split_bounded: false,
             #[cfg(test)]
             ahead_tally: (0, 0),
             #[cfg(test)]

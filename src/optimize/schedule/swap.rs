@@ -176,6 +176,9 @@ impl Schedule<'_> {
         let mut cands: Vec<(f64, EdgeKey)> = edges
             .into_par_iter()
             .filter(|&k| {
+                if !self.edge_in_region(k.lo, k.hi) {
+                    return false;
+                }
                 if let Some((at, found)) = last
                     && self.stamp_of(k.lo) <= *at
                     && self.stamp_of(k.hi) <= *at
