@@ -77,7 +77,7 @@ impl Schedule<'_> {
         // one order.
         let mut queue = ShortestFirst::default();
         let edges: Vec<EdgeKey> = match since {
-            None => self.mesh.edge_list(),
+            None => self.candidate_edges(),
             Some(at) => {
                 // The edges at the vertices stamped since `at`, found in
                 // parallel and sorted (the queue's order does not depend on

@@ -63,6 +63,7 @@ mod swap;
 #[cfg(test)]
 pub(crate) use driver::optimize;
 pub(crate) use driver::{OptimizeOptions, optimize_with_field};
+pub(crate) use repair::needle_energy;
 pub(crate) use stats::{EnergyMeasure, OpTally, OptimizeStats, StopReason, measure_energy};
 
 #[cfg(test)]

@@ -18,14 +18,14 @@
 //! the sizes the coarsening left.
 
 use super::{REFINED_BELOW, SIZING_RADIUS, SIZING_REFINE, Schedule, slot};
-use crate::mesh::{FaceId, TriMesh, VertexId, corner_angles};
+use crate::mesh::{EdgeKey, FaceId, TriMesh, VertexId, corner_angles};
 use crate::ops::Objective;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 /// At most this many repair rounds (each halves the targets around the bad
 /// triangles once more).
-const REPAIR_ROUNDS: usize = 6;
+const REPAIR_ROUNDS: usize = 10;
 /// Min-max smoothing passes per repair round.
 const REPAIR_SMOOTHS: usize = 3;
 
@@ -76,7 +76,7 @@ fn sector_angle(mesh: &TriMesh, v: VertexId, next: VertexId, prev: VertexId) -> 
 /// The smallest AMIPS energy of a triangle with a corner of `alpha` (radians,
 /// below 60°): the isosceles needle with that apex. A triangle of lower energy
 /// has every corner above `alpha`.
-pub(super) fn needle_energy(alpha: f64) -> f64 {
+pub(crate) fn needle_energy(alpha: f64) -> f64 {
     let apex = kurbo::Point::new(0.0, 0.0);
     let b = kurbo::Point::new(1.0, 0.0);
     let c = kurbo::Point::new(alpha.cos(), alpha.sin());
@@ -91,31 +91,35 @@ struct RepairSnapshot {
     refined: Vec<bool>,
 }
 
-/// The smallest corner of the faces `bad` (radians).
-fn worst_corner(mesh: &TriMesh, bad: &[FaceId]) -> f64 {
-    bad.iter()
-        .flat_map(|&f| corner_angles(mesh.face(f).map(|x| mesh.position(x))))
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// The faces with a bad corner (see the module doc), `alpha` in radians.
-pub(super) fn bad_faces(mesh: &TriMesh, alpha: f64) -> Vec<FaceId> {
+/// The faces with a bad corner (see the module doc), `alpha` in radians,
+/// each with its smallest bad corner.
+pub(super) fn bad_faces(mesh: &TriMesh, alpha: f64) -> Vec<(FaceId, f64)> {
     let faces: Vec<FaceId> = mesh.faces().collect();
     faces
         .into_par_iter()
-        .filter(|&f| {
+        .filter_map(|f| {
             let v = mesh.face(f);
             let angles = corner_angles(v.map(|x| mesh.position(x)));
-            (0..3).any(|k| {
-                angles[k] < alpha && {
-                    let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
-                    let mut buf = Vec::new();
-                    let both = fixed_edge(mesh, a, b, &mut buf) && fixed_edge(mesh, a, c, &mut buf);
-                    !both && sector_angle(mesh, a, b, c) >= alpha
-                }
-            })
+            let mut buf = Vec::new();
+            let worst = (0..3)
+                .filter(|&k| {
+                    angles[k] < alpha && {
+                        let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+                        let both =
+                            fixed_edge(mesh, a, b, &mut buf) && fixed_edge(mesh, a, c, &mut buf);
+                        !both && sector_angle(mesh, a, b, c) >= alpha
+                    }
+                })
+                .map(|k| angles[k])
+                .fold(f64::INFINITY, f64::min);
+            worst.is_finite().then_some((f, worst))
         })
         .collect()
+}
+
+/// The smallest bad corner of `bad` ([`bad_faces`]; `+∞` for none).
+fn worst_corner(bad: &[(FaceId, f64)]) -> f64 {
+    bad.iter().map(|b| b.1).fold(f64::INFINITY, f64::min)
 }
 
 impl Schedule<'_> {
@@ -130,6 +134,26 @@ impl Schedule<'_> {
     /// Whether the edge `a`–`b` touches the region ([`Self::in_region`]).
     pub(super) fn edge_in_region(&self, a: VertexId, b: VertexId) -> bool {
         self.in_region(a) || self.in_region(b)
+    }
+
+    /// The edges the passes consider: those at the region's vertices in the
+    /// worst-element phase (sorted), every edge elsewhere.
+    pub(super) fn candidate_edges(&self) -> Vec<EdgeKey> {
+        let Some(region) = &self.region else {
+            return self.mesh.edge_list();
+        };
+        let mut edges: Vec<EdgeKey> = Vec::new();
+        for (i, _) in region.iter().enumerate().filter(|(_, r)| **r) {
+            let v = VertexId::from_index(i);
+            if !self.mesh.is_vertex_alive(v) {
+                continue;
+            }
+            let ring = crate::mesh::ScratchRing::of(self.mesh, v);
+            edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        edges
     }
 
     /// Put `v` (a vertex a split made in the region) in the region.
@@ -152,21 +176,20 @@ impl Schedule<'_> {
         let alpha = self.opts.alpha_deg.to_radians();
         let mut bad = bad_faces(self.mesh, alpha);
         self.failed_smooth.clear();
-        let mut bounded = false;
         for round in 0..REPAIR_ROUNDS {
             if bad.is_empty() || self.out_of_time() {
                 break;
             }
-            let worst = worst_corner(self.mesh, &bad);
-            let saved = (!bounded).then(|| RepairSnapshot {
+            let worst = worst_corner(&bad);
+            let saved = Some(RepairSnapshot {
                 mesh: self.mesh.clone(),
                 target: self.target.clone(),
                 base: self.base.clone(),
                 refined: self.refined.clone(),
             });
-            self.repair_round(round, &bad, bounded);
+            self.repair_round(round, &bad, false);
             let now = bad_faces(self.mesh, alpha);
-            let worse = !now.is_empty() && worst_corner(self.mesh, &now) < worst;
+            let worse = worst_corner(&now) < worst;
             match saved {
                 Some(snap) if worse => {
                     tracing::debug!(round, "worst-element round rolled back");
@@ -175,8 +198,7 @@ impl Schedule<'_> {
                     self.base = snap.base;
                     self.refined = snap.refined;
                     self.forget_memos();
-                    bounded = true;
-                    self.repair_round(round, &bad, bounded);
+                    self.repair_round(round, &bad, true);
                     bad = bad_faces(self.mesh, alpha);
                 }
                 _ => bad = now,
@@ -202,12 +224,16 @@ impl Schedule<'_> {
 
     /// One round of [`Self::repair_angles`] around the faces `bad`, with
     /// `bounded` splits or not.
-    fn repair_round(&mut self, round: usize, bad: &[FaceId], bounded: bool) {
+    fn repair_round(&mut self, round: usize, bad: &[(FaceId, f64)], bounded: bool) {
+        let t0 = std::time::Instant::now();
         self.refine_around(bad);
         self.split_bounded = bounded;
         self.swap_scan = None;
+        let t1 = t0.elapsed().as_secs_f64();
         let (_, splits) = self.split_pass();
+        let t2 = t0.elapsed().as_secs_f64();
         let collapses = self.collapse_pass(super::COLLAPSE_FACTOR);
+        let t3 = t0.elapsed().as_secs_f64();
         let mut swaps = self.swap_pass();
         let mut smooths = 0;
         for _ in 0..REPAIR_SMOOTHS {
@@ -226,6 +252,7 @@ impl Schedule<'_> {
             swaps,
             smooths,
             faces = self.mesh.num_faces(),
+            t = ?(t1, t2, t3, t0.elapsed().as_secs_f64()),
             "worst-element round"
         );
     }
@@ -244,9 +271,9 @@ impl Schedule<'_> {
     /// [`SIZING_RADIUS`] of their target less the farther they are, as
     /// `update_sizing` grades them), and make those vertices and their
     /// neighbours the region.
-    fn refine_around(&mut self, bad: &[FaceId]) {
+    fn refine_around(&mut self, bad: &[(FaceId, f64)]) {
         self.failed_collapse.retain(|_, f| !f.by_length);
-        let mut seeds: Vec<VertexId> = bad.iter().flat_map(|&f| self.mesh.face(f)).collect();
+        let mut seeds: Vec<VertexId> = bad.iter().flat_map(|&(f, _)| self.mesh.face(f)).collect();
         seeds.sort_unstable();
         seeds.dedup();
         let cap = self.mesh.vertex_capacity();

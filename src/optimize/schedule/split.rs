@@ -11,7 +11,7 @@ impl Schedule<'_> {
     /// Split every edge longer than 4/3 of its mean target once, longest first.
     /// Returns the number of candidates and of splits applied.
     pub(super) fn split_pass(&mut self) -> (usize, u64) {
-        let edges: Vec<EdgeKey> = self.mesh.edge_list();
+        let edges: Vec<EdgeKey> = self.candidate_edges();
         let mut cands: Vec<(f64, EdgeKey, f64)> = edges
             .into_par_iter()
             .filter_map(|k| {
