@@ -174,6 +174,7 @@ impl Schedule<'_> {
     /// worse than before or than a corner of α allows.
     pub(super) fn repair_angles(&mut self) -> usize {
         let alpha = self.opts.alpha_deg.to_radians();
+        self.split_multi_curved();
         let mut bad = bad_faces(self.mesh, alpha);
         self.failed_smooth.clear();
         for round in 0..REPAIR_ROUNDS {
@@ -205,7 +206,90 @@ impl Schedule<'_> {
             }
         }
         self.region = None;
+        // The rounds' collapses and swaps may have made faces with two curved
+        // edges again: split them, and smooth around the new vertices only
+        // (no change of topology after that).
+        let new = self.split_multi_curved();
+        if !new.is_empty() {
+            let mut region = vec![false; self.mesh.vertex_capacity()];
+            for &m in &new {
+                if !self.mesh.is_vertex_alive(m) {
+                    continue;
+                }
+                region[m.index()] = true;
+                for &w in &crate::mesh::ScratchRing::of(self.mesh, m).neighbours {
+                    region[w.index()] = true;
+                }
+            }
+            self.region = Some(region);
+            self.failed_smooth.clear();
+            for _ in 0..REPAIR_SMOOTHS {
+                self.smooth_pass_with(Objective::MinMax);
+            }
+            self.region = None;
+            bad = bad_faces(self.mesh, alpha);
+        }
         bad.len()
+    }
+
+    /// Split the faces with two or more curved primary edges (on a curved
+    /// parent) as the curved stage would (thesis §4.4.2: at most one curved
+    /// edge per element), through an edge that is not curved, the longest
+    /// first: done here, the new vertex is smoothed with the rest of the
+    /// region instead of being left where the split put it. Returns the new
+    /// vertices.
+    fn split_multi_curved(&mut self) -> Vec<VertexId> {
+        let mesh: &TriMesh = self.mesh;
+        let ctx: &crate::ops::Context = self.ctx;
+        let curved =
+            |k: EdgeKey| crate::ops::invariants::curved::curved_tag(mesh, ctx, k).is_some();
+        let faces: Vec<FaceId> = mesh.faces().collect();
+        let multi: Vec<FaceId> = faces
+            .into_par_iter()
+            .filter(|&f| {
+                let v = mesh.face(f);
+                (0..3)
+                    .filter(|&i| curved(EdgeKey::new(v[i], v[(i + 1) % 3])))
+                    .count()
+                    > 1
+            })
+            .collect();
+        let mut new = Vec::new();
+        for f in multi {
+            if !self.mesh.is_face_alive(f) {
+                continue;
+            }
+            let v = self.mesh.face(f);
+            let mut edges: Vec<(f64, EdgeKey)> = (0..3)
+                .map(|i| EdgeKey::new(v[i], v[(i + 1) % 3]))
+                .filter(|&k| {
+                    crate::ops::invariants::curved::curved_tag(self.mesh, self.ctx, k).is_none()
+                })
+                .map(|k| (self.mesh.distance(k.lo, k.hi), k))
+                .collect();
+            if edges.len() != 1 {
+                continue;
+            }
+            edges.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let k = edges[0].1;
+            let out = crate::ops::try_split(self.mesh, self.ctx, k.lo, k.hi);
+            self.touch(&out, true);
+            if let crate::ops::Outcome::Applied(ch) = &out
+                && let Some(m) = ch.new_vertex
+            {
+                let t = 0.5 * (self.target_of(k.lo) + self.target_of(k.hi));
+                let h = if self.field.is_uniform() {
+                    self.opts.l
+                } else {
+                    self.field.at(self.mesh.position(m))
+                };
+                self.set_base(m, h);
+                self.set_target(m, t.min(h));
+                new.push(m);
+            }
+            self.stats.split.record(&out);
+        }
+        new
     }
 
     /// The memos of refused operations and the swap scan, after the mesh
