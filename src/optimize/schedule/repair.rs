@@ -174,35 +174,38 @@ impl Schedule<'_> {
     /// worse than before or than a corner of α allows.
     pub(super) fn repair_angles(&mut self) -> usize {
         let alpha = self.opts.alpha_deg.to_radians();
-        self.split_multi_curved();
-        let mut bad = bad_faces(self.mesh, alpha);
+        let mut bad = Vec::new();
         self.failed_smooth.clear();
         for round in 0..REPAIR_ROUNDS {
+            // faces with two curved edges first: the round smooths what their
+            // splits leave
+            if round == 0 || !bad.is_empty() {
+                self.split_multi_curved();
+                bad = bad_faces(self.mesh, alpha);
+            }
             if bad.is_empty() || self.out_of_time() {
                 break;
             }
             let worst = worst_corner(&bad);
-            let saved = Some(RepairSnapshot {
+            let snap = RepairSnapshot {
                 mesh: self.mesh.clone(),
                 target: self.target.clone(),
                 base: self.base.clone(),
                 refined: self.refined.clone(),
-            });
+            };
             self.repair_round(round, &bad, false);
             let now = bad_faces(self.mesh, alpha);
-            let worse = worst_corner(&now) < worst;
-            match saved {
-                Some(snap) if worse => {
-                    tracing::debug!(round, "worst-element round rolled back");
-                    *self.mesh = snap.mesh;
-                    self.target = snap.target;
-                    self.base = snap.base;
-                    self.refined = snap.refined;
-                    self.forget_memos();
-                    self.repair_round(round, &bad, true);
-                    bad = bad_faces(self.mesh, alpha);
-                }
-                _ => bad = now,
+            if worst_corner(&now) < worst {
+                tracing::debug!(round, "worst-element round rolled back");
+                *self.mesh = snap.mesh;
+                self.target = snap.target;
+                self.base = snap.base;
+                self.refined = snap.refined;
+                self.forget_memos();
+                self.repair_round(round, &bad, true);
+                bad = bad_faces(self.mesh, alpha);
+            } else {
+                bad = now;
             }
         }
         self.region = None;
