@@ -1,7 +1,8 @@
 //! The schedule's driver: its options, the entry points
 //! ([`optimize_with_field`], and `optimize` for the tests), the main passes
 //! with their stop rules, then the coarsening, the polish, the min-max polish,
-//! the envelope stages and the final statistics.
+//! the worst-element phase (`repair.rs`), the envelope stages and the final
+//! statistics.
 
 use super::smooth::off_curve_vertices;
 use super::stats::{Measure, OptimizeStats, StopReason, measure};

@@ -28,6 +28,12 @@
 //! and swaps lift the worst triangles while that still pays. From the
 //! coarsening on, smoothing and swaps stretch no edge past `2 l`.
 //!
+//! Last, the worst-element phase (`repair.rs`, issue 38) repairs the corners
+//! below α that the feature edges leave room for: targets halved around them,
+//! the passes run on that region only, round after round (a round that makes
+//! the worst such corner worse is rolled back and run with energy-bounded
+//! splits); the statistics count the triangles left with one.
+//!
 //! Every operation goes through `crate::ops`, so every invariant holds after
 //! each one and refused operations leave the mesh as it was. Collapse, swap and
 //! smoothing never raise the local maximum energy; splits may.
@@ -45,7 +51,8 @@
 //!
 //! The schedule's files, by phase: `driver.rs` (the entry points, the phases,
 //! the stop rules), one file per pass (`split.rs`, `collapse.rs`, `swap.rs`,
-//! `smooth.rs` with rounding and projection), `sizing.rs` (the targets against
+//! `smooth.rs` with rounding and projection), `repair.rs` (the worst-element
+//! phase), `sizing.rs` (the targets against
 //! the size field), `queue.rs` (the edge queue, the plans made ahead) and
 //! `stats.rs` (tallies, statistics, measures). This file holds the tuning
 //! constants and the optimizer's state ([`Schedule`]).
