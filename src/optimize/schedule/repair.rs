@@ -41,6 +41,10 @@ use std::f64::consts::TAU;
 /// At most this many repair rounds (each halves the targets around the bad
 /// triangles once more).
 const REPAIR_ROUNDS: usize = 10;
+/// Around bad corners the targets may go this many times below the sizing
+/// floor (ε): at the floor the collapses undid the splits that open a corner
+/// at a kink of a feature (the chord's midpoint, closer than ε to the kink).
+const REPAIR_FLOOR_DIVISOR: f64 = 16.0;
 /// Min-max smoothing passes per repair round.
 const REPAIR_SMOOTHS: usize = 3;
 
@@ -404,7 +408,8 @@ impl Schedule<'_> {
         let mut region = vec![false; cap];
         for &v in &touched {
             let top = self.base_of(v);
-            let t = (self.target_of(v) * mult[v.index()]).clamp(self.opts.l_floor.min(top), top);
+            let floor = self.opts.l_floor / REPAIR_FLOOR_DIVISOR;
+            let t = (self.target_of(v) * mult[v.index()]).clamp(floor.min(top), top);
             if t < top * REFINED_BELOW {
                 *slot(&mut self.refined, v, false) = true;
             }
