@@ -10,7 +10,7 @@ pub(crate) mod schedule;
 
 #[cfg(test)]
 pub(crate) use schedule::optimize;
-pub(crate) use schedule::{OptimizeOptions, OptimizeStats, optimize_with_field};
+pub(crate) use schedule::{OptimizeOptions, OptimizeStats, needle_energy, optimize_with_field};
 
 #[cfg(test)]
 mod tests;

@@ -496,7 +496,7 @@ fn mesh_stages(
                             .with_l_min_abs(resolved.l_min)
                             .with_size(field)
                             .with_stop_curved(params.stop_energy_curved, params.max_passes_curved)
-                            .with_corner_floor(params.stop_energy)
+                            .with_corner_floor(corner_floor(params, &resolved))
                             .with_deadline(deadline);
                         curve_mesh(&mut mesh, &ctx, &opts, |t| feature_of(&fs, &ctx, t))
                     })?;
@@ -809,6 +809,18 @@ fn check_trimesh(mesh: &TriMesh, stage: Stage) -> Result<()> {
         )),
         None => Ok(()),
     }
+}
+
+/// The curved stage's corner rule ([`crate::ops::CurvedRule::corner_floor`]):
+/// the linear stop energy, or the energy below which no corner is under α
+/// if that is lower, so the curved passes never make a straight corner below
+/// α where the linear stage left none (issue 38: on the dev drawings the
+/// curved stage took the worst unforced angle from 10° to 5.2° with the stop
+/// energy, whose triangles may have corners of 7°).
+fn corner_floor(params: &Params, resolved: &Resolved) -> f64 {
+    params
+        .stop_energy
+        .min(crate::optimize::needle_energy(resolved.alpha))
 }
 
 /// The optimizer's options from the parameters (thesis §2.3.2: target `l`,

@@ -77,7 +77,7 @@ impl Schedule<'_> {
         // one order.
         let mut queue = ShortestFirst::default();
         let edges: Vec<EdgeKey> = match since {
-            None => self.mesh.edge_list(),
+            None => self.candidate_edges(),
             Some(at) => {
                 // The edges at the vertices stamped since `at`, found in
                 // parallel and sorted (the queue's order does not depend on
@@ -105,7 +105,8 @@ impl Schedule<'_> {
             .into_par_iter()
             .filter_map(|k| {
                 let len = self.mesh.distance(k.lo, k.hi);
-                (len < factor * self.edge_target(k)).then_some((len.to_bits(), k))
+                (len < factor * self.edge_target(k) && self.edge_in_region(k.lo, k.hi))
+                    .then_some((len.to_bits(), k))
             })
             .collect();
         queue.sort();

@@ -1,7 +1,8 @@
 //! The schedule's driver: its options, the entry points
 //! ([`optimize_with_field`], and `optimize` for the tests), the main passes
 //! with their stop rules, then the coarsening, the polish, the min-max polish,
-//! the envelope stages and the final statistics.
+//! the worst-element phase (`repair.rs`), the envelope stages and the final
+//! statistics.
 
 use super::smooth::off_curve_vertices;
 use super::stats::{Measure, OptimizeStats, StopReason, measure};
@@ -92,6 +93,13 @@ pub(crate) fn optimize_with_field(
     s.polish();
     s.minmax_polish();
     s.enter(Phase::Main);
+    s.stats.bad_corners_left = s.repair_angles();
+    // the splits of the worst-element phase may leave rational vertices
+    let rational = if rational > 0 || s.mesh.vertices().any(|v| s.mesh.is_rational(v)) {
+        s.round_all()
+    } else {
+        0
+    };
     let rational = s.envelope_stages(rational);
     let refined: Vec<kurbo::Point> = s
         .mesh
@@ -138,7 +146,7 @@ fn stalled(history: &[(f64, f64)]) -> bool {
 
 impl Schedule<'_> {
     /// Whether the deadline has passed (then the stop reason says so).
-    fn out_of_time(&mut self) -> bool {
+    pub(super) fn out_of_time(&mut self) -> bool {
         let expired = self.opts.deadline.expired();
         if expired {
             self.stats.stop = StopReason::TimeLimit;

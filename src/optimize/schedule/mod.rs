@@ -28,6 +28,12 @@
 //! and swaps lift the worst triangles while that still pays. From the
 //! coarsening on, smoothing and swaps stretch no edge past `2 l`.
 //!
+//! Last, the worst-element phase (`repair.rs`, issue 38) repairs the corners
+//! below α that the feature edges leave room for: targets halved around them,
+//! the passes run on that region only, round after round (a round that makes
+//! the worst such corner worse is rolled back and run with energy-bounded
+//! splits); the statistics count the triangles left with one.
+//!
 //! Every operation goes through `crate::ops`, so every invariant holds after
 //! each one and refused operations leave the mesh as it was. Collapse, swap and
 //! smoothing never raise the local maximum energy; splits may.
@@ -45,7 +51,8 @@
 //!
 //! The schedule's files, by phase: `driver.rs` (the entry points, the phases,
 //! the stop rules), one file per pass (`split.rs`, `collapse.rs`, `swap.rs`,
-//! `smooth.rs` with rounding and projection), `sizing.rs` (the targets against
+//! `smooth.rs` with rounding and projection), `repair.rs` (the worst-element
+//! phase), `sizing.rs` (the targets against
 //! the size field), `queue.rs` (the edge queue, the plans made ahead) and
 //! `stats.rs` (tallies, statistics, measures). This file holds the tuning
 //! constants and the optimizer's state ([`Schedule`]).
@@ -53,6 +60,7 @@
 mod collapse;
 mod driver;
 mod queue;
+mod repair;
 mod sizing;
 mod smooth;
 mod split;
@@ -62,6 +70,7 @@ mod swap;
 #[cfg(test)]
 pub(crate) use driver::optimize;
 pub(crate) use driver::{OptimizeOptions, optimize_with_field};
+pub(crate) use repair::needle_energy;
 pub(crate) use stats::{EnergyMeasure, OpTally, OptimizeStats, StopReason, measure_energy};
 
 #[cfg(test)]
@@ -293,6 +302,12 @@ pub(crate) struct Schedule<'a> {
     /// found a gain on: an edge whose ends' faces have not changed since
     /// (so neither has its quad) and that had no gain then has none now.
     swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
+    /// In the worst-element phase (`repair.rs`), by vertex slot: the vertices
+    /// whose edges and moves the passes consider (`None`: every vertex).
+    region: Option<Vec<bool>>,
+    /// In the worst-element phase: splits may not make their faces worse
+    /// than before or than a corner of α allows (`repair.rs`).
+    split_bounded: bool,
     /// Tests: the plans made ahead that were used, and those found stale.
     #[cfg(test)]
     ahead_tally: (usize, usize),
@@ -354,6 +369,7 @@ impl<'a> Schedule<'a> {
                 off_curve_left: 0,
                 rational_left: 0,
                 envelope_stages: 0,
+                bad_corners_left: 0,
                 min_angle_deg: 0.0,
                 max_amips: 0.0,
             },
@@ -366,6 +382,8 @@ impl<'a> Schedule<'a> {
             role_refused: rustc_hash::FxHashMap::default(),
             stretch: Stretch::uniform(SPLIT_ABOVE),
             swap_scan: None,
+            region: None,
+            split_bounded: false,
             #[cfg(test)]
             ahead_tally: (0, 0),
             #[cfg(test)]

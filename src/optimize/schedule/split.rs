@@ -4,19 +4,19 @@
 use super::queue::PlanAhead;
 use super::{SPLIT_ABOVE, Schedule, slot};
 use crate::mesh::{EdgeKey, VertexId};
-use crate::ops::{Outcome, SplitPlan, try_split, try_split_planned};
+use crate::ops::{Outcome, SplitPlan, try_split, try_split_bounded, try_split_planned};
 use rayon::prelude::*;
 
 impl Schedule<'_> {
     /// Split every edge longer than 4/3 of its mean target once, longest first.
     /// Returns the number of candidates and of splits applied.
     pub(super) fn split_pass(&mut self) -> (usize, u64) {
-        let edges: Vec<EdgeKey> = self.mesh.edge_list();
+        let edges: Vec<EdgeKey> = self.candidate_edges();
         let mut cands: Vec<(f64, EdgeKey, f64)> = edges
             .into_par_iter()
             .filter_map(|k| {
                 let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
-                (len > SPLIT_ABOVE * t).then_some((len, k, t))
+                (len > SPLIT_ABOVE * t && self.edge_in_region(k.lo, k.hi)).then_some((len, k, t))
             })
             .collect();
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -37,9 +37,16 @@ impl Schedule<'_> {
                     Some((this.clock, SplitPlan::new(this.mesh, this.ctx, e.lo, e.hi)))
                 })
                 .filter(|(at, _)| self.fresh(*at, &[k.lo, k.hi]));
-            let out = match planned {
-                Some((_, plan)) => try_split_planned(self.mesh, self.ctx, plan),
-                None => try_split(self.mesh, self.ctx, k.lo, k.hi),
+            let out = if self.split_bounded {
+                // the worst-element phase: no split makes its edge's faces worse
+                // than they were or than a corner of α allows
+                let bound = self.split_bound(k.lo, k.hi);
+                try_split_bounded(self.mesh, self.ctx, k.lo, k.hi, Some(bound))
+            } else {
+                match planned {
+                    Some((_, plan)) => try_split_planned(self.mesh, self.ctx, plan),
+                    None => try_split(self.mesh, self.ctx, k.lo, k.hi),
+                }
             };
             self.touch(&out, true);
             if let Outcome::Applied(ch) = &out {
@@ -56,6 +63,7 @@ impl Schedule<'_> {
                     }
                     let refined = self.is_refined(k.lo) || self.is_refined(k.hi);
                     *slot(&mut self.refined, m, false) = refined;
+                    self.add_to_region(m);
                 }
                 applied += 1;
             }

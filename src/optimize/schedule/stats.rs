@@ -95,6 +95,9 @@ pub struct OptimizeStats {
     pub rational_left: usize,
     /// Envelope stages run for leftover rational vertices (0 when none were needed).
     pub envelope_stages: u32,
+    /// Triangles left with a corner below α that the mesh's feature edges
+    /// leave room for (the worst-element phase's goal: 0).
+    pub bad_corners_left: usize,
     /// Smallest angle at the end, degrees.
     pub min_angle_deg: f64,
     /// Largest AMIPS energy at the end.

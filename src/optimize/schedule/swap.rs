@@ -172,10 +172,13 @@ impl Schedule<'_> {
     /// either face, or a move of any of its four vertices, stamps both ends),
     /// and so is the answer.
     fn swap_candidates(&self, last: Option<&(u64, FxHashSet<EdgeKey>)>) -> Vec<(f64, EdgeKey)> {
-        let edges: Vec<EdgeKey> = self.mesh.edge_list();
+        let edges: Vec<EdgeKey> = self.candidate_edges();
         let mut cands: Vec<(f64, EdgeKey)> = edges
             .into_par_iter()
             .filter(|&k| {
+                if !self.edge_in_region(k.lo, k.hi) {
+                    return false;
+                }
                 if let Some((at, found)) = last
                     && self.stamp_of(k.lo) <= *at
                     && self.stamp_of(k.hi) <= *at

@@ -1,0 +1,424 @@
+//! The worst-element phase (issue 38): after the polish, the corners below α
+//! that the mesh's feature edges leave room for are repaired locally, the way
+//! TetWild and TriWild reach their energies when the passes stall: the targets
+//! around each bad triangle are halved (graded as in `update_sizing`), and the
+//! split, collapse, swap and min-max smoothing passes run on that region only,
+//! round after round while bad corners are left.
+//!
+//! A corner at `v` is **bad** when it is below α while the sector of `v` it lies
+//! in, between the feature edges (or mesh boundary edges) around `v`, spans at
+//! least α: a single triangle could then fill the sector with a good corner.
+//! A corner in a narrower sector is the drawing's (the wedge of the pipeline's
+//! forced corners, measured on the mesh's own edges), and so is a corner
+//! between two feature edges.
+//!
+//! The region's operations are the main passes' own (every invariant checked,
+//! collapses, swaps and moves never raise the local largest energy); only
+//! their candidates are limited to the region, so the rest of the mesh keeps
+//! the sizes the coarsening left. Splits ignore the energy rule, so a round is
+//! checked as a whole: one that leaves the worst bad corner worse is rolled
+//! back (mesh and targets restored, the memos of refusals forgotten) and run
+//! again with splits bounded by [`needle_energy`].
+//!
+//! Each round first splits the faces with two curved primary edges, the split
+//! the curved stage makes (at most one curved edge per element) without
+//! smoothing: made here, the round repairs the corners it leaves.
+//!
+//! Why corners stayed below α before this phase (the 40 dev drawings, issue
+//! 38): the quality goal is met once the largest energy is below the stop
+//! energy (5), and a needle of 7.5° has energy 4.4; the sizing field is
+//! refined only around triangles above 0.9 times the stop energy; most such
+//! corners were at a vertex on one feature facing short edges of another
+//! (a fan from a vertex to a curve sampled within α, a strip between two close
+//! features) that only new vertices between the features resolve.
+
+use super::{REFINED_BELOW, SIZING_RADIUS, SIZING_REFINE, Schedule, slot};
+use crate::mesh::{EdgeKey, FaceId, TriMesh, VertexId, corner_angles};
+use crate::ops::Objective;
+use rayon::prelude::*;
+use std::f64::consts::TAU;
+
+/// At most this many repair rounds (each halves the targets around the bad
+/// triangles once more).
+const REPAIR_ROUNDS: usize = 10;
+/// Around bad corners the targets may go this many times below the sizing
+/// floor (ε): at the floor the collapses undid the splits that open a corner
+/// at a kink of a feature (the chord's midpoint, closer than ε to the kink).
+const REPAIR_FLOOR_DIVISOR: f64 = 16.0;
+/// Min-max smoothing passes per repair round.
+const REPAIR_SMOOTHS: usize = 3;
+
+/// Whether the mesh edge `v`–`w` bounds a sector at `v`: a feature edge or a
+/// boundary edge.
+fn fixed_edge(mesh: &TriMesh, v: VertexId, w: VertexId, buf: &mut Vec<FaceId>) -> bool {
+    if !mesh.edge_tags(v, w).is_empty() {
+        return true;
+    }
+    buf.clear();
+    mesh.faces_on_edge(v, w, buf);
+    buf.len() < 2
+}
+
+/// The counter-clockwise angle from direction angle `from` to `to`, in `[0, 2π)`.
+fn ccw(from: f64, to: f64) -> f64 {
+    (to - from).rem_euclid(TAU)
+}
+
+/// The angle of the sector of `v` (between its fixed edges, see [`fixed_edge`])
+/// that holds the corner from the direction of `next` counter-clockwise to the
+/// direction of `prev`; `2π` when no edge at `v` is fixed.
+fn sector_angle(mesh: &TriMesh, v: VertexId, next: VertexId, prev: VertexId) -> f64 {
+    let p = mesh.position(v);
+    let dir = |w: VertexId| {
+        let d = mesh.position(w) - p;
+        d.y.atan2(d.x)
+    };
+    let (start, end) = (dir(next), dir(prev));
+    let ring = crate::mesh::ScratchRing::of(mesh, v);
+    let mut buf = Vec::new();
+    // the fixed directions at or clockwise before `start`, at or after `end`
+    let (mut back, mut ahead) = (f64::INFINITY, f64::INFINITY);
+    for &w in &ring.neighbours {
+        if !fixed_edge(mesh, v, w, &mut buf) {
+            continue;
+        }
+        let a = dir(w);
+        back = back.min(ccw(a, start));
+        ahead = ahead.min(ccw(end, a));
+    }
+    if back.is_infinite() {
+        return TAU;
+    }
+    back + ccw(start, end) + ahead
+}
+
+/// The smallest AMIPS energy of a triangle with a corner of `alpha` (radians,
+/// below 60°): the isosceles needle with that apex. A triangle of lower energy
+/// has every corner above `alpha`.
+pub(crate) fn needle_energy(alpha: f64) -> f64 {
+    let apex = kurbo::Point::new(0.0, 0.0);
+    let b = kurbo::Point::new(1.0, 0.0);
+    let c = kurbo::Point::new(alpha.cos(), alpha.sin());
+    crate::element::energy::amips(apex, b, c)
+}
+
+/// What a worst-element round restores when it is rolled back.
+struct RepairSnapshot {
+    mesh: TriMesh,
+    target: Vec<f64>,
+    base: Vec<f64>,
+    refined: Vec<bool>,
+}
+
+/// The faces with a bad corner (see the module doc), `alpha` in radians,
+/// each with its smallest bad corner.
+pub(super) fn bad_faces(mesh: &TriMesh, alpha: f64) -> Vec<(FaceId, f64)> {
+    let faces: Vec<FaceId> = mesh.faces().collect();
+    faces
+        .into_par_iter()
+        .filter_map(|f| {
+            let v = mesh.face(f);
+            let angles = corner_angles(v.map(|x| mesh.position(x)));
+            let mut buf = Vec::new();
+            let worst = (0..3)
+                .filter(|&k| {
+                    angles[k] < alpha && {
+                        let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+                        let both =
+                            fixed_edge(mesh, a, b, &mut buf) && fixed_edge(mesh, a, c, &mut buf);
+                        !both && sector_angle(mesh, a, b, c) >= alpha
+                    }
+                })
+                .map(|k| angles[k])
+                .fold(f64::INFINITY, f64::min);
+            worst.is_finite().then_some((f, worst))
+        })
+        .collect()
+}
+
+/// The smallest bad corner of `bad` ([`bad_faces`]; `+∞` for none).
+fn worst_corner(bad: &[(FaceId, f64)]) -> f64 {
+    bad.iter().map(|b| b.1).fold(f64::INFINITY, f64::min)
+}
+
+impl Schedule<'_> {
+    /// Whether `v` may be touched by the passes: everywhere outside the
+    /// worst-element phase, in it only the region around the bad triangles.
+    pub(super) fn in_region(&self, v: VertexId) -> bool {
+        self.region
+            .as_ref()
+            .is_none_or(|r| r.get(v.index()).copied().unwrap_or(false))
+    }
+
+    /// Whether the edge `a`–`b` touches the region ([`Self::in_region`]).
+    pub(super) fn edge_in_region(&self, a: VertexId, b: VertexId) -> bool {
+        self.in_region(a) || self.in_region(b)
+    }
+
+    /// The edges the passes consider: those at the region's vertices in the
+    /// worst-element phase (sorted), every edge elsewhere.
+    pub(super) fn candidate_edges(&self) -> Vec<EdgeKey> {
+        let Some(region) = &self.region else {
+            return self.mesh.edge_list();
+        };
+        let mut edges: Vec<EdgeKey> = Vec::new();
+        for (i, _) in region.iter().enumerate().filter(|(_, r)| **r) {
+            let v = VertexId::from_index(i);
+            if !self.mesh.is_vertex_alive(v) {
+                continue;
+            }
+            let ring = crate::mesh::ScratchRing::of(self.mesh, v);
+            edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+    }
+
+    /// Put `v` (a vertex a split made in the region) in the region.
+    pub(super) fn add_to_region(&mut self, v: VertexId) {
+        if let Some(r) = &mut self.region {
+            *slot(r, v, false) = true;
+        }
+    }
+
+    /// The worst-element phase (see the module doc). Returns the bad faces
+    /// left.
+    ///
+    /// A round's splits ignore the energy rule (a fan of needles from a vertex
+    /// is undone by splitting all its spokes, then collapsing between the new
+    /// vertices, and the single splits on the way are worse than the fan); a
+    /// round that leaves the worst bad corner worse than before is rolled back
+    /// as a whole and run again with splits that may not make their faces
+    /// worse than before or than a corner of α allows.
+    pub(super) fn repair_angles(&mut self) -> usize {
+        let alpha = self.opts.alpha_deg.to_radians();
+        let mut bad = Vec::new();
+        self.failed_smooth.clear();
+        for round in 0..REPAIR_ROUNDS {
+            // faces with two curved edges first: the round smooths what their
+            // splits leave
+            if round == 0 || !bad.is_empty() {
+                self.split_multi_curved();
+                bad = bad_faces(self.mesh, alpha);
+            }
+            if bad.is_empty() || self.out_of_time() {
+                break;
+            }
+            let worst = worst_corner(&bad);
+            let snap = RepairSnapshot {
+                mesh: self.mesh.clone(),
+                target: self.target.clone(),
+                base: self.base.clone(),
+                refined: self.refined.clone(),
+            };
+            self.repair_round(round, &bad, false);
+            let now = bad_faces(self.mesh, alpha);
+            if worst_corner(&now) < worst {
+                tracing::debug!(round, "worst-element round rolled back");
+                *self.mesh = snap.mesh;
+                self.target = snap.target;
+                self.base = snap.base;
+                self.refined = snap.refined;
+                self.forget_memos();
+                self.repair_round(round, &bad, true);
+                bad = bad_faces(self.mesh, alpha);
+            } else {
+                bad = now;
+            }
+        }
+        self.region = None;
+        // The rounds' collapses and swaps may have made faces with two curved
+        // edges again: split them, and smooth around the new vertices only
+        // (no change of topology after that).
+        let new = self.split_multi_curved();
+        if !new.is_empty() {
+            let mut region = vec![false; self.mesh.vertex_capacity()];
+            for &m in &new {
+                if !self.mesh.is_vertex_alive(m) {
+                    continue;
+                }
+                region[m.index()] = true;
+                for &w in &crate::mesh::ScratchRing::of(self.mesh, m).neighbours {
+                    region[w.index()] = true;
+                }
+            }
+            self.region = Some(region);
+            self.failed_smooth.clear();
+            for _ in 0..REPAIR_SMOOTHS {
+                self.smooth_pass_with(Objective::MinMax);
+            }
+            self.region = None;
+            bad = bad_faces(self.mesh, alpha);
+        }
+        bad.len()
+    }
+
+    /// Split the faces with two or more curved primary edges (on a curved
+    /// parent) as the curved stage would (thesis §4.4.2: at most one curved
+    /// edge per element), through an edge that is not curved, the longest
+    /// first: done here, the new vertex is smoothed with the rest of the
+    /// region instead of being left where the split put it. Returns the new
+    /// vertices.
+    fn split_multi_curved(&mut self) -> Vec<VertexId> {
+        let mesh: &TriMesh = self.mesh;
+        let ctx: &crate::ops::Context = self.ctx;
+        let curved =
+            |k: EdgeKey| crate::ops::invariants::curved::curved_tag(mesh, ctx, k).is_some();
+        let faces: Vec<FaceId> = mesh.faces().collect();
+        let multi: Vec<FaceId> = faces
+            .into_par_iter()
+            .filter(|&f| {
+                let v = mesh.face(f);
+                (0..3)
+                    .filter(|&i| curved(EdgeKey::new(v[i], v[(i + 1) % 3])))
+                    .count()
+                    > 1
+            })
+            .collect();
+        let mut new = Vec::new();
+        for f in multi {
+            if !self.mesh.is_face_alive(f) {
+                continue;
+            }
+            let v = self.mesh.face(f);
+            let mut edges: Vec<(f64, EdgeKey)> = (0..3)
+                .map(|i| EdgeKey::new(v[i], v[(i + 1) % 3]))
+                .filter(|&k| {
+                    crate::ops::invariants::curved::curved_tag(self.mesh, self.ctx, k).is_none()
+                })
+                .map(|k| (self.mesh.distance(k.lo, k.hi), k))
+                .collect();
+            if edges.len() != 1 {
+                continue;
+            }
+            edges.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let k = edges[0].1;
+            let out = crate::ops::try_split(self.mesh, self.ctx, k.lo, k.hi);
+            self.touch(&out, true);
+            if let crate::ops::Outcome::Applied(ch) = &out
+                && let Some(m) = ch.new_vertex
+            {
+                let t = 0.5 * (self.target_of(k.lo) + self.target_of(k.hi));
+                let h = if self.field.is_uniform() {
+                    self.opts.l
+                } else {
+                    self.field.at(self.mesh.position(m))
+                };
+                self.set_base(m, h);
+                self.set_target(m, t.min(h));
+                new.push(m);
+            }
+            self.stats.split.record(&out);
+        }
+        new
+    }
+
+    /// The memos of refused operations and the swap scan, after the mesh
+    /// was restored to an earlier state (they describe the abandoned one).
+    fn forget_memos(&mut self) {
+        self.clock += 1;
+        self.failed_collapse.clear();
+        self.failed_smooth.clear();
+        self.role_refused.clear();
+        self.swap_scan = None;
+        let clock = self.clock;
+        for s in self.stamp.iter_mut().chain(self.topo_stamp.iter_mut()) {
+            *s = clock;
+        }
+    }
+
+    /// One round of [`Self::repair_angles`] around the faces `bad`, with
+    /// `bounded` splits or not.
+    fn repair_round(&mut self, round: usize, bad: &[(FaceId, f64)], bounded: bool) {
+        self.refine_around(bad);
+        self.split_bounded = bounded;
+        self.swap_scan = None;
+        let (_, splits) = self.split_pass();
+        let collapses = self.collapse_pass(super::COLLAPSE_FACTOR);
+        let mut swaps = self.swap_pass();
+        let mut smooths = 0;
+        for _ in 0..REPAIR_SMOOTHS {
+            smooths += self.smooth_pass_with(Objective::MinMax);
+            swaps += self.swap_pass();
+        }
+        self.region = None;
+        self.split_bounded = false;
+        self.swap_scan = None;
+        tracing::debug!(
+            round,
+            bounded,
+            bad = bad.len(),
+            splits,
+            collapses,
+            swaps,
+            smooths,
+            faces = self.mesh.num_faces(),
+            "worst-element round"
+        );
+    }
+
+    /// The largest energy a split of `a`–`b` may make in the worst-element
+    /// phase: the largest of the edge's faces now, or [`needle_energy`] of α
+    /// (below which no corner is under α), whichever is larger.
+    pub(super) fn split_bound(&self, a: VertexId, b: VertexId) -> f64 {
+        let mut faces = Vec::new();
+        self.mesh.faces_on_edge(a, b, &mut faces);
+        let old = crate::ops::max_energy(self.mesh, self.ctx, &faces);
+        old.max(needle_energy(self.opts.alpha_deg.to_radians()))
+    }
+
+    /// Halve the targets at the vertices of `bad` (those within
+    /// [`SIZING_RADIUS`] of their target less the farther they are, as
+    /// `update_sizing` grades them), and make those vertices and their
+    /// neighbours the region.
+    fn refine_around(&mut self, bad: &[(FaceId, f64)]) {
+        self.failed_collapse.retain(|_, f| !f.by_length);
+        let mut seeds: Vec<VertexId> = bad.iter().flat_map(|&(f, _)| self.mesh.face(f)).collect();
+        seeds.sort_unstable();
+        seeds.dedup();
+        let cap = self.mesh.vertex_capacity();
+        let mut mult = vec![1.0f64; cap];
+        let mut seen = vec![false; cap];
+        let mut queue = std::collections::VecDeque::new();
+        for &v in &seeds {
+            mult[v.index()] = SIZING_REFINE;
+            seen[v.index()] = true;
+            queue.push_back((v, v));
+        }
+        let mut touched: Vec<VertexId> = seeds.clone();
+        while let Some((v, seed)) = queue.pop_front() {
+            let radius = SIZING_RADIUS * self.target_of(seed);
+            let ps = self.mesh.position(seed);
+            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
+                let i = w.index();
+                if seen[i] {
+                    continue;
+                }
+                seen[i] = true;
+                let dist = self.mesh.position(w).distance(ps);
+                if dist < radius {
+                    let m = SIZING_REFINE + (1.0 - SIZING_REFINE) * dist / radius;
+                    mult[i] = mult[i].min(m);
+                    queue.push_back((w, seed));
+                    touched.push(w);
+                }
+            }
+        }
+        let mut region = vec![false; cap];
+        for &v in &touched {
+            let top = self.base_of(v);
+            let floor = self.opts.l_floor / REPAIR_FLOOR_DIVISOR;
+            let t = (self.target_of(v) * mult[v.index()]).clamp(floor.min(top), top);
+            if t < top * REFINED_BELOW {
+                *slot(&mut self.refined, v, false) = true;
+            }
+            self.set_target(v, t);
+            region[v.index()] = true;
+            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
+                region[w.index()] = true;
+            }
+        }
+        self.region = Some(region);
+    }
+}
