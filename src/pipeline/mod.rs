@@ -486,6 +486,13 @@ fn mesh_stages(
                         stats.off_curve_left
                     ));
                 }
+                if stats.bad_corners_left > 0 {
+                    warnings.push(bad_corners_warning(
+                        stats.bad_corners_left,
+                        resolved.alpha,
+                        stats.stop,
+                    ));
+                }
                 optimize = Some(stats);
                 if params.stop_after == Some(Stage::Optimize) {
                     classify(&mesh, &ctx, &mut times);
@@ -946,3 +953,22 @@ mod forced;
 mod snap;
 #[cfg(test)]
 mod tests;
+
+/// The warning for corners below α that the worst-element phase left where
+/// the drawing leaves room (issue 38): how many, and why it stopped.
+fn bad_corners_warning(
+    n: usize,
+    alpha: f64,
+    stop: crate::optimize::schedule::StopReason,
+) -> String {
+    let why = if stop == crate::optimize::schedule::StopReason::TimeLimit {
+        "the time limit"
+    } else {
+        "its rounds ran out"
+    };
+    format!(
+        "{n} corner(s) below alpha = {:.1} degrees left where the features leave room \
+         (the worst-element phase stopped: {why}); --stats quality.unforced gives the worst",
+        alpha.to_degrees()
+    )
+}
