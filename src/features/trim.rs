@@ -33,7 +33,7 @@
 //!
 //! What is judged:
 //! - a stroke area ([`ShapeKind::Stroke`]) and a clipped fill: by its own test;
-//! - a stroke that joins its element's fill ([`crate::svg::ShapePaint::joins_fill`])
+//! - a stroke that joins its element's fill ([`crate::svg::drawing::ShapePaint::joins_fill`])
 //!   and that fill: by the union of their tests (one region): the fill's
 //!   outline under the stroke and the stroke's inner outline bound nothing;
 //! - a clip or mask outline ([`ShapeKind::ClipOutline`]): by the tests of the

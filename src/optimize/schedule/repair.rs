@@ -32,7 +32,7 @@
 //! (a fan from a vertex to a curve sampled within α, a strip between two close
 //! features) that only new vertices between the features resolve.
 
-use super::{REFINED_BELOW, SIZING_RADIUS, SIZING_REFINE, Schedule, slot};
+use super::{REFINED_BELOW, Schedule, slot};
 use crate::mesh::{EdgeKey, FaceId, TriMesh, VertexId, corner_angles};
 use crate::ops::Objective;
 use rayon::prelude::*;
@@ -369,7 +369,7 @@ impl Schedule<'_> {
     }
 
     /// Halve the targets at the vertices of `bad` (those within
-    /// [`SIZING_RADIUS`] of their target less the farther they are, as
+    /// [`SIZING_RADIUS`](super::SIZING_RADIUS) of their target less the farther they are, as
     /// `update_sizing` grades them), and make those vertices and their
     /// neighbours the region.
     fn refine_around(&mut self, bad: &[(FaceId, f64)]) {
@@ -378,33 +378,7 @@ impl Schedule<'_> {
         seeds.sort_unstable();
         seeds.dedup();
         let cap = self.mesh.vertex_capacity();
-        let mut mult = vec![1.0f64; cap];
-        let mut seen = vec![false; cap];
-        let mut queue = std::collections::VecDeque::new();
-        for &v in &seeds {
-            mult[v.index()] = SIZING_REFINE;
-            seen[v.index()] = true;
-            queue.push_back((v, v));
-        }
-        let mut touched: Vec<VertexId> = seeds.clone();
-        while let Some((v, seed)) = queue.pop_front() {
-            let radius = SIZING_RADIUS * self.target_of(seed);
-            let ps = self.mesh.position(seed);
-            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
-                let i = w.index();
-                if seen[i] {
-                    continue;
-                }
-                seen[i] = true;
-                let dist = self.mesh.position(w).distance(ps);
-                if dist < radius {
-                    let m = SIZING_REFINE + (1.0 - SIZING_REFINE) * dist / radius;
-                    mult[i] = mult[i].min(m);
-                    queue.push_back((w, seed));
-                    touched.push(w);
-                }
-            }
-        }
+        let (mult, touched) = self.refine_multipliers(&seeds, 1.0);
         let mut region = vec![false; cap];
         for &v in &touched {
             let top = self.base_of(v);

@@ -172,33 +172,7 @@ impl Schedule<'_> {
             .collect();
         seeds.sort_unstable();
         seeds.dedup();
-        let cap = self.mesh.vertex_capacity();
-        let mut mult = vec![SIZING_RELAX; cap];
-        // Breadth-first from the bad vertices; `near[v]` = (seed, distance).
-        let mut seen = vec![false; cap];
-        let mut queue = std::collections::VecDeque::new();
-        for &v in &seeds {
-            mult[v.index()] = SIZING_REFINE;
-            seen[v.index()] = true;
-            queue.push_back((v, v));
-        }
-        while let Some((v, seed)) = queue.pop_front() {
-            let radius = SIZING_RADIUS * self.target_of(seed);
-            let ps = self.mesh.position(seed);
-            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
-                let i = w.index();
-                if seen[i] {
-                    continue;
-                }
-                seen[i] = true;
-                let dist = self.mesh.position(w).distance(ps);
-                if dist < radius {
-                    let m = SIZING_REFINE + (1.0 - SIZING_REFINE) * dist / radius;
-                    mult[i] = mult[i].min(m);
-                    queue.push_back((w, seed));
-                }
-            }
-        }
+        let (mult, _) = self.refine_multipliers(&seeds, SIZING_RELAX);
         let mut hit_floor = false;
         let verts: Vec<VertexId> = self.mesh.vertices().collect();
         for v in verts {
@@ -214,5 +188,47 @@ impl Schedule<'_> {
             self.set_target(v, t);
         }
         hit_floor
+    }
+}
+
+impl Schedule<'_> {
+    /// The target multipliers around `seeds`, found breadth-first:
+    /// [`SIZING_REFINE`] at a seed, growing linearly to 1 at [`SIZING_RADIUS`]
+    /// times the seed's target, and `rest` at every vertex out of reach of
+    /// all seeds. Also the vertices within reach, the seeds first.
+    pub(super) fn refine_multipliers(
+        &self,
+        seeds: &[VertexId],
+        rest: f64,
+    ) -> (Vec<f64>, Vec<VertexId>) {
+        let cap = self.mesh.vertex_capacity();
+        let mut mult = vec![rest; cap];
+        let mut seen = vec![false; cap];
+        let mut queue = std::collections::VecDeque::new();
+        for &v in seeds {
+            mult[v.index()] = SIZING_REFINE;
+            seen[v.index()] = true;
+            queue.push_back((v, v));
+        }
+        let mut reached: Vec<VertexId> = seeds.to_vec();
+        while let Some((v, seed)) = queue.pop_front() {
+            let radius = SIZING_RADIUS * self.target_of(seed);
+            let ps = self.mesh.position(seed);
+            for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
+                let i = w.index();
+                if seen[i] {
+                    continue;
+                }
+                seen[i] = true;
+                let dist = self.mesh.position(w).distance(ps);
+                if dist < radius {
+                    let m = SIZING_REFINE + (1.0 - SIZING_REFINE) * dist / radius;
+                    mult[i] = mult[i].min(m);
+                    queue.push_back((w, seed));
+                    reached.push(w);
+                }
+            }
+        }
+        (mult, reached)
     }
 }
