@@ -28,3 +28,27 @@ pub(crate) use ids::{FaceId, VertexId};
 pub(crate) use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};
 pub(crate) use topology::{EdgeQuad, ScratchRing, VertexRing};
 pub(crate) use transaction::Transaction;
+
+/// A test mesh from a spade constrained triangulation: its vertices (tagged by
+/// `tags`, indexed like spade's vertices) and inner faces, linked. Returns the
+/// mesh and the mesh's vertex for each of spade's.
+#[cfg(test)]
+pub(crate) fn trimesh_of_cdt(
+    cdt: &spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
+    tags: &[VertexTag],
+) -> (TriMesh, Vec<VertexId>) {
+    use spade::Triangulation;
+    let mut mesh = TriMesh::new();
+    let ids: Vec<VertexId> = cdt
+        .vertices()
+        .map(|v| {
+            let p = v.position();
+            mesh.add_vertex(kurbo::Point::new(p.x, p.y), tags[v.fix().index()])
+        })
+        .collect();
+    for f in cdt.inner_faces() {
+        mesh.add_face(f.vertices().map(|v| ids[v.fix().index()]));
+    }
+    mesh.link_all();
+    (mesh, ids)
+}

@@ -129,18 +129,7 @@ fn delaunay_mesh_on(seed: u64, energy: EnergyRule, parent: Parent) -> (TriMesh, 
     for w in sec.windows(2) {
         cdt.add_constraint(w[0], w[1]);
     }
-    let mut mesh = TriMesh::new();
-    let ids: Vec<VertexId> = cdt
-        .vertices()
-        .map(|v| {
-            let p = v.position();
-            mesh.add_vertex(Point::new(p.x, p.y), tags[v.fix().index()])
-        })
-        .collect();
-    for f in cdt.inner_faces() {
-        mesh.add_face(f.vertices().map(|v| ids[v.fix().index()]));
-    }
-    mesh.link_all();
+    let (mut mesh, ids) = crate::mesh::trimesh_of_cdt(&cdt, &tags);
     for w in chain.windows(2) {
         let ((a, ta), (b, tb)) = (w[0], w[1]);
         let section = u32::from(ta >= 0.5);

@@ -125,7 +125,7 @@ fn the_sizing_field_bounds_edge_lengths_by_l() {
 /// whose energy (4.4) is below the stop energy, and their spokes are no
 /// longer than `l` = 0.1 (no split asks for them).
 fn fan_mesh() -> (TriMesh, Context) {
-    use crate::mesh::{FeatureOn, VertexId, VertexTag};
+    use crate::mesh::{FeatureOn, VertexTag};
     use crate::ops::invariants::envelope::Envelope;
     use kurbo::Point;
     use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
@@ -174,18 +174,7 @@ fn fan_mesh() -> (TriMesh, Context) {
     for k in 0..ring.len() {
         cdt.add_constraint(ring[k], ring[(k + 1) % ring.len()]);
     }
-    let mut mesh = TriMesh::new();
-    let ids: Vec<VertexId> = cdt
-        .vertices()
-        .map(|v| {
-            let p = v.position();
-            mesh.add_vertex(Point::new(p.x, p.y), tags[v.fix().index()])
-        })
-        .collect();
-    for f in cdt.inner_faces() {
-        mesh.add_face(f.vertices().map(|v| ids[v.fix().index()]));
-    }
-    mesh.link_all();
+    let (mut mesh, ids) = crate::mesh::trimesh_of_cdt(&cdt, &tags);
     for k in 0..ring.len() {
         let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
         mesh.add_edge_tag(
