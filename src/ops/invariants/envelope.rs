@@ -8,32 +8,42 @@
 //! 1-Lipschitz), so the march steps by `ε − d`; a point farther than
 //! `ε − spacing/2` rejects the edge. With a fixed spacing `s` this is the
 //! thesis's sampling with `ε̂ = ε − s/2`; adaptive steps only accept more edges
-//! that are provably inside. Distances are found through a uniform grid of the
-//! input segments, never a linear scan.
+//! that are provably inside. Distances are found through a tree of boxes over each
+//! polyline's segments, never a linear scan.
 
 use crate::mesh::point_segment_distance;
 use kurbo::{Line, Point, Rect};
-use std::collections::{HashMap, HashSet};
+use rustc_hash::FxHashSet;
 
-/// The ε-envelope of a set of polylines (by index), with its search grid.
+/// The ε-envelope of a set of polylines (by index), with its search tree.
 #[derive(Clone, Debug)]
 pub(crate) struct Envelope {
     eps: f64,
     spacing: f64,
-    cell: f64,
     segments: Vec<(Line, u32)>,
-    /// The segments of each polyline by the cells they pass: (cell x, cell y,
-    /// polyline) → segment indices, in order (a query reads only its own
-    /// polyline's segments, however many others pass the same cells).
-    grid: HashMap<(i64, i64, u32), Vec<u32>>,
-    /// Each polyline's segments: a range of `segments` (they are added polyline
-    /// by polyline).
-    ranges: Vec<std::ops::Range<u32>>,
+    /// A bounding-box tree over each polyline's segments, in their order along
+    /// the polyline (a polyline is spatially coherent, so consecutive segments
+    /// make tight boxes): a query reads only its own polyline's boxes, however
+    /// many other polylines pass the same place, and touches no hash table.
+    nodes: Vec<Node>,
+    /// Each polyline's root in `nodes` (`NONE` for a polyline without segments).
+    roots: Vec<u32>,
 }
 
-/// A polyline with at most this many segments is searched whole, without the
-/// grid (most polylines are the sections of one input curve).
-const SCAN_WHOLE: u32 = 8;
+/// A node of an [`Envelope`]'s tree: the box of segments `lo..hi`, and its
+/// children `left` and `left + 1` (`NONE` for a leaf).
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    bbox: Rect,
+    lo: u32,
+    hi: u32,
+    left: u32,
+}
+
+const NONE: u32 = u32::MAX;
+
+/// Most segments in a leaf of the tree (scanned one by one).
+const LEAF: u32 = 8;
 
 impl Envelope {
     /// The envelope of `polylines` (polyline `i` is the tags' `polyline: i`)
@@ -44,8 +54,8 @@ impl Envelope {
         // A polyline that runs over one segment again (a dense zigzag after the
         // secondary simplification: back and forth between two clusters) has it
         // once here: the distance to a set of segments does not change, and the
-        // grid's cells stay as full as the drawing is dense, not as its input.
-        let mut seen: HashSet<(u32, [u64; 4])> = HashSet::new();
+        // tree's boxes stay as full as the drawing is dense, not as its input.
+        let mut seen: FxHashSet<(u32, [u64; 4])> = FxHashSet::default();
         let bits =
             |a: Point, b: Point| [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()];
         for (i, pl) in polylines.iter().enumerate() {
@@ -81,62 +91,40 @@ impl Envelope {
         } else {
             eps
         };
-        let mut bounds: Option<Rect> = None;
-        for (l, _) in &segments {
-            let r = Rect::from_points(l.p0, l.p1);
-            bounds = Some(bounds.map_or(r, |b| b.union(r)));
-        }
-        let b = bounds.unwrap_or(Rect::ZERO);
-        let n = segments.len().max(1) as f64;
-        let diag = b.width().hypot(b.height());
-        let mut cell = (4.0 * eps).max(diag / (2.0 * n.sqrt()));
-        if !(cell.is_finite() && cell > 0.0) {
-            cell = 1.0;
-        }
-        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
-        for (k, &(_, polyline)) in segments.iter().enumerate() {
-            let k = u32::try_from(k).expect("internal: segment count fits u32");
-            let polyline = polyline as usize;
-            if ranges.len() <= polyline {
-                ranges.resize(polyline + 1, k..k);
+        let mut roots: Vec<u32> = Vec::new();
+        let mut nodes: Vec<Node> = Vec::with_capacity(segments.len() / 4 + 1);
+        let mut start = 0usize;
+        while start < segments.len() {
+            let polyline = segments[start].1 as usize;
+            let mut end = start + 1;
+            while end < segments.len() && segments[end].1 as usize == polyline {
+                end += 1;
             }
-            debug_assert!(ranges[polyline].end == k, "internal: segments by polyline");
-            ranges[polyline].end = k + 1;
+            if roots.len() <= polyline {
+                roots.resize(polyline + 1, NONE);
+            }
+            debug_assert!(roots[polyline] == NONE, "internal: segments by polyline");
+            let (lo, hi) = (
+                u32::try_from(start).expect("internal: segment count fits u32"),
+                u32::try_from(end).expect("internal: segment count fits u32"),
+            );
+            roots[polyline] = u32::try_from(nodes.len()).expect("internal: node count fits u32");
+            nodes.push(Node {
+                bbox: Rect::ZERO,
+                lo,
+                hi,
+                left: NONE,
+            });
+            build(&segments, &mut nodes, roots[polyline] as usize);
+            start = end;
         }
-        let mut env = Envelope {
+        Envelope {
             eps,
             spacing,
-            cell,
             segments,
-            grid: HashMap::new(),
-            ranges,
-        };
-        for k in 0..env.segments.len() {
-            let (l, _) = env.segments[k];
-            let steps = ((l.p0.distance(l.p1) / (0.5 * cell)).ceil() as usize).clamp(1, 1 << 20);
-            let mut cells: Vec<(i64, i64)> = Vec::new();
-            for s in 0..steps {
-                let (a, b) = (
-                    l.p0.lerp(l.p1, s as f64 / steps as f64),
-                    l.p0.lerp(l.p1, (s + 1) as f64 / steps as f64),
-                );
-                let (x0, y0) = env.key(Point::new(a.x.min(b.x), a.y.min(b.y)));
-                let (x1, y1) = env.key(Point::new(a.x.max(b.x), a.y.max(b.y)));
-                for x in x0..=x1 {
-                    for y in y0..=y1 {
-                        cells.push((x, y));
-                    }
-                }
-            }
-            cells.sort_unstable();
-            cells.dedup();
-            let id = u32::try_from(k).expect("internal: segment count fits u32");
-            let polyline = env.segments[k].1;
-            for (x, y) in cells {
-                env.grid.entry((x, y, polyline)).or_default().push(id);
-            }
+            nodes,
+            roots,
         }
-        env
     }
 
     /// The envelope radius ε (user units).
@@ -144,72 +132,69 @@ impl Envelope {
         self.eps
     }
 
-    fn key(&self, p: Point) -> (i64, i64) {
-        // Saturating float-to-int casts keep far points in the outermost cells.
-        (
-            (p.x / self.cell).floor() as i64,
-            (p.y / self.cell).floor() as i64,
-        )
+    /// Calls `f` with every segment index of polyline `polyline` whose box is
+    /// within `r` of `p` (with a margin far above the rounding of a distance:
+    /// no segment within `r` is skipped), in the polyline's order.
+    fn for_near(&self, p: Point, polyline: u32, r: f64, mut f: impl FnMut(usize)) {
+        let Some(&root) = self.roots.get(polyline as usize) else {
+            return;
+        };
+        if root == NONE {
+            return;
+        }
+        let reach = r + 1e-9 * (r + p.x.abs().max(p.y.abs()));
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        stack[0] = root;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            let b = n.bbox;
+            // NaN-safe: a NaN point is near nothing.
+            if !(p.x >= b.x0 - reach
+                && p.x <= b.x1 + reach
+                && p.y >= b.y0 - reach
+                && p.y <= b.y1 + reach)
+            {
+                continue;
+            }
+            if n.left == NONE {
+                (n.lo..n.hi).for_each(|k| f(k as usize));
+            } else {
+                // The right child below the left: the left is read first.
+                stack[top] = n.left + 1;
+                stack[top + 1] = n.left;
+                top += 2;
+            }
+        }
     }
 
     /// The distance from `p` to polyline `polyline` when it is at most `ε`,
     /// else `None`.
     pub(crate) fn distance_within(&self, p: Point, polyline: u32) -> Option<f64> {
-        let (x0, y0) = self.key(Point::new(p.x - self.eps, p.y - self.eps));
-        let (x1, y1) = self.key(Point::new(p.x + self.eps, p.y + self.eps));
         let mut best: Option<f64> = None;
-        // Every segment within ε of `p` is in a cell this box meets, so the grid
-        // and a scan of the whole polyline find the same nearest distance.
-        let range = self.ranges.get(polyline as usize).cloned().unwrap_or(0..0);
-        if range.len() <= SCAN_WHOLE as usize {
-            for (l, _) in &self.segments[range.start as usize..range.end as usize] {
-                let d = point_segment_distance(p, *l);
-                if d <= self.eps && best.is_none_or(|b| d < b) {
-                    best = Some(d);
-                }
+        self.for_near(p, polyline, self.eps, |k| {
+            let d = point_segment_distance(p, self.segments[k].0);
+            if d <= self.eps && best.is_none_or(|b| d < b) {
+                best = Some(d);
             }
-            return best;
-        }
-        for x in x0..=x1.min(x0.saturating_add(4)) {
-            for y in y0..=y1.min(y0.saturating_add(4)) {
-                let bucket = self.grid.get(&(x, y, polyline));
-                for &k in bucket.map_or(&[][..], Vec::as_slice) {
-                    let d = point_segment_distance(p, self.segments[k as usize].0);
-                    if d <= self.eps && best.is_none_or(|b| d < b) {
-                        best = Some(d);
-                    }
-                }
-            }
-        }
+        });
         best
     }
 
     /// The input segments of polyline `polyline` within `r ≤ ε` of `p`, each
-    /// once, into `out` (cleared first): what the polyline looks like at `p`
-    /// (the forced-corner classification reads the drawing's directions there).
+    /// once, into `out` (cleared first), in the polyline's order: what the
+    /// polyline looks like at `p` (the forced-corner classification reads the
+    /// drawing's directions there).
     pub(crate) fn segments_near(&self, p: Point, polyline: u32, r: f64, out: &mut Vec<Line>) {
         out.clear();
         let r = r.min(self.eps);
-        let range = self.ranges.get(polyline as usize).cloned().unwrap_or(0..0);
-        let mut push = |k: u32| {
-            let l = self.segments[k as usize].0;
+        self.for_near(p, polyline, r, |k| {
+            let l = self.segments[k].0;
             if point_segment_distance(p, l) <= r && !out.contains(&l) {
                 out.push(l);
             }
-        };
-        if range.len() <= SCAN_WHOLE as usize {
-            range.for_each(&mut push);
-            return;
-        }
-        let (x0, y0) = self.key(Point::new(p.x - r, p.y - r));
-        let (x1, y1) = self.key(Point::new(p.x + r, p.y + r));
-        for x in x0..=x1.min(x0.saturating_add(4)) {
-            for y in y0..=y1.min(y0.saturating_add(4)) {
-                if let Some(bucket) = self.grid.get(&(x, y, polyline)) {
-                    bucket.iter().copied().for_each(&mut push);
-                }
-            }
-        }
+        });
     }
 
     /// Whether the segment `a b` lies within ε of polyline `polyline`,
@@ -243,6 +228,34 @@ impl Envelope {
             }
         }
     }
+}
+
+/// Fills node `i` (its range set): its box, and children while its range is
+/// longer than a leaf. Depth ≤ 33 for 2³² segments: the query's stack of 64
+/// holds it.
+fn build(segments: &[(Line, u32)], nodes: &mut Vec<Node>, i: usize) {
+    let Node { lo, hi, .. } = nodes[i];
+    let mut b = Rect::from_points(segments[lo as usize].0.p0, segments[lo as usize].0.p1);
+    for (l, _) in &segments[lo as usize + 1..hi as usize] {
+        b = b.union(Rect::from_points(l.p0, l.p1));
+    }
+    nodes[i].bbox = b;
+    if hi - lo <= LEAF {
+        return;
+    }
+    let mid = lo + (hi - lo) / 2;
+    let left = u32::try_from(nodes.len()).expect("internal: node count fits u32");
+    nodes[i].left = left;
+    for (lo, hi) in [(lo, mid), (mid, hi)] {
+        nodes.push(Node {
+            bbox: Rect::ZERO,
+            lo,
+            hi,
+            left: NONE,
+        });
+    }
+    build(segments, nodes, left as usize);
+    build(segments, nodes, left as usize + 1);
 }
 
 #[cfg(test)]
@@ -316,7 +329,7 @@ mod tests {
 
     #[test]
     fn short_and_long_polylines_find_the_nearest_distance() {
-        // A long wavy polyline (searched through the grid), a short one (scanned
+        // A long wavy polyline (searched through the tree), a short one (scanned
         // whole), and a zigzag running back and forth over the same segments
         // (kept once).
         let long: Vec<Point> = (0..200)
