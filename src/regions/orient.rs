@@ -18,7 +18,7 @@
 use super::classify::edge_key;
 use crate::fem::{BOUNDARY, FemMesh, LineKind};
 use crate::svg::{Drawing, FeatureGeom, ShapeId};
-use kurbo::{ParamCurveNearest, Point};
+use kurbo::{ParamCurveNearest, Point, Rect};
 use std::collections::HashMap;
 
 /// Accuracy of the projections onto source curves, relative to the drawing's
@@ -44,10 +44,12 @@ pub(crate) fn orient_lines(
     shapes.sort_unstable_by_key(|s| s.index());
     // Each shape's features, in drawing order, found once (not per chain: a
     // drawing of many small shapes would scan all features per chain).
-    let mut own: HashMap<ShapeId, Vec<FeatureGeom>> = HashMap::new();
+    let mut own: HashMap<ShapeId, Vec<Own>> = HashMap::new();
     for f in &drawing.features {
         if by_shape.contains_key(&f.source.shape) {
-            own.entry(f.source.shape).or_default().push(f.geom);
+            own.entry(f.source.shape)
+                .or_default()
+                .push(Own::new(f.geom));
         }
     }
     // The nearest-point accuracy, from the drawing's diagonal found once (it scans
@@ -61,6 +63,39 @@ pub(crate) fn orient_lines(
             }
             orient_chain(accuracy, mesh, own, &chain);
         }
+    }
+}
+
+/// A feature of a shape, with the box of its control points (its curve, and
+/// the curve its projections are taken on, lie in it).
+struct Own {
+    geom: FeatureGeom,
+    bbox: Rect,
+}
+
+impl Own {
+    fn new(geom: FeatureGeom) -> Own {
+        let bbox = match geom {
+            FeatureGeom::Point(p) => Rect::from_points(p, p),
+            FeatureGeom::Line(l) => Rect::from_points(l.p0, l.p1),
+            FeatureGeom::Cubic(c) => {
+                Rect::from_points(c.p0, c.p1).union(Rect::from_points(c.p2, c.p3))
+            }
+            FeatureGeom::Conic(c) => {
+                let a = c.approx_cubic();
+                Rect::from_points(a.p0, a.p1).union(Rect::from_points(a.p2, a.p3))
+            }
+        };
+        Own { geom, bbox }
+    }
+
+    /// The squared distance from `p` to the box: a lower bound of the
+    /// squared distance from `p` to any point of the curve.
+    fn box_distance_sq(&self, p: Point) -> f64 {
+        let b = self.bbox;
+        let dx = (b.x0 - p.x).max(p.x - b.x1).max(0.0);
+        let dy = (b.y0 - p.y).max(p.y - b.y1).max(0.0);
+        dx * dx + dy * dy
     }
 }
 
@@ -139,7 +174,7 @@ fn chains(mesh: &FemMesh, lines: &[usize]) -> Vec<Chain> {
 /// give.
 /// `own`: the features of the chain's shape; `accuracy`: of the nearest-point
 /// searches (user units).
-fn orient_chain(accuracy: f64, mesh: &mut FemMesh, own: &[FeatureGeom], chain: &Chain) {
+fn orient_chain(accuracy: f64, mesh: &mut FemMesh, own: &[Own], chain: &Chain) {
     let lines = &chain.lines;
     // Consecutive: each element starts where the previous one ends.
     for k in 0..lines.len() {
@@ -188,7 +223,7 @@ const DIRECTION_VOTES: usize = 5;
 /// midpoint (the branch the element lies on, even next to a place where the source crosses itself), the parameter
 /// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
 /// feature or the projections coincide.
-fn runs_along(accuracy: f64, own: &[FeatureGeom], a: Point, b: Point) -> Option<bool> {
+fn runs_along(accuracy: f64, own: &[Own], a: Point, b: Point) -> Option<bool> {
     let mid = a.midpoint(b);
     let t = |f: &FeatureGeom, p: Point| match *f {
         FeatureGeom::Point(_) => None,
@@ -196,10 +231,22 @@ fn runs_along(accuracy: f64, own: &[FeatureGeom], a: Point, b: Point) -> Option<
         FeatureGeom::Cubic(c) => Some(c.nearest(p, accuracy)),
         FeatureGeom::Conic(c) => Some(c.approx_cubic().nearest(p, accuracy)),
     };
-    let (_, f) = own
-        .iter()
-        .filter_map(|f| Some((t(f, mid)?.distance_sq, f)))
-        .min_by(|x, y| x.0.total_cmp(&y.0))?;
+    // The first nearest feature; a feature whose box is farther than the
+    // nearest so far (with a margin far above the rounding of a distance) can
+    // be neither nearer nor as near, and is not projected on.
+    let mut best: Option<(f64, &FeatureGeom)> = None;
+    for o in own {
+        if best.is_some_and(|(d, _)| o.box_distance_sq(mid) * (1.0 - 1e-9) > d) {
+            continue;
+        }
+        let Some(n) = t(&o.geom, mid) else {
+            continue;
+        };
+        if best.is_none_or(|(d, _)| n.distance_sq.total_cmp(&d).is_lt()) {
+            best = Some((n.distance_sq, &o.geom));
+        }
+    }
+    let (_, f) = best?;
     let (ta, tb) = (t(f, a)?.t, t(f, b)?.t);
     (ta != tb).then_some(ta < tb)
 }
@@ -207,7 +254,7 @@ fn runs_along(accuracy: f64, own: &[FeatureGeom], a: Point, b: Point) -> Option<
 /// Whether the consecutive open chain `lines` runs against its source's
 /// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
 /// elements nearest the chain's middle (no verdict: as it is).
-fn runs_backwards(accuracy: f64, mesh: &FemMesh, own: &[FeatureGeom], lines: &[usize]) -> bool {
+fn runs_backwards(accuracy: f64, mesh: &FemMesh, own: &[Own], lines: &[usize]) -> bool {
     let mid = lines.len() / 2;
     let mut order: Vec<usize> = (0..lines.len()).collect();
     order.sort_by_key(|&k| k.abs_diff(mid));
