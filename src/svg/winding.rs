@@ -394,6 +394,140 @@ pub(crate) struct Painting {
     /// shape whose region it paints (itself, or for a stroke that joins its
     /// fill, [`Drawing::joined_fill`], that fill).
     layers: Vec<(ShapeId, ShapeId, PaintTest, Rect)>,
+    /// The layers by the cells of a grid their boxes meet, for drawings of
+    /// many shapes (a query reads the layers near it, not all of them).
+    index: Option<LayerGrid>,
+}
+
+/// Fewer layers than this are scanned whole by [`Painting::owner_at`].
+const SCAN_LAYERS: usize = 64;
+
+/// A uniform grid over the layers' boxes: each cell lists, in layer order,
+/// the layers whose box meets it.
+struct LayerGrid {
+    origin: Point,
+    cell: f64,
+    cols: usize,
+    rows: usize,
+    /// Cell `(x, y)`'s layers: `ids[starts[y * cols + x]..starts[y * cols + x + 1]]`.
+    starts: Vec<u32>,
+    ids: Vec<u32>,
+}
+
+impl LayerGrid {
+    /// The grid of `boxes` (about one cell per box over their union), `None`
+    /// when they would fill it with far more entries than boxes.
+    fn new(boxes: &[Rect]) -> Option<LayerGrid> {
+        let all = boxes.iter().copied().reduce(|a, b| a.union(b))?;
+        let n = boxes.len();
+        let side = (n as f64).sqrt().ceil().max(1.0);
+        let cell = (all.width().max(all.height()) / side).max(f64::MIN_POSITIVE);
+        if !(cell.is_finite() && cell > 0.0) {
+            return None;
+        }
+        let cols = ((all.width() / cell).floor() as usize + 1).min(1 << 12);
+        let rows = ((all.height() / cell).floor() as usize + 1).min(1 << 12);
+        let origin = Point::new(all.x0, all.y0);
+        let mut g = LayerGrid {
+            origin,
+            cell,
+            cols,
+            rows,
+            starts: Vec::new(),
+            ids: Vec::new(),
+        };
+        // Entries in all: a drawing of many large layers (each over most of
+        // the grid) gets no index; its queries scan the layers.
+        let entries: usize = boxes
+            .iter()
+            .map(|b| {
+                let (x0, y0, x1, y1) = g.span(*b);
+                (x1 - x0 + 1) * (y1 - y0 + 1)
+            })
+            .sum();
+        if entries > 32 * n + (1 << 20) {
+            return None;
+        }
+        // Two sweeps: count, then fill (layer order within each cell).
+        let mut counts = vec![0u32; cols * rows + 1];
+        for b in boxes {
+            let (x0, y0, x1, y1) = g.span(*b);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    counts[y * cols + x] += 1;
+                }
+            }
+        }
+        let mut starts = Vec::with_capacity(counts.len());
+        let mut total = 0u32;
+        for c in &counts {
+            starts.push(total);
+            total = total.checked_add(*c)?;
+        }
+        let mut fill = starts.clone();
+        let mut ids = vec![0u32; total as usize];
+        for (k, b) in boxes.iter().enumerate() {
+            let (x0, y0, x1, y1) = g.span(*b);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let slot = &mut fill[y * cols + x];
+                    ids[*slot as usize] = k as u32;
+                    *slot += 1;
+                }
+            }
+        }
+        g.starts = starts;
+        g.ids = ids;
+        Some(g)
+    }
+
+    /// The column or row of coordinate `v` from `origin` (clamped to the grid).
+    fn index(&self, v: f64, o: f64, len: usize) -> usize {
+        let i = ((v - o) / self.cell).floor();
+        if i.is_nan() || i < 0.0 {
+            0
+        } else {
+            (i as usize).min(len - 1)
+        }
+    }
+
+    /// The cells `b` meets: columns `x0..=x1`, rows `y0..=y1`.
+    fn span(&self, b: Rect) -> (usize, usize, usize, usize) {
+        (
+            self.index(b.x0, self.origin.x, self.cols),
+            self.index(b.y0, self.origin.y, self.rows),
+            self.index(b.x1, self.origin.x, self.cols),
+            self.index(b.y1, self.origin.y, self.rows),
+        )
+    }
+
+    /// The layers whose box may come within `r` of `p`, in layer order, into
+    /// `out` (a box that meets none of the cells near `p` cannot); `false` when
+    /// `p ± r` spans too many cells to be worth it (then scan all layers).
+    fn near(&self, p: Point, r: f64, out: &mut Vec<u32>) -> bool {
+        out.clear();
+        let b = Rect::new(p.x - r, p.y - r, p.x + r, p.y + r);
+        if !(b.x0.is_finite() && b.y0.is_finite() && b.x1.is_finite() && b.y1.is_finite()) {
+            return false;
+        }
+        let (x0, y0, x1, y1) = self.span(b);
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > 4 {
+            return false;
+        }
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let c = y * self.cols + x;
+                out.extend_from_slice(
+                    &self.ids[self.starts[c] as usize..self.starts[c + 1] as usize],
+                );
+            }
+        }
+        if (x1, y1) != (x0, y0) {
+            out.sort_unstable();
+            out.dedup();
+        }
+        true
+    }
 }
 
 impl Painting {
@@ -412,12 +546,14 @@ impl Painting {
             })
             .collect();
         layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
-        Painting {
-            layers: layers
-                .into_iter()
-                .map(|(_, id, t, bb)| (drawing.joined_fill(id).unwrap_or(id), id, t, bb))
-                .collect(),
-        }
+        let layers: Vec<_> = layers
+            .into_iter()
+            .map(|(_, id, t, bb)| (drawing.joined_fill(id).unwrap_or(id), id, t, bb))
+            .collect();
+        let index = (layers.len() > SCAN_LAYERS)
+            .then(|| LayerGrid::new(&layers.iter().map(|l| l.3).collect::<Vec<_>>()))
+            .flatten();
+        Painting { layers, index }
     }
 
     /// The shapes that own a region, topmost first (a stroke that joins its
@@ -432,8 +568,30 @@ impl Painting {
     /// answer. A shape whose outline's box, grown by `eps_abs`, misses `p` is
     /// skipped: it neither paints `p` nor passes near it.
     pub(crate) fn owner_at(&self, p: Point, eps_abs: f64) -> (Option<ShapeId>, bool) {
+        if let Some(g) = &self.index {
+            let mut near = Vec::new();
+            if g.near(p, eps_abs, &mut near) {
+                return self.owner_among(
+                    near.iter().map(|&k| &self.layers[k as usize]),
+                    p,
+                    eps_abs,
+                );
+            }
+        }
+        self.owner_among(self.layers.iter(), p, eps_abs)
+    }
+
+    /// [`Painting::owner_at`] over `layers` (topmost first): all of them, or
+    /// those the grid finds near `p` (every layer whose grown box holds `p`
+    /// is among them).
+    fn owner_among<'a>(
+        &'a self,
+        layers: impl Iterator<Item = &'a (ShapeId, ShapeId, PaintTest, Rect)>,
+        p: Point,
+        eps_abs: f64,
+    ) -> (Option<ShapeId>, bool) {
         let mut clear = true;
-        for (id, _, test, bb) in &self.layers {
+        for (id, _, test, bb) in layers {
             let near_box = p.x >= bb.x0 - eps_abs
                 && p.x <= bb.x1 + eps_abs
                 && p.y >= bb.y0 - eps_abs
@@ -916,6 +1074,51 @@ mod tests {
                 prop_assert_eq!(w.is_clear(), !on_edge, "p {:?}", p);
                 if !on_edge {
                     prop_assert_eq!(w.number(), angle_winding(&pts, p), "p {:?}", p);
+                }
+            }
+        }
+
+        /// With more layers than are scanned whole, the grid's owner of a point
+        /// is the whole scan's (same shape, same certainty), on and off the
+        /// outlines, with layers of every size (a background over all of them).
+        #[test]
+        fn indexed_owner_matches_the_scan(
+            rects in proptest::collection::vec((0i32..200, 0i32..200, 1i32..6, 1i32..6), 65..160),
+            grid_queries in proptest::collection::vec((-4i32..420, -4i32..420), 40),
+            queries in proptest::collection::vec((-5.0f64..210.0, -5.0f64..210.0), 200),
+            eps_exp in -8i32..4,
+        ) {
+            let mut svg = String::from(r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 210 210">"#);
+            svg.push_str(r##"<rect x="-1" y="-1" width="212" height="212" fill="#123456"/>"##);
+            for (k, &(x, y, w, h)) in rects.iter().enumerate() {
+                svg.push_str(&format!(
+                    r##"<rect x="{x}" y="{y}" width="{w}" height="{h}" fill="#{:06x}"/>"##,
+                    (k * 7919) % 0xffffff
+                ));
+            }
+            svg.push_str("</svg>");
+            let drawing = crate::svg::load_bytes(svg.as_bytes()).expect("a drawing");
+            let painting = Painting::new(&drawing);
+            prop_assert!(painting.index.is_some());
+            let eps = 2f64.powi(eps_exp);
+            // Half-integer grid points (on outlines, corners and between
+            // them), and points anywhere (near outlines in other cells).
+            let points = grid_queries
+                .iter()
+                .map(|&(qx, qy)| Point::new(f64::from(qx) * 0.5, f64::from(qy) * 0.5))
+                .chain(queries.iter().map(|&(x, y)| Point::new(x, y)));
+            for p in points {
+                let scan = painting.owner_among(painting.layers.iter(), p, eps);
+                prop_assert_eq!(painting.owner_at(p, eps), scan, "p {:?}", p);
+                // Every layer whose box grown by eps holds p is near p.
+                let mut near = Vec::new();
+                if painting.index.as_ref().is_some_and(|g| g.near(p, eps, &mut near)) {
+                    for (k, l) in painting.layers.iter().enumerate() {
+                        let b = l.3.inflate(eps, eps);
+                        if b.contains(p) {
+                            prop_assert!(near.contains(&(k as u32)), "layer {} at {:?}", k, p);
+                        }
+                    }
                 }
             }
         }
