@@ -251,6 +251,26 @@ impl Parent {
         }
     }
 
+    /// Where the curvature of the piece on `[t0, t1]` (either order) changes sign: the
+    /// parent cubic's inflections strictly inside, in increasing order (none for a line
+    /// or a conic); `None` when a zero-derivative point (a cusp, where the tangent turns
+    /// back) lies strictly inside. A section has neither (the feature stage splits
+    /// there), but a chain of sections, along which the optimizer slides and collapses
+    /// vertices, may have both.
+    pub(crate) fn inflections_within(&self, t0: f64, t1: f64) -> Option<Vec<f64>> {
+        let Parent::Cubic(c) = self else {
+            return Some(Vec::new());
+        };
+        let (lo, hi) = (t0.min(t1), t0.max(t1));
+        let inside = |t: f64| t > lo && t < hi;
+        if split::cusps(c).into_iter().any(inside) {
+            return None;
+        }
+        let mut ts: Vec<f64> = c.inflections().into_iter().filter(|&t| inside(t)).collect();
+        ts.sort_by(f64::total_cmp);
+        Some(ts)
+    }
+
     /// Whether this is a straight segment.
     pub(crate) fn is_line(&self) -> bool {
         matches!(self, Parent::Line(_))
