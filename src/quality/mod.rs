@@ -60,8 +60,8 @@ pub struct Unforced {
     pub min_jacobian_ratio: f64,
     /// Unforced corners below α.
     pub below_alpha: usize,
-    /// Unforced elements whose certified Jacobian ratio is below
-    /// [`RATIO_FLOOR`] (curved elements bent too far for their size).
+    /// Unforced elements whose certified Jacobian ratio is below 0.1 (curved
+    /// elements bent or parametrized too unevenly for their size; issue 38).
     pub below_ratio_floor: usize,
     /// Forced corners.
     pub forced_corners: usize,
