@@ -285,7 +285,8 @@ impl Parent {
 /// instead of 1/3 and 2/3) gave cubic elements of certified Jacobian ratio 0.006 on
 /// straight-looking triangles (issue 38). Below one half, the arc-length nodes give the
 /// edge a nearly even speed; above it, the parameter thirds keep the piece exact.
-/// Measured on the 40-drawing dev sample in session 25.
+/// Chosen, not tuned (session 25): with it no unforced element of the 40-drawing dev
+/// sample has a ratio below 0.25 at orders 2 and 3; other values were not measured.
 pub(crate) const CUBIC_EVEN_SPEED: f64 = 0.5;
 
 /// The parameter of the node at fraction `s` of the cubic `c`'s piece on `[t[0], t[1]]`
