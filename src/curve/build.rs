@@ -11,7 +11,10 @@
 //!    each has at most one (`repair`);
 //! 3. each primary edge takes its curve piece: the cubic nodes at the parameter
 //!    thirds (order 3, which reproduces the piece exactly) or the parameter
-//!    midpoint (order 2). When a corner is off its curve (a vertex the BSP left on
+//!    midpoint (order 2); at equal arc length instead where the cubic's
+//!    parametric speed is uneven, which would bunch the nodes and drop the
+//!    element's Jacobian ratio (`features::Parent::along`). When a corner is
+//!    off its curve (a vertex the BSP left on
 //!    a chord) the piece is moved by the linear blend of the two corner offsets,
 //!    so the element still passes through its corners (`shape`);
 //! 4. repair of elements that are not certified, on the linear mesh: a straight
@@ -410,6 +413,46 @@ mod tests {
         assert_eq!(cm.lines.len(), 3);
         assert!((cm.nodes[cm.lines[2] as usize] - Point::new(0.5, 0.075)).hypot() < 1e-15);
         assert!(all_certified(&cm));
+    }
+
+    #[test]
+    fn uneven_cubic_speed_keeps_the_jacobian_ratio() {
+        // A nearly straight edge on a cubic whose first control point sits next to
+        // its start: at the parameter thirds the edge's nodes bunch toward that end
+        // and the element is certified, but with a ratio far below 0.1 (issue 38);
+        // at equal arc length it is nearly straight.
+        let c = CubicBez::new((0.0, 0.0), (0.002, 0.0002), (0.41, 0.03), (1.0, 0.0));
+        let corners = [
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::new(0.5, 0.6),
+        ];
+        for order in [Order::Cubic, Order::Quadratic] {
+            let thirds = crate::element::triangle::piece_inner(
+                |s| kurbo::ParamCurve::eval(&c, s),
+                [0.0, 1.0],
+                corners[0],
+                corners[1],
+                order,
+            );
+            let nodes = crate::element::triangle::nodes(
+                order,
+                corners,
+                [Some(&thirds), None, None],
+                kurbo::Vec2::ZERO,
+            );
+            let at_thirds = jacobian::certify_element(order, &nodes, &CertifyOptions::DEFAULT)
+                .expect("certificate");
+            assert!(at_thirds.ratio() < 0.1, "{order:?} {at_thirds:?}");
+            let (mut m, ctx) = diamond(c, 0.6);
+            let opts = CurveOptions::new(order, 2.0);
+            let (cm, stats) = curve_mesh(&mut m, &ctx, &opts, feature).expect("curving");
+            assert!(all_certified(&cm));
+            assert_eq!(stats.curved_triangles, 2, "{stats:?}");
+            assert!(stats.min_jacobian_ratio > 0.5, "{order:?} {stats:?}");
+            // still on the curve
+            assert!(stats.max_curve_distance_rel < 1e-3, "{order:?} {stats:?}");
+        }
     }
 
     #[test]

@@ -46,7 +46,17 @@ fn hodograph(c: &CubicBez) -> (Vec2, Vec2, Vec2) {
 /// Parameters in (0, 1) where det(c′, c″) = 0 or c′ = 0.
 pub(super) fn inflections_and_cusps(c: &CubicBez) -> Vec<f64> {
     let mut ts: Vec<f64> = c.inflections().into_iter().collect();
-    // Zero-derivative points: common roots of both components of c′.
+    ts.extend(cusps(c));
+    ts.retain(|t| *t > T_MERGE && *t < 1.0 - T_MERGE);
+    ts.sort_by(f64::total_cmp);
+    ts.dedup_by(|x, y| (*x - *y).abs() < T_MERGE);
+    ts
+}
+
+/// Zero-derivative points in (0, 1): common roots of both components of c′ (to
+/// 1e-9 of the hodograph's size).
+pub(super) fn cusps(c: &CubicBez) -> Vec<f64> {
+    let mut ts = Vec::new();
     let (a, b, e) = hodograph(c);
     let scale = a.hypot() + b.hypot() + e.hypot();
     for (a, b, e) in [(a.x, b.x, e.x), (a.y, b.y, e.y)] {
@@ -56,9 +66,6 @@ pub(super) fn inflections_and_cusps(c: &CubicBez) -> Vec<f64> {
             }
         }
     }
-    ts.retain(|t| *t > T_MERGE && *t < 1.0 - T_MERGE);
-    ts.sort_by(f64::total_cmp);
-    ts.dedup_by(|x, y| (*x - *y).abs() < T_MERGE);
     ts
 }
 

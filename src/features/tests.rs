@@ -586,3 +586,40 @@ fn area_matching_angles_stay_near_equal_spacing_and_join_the_series() {
     assert_eq!(a(-1.0), 1.0);
     assert_eq!(a(2.0), 1.0);
 }
+
+/// `along` on a cubic: at the parameter thirds where its speed is even (the cubic edge
+/// is then the piece itself); at equal arc length where it is not (a control point next
+/// to its end point), either direction, on the curve and exact at the ends.
+#[test]
+fn cubic_nodes_at_parameter_thirds_or_equal_arc_length() {
+    use kurbo::ParamCurveArclen;
+    let even = Parent::Cubic(CubicBez::new(
+        (0.0, 0.0),
+        (1.0, 0.3),
+        (2.0, 0.3),
+        (3.0, 0.0),
+    ));
+    for s in [1.0 / 3.0, 0.5, 2.0 / 3.0] {
+        assert_eq!(even.along([0.2, 0.9], s), even.eval(0.2 + s * 0.7));
+    }
+    let c = CubicBez::new((0.0, 0.0), (0.01, 0.001), (0.5, 0.03), (1.0, 0.0));
+    let uneven = Parent::Cubic(c);
+    for t in [[0.0, 0.8], [0.8, 0.0]] {
+        assert_eq!(uneven.along(t, 0.0), uneven.eval(t[0]));
+        assert_eq!(uneven.along(t, 1.0), uneven.eval(t[1]));
+        let piece = c.subsegment(t[0]..t[1]);
+        let length = piece.arclen(1e-12);
+        for s in [1.0 / 3.0, 0.5, 2.0 / 3.0] {
+            let p = uneven.along(t, s);
+            // on the curve: at the parameter of the arc length fraction
+            let u = piece.inv_arclen(s * length, 1e-12);
+            assert!((p - piece.eval(u)).hypot() < 1e-8, "{t:?} {s}");
+            let mirrored = uneven.along([t[1], t[0]], 1.0 - s);
+            assert!((p - mirrored).hypot() < 1e-8, "{t:?} {s}");
+            // at the parameter fraction the node would sit far from that fraction of
+            // its arc length (0.14 at 1/3 from the slow end, 0.50 from the fast one)
+            let at_parameter = piece.subsegment(0.0..s).arclen(1e-12) / length;
+            assert!((at_parameter - s).abs() > 0.15, "{at_parameter} at {s}");
+        }
+    }
+}

@@ -770,6 +770,26 @@ fn curvature_refuses_pieces_that_turn_too_much_or_leave_the_section() {
 }
 
 #[test]
+fn curvature_sums_the_turn_of_a_piece_across_an_inflection() {
+    // A symmetric S (inflection at 1/2): its end tangents are parallel, but each
+    // half bends by about 10°. A chain may run across the inflection, so an
+    // edge's piece can: it turns about 20°, more than α = 15°, not 0.
+    let (_, mut ctx) = delaunay_mesh(0, EnergyRule::Ignore);
+    let s = CubicBez::new((0.0, 0.0), (1.0, 0.12), (2.0, -0.12), (3.0, 0.0));
+    ctx.sections[0].parent = Parent::Cubic(s);
+    ctx.sections[0].t = [0.0, 1.0];
+    assert_eq!(curvature::turn(&s), 0.0);
+    assert!(!curvature::holds(&ctx, 0, [0.0, 1.0]));
+    assert!(!curvature::holds(&ctx, 0, [0.98, 0.02]));
+    assert!(curvature::holds(&ctx, 0, [0.0, 0.5]));
+    assert!(curvature::holds(&ctx, 0, [0.4, 0.6]));
+    // Across a cusp the tangent turns back: refused however short the piece.
+    let cusp = CubicBez::new((0.0, 0.0), (2.0, 1.0), (0.0, 1.0), (2.0, 0.0));
+    ctx.sections[0].parent = Parent::Cubic(cusp);
+    assert!(!curvature::holds(&ctx, 0, [0.49, 0.51]));
+}
+
+#[test]
 fn projection_moves_a_chord_vertex_onto_its_curve_or_closer() {
     for seed in 0..6 {
         let (mut mesh, ctx) = delaunay_mesh(seed, EnergyRule::NoWorseMax);

@@ -547,6 +547,9 @@ fn mesh_stages(
         Mesher::TriWild => Quality::of_classified(&mesh, &mask, params.alpha_deg),
         Mesher::Cdt => Quality::of(&mesh),
     });
+    if let Some(warning) = quality.unforced.as_ref().and_then(low_ratio_warning) {
+        warnings.push(warning);
+    }
     let mut region_report = region_report;
     region_report.small = crate::regions::SmallRegions::of(&region_report.surfaces);
     let mut sizing = field.report().clone();
@@ -953,6 +956,26 @@ mod forced;
 mod snap;
 #[cfg(test)]
 mod tests;
+
+/// The warning for unforced elements whose certified Jacobian ratio is below
+/// [`crate::quality::RATIO_FLOOR`] (issue 38), `None` when there is none: how
+/// many, the worst and where. The curving stage repairs only elements that it
+/// cannot certify, then fits those it still cannot (to a ratio of at least
+/// 0.01), so such an element is a fitted one or a valid one bent too far for
+/// its size.
+fn low_ratio_warning(u: &crate::quality::Unforced) -> Option<String> {
+    let w = u.worst_ratio.filter(|_| u.below_ratio_floor > 0)?;
+    Some(format!(
+        "{} unforced element(s) with a certified Jacobian ratio below {} left by the curving \
+         stage (its repair splits only elements it cannot certify); the worst, {:.3}, at \
+         ({:.6}, {:.6}); --stats quality.unforced.worst_ratio",
+        u.below_ratio_floor,
+        crate::quality::RATIO_FLOOR,
+        w.jacobian_ratio,
+        w.x,
+        w.y
+    ))
+}
 
 /// The warning for corners below α that the worst-element phase left where
 /// the drawing leaves room (issue 38): how many, and why it stopped.

@@ -60,6 +60,9 @@ pub struct Unforced {
     pub min_jacobian_ratio: f64,
     /// Unforced corners below α.
     pub below_alpha: usize,
+    /// Unforced elements whose certified Jacobian ratio is below 0.1 (curved
+    /// elements bent or parametrized too unevenly for their size; issue 38).
+    pub below_ratio_floor: usize,
     /// Forced corners.
     pub forced_corners: usize,
     /// Of those, forced by a wedge between features meeting below α (the one
@@ -71,7 +74,14 @@ pub struct Unforced {
     pub forced_elements: usize,
     /// The unforced element with the smallest angle, if any.
     pub worst: Option<WorstElement>,
+    /// The unforced element with the smallest Jacobian ratio, if any.
+    pub worst_ratio: Option<WorstElement>,
 }
+
+/// The smallest certified Jacobian ratio an unforced element should have
+/// ([`Unforced::below_ratio_floor`]; issue 38's acceptance: 0.1 at orders 2 and
+/// 3, where a solver's conditioning still holds).
+pub(crate) const RATIO_FLOOR: f64 = 0.1;
 
 /// Where the worst unforced element is and how bad.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -121,11 +131,13 @@ impl Quality {
             min_angle_deg: 180.0,
             min_jacobian_ratio: 1.0,
             below_alpha: 0,
+            below_ratio_floor: 0,
             forced_corners: 0,
             forced_by_angle: 0,
             corners: 3 * mesh.triangle_count(),
             forced_elements: 0,
             worst: None,
+            worst_ratio: None,
         };
         for (i, &ratio) in ratios.iter().enumerate() {
             let m = forced.get(i).copied().unwrap_or(0);
@@ -147,16 +159,21 @@ impl Quality {
                 continue;
             }
             u.min_jacobian_ratio = u.min_jacobian_ratio.min(ratio);
+            u.below_ratio_floor += usize::from(ratio < RATIO_FLOOR);
             let min = angles.iter().copied().fold(f64::INFINITY, f64::min);
+            let [a, b, c] = corners;
+            let element = WorstElement {
+                element: i,
+                x: (a.x + b.x + c.x) / 3.0,
+                y: (a.y + b.y + c.y) / 3.0,
+                min_angle_deg: min,
+                jacobian_ratio: ratio,
+            };
             if u.worst.is_none_or(|w| min < w.min_angle_deg) {
-                let [a, b, c] = corners;
-                u.worst = Some(WorstElement {
-                    element: i,
-                    x: (a.x + b.x + c.x) / 3.0,
-                    y: (a.y + b.y + c.y) / 3.0,
-                    min_angle_deg: min,
-                    jacobian_ratio: ratio,
-                });
+                u.worst = Some(element);
+            }
+            if u.worst_ratio.is_none_or(|w| ratio < w.jacobian_ratio) {
+                u.worst_ratio = Some(element);
             }
         }
         q.unforced = Some(u);
@@ -438,6 +455,24 @@ mod tests {
         let mut straight = mesh.clone();
         straight.nodes[3] = Point::new(0.5, 0.0);
         assert_eq!(Quality::of(&straight).min_jacobian_ratio, 1.0);
+        // The mid-edge node slid toward a corner: still straight and valid, but
+        // det J along the edge runs from 0.08 to 1.92 of its mean (issue 38).
+        let mut slid = straight.clone();
+        slid.nodes[3] = Point::new(0.27, 0.0);
+        let u = Quality::of_classified(&slid, &[], 10.0)
+            .unforced
+            .expect("classified");
+        assert!(
+            u.min_jacobian_ratio > 0.0 && u.min_jacobian_ratio < RATIO_FLOOR,
+            "{u:?}"
+        );
+        assert_eq!(u.below_ratio_floor, 1);
+        let w = u.worst_ratio.expect("an unforced element");
+        assert_eq!((w.element, w.jacobian_ratio), (0, u.min_jacobian_ratio));
+        let u = Quality::of_classified(&straight, &[], 10.0)
+            .unforced
+            .expect("classified");
+        assert_eq!(u.below_ratio_floor, 0);
     }
 
     #[test]

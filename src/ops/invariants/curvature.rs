@@ -3,7 +3,12 @@
 //!
 //! A section has constant-sign curvature (the feature stage splits at
 //! inflections), so the turn of a piece is the angle between the end tangents
-//! of its control polygon, the measure the feature stage bounds. For a conic
+//! of its control polygon, the measure the feature stage bounds. An edge's
+//! piece lies on a chain of sections, though, and may span an inflection
+//! between them: its turn is then the sum of its parts' between the
+//! inflections (an S-shaped piece whose end tangents are parallel turns as
+//! much as its two bends together, not 0), and a piece across a cusp fails.
+//! For a conic
 //! parent the control polygon is its hull ([`Parent::restrict`]), which has the
 //! conic's own end tangents, so the turn is the conic's exactly.
 //!
@@ -49,5 +54,14 @@ pub(crate) fn holds(ctx: &Context, section: u32, t: [f64; 2]) -> bool {
     if s.parent.is_line() {
         return true;
     }
-    turn(&s.parent.restrict(lo, hi)) < ctx.turn_bound()
+    let Some(inflections) = s.parent.inflections_within(lo, hi) else {
+        return false;
+    };
+    let mut total = 0.0;
+    let mut from = lo;
+    for to in inflections.into_iter().chain([hi]) {
+        total += turn(&s.parent.restrict(from, to));
+        from = to;
+    }
+    total < ctx.turn_bound()
 }
