@@ -39,6 +39,9 @@
 //!    stroke's size to its own outline only where that outline may be primary) are cut
 //!    again at their secondary size; then the secondary simplification (endpoints
 //!    closer than μ collapse to their barycentre).
+//! 5. `merge`: an open secondary polyline within μ of kept secondary segments of other
+//!    polylines goes (the longest polylines stay first), so the lines of a hatch or a
+//!    stroked soup closer than μ reach the linear mesher about μ apart.
 //!
 //! Guarantees to the next stage (checked by the property tests with an independent checker):
 //! every primary section has constant-sign curvature, turns less than α, is no longer than
@@ -54,6 +57,7 @@ mod continuation;
 mod crossings;
 mod grid;
 mod json;
+mod merge;
 mod preview;
 mod resample;
 mod separation;
@@ -515,6 +519,9 @@ pub struct FeatureCounts {
     pub demoted_after_simplify: usize,
     /// Secondary vertices moved by the simplification.
     pub collapsed_vertices: usize,
+    /// Secondary segments dropped with their open polylines, which lie within μ
+    /// of secondary segments of other polylines that stay (step 5, `merge`).
+    pub merged_segments: usize,
     /// Primary sections.
     pub primary: usize,
     /// Secondary polylines.
@@ -880,12 +887,13 @@ impl FeatureSet {
             &mut primary,
             drawing,
             &mut points,
-            params.mu,
-            params.alpha,
+            (params.mu, params.alpha),
             &recut,
+            deadline,
         );
         counts.collapsed_vertices = simplified.collapsed;
         counts.demoted_after_simplify = simplified.demoted;
+        counts.merged_segments = simplified.merged;
         let primary_sections = assemble_primary(&sections, &primary, drawing);
         counts.primary = primary_sections.len();
         counts.secondary_polylines = simplified.polylines.len();

@@ -353,6 +353,8 @@ pub(super) struct Simplified {
     pub(super) polylines: Vec<SecondaryPolyline>,
     pub(super) collapsed: usize,
     pub(super) demoted: usize,
+    /// Secondary segments the merge dropped with their runs ([`super::merge`]).
+    pub(super) merged: usize,
 }
 
 /// Build the secondary polylines (runs of consecutive secondary sections of one input
@@ -365,9 +367,9 @@ pub(super) fn simplify(
     primary: &mut [bool],
     drawing: &Drawing,
     points: &mut Vec<FeaturePoint>,
-    mu: f64,
-    alpha: f64,
+    (mu, alpha): (f64, f64),
     recut: &[bool],
+    deadline: &Deadline,
 ) -> Simplified {
     // Runs of secondary sections.
     // A run's feature and sharers, and its points.
@@ -392,6 +394,31 @@ pub(super) fn simplify(
         }
         seg_recut.push(recut.get(i).copied().unwrap_or(false));
         prev = Some(i);
+    }
+    // Open runs within μ of other runs that stay go (before the collapse, which
+    // would weld the lines of a hatch into one another).
+    let run_points: Vec<Vec<Point>> = runs.iter().map(|(_, pts)| pts.clone()).collect();
+    let others = sections
+        .iter()
+        .zip(primary.iter())
+        .filter(|(_, p)| **p)
+        .flat_map(|(s, _)| [s.ctrl.p0, s.ctrl.p3])
+        .chain(points.iter().map(|p| p.pos));
+    let merge = super::merge::merge_close(&run_points, others, mu, deadline);
+    if merge.dropped > 0 {
+        let mut flags = seg_recut.into_iter();
+        seg_recut = Vec::new();
+        let mut kept_runs = Vec::with_capacity(runs.len());
+        for (run, keep) in runs.into_iter().zip(&merge.keep) {
+            let segs = run.1.len() - 1;
+            if *keep {
+                seg_recut.extend(flags.by_ref().take(segs));
+                kept_runs.push(run);
+            } else {
+                flags.by_ref().take(segs).for_each(drop);
+            }
+        }
+        runs = kept_runs;
     }
     // Collapse free vertices.
     let fixed_keys: HashSet<(u64, u64)> = sections
@@ -476,6 +503,7 @@ pub(super) fn simplify(
         polylines,
         collapsed: clusters.moved,
         demoted,
+        merged: merge.dropped,
     }
 }
 

@@ -240,7 +240,10 @@ fn parallel_lines_closer_than_mu_are_secondary_farther_primary() {
     let lines = |h| vec![line((0.0, 0.0), (10.0, 0.0)), line((0.0, h), (10.0, h))];
     let (near, _) = build(lines(0.05), abs_params(0.1, 1.0));
     assert!(near.primary.is_empty());
-    assert_eq!(near.counts.secondary_segments, 20);
+    // Both secondary, and the merge keeps one of the two (they are closer than μ).
+    assert_eq!(near.counts.merged_segments, 10);
+    assert_eq!(near.counts.secondary_segments, 10);
+    assert_eq!(near.secondary.len(), 1);
     let (far, _) = build(lines(0.2), abs_params(0.1, 1.0));
     assert_eq!(far.primary.len(), 20);
     assert!(far.secondary.is_empty());
