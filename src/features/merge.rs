@@ -14,7 +14,11 @@
 //! sets, not the size field (1 000 parallel strokes at a third of μ apart gave 593 k
 //! BSP triangles and 80 s). After the merge the kept lines are about μ apart.
 //!
-//! **Which polylines.** Only whole open runs go. A run that touches nothing else
+//! **Which polylines.** Only whole runs go. A run that separates no colours (the
+//! centre line of a stroke, a shape drawn without fill, shared with no other
+//! outline), closed or open, may be covered by any kept runs: the faces on its two
+//! sides take one label, the same, whatever else it touches. Otherwise only open runs
+//! go. A run that touches nothing else
 //! (every vertex its own) may be covered by any kept runs: an open line whose ends
 //! touch nothing bounds no face. A run that shares vertices with other features (a
 //! primary section's end, an isolated point, another run's vertex) goes only when one
@@ -157,6 +161,7 @@ impl By {
 /// passed.
 pub(super) fn merge_close(
     polylines: &[Vec<Point>],
+    colourless: &[bool],
     others: impl Iterator<Item = Point>,
     mu: f64,
     deadline: &Deadline,
@@ -221,10 +226,13 @@ pub(super) fn merge_close(
             .map(|&q| key(q))
             .filter(|k| uses.get(k).copied().unwrap_or(0) > 1)
             .collect();
-        let goes = open
+        let free = colourless.get(i).copied().unwrap_or(false);
+        let goes = (open || free)
             && !deadline.expired()
             && match shared.split_first() {
-                // Touches nothing: any kept lines may stand for it.
+                // Separates no colours, or touches nothing: any kept lines may
+                // stand for it.
+                _ if free => covered_by(By::AnyBut(own)),
                 None => covered_by(By::AnyBut(own)),
                 // One kept polyline must pass through every shared vertex and
                 // cover it alone (so what met it there still meets that one).
@@ -280,7 +288,14 @@ mod tests {
 
     fn merge_with(pls: Vec<SecondaryPolyline>, others: &[Point], mu: f64) -> Out {
         let points: Vec<Vec<Point>> = pls.iter().map(|p| p.points.clone()).collect();
-        let m = merge_close(&points, others.iter().copied(), mu, &Deadline::NONE);
+        let coloured = vec![false; points.len()];
+        let m = merge_close(
+            &points,
+            &coloured,
+            others.iter().copied(),
+            mu,
+            &Deadline::NONE,
+        );
         Out {
             polylines: pls
                 .into_iter()
@@ -405,6 +420,31 @@ mod tests {
             1.0,
         );
         assert_eq!(m.dropped, 0);
+    }
+
+    #[test]
+    fn a_line_that_separates_no_colours_goes_whatever_it_touches() {
+        // `b` ends on `c`'s start, off `a`; closed `e` lies along `a` too. Coloured
+        // (a fill's outline), both stay; colourless (centre lines), both go.
+        let a = pl(&[(0.0, 0.0), (100.0, 0.0)]);
+        let b = pl(&[(10.0, 0.3), (90.0, 0.3)]);
+        let c = pl(&[(90.0, 0.3), (90.0, 40.0)]);
+        let e = pl(&[(20.0, -0.2), (60.0, -0.2), (60.0, -0.4), (20.0, -0.2)]);
+        let points: Vec<Vec<Point>> = [&a, &b, &c, &e].iter().map(|p| p.points.clone()).collect();
+        let run = |colourless: [bool; 4]| {
+            merge_close(
+                &points,
+                &colourless,
+                std::iter::empty(),
+                1.0,
+                &Deadline::NONE,
+            )
+        };
+        let m = run([false; 4]);
+        assert_eq!(m.keep, vec![true; 4]);
+        let m = run([false, true, false, true]);
+        assert_eq!(m.keep, vec![true, false, true, false]);
+        assert_eq!(m.dropped, 4);
     }
 
     #[test]

@@ -27,7 +27,7 @@ use super::resample::polygon_length;
 use super::{FeaturePoint, SecondaryPolyline, Section};
 use crate::budget::Deadline;
 use crate::mesh::{angle_between, point_segment_distance, segment_distance};
-use crate::svg::Drawing;
+use crate::svg::{Drawing, ShapeKind};
 use kurbo::{CubicBez, Line, Point, Rect};
 use std::collections::HashSet;
 
@@ -404,7 +404,19 @@ pub(super) fn simplify(
         .filter(|(_, p)| **p)
         .flat_map(|(s, _)| [s.ctrl.p0, s.ctrl.p3])
         .chain(points.iter().map(|p| p.pos));
-    let merge = super::merge::merge_close(&run_points, others, mu, deadline);
+    // A run separates no colours when its shape paints no area (a stroke's centre
+    // line, an unfilled element) and no other outline runs along it.
+    let colourless: Vec<bool> = runs
+        .iter()
+        .map(|((feature, shared), _)| {
+            let shape = drawing.features[*feature as usize].source.shape.index();
+            // (a drawing without shapes, as the tests build: coloured)
+            drawing.shapes.get(shape).is_some_and(|shape| {
+                shared.is_none() && !shape.filled && shape.paint.kind == ShapeKind::Element
+            })
+        })
+        .collect();
+    let merge = super::merge::merge_close(&run_points, &colourless, others, mu, deadline);
     if merge.dropped > 0 {
         let mut flags = seg_recut.into_iter();
         seg_recut = Vec::new();

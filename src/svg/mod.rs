@@ -78,7 +78,8 @@ mod viewport;
 pub(crate) mod winding;
 
 pub(crate) use drawing::{
-    Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId, Subpath,
+    Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId,
+    ShapeKind, Subpath,
 };
 pub use paint::{PaintOptions, StrokeMode};
 
