@@ -14,11 +14,11 @@
 //! sets, not the size field (1 000 parallel strokes at a third of μ apart gave 593 k
 //! BSP triangles and 80 s). After the merge the kept lines are about μ apart.
 //!
-//! **Which polylines.** Only whole runs go. A run that separates no colours (the
-//! centre line of a stroke, a shape drawn without fill, shared with no other
-//! outline), closed or open, may be covered by any kept runs: the faces on its two
-//! sides take one label, the same, whatever else it touches. Otherwise only open runs
-//! go. A run that touches nothing else
+//! **Which segments.** A run that separates no colours (the centre line of a stroke,
+//! a shape drawn without fill, shared with no other outline) loses each segment that
+//! kept runs cover: the faces on its two sides take one label, the same, whatever
+//! else it touches, so a gap in it merges faces of one label. Any other run goes
+//! whole or not at all, and only when it is open. A run that touches nothing else
 //! (every vertex its own) may be covered by any kept runs: an open line whose ends
 //! touch nothing bounds no face. A run that shares vertices with other features (a
 //! primary section's end, an isolated point, another run's vertex) goes only when one
@@ -55,8 +55,8 @@ const REJECT: f64 = 15.0 / 16.0;
 
 /// What the merge decided.
 pub(super) struct Merged {
-    /// Whether each polyline stays.
-    pub(super) keep: Vec<bool>,
+    /// Whether each segment of each polyline stays.
+    pub(super) keep: Vec<Vec<bool>>,
     /// Secondary segments dropped.
     pub(super) dropped: usize,
 }
@@ -169,7 +169,7 @@ pub(super) fn merge_close(
     let segments: usize = polylines.iter().map(|p| p.len() - 1).sum();
     if polylines.len() < 2 || !(mu.is_finite() && mu > 0.0) {
         return Merged {
-            keep: vec![true; polylines.len()],
+            keep: polylines.iter().map(|p| vec![true; p.len() - 1]).collect(),
             dropped: 0,
         };
     }
@@ -211,7 +211,7 @@ pub(super) fn merge_close(
     // one of theirs: a point the float distance puts on a kept segment may be off it
     // exactly, and the exact BSP would leave a gap there).
     let mut kept_at: HashMap<(u64, u64), Vec<u32>> = HashMap::new();
-    let mut keep = vec![true; polylines.len()];
+    let mut keep: Vec<Vec<bool>> = polylines.iter().map(|p| vec![true; p.len() - 1]).collect();
     let mut dropped = 0;
     for &(_, i) in &order {
         let p = &polylines[i];
@@ -226,13 +226,30 @@ pub(super) fn merge_close(
             .map(|&q| key(q))
             .filter(|k| uses.get(k).copied().unwrap_or(0) > 1)
             .collect();
-        let free = colourless.get(i).copied().unwrap_or(false);
-        let goes = (open || free)
+        if colourless.get(i).copied().unwrap_or(false) {
+            // Separates no colours: segment by segment, any kept lines may stand
+            // for it.
+            for (k, w) in p.windows(2).enumerate() {
+                let seg = Line::new(w[0], w[1]);
+                if !deadline.expired() && kept.covers(seg, mu, By::AnyBut(own)) {
+                    keep[i][k] = false;
+                    dropped += 1;
+                } else {
+                    kept.insert(seg, own);
+                    for q in [w[0], w[1]] {
+                        let at = kept_at.entry(key(q)).or_default();
+                        if at.last() != Some(&own) {
+                            at.push(own);
+                        }
+                    }
+                }
+            }
+            continue;
+        }
+        let goes = open
             && !deadline.expired()
             && match shared.split_first() {
-                // Separates no colours, or touches nothing: any kept lines may
-                // stand for it.
-                _ if free => covered_by(By::AnyBut(own)),
+                // Touches nothing: any kept lines may stand for it.
                 None => covered_by(By::AnyBut(own)),
                 // One kept polyline must pass through every shared vertex and
                 // cover it alone (so what met it there still meets that one).
@@ -245,7 +262,7 @@ pub(super) fn merge_close(
                 }),
             };
         if goes {
-            keep[i] = false;
+            keep[i].iter_mut().for_each(|k| *k = false);
             dropped += p.len() - 1;
         } else {
             for w in p.windows(2) {
@@ -296,11 +313,12 @@ mod tests {
             mu,
             &Deadline::NONE,
         );
+        // (the coloured runs of these tests go whole or not at all)
         Out {
             polylines: pls
                 .into_iter()
                 .zip(m.keep)
-                .filter_map(|(p, k)| k.then_some(p))
+                .filter_map(|(p, k)| k.iter().all(|&k| k).then_some(p))
                 .collect(),
             dropped: m.dropped,
         }
@@ -441,10 +459,30 @@ mod tests {
             )
         };
         let m = run([false; 4]);
-        assert_eq!(m.keep, vec![true; 4]);
+        assert!(m.keep.iter().flatten().all(|&k| k));
         let m = run([false, true, false, true]);
-        assert_eq!(m.keep, vec![true, false, true, false]);
+        assert_eq!(
+            m.keep,
+            vec![vec![true], vec![false], vec![true], vec![false; 3]]
+        );
         assert_eq!(m.dropped, 4);
+        // Colourless, a line along `a` for a stretch loses that stretch only.
+        let f = pl(&[
+            (0.0, 0.5),
+            (40.0, 0.5),
+            (50.0, 10.0),
+            (60.0, 0.5),
+            (80.0, 0.5),
+        ]);
+        let points = vec![a.points.clone(), f.points.clone()];
+        let m = merge_close(
+            &points,
+            &[false, true],
+            std::iter::empty(),
+            1.0,
+            &Deadline::NONE,
+        );
+        assert_eq!(m.keep[1], vec![false, true, true, false]);
     }
 
     #[test]

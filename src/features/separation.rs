@@ -418,16 +418,26 @@ pub(super) fn simplify(
         .collect();
     let merge = super::merge::merge_close(&run_points, &colourless, others, mu, deadline);
     if merge.dropped > 0 {
+        // Split the runs where segments went, and their recut flags with them.
         let mut flags = seg_recut.into_iter();
         seg_recut = Vec::new();
         let mut kept_runs = Vec::with_capacity(runs.len());
-        for (run, keep) in runs.into_iter().zip(&merge.keep) {
-            let segs = run.1.len() - 1;
-            if *keep {
-                seg_recut.extend(flags.by_ref().take(segs));
-                kept_runs.push(run);
-            } else {
-                flags.by_ref().take(segs).for_each(drop);
+        for ((id, pts), keep) in runs.into_iter().zip(&merge.keep) {
+            let mut part: Vec<Point> = Vec::new();
+            for (k, &stays) in keep.iter().enumerate() {
+                let flag = flags.next().unwrap_or(false);
+                if stays {
+                    if part.is_empty() {
+                        part.push(pts[k]);
+                    }
+                    part.push(pts[k + 1]);
+                    seg_recut.push(flag);
+                } else if !part.is_empty() {
+                    kept_runs.push((id, std::mem::take(&mut part)));
+                }
+            }
+            if !part.is_empty() {
+                kept_runs.push((id, part));
             }
         }
         runs = kept_runs;
