@@ -69,12 +69,27 @@ struct Kept {
     piece_of: Vec<u32>,
     /// The kept segments with their polyline.
     segments: Vec<(Line, u32)>,
+    /// The kept polylines through each vertex, bit for bit (a shared vertex must be
+    /// one of theirs: a point the float distance puts on a kept segment may be off it
+    /// exactly, and the exact BSP would leave a gap there).
+    at: HashMap<(u64, u64), Vec<u32>>,
+}
+
+/// A point's key, bit for bit (+0.0 makes −0.0 and 0.0, equal points, one key).
+fn key(p: Point) -> (u64, u64) {
+    ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits())
 }
 
 impl Kept {
     fn insert(&mut self, seg: Line, polyline: u32) {
         let id = u32::try_from(self.segments.len()).expect("internal: segment count fits u32");
         self.segments.push((seg, polyline));
+        for q in [seg.p0, seg.p1] {
+            let at = self.at.entry(key(q)).or_default();
+            if at.last() != Some(&polyline) {
+                at.push(polyline);
+            }
+        }
         let cell = self.grid.cell();
         let pieces = (seg.length() / cell).ceil().clamp(1.0, 1e6) as usize;
         for k in 0..pieces {
@@ -155,9 +170,9 @@ impl By {
 
 /// Drop the open secondary polylines lying within `mu` of kept secondary segments of
 /// other polylines (see the module doc). `others` are the vertices of the other
-/// features (primary section ends, isolated points): a polyline vertex shared with
-/// another feature, or with another polyline, must lie exactly on the kept geometry for
-/// its polyline to go. Stops merging (keeping the rest as it is) once `deadline` has
+/// features (primary section ends, isolated points): a coloured polyline whose
+/// vertices another feature or polyline shares goes only when one kept polyline has
+/// every such vertex. `keep` holds a flag per segment. Stops merging (keeping the rest as it is) once `deadline` has
 /// passed.
 pub(super) fn merge_close(
     polylines: &[Vec<Point>],
@@ -174,12 +189,11 @@ pub(super) fn merge_close(
         };
     }
     // How many features use each vertex (a closed polyline's first and last point once).
-    let key = |p: Point| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits());
     let mut uses: HashMap<(u64, u64), u32> = HashMap::new();
     for p in polylines {
         let closed = p.first() == p.last();
         let n = p.len() - usize::from(closed);
-        for &q in &p[..][..n] {
+        for &q in &p[..n] {
             *uses.entry(key(q)).or_default() += 1;
         }
     }
@@ -199,6 +213,7 @@ pub(super) fn merge_close(
         grid: Grid::new(bounds, mu, segments.max(1024)),
         piece_of: Vec::new(),
         segments: Vec::new(),
+        at: HashMap::new(),
     };
     let length = |p: &Vec<Point>| -> f64 { p.windows(2).map(|w| w[0].distance(w[1])).sum() };
     let mut order: Vec<(f64, usize)> = polylines
@@ -207,10 +222,6 @@ pub(super) fn merge_close(
         .map(|(i, p)| (length(p), i))
         .collect();
     order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    // The kept polylines through each vertex, bit for bit (a shared vertex must be
-    // one of theirs: a point the float distance puts on a kept segment may be off it
-    // exactly, and the exact BSP would leave a gap there).
-    let mut kept_at: HashMap<(u64, u64), Vec<u32>> = HashMap::new();
     let mut keep: Vec<Vec<bool>> = polylines.iter().map(|p| vec![true; p.len() - 1]).collect();
     let mut dropped = 0;
     for &(_, i) in &order {
@@ -221,11 +232,6 @@ pub(super) fn merge_close(
             p.windows(2)
                 .all(|w| kept.covers(Line::new(w[0], w[1]), mu, by))
         };
-        let shared: Vec<(u64, u64)> = p
-            .iter()
-            .map(|&q| key(q))
-            .filter(|k| uses.get(k).copied().unwrap_or(0) > 1)
-            .collect();
         if colourless.get(i).copied().unwrap_or(false) {
             // Separates no colours: segment by segment, any kept lines may stand
             // for it.
@@ -236,16 +242,15 @@ pub(super) fn merge_close(
                     dropped += 1;
                 } else {
                     kept.insert(seg, own);
-                    for q in [w[0], w[1]] {
-                        let at = kept_at.entry(key(q)).or_default();
-                        if at.last() != Some(&own) {
-                            at.push(own);
-                        }
-                    }
                 }
             }
             continue;
         }
+        let shared: Vec<(u64, u64)> = p
+            .iter()
+            .map(|&q| key(q))
+            .filter(|k| uses.get(k).copied().unwrap_or(0) > 1)
+            .collect();
         let goes = open
             && !deadline.expired()
             && match shared.split_first() {
@@ -253,10 +258,10 @@ pub(super) fn merge_close(
                 None => covered_by(By::AnyBut(own)),
                 // One kept polyline must pass through every shared vertex and
                 // cover it alone (so what met it there still meets that one).
-                Some((first, rest)) => kept_at.get(first).is_some_and(|cands| {
+                Some((first, rest)) => kept.at.get(first).is_some_and(|cands| {
                     cands.iter().any(|&a| {
                         rest.iter()
-                            .all(|k| kept_at.get(k).is_some_and(|c| c.contains(&a)))
+                            .all(|k| kept.at.get(k).is_some_and(|c| c.contains(&a)))
                             && covered_by(By::Only(a))
                     })
                 }),
@@ -267,12 +272,6 @@ pub(super) fn merge_close(
         } else {
             for w in p.windows(2) {
                 kept.insert(Line::new(w[0], w[1]), own);
-            }
-            for &q in &p[..] {
-                let at = kept_at.entry(key(q)).or_default();
-                if at.last() != Some(&own) {
-                    at.push(own);
-                }
             }
         }
     }
