@@ -281,11 +281,13 @@ fn evenodd_and_nonzero_stars_have_their_areas() {
         // The input points are exact (f64 from the document's text), but the
         // star's edges cross and come within μ of each other near the crossings,
         // where they are secondary features, kept only inside the ε-envelope
-        // (DESIGN invariant 2): the meshed area is close, not exact. Measured:
-        // 1.9e-5 relative (nonzero) with the f64 loader; under 1e-5 with usvg's
-        // f32 points, by the optimizer's path, not by precision.
+        // (DESIGN invariant 2): the meshed area is close, not exact (the
+        // envelope allows ~1e-3 here: ε = 2e-3·d along the secondary stretches
+        // near the ten crossings). Measured: 1.9e-5 relative (nonzero) with the
+        // f64 loader and a plain Delaunay seed; 1.5e-4 with the constrained
+        // seed (the optimizer's path differs, not the precision).
         assert!(
-            (got - exact).abs() < 1e-4 * exact,
+            (got - exact).abs() < 3e-4 * exact,
             "{rule}: {got} vs {exact}"
         );
         let total: f64 = m.report.regions.surfaces.iter().map(|s| s.area).sum();

@@ -1,10 +1,11 @@
 //! The exact BSP mesher: a valid triangle mesh of a box that contains every
 //! input segment exactly as a chain of its edges.
 //!
-//! It owns [`build`]: a Delaunay triangulation (spade, `f64`) of every input
-//! point, segment endpoint and box corner (`seed.rs`); each triangle is the
+//! It owns [`build`]: a constrained Delaunay triangulation (spade, `f64`) of
+//! every input point, segment endpoint and box corner, with every segment that
+//! crosses no earlier one as a constraint edge (`seed.rs`); each triangle is the
 //! root of a BSP cell cut by the supporting line of every input segment that
-//! meets its interior, in rational arithmetic (`cut.rs`); each convex cell is
+//! still meets its interior, in rational arithmetic (`cut.rs`); each convex cell is
 //! triangulated by a fan from one of its corners when that gives no
 //! degenerate triangle, else from its exact barycentre; then edges are tagged
 //! with the segments they lie on, and vertices are rounded to `f64` wherever
@@ -138,6 +139,11 @@ pub struct BspStats {
     pub seed_vertices: usize,
     /// Triangles of the Delaunay triangulation.
     pub seed_triangles: usize,
+    /// Distinct segments offered to the seed as constraint edges.
+    pub seed_constraints: usize,
+    /// Of those, the ones the seed refused (they cross one already in): only
+    /// these cut seed triangles.
+    pub seed_refused: usize,
     /// Seed triangles crossed by at least one segment.
     pub cut_triangles: usize,
     /// Convex cells after cutting.
@@ -187,6 +193,8 @@ pub(crate) fn build(
     let seed = seed::seed(input, bbox)?;
     stats.seed_vertices = seed.points.len();
     stats.seed_triangles = seed.triangles.len();
+    stats.seed_constraints = seed.constraints;
+    stats.seed_refused = seed.refused;
     stats.delaunay_scale_exp = seed.scale_exp;
     let t1 = Instant::now();
     let mut mesh = cut::cut_all(input, &seed, opts, &mut stats)?;

@@ -423,3 +423,60 @@ fn rounding_in_levels_matches_the_sequential_order() {
     let levelled = levelled.get();
     assert!(levelled > 500, "only {levelled} rational vertices");
 }
+
+#[test]
+fn constrained_seed_cuts_only_what_crosses() {
+    // A hatch of long parallel lines: with a plain Delaunay seed each line
+    // crossed a row of thin triangles; as constraints of the seed, none is cut.
+    let segments: Vec<BspSegment> = (0..40)
+        .map(|k| {
+            let y = f64::from(k) * 0.05;
+            seg(p(0.0, y), p(10.0, y + 0.01), k)
+        })
+        .collect();
+    let input = BspInput {
+        segments,
+        ..BspInput::default()
+    };
+    let stats = run_both(&input);
+    assert_eq!((stats.seed_constraints, stats.seed_refused), (40, 0));
+    assert_eq!(stats.cut_triangles, 0);
+    assert_eq!(stats.rational_before_rounding, 0);
+    // Two crossing segments: the second is refused and cut, exactly.
+    let input = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(3.0, 1.0), 0),
+            seg(p(0.0, 1.0), p(1.0, -1.0), 1),
+        ],
+        ..BspInput::default()
+    };
+    let stats = run_both(&input);
+    assert_eq!((stats.seed_constraints, stats.seed_refused), (2, 1));
+    assert!(stats.cut_triangles > 0);
+}
+
+#[test]
+fn constrained_seed_makes_no_thin_triangle() {
+    // A segment endpoint one ulp off another segment's line, between its ends:
+    // as a constraint that segment would make a triangle of area ~1e-16 with it;
+    // it is refused, and the seed holds no triangle thinner than the plain
+    // Delaunay one would.
+    let up = |v: f64| f64::from_bits(v.to_bits() + 1);
+    let input = BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(4.0, 4.0), 0),
+            seg(p(2.0, up(2.0)), p(2.0, 5.0), 1),
+            seg(p(0.5, 3.0), p(3.5, 3.5), 2),
+        ],
+        ..BspInput::default()
+    };
+    let bbox = padded_box(&input);
+    let s = super::seed::seed(&input, bbox).expect("seed");
+    assert!(s.refused >= 1, "refused {}", s.refused);
+    for t in &s.triangles {
+        let [a, b, c] = t.map(|i| s.points[i as usize].0);
+        let twice = (b - a).cross(c - a);
+        assert!(twice > 1e-6, "thin seed triangle {a:?} {b:?} {c:?}");
+    }
+    run_both(&input);
+}

@@ -962,7 +962,7 @@ fn verdicts_decided_ahead_match_the_tentative_changes() {
     let cubic = CurvedRule::new(crate::element::Order::Cubic);
     let mut meshes: Vec<(TriMesh, Context)> = (0..3)
         .map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax))
-        .chain((0..3).map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax)))
+        .chain((0..10).map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax)))
         .chain((0..3).map(|seed| {
             let (mesh, ctx) = delaunay_mesh(seed + 10, EnergyRule::NoWorseMax);
             (mesh, ctx.with_curved(cubic))

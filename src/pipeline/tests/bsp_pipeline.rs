@@ -210,9 +210,10 @@ fn sample_drawings_and_fixtures_mesh_valid_and_conforming() {
 #[test]
 fn crossing_fixtures_exercise_crossing_splits_and_rational_vertices() {
     // Transversal crossings are split by the feature stage (both curves end at the
-    // crossing point); what stays (T-junctions within rounding, near-parallel and
-    // shallow crossings of secondary features) makes the BSP cut, and rational
-    // vertices appear, which rounding must all remove.
+    // crossing point); what stays (beyond the 32 a piece is split at, shallow
+    // crossings of secondary features) is refused as a constraint of the seed
+    // and makes the BSP cut, and rational vertices appear, which rounding must
+    // all remove.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp");
     let dir = out_dir("bsp-crossings");
     let (mut cuts, mut rational) = (0, 0);
@@ -221,6 +222,7 @@ fn crossing_fixtures_exercise_crossing_splits_and_rational_vertices() {
         "overlapping-circles",
         "t-junction",
         "near-parallel",
+        "crossing-many",
     ] {
         let f = root.join(format!("{name}.svg"));
         let o = mesh_and_check(&f, &dir.join(format!("{name}.msh")))
