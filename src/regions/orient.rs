@@ -52,11 +52,17 @@ pub(crate) fn orient_lines(
                 .push(Own::new(f.geom));
         }
     }
+    let own: HashMap<ShapeId, Owned> = own
+        .into_iter()
+        .map(|(s, features)| (s, Owned::new(features)))
+        .collect();
     // The nearest-point accuracy, from the drawing's diagonal found once (it scans
     // every feature: per chain, a drawing of many small shapes spent minutes here).
     let accuracy = NEAREST_ACCURACY_REL * drawing.diagonal();
     for s in shapes {
-        let own = own.get(&s).map_or(&[][..], Vec::as_slice);
+        let Some(own) = own.get(&s) else {
+            continue;
+        };
         for chain in chains(mesh, &by_shape[&s]) {
             if deadline.expired() {
                 return;
@@ -96,6 +102,172 @@ impl Own {
         let dx = (b.x0 - p.x).max(p.x - b.x1).max(0.0);
         let dy = (b.y0 - p.y).max(p.y - b.y1).max(0.0);
         dx * dx + dy * dy
+    }
+}
+
+/// A shape's features, with a grid of their boxes when there are many (one
+/// dashed stroke is one shape of 100 000 features: each open chain scanned
+/// them all, minutes on a dashed spiral).
+struct Owned {
+    features: Vec<Own>,
+    grid: Option<NearGrid>,
+}
+
+/// Features beyond which a shape's features get a grid.
+const GRID_FROM: usize = 64;
+
+impl Owned {
+    fn new(features: Vec<Own>) -> Owned {
+        let grid = (features.len() > GRID_FROM)
+            .then(|| NearGrid::new(&features))
+            .flatten();
+        Owned { features, grid }
+    }
+
+    /// The first (in drawing order) of the features nearest `p`, with the
+    /// squared distance, among those `t` projects on.
+    fn nearest<T>(
+        &self,
+        p: Point,
+        t: impl Fn(&FeatureGeom, Point) -> Option<T>,
+        dist_sq: impl Fn(&T) -> f64,
+    ) -> Option<&FeatureGeom> {
+        let mut best: Option<(f64, usize)> = None;
+        let consider = |best: &mut Option<(f64, usize)>, i: usize| {
+            let o = &self.features[i];
+            // A feature whose box is farther than the nearest so far (with a
+            // margin far above the rounding of a distance) can be neither
+            // nearer nor as near, and is not projected on.
+            if best.is_some_and(|(d, _)| o.box_distance_sq(p) * (1.0 - 1e-9) > d) {
+                return;
+            }
+            let Some(n) = t(&o.geom, p) else {
+                return;
+            };
+            let d = dist_sq(&n);
+            // The smallest distance; of equal ones, the first in drawing order.
+            if best.is_none_or(|(bd, bi)| d.total_cmp(&bd).then(i.cmp(&bi)).is_lt()) {
+                *best = Some((d, i));
+            }
+        };
+        match &self.grid {
+            None => (0..self.features.len()).for_each(|i| consider(&mut best, i)),
+            Some(g) => g.rings(p, |cells, reach_sq| {
+                if best.is_some_and(|(d, _)| reach_sq * (1.0 - 1e-9) > d) {
+                    return false;
+                }
+                for &i in cells {
+                    consider(&mut best, i as usize);
+                }
+                true
+            }),
+        }
+        best.map(|(_, i)| &self.features[i].geom)
+    }
+}
+
+/// A uniform grid over feature boxes: each cell lists the features whose box
+/// meets it, in drawing order.
+struct NearGrid {
+    origin: Point,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl NearGrid {
+    /// `None` when the boxes' extent is degenerate or not finite (the caller
+    /// scans the list).
+    fn new(features: &[Own]) -> Option<NearGrid> {
+        let bounds = features.iter().map(|o| o.bbox).reduce(|a, b| a.union(b))?;
+        let (w, h) = (bounds.width(), bounds.height());
+        if !(w.is_finite() && h.is_finite()) || w.max(h) <= 0.0 {
+            return None;
+        }
+        // About one feature per cell, at most 1024 cells a side.
+        let side = (features.len() as f64).sqrt().ceil().clamp(1.0, 1024.0);
+        let cell = w.max(h) / side;
+        let nx = ((w / cell).ceil() as usize).clamp(1, 1024);
+        let ny = ((h / cell).ceil() as usize).clamp(1, 1024);
+        let mut g = NearGrid {
+            origin: bounds.origin(),
+            cell,
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        };
+        for (i, o) in features.iter().enumerate() {
+            let i = u32::try_from(i).ok()?;
+            let (x0, y0) = g.index(o.bbox.origin());
+            let (x1, y1) = g.index(Point::new(o.bbox.x1, o.bbox.y1));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    g.cells[y * g.nx + x].push(i);
+                }
+            }
+        }
+        Some(g)
+    }
+
+    /// The cell of `p`, clamped into the grid (monotone in each coordinate).
+    fn index(&self, p: Point) -> (usize, usize) {
+        let f = |v: f64, o: f64, n: usize| {
+            let t = ((v - o) / self.cell).floor();
+            if t.is_nan() || t < 0.0 {
+                0
+            } else {
+                (t as usize).min(n - 1)
+            }
+        };
+        (
+            f(p.x, self.origin.x, self.nx),
+            f(p.y, self.origin.y, self.ny),
+        )
+    }
+
+    /// Visit the cells in square rings around `p`'s (clamped) cell, nearest
+    /// ring first: `visit(cells, reach_sq)`, where every feature not listed in
+    /// this ring or an earlier one lies farther than `sqrt(reach_sq)` from `p`;
+    /// stops when `visit` returns false or the grid is covered.
+    fn rings(&self, p: Point, mut visit: impl FnMut(&[u32], f64) -> bool) {
+        let (cx, cy) = self.index(p);
+        // How far `p` lies outside the grid (clamped into the edge cell).
+        let outside = {
+            let (x1, y1) = (
+                self.origin.x + self.cell * self.nx as f64,
+                self.origin.y + self.cell * self.ny as f64,
+            );
+            let dx = (self.origin.x - p.x).max(p.x - x1).max(0.0);
+            let dy = (self.origin.y - p.y).max(p.y - y1).max(0.0);
+            dx.max(dy)
+        };
+        let last = self.nx.max(self.ny);
+        for r in 0..=last {
+            // Features met by no ring up to r-1 lie outside the square of
+            // those rings: farther from `p` than r·cell inside the grid, and
+            // than sqrt(outside² + (r·cell)²) from outside it (the grid lies
+            // beyond `outside` in one direction, the square's far cells r
+            // cells on in one of the two). One cell less, for the rounding
+            // of the cell index.
+            let inner = (r.saturating_sub(1) as f64) * self.cell;
+            let reach_sq = outside * outside + inner * inner;
+            let mut ring: Vec<u32> = Vec::new();
+            let (x0, x1) = (cx.saturating_sub(r), (cx + r).min(self.nx - 1));
+            let (y0, y1) = (cy.saturating_sub(r), (cy + r).min(self.ny - 1));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    if x.abs_diff(cx) == r || y.abs_diff(cy) == r {
+                        ring.extend_from_slice(&self.cells[y * self.nx + x]);
+                    }
+                }
+            }
+            ring.sort_unstable();
+            ring.dedup();
+            if !visit(&ring, reach_sq) {
+                return;
+            }
+        }
     }
 }
 
@@ -174,7 +346,7 @@ fn chains(mesh: &FemMesh, lines: &[usize]) -> Vec<Chain> {
 /// give.
 /// `own`: the features of the chain's shape; `accuracy`: of the nearest-point
 /// searches (user units).
-fn orient_chain(accuracy: f64, mesh: &mut FemMesh, own: &[Own], chain: &Chain) {
+fn orient_chain(accuracy: f64, mesh: &mut FemMesh, own: &Owned, chain: &Chain) {
     let lines = &chain.lines;
     // Consecutive: each element starts where the previous one ends.
     for k in 0..lines.len() {
@@ -223,7 +395,7 @@ const DIRECTION_VOTES: usize = 5;
 /// midpoint (the branch the element lies on, even next to a place where the source crosses itself), the parameter
 /// of `b`'s projection exceeds `a`'s. `None` if the shape has no curve
 /// feature or the projections coincide.
-fn runs_along(accuracy: f64, own: &[Own], a: Point, b: Point) -> Option<bool> {
+fn runs_along(accuracy: f64, own: &Owned, a: Point, b: Point) -> Option<bool> {
     let mid = a.midpoint(b);
     let t = |f: &FeatureGeom, p: Point| match *f {
         FeatureGeom::Point(_) => None,
@@ -231,22 +403,7 @@ fn runs_along(accuracy: f64, own: &[Own], a: Point, b: Point) -> Option<bool> {
         FeatureGeom::Cubic(c) => Some(c.nearest(p, accuracy)),
         FeatureGeom::Conic(c) => Some(c.approx_cubic().nearest(p, accuracy)),
     };
-    // The first nearest feature; a feature whose box is farther than the
-    // nearest so far (with a margin far above the rounding of a distance) can
-    // be neither nearer nor as near, and is not projected on.
-    let mut best: Option<(f64, &FeatureGeom)> = None;
-    for o in own {
-        if best.is_some_and(|(d, _)| o.box_distance_sq(mid) * (1.0 - 1e-9) > d) {
-            continue;
-        }
-        let Some(n) = t(&o.geom, mid) else {
-            continue;
-        };
-        if best.is_none_or(|(d, _)| n.distance_sq.total_cmp(&d).is_lt()) {
-            best = Some((n.distance_sq, &o.geom));
-        }
-    }
-    let (_, f) = best?;
+    let f = own.nearest(mid, t, |n| n.distance_sq)?;
     let (ta, tb) = (t(f, a)?.t, t(f, b)?.t);
     (ta != tb).then_some(ta < tb)
 }
@@ -254,7 +411,7 @@ fn runs_along(accuracy: f64, own: &[Own], a: Point, b: Point) -> Option<bool> {
 /// Whether the consecutive open chain `lines` runs against its source's
 /// direction: the majority of [`runs_along`] over the [`DIRECTION_VOTES`]
 /// elements nearest the chain's middle (no verdict: as it is).
-fn runs_backwards(accuracy: f64, mesh: &FemMesh, own: &[Own], lines: &[usize]) -> bool {
+fn runs_backwards(accuracy: f64, mesh: &FemMesh, own: &Owned, lines: &[usize]) -> bool {
     let mid = lines.len() / 2;
     let mut order: Vec<usize> = (0..lines.len()).collect();
     order.sort_by_key(|&k| k.abs_diff(mid));
@@ -309,4 +466,66 @@ pub(crate) fn add_boundary(mesh: &mut FemMesh) {
     mesh.line_group.extend(std::iter::repeat_n(group, n));
     mesh.line_kind
         .extend(std::iter::repeat_n(LineKind::Boundary, n));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kurbo::{CubicBez, Line};
+    use proptest::prelude::*;
+
+    fn features(pieces: &[(f64, f64, f64, f64, bool)]) -> Vec<Own> {
+        pieces
+            .iter()
+            .map(|&(x, y, dx, dy, cubic)| {
+                let (a, b) = (Point::new(x, y), Point::new(x + dx, y + dy));
+                Own::new(if cubic {
+                    FeatureGeom::Cubic(CubicBez::new(
+                        a,
+                        Point::new(x + dy, y - dx),
+                        Point::new(x + dx - dy, y + dy + dx),
+                        b,
+                    ))
+                } else {
+                    FeatureGeom::Line(Line::new(a, b))
+                })
+            })
+            .collect()
+    }
+
+    fn nearest_of(own: &Owned, p: Point) -> Option<usize> {
+        let t = |f: &FeatureGeom, q: Point| match *f {
+            FeatureGeom::Line(l) => Some(l.nearest(q, 1e-9)),
+            FeatureGeom::Cubic(c) => Some(c.nearest(q, 1e-9)),
+            _ => None,
+        };
+        let f = own.nearest(p, t, |n| n.distance_sq)?;
+        own.features.iter().position(|o| std::ptr::eq(&o.geom, f))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+        /// The grid finds what scanning every feature finds: the same
+        /// feature (the first of equal distances), for points inside and far
+        /// outside the features' extent, with duplicated features (ties).
+        #[test]
+        fn grid_nearest_is_the_scan_nearest(
+            pieces in proptest::collection::vec(
+                (0.0..100.0f64, 0.0..100.0f64, -5.0..5.0f64, -5.0..5.0f64, any::<bool>()),
+                65..300,
+            ),
+            dup in 0usize..65,
+            queries in proptest::collection::vec((-300.0..400.0f64, -300.0..400.0f64), 1..40),
+        ) {
+            let mut pieces = pieces;
+            pieces.push(pieces[dup]);
+            let gridded = Owned::new(features(&pieces));
+            prop_assert!(gridded.grid.is_some());
+            let scanned = Owned { features: features(&pieces), grid: None };
+            for (x, y) in queries {
+                let p = Point::new(x, y);
+                prop_assert_eq!(nearest_of(&gridded, p), nearest_of(&scanned, p), "at {:?}", p);
+            }
+        }
+    }
 }
