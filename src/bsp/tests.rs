@@ -424,14 +424,27 @@ fn rounding_in_levels_matches_the_sequential_order() {
     assert!(levelled > 500, "only {levelled} rational vertices");
 }
 
+/// Points on both sides of the diagonal (0,0)-(4,4), close to it: the plain
+/// Delaunay triangulation's edges between them cross the diagonal dozens of
+/// times.
+fn beside_diagonal() -> Vec<Point> {
+    (1..20)
+        .flat_map(|k| {
+            let t = f64::from(k) * 0.2;
+            [p(t, t + 0.05), p(t + 0.05, t)]
+        })
+        .collect()
+}
+
 #[test]
 fn constrained_seed_cuts_only_what_crosses() {
-    // A hatch of long parallel lines: with a plain Delaunay seed each line
-    // crossed a row of thin triangles; as constraints of the seed, none is cut.
+    // A hatch of long parallel lines, each rising 20 spacings: with a plain
+    // Delaunay seed each line crossed a row of thin triangles; as constraints
+    // of the seed, none is cut.
     let segments: Vec<BspSegment> = (0..40)
         .map(|k| {
             let y = f64::from(k) * 0.05;
-            seg(p(0.0, y), p(10.0, y + 0.01), k)
+            seg(p(0.0, y), p(10.0, y + 1.0), k)
         })
         .collect();
     let input = BspInput {
@@ -439,39 +452,61 @@ fn constrained_seed_cuts_only_what_crosses() {
         ..BspInput::default()
     };
     let stats = run_both(&input);
-    assert_eq!((stats.seed_constraints, stats.seed_refused), (40, 0));
-    assert_eq!(stats.cut_triangles, 0);
-    assert_eq!(stats.rational_before_rounding, 0);
-    // Two crossing segments: the second is refused and cut, exactly.
-    let input = BspInput {
+    // (the first and last lines cross fewer than 8 edges: not offered)
+    assert!(stats.seed_constraints >= 36, "{stats:?}");
+    assert_eq!(stats.seed_refused, 0);
+    assert!(stats.cut_triangles <= 4, "{stats:?}");
+    // Two long crossing diagonals, each beside a row of points the plain
+    // triangulation joins across it: both are offered, spade takes one and
+    // refuses the other, which is cut, exactly.
+    let mut points = beside_diagonal();
+    points.extend(beside_diagonal().into_iter().map(|q| p(q.x, 4.0 - q.y)));
+    points.retain(|q| (q.x - 2.0).abs() > 0.3);
+    let stats = run_both(&BspInput {
+        segments: vec![
+            seg(p(0.0, 0.0), p(4.0, 4.0), 0),
+            seg(p(0.0, 4.0), p(4.0, 0.0), 1),
+        ],
+        points,
+        ..BspInput::default()
+    });
+    assert_eq!(
+        (stats.seed_constraints, stats.seed_refused),
+        (2, 1),
+        "{stats:?}"
+    );
+    assert!(stats.cut_triangles > 0 && stats.rational_before_rounding > 0);
+    // Short segments that cross a few Delaunay edges stay out of the seed
+    // (cut as before): a crossing pair.
+    let stats = run_both(&BspInput {
         segments: vec![
             seg(p(0.0, 0.0), p(3.0, 1.0), 0),
             seg(p(0.0, 1.0), p(1.0, -1.0), 1),
         ],
         ..BspInput::default()
-    };
-    let stats = run_both(&input);
-    assert_eq!((stats.seed_constraints, stats.seed_refused), (2, 1));
+    });
+    assert_eq!((stats.seed_constraints, stats.seed_refused), (0, 0));
     assert!(stats.cut_triangles > 0);
 }
 
 #[test]
 fn constrained_seed_makes_no_thin_triangle() {
-    // A segment endpoint one ulp off another segment's line, between its ends:
-    // as a constraint that segment would make a triangle of area ~1e-16 with it;
-    // it is refused, and the seed holds no triangle thinner than the plain
-    // Delaunay one would.
+    // A segment endpoint one ulp off the diagonal's line, between its ends:
+    // with the diagonal as a constraint the seed would hold a triangle of area
+    // ~1e-16; the diagonal is refused (cut instead), and no seed triangle is
+    // thinner than the plain Delaunay one would be.
     let up = |v: f64| f64::from_bits(v.to_bits() + 1);
     let input = BspInput {
         segments: vec![
             seg(p(0.0, 0.0), p(4.0, 4.0), 0),
-            seg(p(2.0, up(2.0)), p(2.0, 5.0), 1),
-            seg(p(0.5, 3.0), p(3.5, 3.5), 2),
+            seg(p(2.0, up(2.0)), p(1.0, 5.0), 1),
         ],
+        points: beside_diagonal(),
         ..BspInput::default()
     };
     let bbox = padded_box(&input);
     let s = super::seed::seed(&input, bbox).expect("seed");
+    assert!(s.constraints >= 1, "the diagonal is offered");
     assert!(s.refused >= 1, "refused {}", s.refused);
     for t in &s.triangles {
         let [a, b, c] = t.map(|i| s.points[i as usize].0);

@@ -115,6 +115,9 @@ struct Owned {
 
 /// Features beyond which a shape's features get a grid.
 const GRID_FROM: usize = 64;
+/// Cells beyond which a feature's box is not put in the cells but in the list
+/// every query scans.
+const LARGE_CELLS: usize = 64;
 
 impl Owned {
     fn new(features: Vec<Own>) -> Owned {
@@ -152,15 +155,20 @@ impl Owned {
         };
         match &self.grid {
             None => (0..self.features.len()).for_each(|i| consider(&mut best, i)),
-            Some(g) => g.rings(p, |cells, reach_sq| {
-                if best.is_some_and(|(d, _)| reach_sq * (1.0 - 1e-9) > d) {
-                    return false;
-                }
-                for &i in cells {
+            Some(g) => {
+                for &i in &g.large {
                     consider(&mut best, i as usize);
                 }
-                true
-            }),
+                g.rings(p, |cells, reach_sq| {
+                    if best.is_some_and(|(d, _)| reach_sq * (1.0 - 1e-9) > d) {
+                        return false;
+                    }
+                    for &i in cells {
+                        consider(&mut best, i as usize);
+                    }
+                    true
+                });
+            }
         }
         best.map(|(_, i)| &self.features[i].geom)
     }
@@ -174,6 +182,8 @@ struct NearGrid {
     nx: usize,
     ny: usize,
     cells: Vec<Vec<u32>>,
+    /// Features whose box covers more than [`LARGE_CELLS`] cells.
+    large: Vec<u32>,
 }
 
 impl NearGrid {
@@ -196,11 +206,26 @@ impl NearGrid {
             nx,
             ny,
             cells: vec![Vec::new(); nx * ny],
+            large: Vec::new(),
         };
         for (i, o) in features.iter().enumerate() {
             let i = u32::try_from(i).ok()?;
+            if let FeatureGeom::Line(l) = o.geom {
+                // The cells the segment passes through (a long diagonal line's
+                // box would cover a square of them).
+                for k in g.segment_cells(l.p0, l.p1) {
+                    g.cells[k].push(i);
+                }
+                continue;
+            }
             let (x0, y0) = g.index(o.bbox.origin());
             let (x1, y1) = g.index(Point::new(o.bbox.x1, o.bbox.y1));
+            // A curve whose box covers many cells would make every cell
+            // long: such features are looked at by every query.
+            if (x1 - x0 + 1) * (y1 - y0 + 1) > LARGE_CELLS {
+                g.large.push(i);
+                continue;
+            }
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     g.cells[y * g.nx + x].push(i);
@@ -208,6 +233,39 @@ impl NearGrid {
             }
         }
         Some(g)
+    }
+
+    /// The cells segment `a b` meets (a few more, for rounding), each once:
+    /// row by row, the columns between the segment's ends in that row.
+    fn segment_cells(&self, a: Point, b: Point) -> Vec<usize> {
+        let (lo, hi) = if a.y <= b.y { (a, b) } else { (b, a) };
+        let slack = 1e-7 * self.cell + 1e-12 * (lo.x.abs().max(hi.x.abs()));
+        let (_, j0) = self.index(lo);
+        let (_, j1) = self.index(hi);
+        let mut out = Vec::new();
+        for j in j0..=j1 {
+            // The segment's x range within row j's band (grown by the slack).
+            let band0 = self.origin.y + j as f64 * self.cell - slack;
+            let band1 = self.origin.y + (j + 1) as f64 * self.cell + slack;
+            let (ya, yb) = (band0.max(lo.y), band1.min(hi.y));
+            let at = |y: f64| {
+                if hi.y == lo.y {
+                    (lo.x, hi.x)
+                } else {
+                    let t = ((y - lo.y) / (hi.y - lo.y)).clamp(0.0, 1.0);
+                    let x = lo.x + t * (hi.x - lo.x);
+                    (x, x)
+                }
+            };
+            let (xa, xa2) = at(ya);
+            let (xb, xb2) = at(yb);
+            let xmin = xa.min(xa2).min(xb).min(xb2).max(lo.x.min(hi.x)) - slack;
+            let xmax = xa.max(xa2).max(xb).max(xb2).min(lo.x.max(hi.x)) + slack;
+            let (i0, _) = self.index(Point::new(xmin, lo.y));
+            let (i1, _) = self.index(Point::new(xmax, lo.y));
+            out.extend((i0..=i1).map(|i| j * self.nx + i));
+        }
+        out
     }
 
     /// The cell of `p`, clamped into the grid (monotone in each coordinate).
@@ -511,7 +569,7 @@ mod tests {
         #[test]
         fn grid_nearest_is_the_scan_nearest(
             pieces in proptest::collection::vec(
-                (0.0..100.0f64, 0.0..100.0f64, -5.0..5.0f64, -5.0..5.0f64, any::<bool>()),
+                (0.0..100.0f64, 0.0..100.0f64, -60.0..60.0f64, -60.0..60.0f64, any::<bool>()),
                 65..300,
             ),
             dup in 0usize..65,
