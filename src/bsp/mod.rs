@@ -1,11 +1,12 @@
 //! The exact BSP mesher: a valid triangle mesh of a box that contains every
 //! input segment exactly as a chain of its edges.
 //!
-//! It owns [`build`]: a constrained Delaunay triangulation (spade, `f64`) of
-//! every input point, segment endpoint and box corner, with every segment that
-//! crosses no earlier one as a constraint edge (`seed.rs`); each triangle is the
-//! root of a BSP cell cut by the supporting line of every input segment that
-//! still meets its interior, in rational arithmetic (`cut.rs`); each convex cell is
+//! It owns [`build`]: a Delaunay triangulation (spade, `f64`) of every input
+//! point, segment endpoint and box corner, constrained by the segments that
+//! cross many of its edges (a hatch's long lines) where they cross no other
+//! (`seed.rs`); each triangle is the root of a BSP cell cut by the supporting
+//! line of every input segment that still meets its interior, in rational
+//! arithmetic (`cut.rs`); each convex cell is
 //! triangulated by a fan from one of its corners when that gives no
 //! degenerate triangle, else from its exact barycentre; then edges are tagged
 //! with the segments they lie on, and vertices are rounded to `f64` wherever
@@ -139,7 +140,8 @@ pub struct BspStats {
     pub seed_vertices: usize,
     /// Triangles of the Delaunay triangulation.
     pub seed_triangles: usize,
-    /// Distinct segments offered to the seed as constraint edges.
+    /// Distinct segments offered to the seed as constraint edges (those that
+    /// cross more than 8 edges of the plain Delaunay triangulation).
     pub seed_constraints: usize,
     /// Of those, the ones the seed refused (they cross one already in): only
     /// these cut seed triangles.
