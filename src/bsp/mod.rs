@@ -141,7 +141,7 @@ pub struct BspStats {
     /// Triangles of the Delaunay triangulation.
     pub seed_triangles: usize,
     /// Distinct segments offered to the seed as constraint edges (those that
-    /// cross more than 8 edges of the plain Delaunay triangulation).
+    /// cross more than 32 edges of the plain Delaunay triangulation).
     pub seed_constraints: usize,
     /// Of those, the ones the seed refused (they cross one already in): only
     /// these cut seed triangles.
