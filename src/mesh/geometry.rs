@@ -14,6 +14,18 @@ impl TriMesh {
 }
 
 /// The distance from `p` to the segment `l` (to `l.p0` when `l` has zero length).
+/// Whether the triangle `[a, b, c]` is thin to rounding: `|2·area| ≤ rel · h²`,
+/// h² the sum of its bounding box's squared extents (scale-free: `mshcheck`'s
+/// degeneracy test has this form).
+pub(crate) fn is_sliver([a, b, c]: [Point; 3], rel: f64) -> bool {
+    let twice_area = (b - a).cross(c - a);
+    let ext = |v: [f64; 3]| {
+        v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x))
+    };
+    let h2 = ext([a.x, b.x, c.x]).powi(2) + ext([a.y, b.y, c.y]).powi(2);
+    twice_area.abs() <= rel * h2
+}
+
 pub(crate) fn point_segment_distance(p: Point, l: Line) -> f64 {
     let d = l.p1 - l.p0;
     let len2 = d.hypot2();

@@ -22,7 +22,8 @@ mod topology;
 mod transaction;
 
 pub(crate) use geometry::{
-    angle_between, corner_angles, min_angle_deg, point_segment_distance, segment_distance,
+    angle_between, corner_angles, is_sliver, min_angle_deg, point_segment_distance,
+    segment_distance,
 };
 pub(crate) use ids::{FaceId, VertexId};
 pub(crate) use storage::{EdgeKey, FeatureOn, TriMesh, VertexTag};

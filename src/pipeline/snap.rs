@@ -10,6 +10,7 @@
 //! naming it.
 
 use crate::error::Error;
+use crate::mesh::is_sliver;
 use crate::mesh::{FaceId, TriMesh, VertexId};
 use crate::ops::{Context, try_collapse, try_round, try_smooth, try_split, try_swap};
 use crate::params::Stage;
@@ -36,16 +37,10 @@ fn num(x: f64) -> String {
 
 fn degenerate(p: [Point; 3], d: f64) -> bool {
     let (a, b, c) = (p[0], p[1], p[2]);
-    let twice_area = (b - a).cross(c - a);
-    let (xs, ys) = ([a.x, b.x, c.x], [a.y, b.y, c.y]);
-    let ext = |v: [f64; 3]| {
-        v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x))
-    };
-    let h2 = ext(xs).powi(2) + ext(ys).powi(2);
     let short = [(a, b), (b, c), (c, a)]
         .iter()
         .any(|(p, q)| (*p - *q).hypot() <= DUPLICATE_REL * d);
-    twice_area.abs() <= DEGENERATE_REL * h2 || short
+    is_sliver(p, DEGENERATE_REL) || short
 }
 
 fn bad_faces(mesh: &TriMesh, d: f64) -> Vec<FaceId> {

@@ -105,9 +105,9 @@ impl Own {
     }
 }
 
-/// A shape's features, with a grid of their boxes when there are many (one
-/// dashed stroke is one shape of 100 000 features: each open chain scanned
-/// them all, minutes on a dashed spiral).
+/// A shape's features, with a grid over them when there are many (one dashed
+/// stroke is one shape of 100 000 features: each open chain scanned them all,
+/// minutes on a dashed spiral).
 struct Owned {
     features: Vec<Own>,
     grid: Option<NearGrid>,
@@ -130,8 +130,8 @@ impl Owned {
         Owned { features, grid }
     }
 
-    /// The first (in drawing order) of the features nearest `p`, with the
-    /// squared distance, among those `t` projects on.
+    /// The first (in drawing order) of the features nearest `p` among those
+    /// `t` projects on (`dist_sq` reads the squared distance off a projection).
     fn nearest<T>(
         &self,
         p: Point,
@@ -177,8 +177,9 @@ impl Owned {
     }
 }
 
-/// A uniform grid over feature boxes: each cell lists the features whose box
-/// meets it, in drawing order.
+/// A uniform grid over a shape's features: each cell lists, in drawing order,
+/// the lines that pass through it and the curves whose box meets it; curves
+/// with a box over [`LARGE_CELLS`] cells are listed apart.
 struct NearGrid {
     origin: Point,
     cell: f64,
