@@ -32,7 +32,10 @@ to be kept apart: the paint model's default), and the memory:
 - stroked-soup N: the soup's straight segments (N of them), stroked at a
   width of 1 (they cross and overlap as in the fuzz findings' soups);
 - shapes N (sizes from --shape-sizes): N filled circles with a stroke of
-  another colour, on a square grid.
+  another colour, on a square grid;
+- stroked-circles N (sizes from --shape-sizes): N unfilled circles at random
+  places, radius 1 to 8, stroke width 0.6 (issue 41's "5 000 stroked
+  circles": they overlap and cross, and each stroke is an area).
 
 Each row gives wall and CPU time, the stages' times, triangles, and the peak
 resident memory the run reports (`peak_memory_mb`); each series ends with the
@@ -147,6 +150,19 @@ def shapes(n):
     return "".join(out)
 
 
+def stroked_circles(n, seed=1):
+    rnd = random.Random(seed)
+    out = [HEAD]
+    for _ in range(n):
+        cx, cy, r = rnd.uniform(20, 980), rnd.uniform(20, 980), rnd.uniform(1, 8)
+        out.append(
+            f'<circle cx="{cx:.4f}" cy="{cy:.4f}" r="{r:.4f}" fill="none" '
+            'stroke="#000" stroke-width="0.6"/>\n'
+        )
+    out.append("</svg>\n")
+    return "".join(out)
+
+
 def duplicates(copies=3000):
     blob = "M300 300C400 200 600 200 700 300C800 400 800 600 700 700C600 800 400 800 300 700Z"
     curve = "M100 900C300 800 700 950 900 850"
@@ -197,7 +213,8 @@ def main():
     ap.add_argument("--shape-sizes", default="100,300,1000,3000,10000")
     ap.add_argument(
         "--cases",
-        default="soup,zigzag,serpentine,duplicates,hatch,stroked-path,stroked-soup,shapes",
+        default="soup,zigzag,serpentine,duplicates,hatch,stroked-path,stroked-soup,shapes,"
+        "stroked-circles",
     )
     ap.add_argument("--keep", help="directory to keep the inputs and meshes in")
     ap.add_argument("--time-limit", default="600")
@@ -215,6 +232,7 @@ def main():
         "stroked-path": stroked_path,
         "stroked-soup": stroked_soup,
         "shapes": shapes,
+        "stroked-circles": stroked_circles,
     }
     stages = ["load", "features", "bsp", "optimize", "curve", "regions"]
     print(
@@ -225,7 +243,7 @@ def main():
     print("|---|---|---|---|---|---|" + "---|" * len(stages) + "---|---|---|")
     series = {}
     todo = [
-        (c, n) for c in cases if c in gens for n in (shape_sizes if c == "shapes" else sizes)
+        (c, n) for c in cases if c in gens for n in (shape_sizes if c in ("shapes", "stroked-circles") else sizes)
     ]
     if "duplicates" in cases:
         todo.append(("duplicates", 3000))

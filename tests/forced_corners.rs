@@ -94,7 +94,7 @@ fn a_thin_wedge_between_two_features_is_forced_and_left_out_of_the_unforced_mini
 /// A whisker (an open centre line) ending 0.01 from a square's edge in a
 /// 100-unit drawing, with μ small enough (`--mu 1e-5`) that both stay primary:
 /// the end forces small elements under it, not small angles (see
-/// `pipeline::forced`), so nothing is forced and the mesh's angles there are
+/// `optimize::forced`), so nothing is forced and the mesh's angles there are
 /// good.
 const WHISKER: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
   <rect id="square" x="10" y="10" width="80" height="80" fill="#3366cc"/>
@@ -163,4 +163,25 @@ fn the_baseline_reports_no_classification() {
         "{}",
         stats["quality"]
     );
+}
+
+/// The folder emoji (data/svg) has thin tips where two outlines meet at an
+/// angle the ε-envelope lets the mesh open: its worst unforced corner was
+/// 9.05° between two feature edges while the worst-element phase counted a
+/// corner between feature edges as the drawing's. The phase now asks the
+/// report's own rule (`optimize::forced`), so no unforced corner is left below
+/// α, linear or curved.
+#[test]
+fn an_unforced_corner_between_two_features_is_not_left_below_alpha() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/folder-emoji.svg"),
+    )
+    .unwrap();
+    for (name, args) in [("folder", &[][..]), ("folder-linear", &["--linear"][..])] {
+        let (stats, _) = mesh(name, &text, args);
+        let u = &stats["quality"]["unforced"];
+        assert!(f(&u["min_angle_deg"]) >= 10.0, "{name}: {u}");
+        assert_eq!(f(&u["below_alpha"]), 0.0, "{name}: {u}");
+        assert_eq!(f(&stats["optimize"]["bad_corners_left"]), 0.0, "{name}");
+    }
 }

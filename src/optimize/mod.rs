@@ -6,6 +6,7 @@
 //! uniform target. Its tuning constants, with their provenance, head
 //! `schedule/mod.rs`. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
 
+pub(crate) mod forced;
 pub(crate) mod schedule;
 
 #[cfg(test)]

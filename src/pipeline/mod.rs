@@ -18,6 +18,7 @@ use crate::features::{self, FeatureCounts, FeatureSet, PrimaryChains};
 use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
+use crate::optimize::forced::ForcedCorners;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MshOptions};
 use crate::params::{Length, Mesher, Params, Resolved, Stage};
@@ -27,7 +28,6 @@ use crate::regions::{RegionOptions, RegionReport};
 use crate::sizing::{FieldInput, SizeField, SizingReport};
 use crate::svg::{self, Drawing, FeatureGeom, PaintOptions};
 use crate::{Error, Result};
-use forced::ForcedCorners;
 use kurbo::Rect;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -399,7 +399,7 @@ fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 /// The stages of [`mesh_within`], on the current thread pool; with the size
 /// field they met (the CDT baseline's: `l` everywhere) and each delivered
 /// triangle's mask of forced corners (empty for the CDT baseline; see
-/// [`forced`]).
+/// [`crate::optimize::forced`]).
 fn mesh_stages(
     drawing: &Drawing,
     params: &Params,
@@ -952,7 +952,6 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
 }
 
 mod density;
-mod forced;
 mod snap;
 #[cfg(test)]
 mod tests;

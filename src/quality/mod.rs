@@ -66,7 +66,7 @@ pub struct Unforced {
     /// Forced corners.
     pub forced_corners: usize,
     /// Of those, forced by a wedge between features meeting below α (the one
-    /// rule: see `pipeline::forced`).
+    /// rule: see `optimize::forced`).
     pub forced_by_angle: usize,
     /// All corners (three per triangle).
     pub corners: usize,

@@ -95,65 +95,10 @@ impl ForcedCorners {
         // (a) wedges between features.
         let mut faces = Vec::new();
         for (&v, edges) in &star {
-            if edges.len() < 2 {
+            let Some(sectors) = Sectors::at(mesh, ctx, v, edges, alpha, &mut near) else {
                 continue;
-            }
+            };
             let pv = mesh.position(v);
-            // (chord angle, input direction angle, the input near v, slack)
-            // per feature edge, by chord angle. The slack is how far the
-            // ε-envelope lets a secondary edge turn from its polyline:
-            // asin(2ε / |e|) (each end may be ε off the input).
-            let eps = ctx.envelope.eps();
-            let mut dirs: Vec<(f64, Option<f64>, Vec<Line>, f64)> = edges
-                .iter()
-                .map(|&(w, tag)| {
-                    let chord = mesh.position(w) - pv;
-                    let input = input_direction(mesh, ctx, v, w, &tag, &mut near);
-                    let slack = match tag {
-                        FeatureOn::Primary { .. } => 0.0,
-                        FeatureOn::Secondary { .. } => (2.0 * eps / chord.hypot()).min(1.0).asin(),
-                    };
-                    (chord.atan2(), input.map(Vec2::atan2), near.clone(), slack)
-                })
-                .collect();
-            dirs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let n = dirs.len();
-            // Sector i runs counter-clockwise from feature edge i to i + 1.
-            let forced: Vec<bool> = (0..n)
-                .map(|i| {
-                    let (c0, d0, ref near0, s0) = dirs[i];
-                    let (c1, d1, ref near1, s1) = dirs[(i + 1) % n];
-                    let (Some(d0), Some(d1)) = (d0, d1) else {
-                        return false;
-                    };
-                    // The two features must meet near v in the input (touch or
-                    // cross): two polylines that merely run side by side within
-                    // ε of v form no wedge.
-                    let meet = near0.iter().any(|a| {
-                        near1
-                            .iter()
-                            .any(|b| segment_distance(*a, *b) <= ctx.on_curve_abs)
-                    });
-                    if !meet {
-                        return false;
-                    }
-                    let mesh_angle = ccw(c0, c1);
-                    let mut input = ccw(d0, d1);
-                    // The input directions are the chords' up to a small turn: an
-                    // input angle a half turn beyond the mesh's has wrapped (the
-                    // features touch or cross over at v: 0), one a half turn short
-                    // of it is the outside of a wedge (not forced).
-                    if input - mesh_angle > PI {
-                        input = 0.0;
-                    } else if mesh_angle - input > PI {
-                        input = TAU;
-                    }
-                    input + s0 + s1 < alpha
-                })
-                .collect();
-            if !forced.contains(&true) {
-                continue;
-            }
             mesh.incident_faces_into(v, &mut faces);
             for &f in &faces {
                 let t = mesh.face(f);
@@ -161,13 +106,7 @@ impl ForcedCorners {
                     continue;
                 };
                 let (pn, pp) = (mesh.position(t[(k + 1) % 3]), mesh.position(t[(k + 2) % 3]));
-                let (a0, a1) = ((pn - pv).atan2(), (pp - pv).atan2());
-                let mid = a0 + 0.5 * ccw(a0, a1);
-                let sector = (0..n).find(|&i| {
-                    let (c0, c1) = (dirs[i].0, dirs[(i + 1) % n].0);
-                    ccw(c0, mid) < ccw(c0, c1) || n == 1
-                });
-                if sector.is_some_and(|i| forced[i]) {
+                if sectors.holds_forced(pv, pn, pp) {
                     *out.corners.entry(corner_key(pv, pn, pp)).or_default() |= BY_ANGLE;
                 }
             }
@@ -197,6 +136,125 @@ impl ForcedCorners {
             })
             .collect()
     }
+}
+
+/// The sectors of a vertex between its feature edges, with the wedge rule (a)
+/// decided for each.
+struct Sectors {
+    /// The feature edges' chord angles, sorted; sector `i` runs
+    /// counter-clockwise from chord `i` to chord `i + 1`.
+    chords: Vec<f64>,
+    /// By sector: whether it is a forced wedge.
+    forced: Vec<bool>,
+}
+
+impl Sectors {
+    /// The sectors at `v`, whose feature edges are `edges` (neighbour, its
+    /// first tag); `None` when fewer than two or none is forced.
+    fn at(
+        mesh: &TriMesh,
+        ctx: &Context,
+        v: VertexId,
+        edges: &[(VertexId, FeatureOn)],
+        alpha: f64,
+        near: &mut Vec<Line>,
+    ) -> Option<Sectors> {
+        if edges.len() < 2 {
+            return None;
+        }
+        let pv = mesh.position(v);
+        // (chord angle, input direction angle, the input near v, slack)
+        // per feature edge, by chord angle. The slack is how far the
+        // ε-envelope lets a secondary edge turn from its polyline:
+        // asin(2ε / |e|) (each end may be ε off the input).
+        let eps = ctx.envelope.eps();
+        let mut dirs: Vec<(f64, Option<f64>, Vec<Line>, f64)> = edges
+            .iter()
+            .map(|&(w, tag)| {
+                let chord = mesh.position(w) - pv;
+                let input = input_direction(mesh, ctx, v, w, &tag, near);
+                let slack = match tag {
+                    FeatureOn::Primary { .. } => 0.0,
+                    FeatureOn::Secondary { .. } => (2.0 * eps / chord.hypot()).min(1.0).asin(),
+                };
+                (chord.atan2(), input.map(Vec2::atan2), near.clone(), slack)
+            })
+            .collect();
+        dirs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let n = dirs.len();
+        let forced: Vec<bool> = (0..n)
+            .map(|i| {
+                let (c0, d0, ref near0, s0) = dirs[i];
+                let (c1, d1, ref near1, s1) = dirs[(i + 1) % n];
+                let (Some(d0), Some(d1)) = (d0, d1) else {
+                    return false;
+                };
+                // The two features must meet near v in the input (touch or
+                // cross): two polylines that merely run side by side within
+                // ε of v form no wedge.
+                let meet = near0.iter().any(|a| {
+                    near1
+                        .iter()
+                        .any(|b| segment_distance(*a, *b) <= ctx.on_curve_abs)
+                });
+                if !meet {
+                    return false;
+                }
+                let mesh_angle = ccw(c0, c1);
+                let mut input = ccw(d0, d1);
+                // The input directions are the chords' up to a small turn: an
+                // input angle a half turn beyond the mesh's has wrapped (the
+                // features touch or cross over at v: 0), one a half turn short
+                // of it is the outside of a wedge (not forced).
+                if input - mesh_angle > PI {
+                    input = 0.0;
+                } else if mesh_angle - input > PI {
+                    input = TAU;
+                }
+                input + s0 + s1 < alpha
+            })
+            .collect();
+        forced.contains(&true).then(|| Sectors {
+            chords: dirs.iter().map(|d| d.0).collect(),
+            forced,
+        })
+    }
+
+    /// Whether the corner at `pv` from `pn` counter-clockwise to `pp` lies in a
+    /// forced sector (by its bisector).
+    fn holds_forced(&self, pv: Point, pn: Point, pp: Point) -> bool {
+        let n = self.chords.len();
+        let (a0, a1) = ((pn - pv).atan2(), (pp - pv).atan2());
+        let mid = a0 + 0.5 * ccw(a0, a1);
+        let sector = (0..n).find(|&i| {
+            let (c0, c1) = (self.chords[i], self.chords[(i + 1) % n]);
+            ccw(c0, mid) < ccw(c0, c1) || n == 1
+        });
+        sector.is_some_and(|i| self.forced[i])
+    }
+}
+
+/// Whether the corner of `mesh` at `v` from `next` counter-clockwise to `prev`
+/// is forced by rule (a) (see the module doc): what
+/// [`ForcedCorners::classify`] decides for it, for one corner of the mesh as it
+/// is (the optimizer's worst-element phase asks while it changes the mesh).
+pub(crate) fn corner_forced(
+    mesh: &TriMesh,
+    ctx: &Context,
+    v: VertexId,
+    next: VertexId,
+    prev: VertexId,
+    alpha: f64,
+) -> bool {
+    let ring = crate::mesh::ScratchRing::of(mesh, v);
+    let edges: Vec<(VertexId, FeatureOn)> = ring
+        .neighbours
+        .iter()
+        .filter_map(|&w| mesh.edge_tags(v, w).first().map(|&t| (w, t)))
+        .collect();
+    let mut near = Vec::new();
+    Sectors::at(mesh, ctx, v, &edges, alpha, &mut near)
+        .is_some_and(|s| s.holds_forced(mesh.position(v), mesh.position(next), mesh.position(prev)))
 }
 
 /// The direction of the input feature `tag` at `v`, the way the mesh edge
