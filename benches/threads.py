@@ -13,8 +13,13 @@ comparable. Python 3 standard library only.
         [--files a.svg,b.svg] BIN [BIN ...]
 
 The default drawings are the three slowest of the dev set (issue 20's list).
-Prints a line per drawing: each build's best t1, t2 and t1/t2.
+Prints a line per drawing: each build's best t1, t2 and t1/t2, then each
+build's median t1/t2 over the drawings and, per stage (`--stats` `times` of
+the best runs, summed over the drawings), t1, t2 and t1/t2, so the part that
+stays sequential is visible (issue 41, point 3).
 """
+
+import json
 
 import argparse
 import filecmp
@@ -32,18 +37,22 @@ SLOWEST = [
 
 
 def run(binary, svg, out, threads):
-    """Wall seconds of one run; exits on a failed run."""
+    """Wall seconds of one run and its stages' seconds; exits on a failed run."""
     start = time.perf_counter()
     done = subprocess.run(
-        [binary, svg, "-o", out, "--threads", str(threads)],
-        stdout=subprocess.DEVNULL,
+        [binary, svg, "-o", out, "--threads", str(threads), "--stats", "-q"],
+        stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
     wall = time.perf_counter() - start
     if done.returncode != 0:
         sys.exit(f"{binary} {svg} --threads {threads}: exit {done.returncode}: {done.stderr.strip()}")
-    return wall
+    try:
+        stages = json.loads(done.stdout).get("times", {})
+    except json.JSONDecodeError:
+        stages = {}
+    return wall, stages
 
 
 def main():
@@ -60,17 +69,23 @@ def main():
     args = ap.parse_args()
     files = args.files.split(",") if args.files else SLOWEST
     differ = False
+    ratios = {b: [] for b in args.bins}
+    # (build, threads) -> stage -> seconds of the best runs, summed over drawings
+    stage_sum = {(b, t): {} for b in args.bins for t in (1, 2)}
     with tempfile.TemporaryDirectory() as tmp:
         for rel in files:
             svg = os.path.join(args.svg_dir, rel)
             best = {}
+            best_stages = {}
             for _ in range(args.reps):
                 for b in args.bins:
                     outs = {}
                     for t in (1, 2):
                         outs[t] = os.path.join(tmp, f"t{t}.msh")
-                        wall = run(b, svg, outs[t], t)
-                        best[(b, t)] = min(best.get((b, t), wall), wall)
+                        wall, stages = run(b, svg, outs[t], t)
+                        if wall < best.get((b, t), float("inf")):
+                            best[(b, t)] = wall
+                            best_stages[(b, t)] = stages
                     if not filecmp.cmp(outs[1], outs[2], shallow=False):
                         print(f"OUTPUT DIFFERS: {b} {rel}", file=sys.stderr)
                         differ = True
@@ -80,6 +95,21 @@ def main():
                 for b in args.bins
             ]
             print(f"{os.path.basename(rel)[:30]:30} | " + " | ".join(cells), flush=True)
+            for b in args.bins:
+                ratios[b].append(best[(b, 1)] / best[(b, 2)])
+                for t in (1, 2):
+                    for k, v in best_stages[(b, t)].items():
+                        stage_sum[(b, t)][k] = stage_sum[(b, t)].get(k, 0.0) + v
+    for b in args.bins:
+        r = sorted(ratios[b])
+        n = len(r)
+        median = r[n // 2] if n % 2 else 0.5 * (r[n // 2 - 1] + r[n // 2])
+        print(f"{os.path.basename(b)}: median t1/t2 {median:.3f} over {n} drawings")
+        one, two = stage_sum[(b, 1)], stage_sum[(b, 2)]
+        for k in sorted(one, key=lambda k: -one[k]):
+            if k == "total" or one[k] < 0.05 or two.get(k, 0.0) <= 0.0:
+                continue
+            print(f"  {k:10} t1 {one[k]:7.2f} s  t2 {two[k]:7.2f} s  x{one[k] / two[k]:.2f}")
     sys.exit(1 if differ else 0)
 
 
