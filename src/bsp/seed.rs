@@ -14,8 +14,7 @@
 //! the cut makes conform all the same.
 
 use super::BspInput;
-use crate::mesh::VertexTag;
-use crate::mesh::is_sliver;
+use crate::mesh::{VertexTag, is_sliver};
 use crate::{Error, Result};
 use kurbo::{Point, Rect};
 use spade::{

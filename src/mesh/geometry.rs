@@ -13,19 +13,19 @@ impl TriMesh {
     }
 }
 
-/// The distance from `p` to the segment `l` (to `l.p0` when `l` has zero length).
 /// Whether the triangle `[a, b, c]` is thin to rounding: `|2·area| ≤ rel · h²`,
 /// h² the sum of its bounding box's squared extents (scale-free: `mshcheck`'s
-/// degeneracy test has this form).
+/// degeneracy test has this form). A triangle with a NaN coordinate is thin.
 pub(crate) fn is_sliver([a, b, c]: [Point; 3], rel: f64) -> bool {
     let twice_area = (b - a).cross(c - a);
     let ext = |v: [f64; 3]| {
         v.iter().fold(f64::MIN, |m, x| m.max(*x)) - v.iter().fold(f64::MAX, |m, x| m.min(*x))
     };
     let h2 = ext([a.x, b.x, c.x]).powi(2) + ext([a.y, b.y, c.y]).powi(2);
-    twice_area.abs() <= rel * h2
+    twice_area.abs().partial_cmp(&(rel * h2)) != Some(std::cmp::Ordering::Greater)
 }
 
+/// The distance from `p` to the segment `l` (to `l.p0` when `l` has zero length).
 pub(crate) fn point_segment_distance(p: Point, l: Line) -> f64 {
     let d = l.p1 - l.p0;
     let len2 = d.hypot2();
@@ -95,6 +95,22 @@ pub(crate) fn segment_distance(a: Line, b: Line) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slivers_are_scale_free_and_nan_is_thin() {
+        let p = |x: f64, y: f64| Point::new(x, y);
+        for s in [1e-9, 1.0, 1e9] {
+            assert!(!is_sliver([p(0.0, 0.0), p(s, 0.0), p(0.0, s)], 1e-10));
+            assert!(is_sliver(
+                [p(0.0, 0.0), p(s, 0.0), p(2.0 * s, 1e-12 * s)],
+                1e-10
+            ));
+        }
+        assert!(is_sliver(
+            [p(0.0, 0.0), p(1.0, 0.0), p(f64::NAN, 1.0)],
+            1e-10
+        ));
+    }
 
     #[test]
     fn distances_and_angles() {

@@ -10,8 +10,7 @@
 //! naming it.
 
 use crate::error::Error;
-use crate::mesh::is_sliver;
-use crate::mesh::{FaceId, TriMesh, VertexId};
+use crate::mesh::{FaceId, TriMesh, VertexId, is_sliver};
 use crate::ops::{Context, try_collapse, try_round, try_smooth, try_split, try_swap};
 use crate::params::Stage;
 use kurbo::Point;
