@@ -19,11 +19,11 @@ the best runs, summed over the drawings), t1, t2 and t1/t2, so the part that
 stays sequential is visible (issue 41, point 3).
 """
 
-import json
-
 import argparse
 import filecmp
+import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -101,10 +101,8 @@ def main():
                     for k, v in best_stages[(b, t)].items():
                         stage_sum[(b, t)][k] = stage_sum[(b, t)].get(k, 0.0) + v
     for b in args.bins:
-        r = sorted(ratios[b])
-        n = len(r)
-        median = r[n // 2] if n % 2 else 0.5 * (r[n // 2 - 1] + r[n // 2])
-        print(f"{os.path.basename(b)}: median t1/t2 {median:.3f} over {n} drawings")
+        median = statistics.median(ratios[b])
+        print(f"{os.path.basename(b)}: median t1/t2 {median:.3f} over {len(ratios[b])} drawings")
         one, two = stage_sum[(b, 1)], stage_sum[(b, 2)]
         for k in sorted(one, key=lambda k: -one[k]):
             if k == "total" or one[k] < 0.05 or two.get(k, 0.0) <= 0.0:
