@@ -36,6 +36,9 @@ pub(crate) enum Defect {
     DanglingEdgeTag(EdgeKey),
     /// An edge tag with an empty list or a non-finite primary parameter.
     BadEdgeTag(EdgeKey),
+    /// The vertex's count of tagged edges is not the number of its edges
+    /// with tags.
+    BadTagCount(VertexId),
 }
 
 impl TriMesh {
@@ -119,6 +122,19 @@ impl TriMesh {
             }
             if self.exact(v).is_some_and(|p| p.is_f64()) {
                 out.push(Defect::NeedlessRational(v));
+            }
+        }
+        let mut tagged = vec![0u32; self.vertex_capacity()];
+        for (key, _) in self.tagged_edges() {
+            for x in [key.lo, key.hi] {
+                if let Some(n) = tagged.get_mut(x.index()) {
+                    *n += 1;
+                }
+            }
+        }
+        for v in self.vertices() {
+            if self.tagged_count(v) != tagged[v.index()] {
+                out.push(Defect::BadTagCount(v));
             }
         }
         for (key, tags) in self.tagged_edges() {

@@ -97,6 +97,10 @@ pub(super) struct VertexData {
     pub(super) tag: VertexTag,
     /// Some live incident face, if any.
     pub(super) face: Option<FaceId>,
+    /// How many edges at the vertex have tags (entries of
+    /// [`TriMesh::edge_tags`] with the vertex as an end): at 0 a tag lookup
+    /// at the vertex needs no hash lookup.
+    pub(super) tagged: u32,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -140,6 +144,7 @@ impl TriMesh {
             exact: None,
             tag,
             face: None,
+            tagged: 0,
         })
     }
 
@@ -165,6 +170,7 @@ impl TriMesh {
             exact: (!exact).then(|| Box::new(p)),
             tag,
             face: None,
+            tagged: 0,
         })
     }
 
@@ -431,26 +437,69 @@ impl TriMesh {
 
     /// The features the edge `a b` lies on (empty when untagged).
     pub(crate) fn edge_tags(&self, a: VertexId, b: VertexId) -> &[FeatureOn] {
+        if !(self.may_have_tagged_edges(a) && self.may_have_tagged_edges(b)) {
+            return &[];
+        }
         self.edge_tags
             .get(&EdgeKey::new(a, b))
             .map_or(&[][..], Vec::as_slice)
     }
 
+    /// Whether some edge at `v` may have tags: `false` only for a live vertex
+    /// none of whose edges has any.
+    pub(crate) fn may_have_tagged_edges(&self, v: VertexId) -> bool {
+        match self.vertices.get(v.index()) {
+            Some(Some(d)) => d.tagged > 0,
+            _ => true,
+        }
+    }
+
+    /// Count one tagged edge more (`up`) or less at `v`, if it is live.
+    fn count_tagged(&mut self, v: VertexId, up: bool) {
+        if let Some(Some(d)) = self.vertices.get_mut(v.index()) {
+            if up {
+                d.tagged += 1;
+            } else {
+                d.tagged = d.tagged.saturating_sub(1);
+            }
+        }
+    }
+
     /// Record that the edge `a b` lies on a feature (no duplicate entries).
     /// For a primary, `t_a` / `t_b` are the parameters at `a` / `b`.
     pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
+        use std::collections::hash_map::Entry;
         let tag = tag.keyed(a, b);
-        let list = self.edge_tags.entry(EdgeKey::new(a, b)).or_default();
-        if !list.contains(&tag) {
-            list.push(tag);
+        match self.edge_tags.entry(EdgeKey::new(a, b)) {
+            Entry::Occupied(mut list) => {
+                if !list.get().contains(&tag) {
+                    list.get_mut().push(tag);
+                }
+            }
+            Entry::Vacant(slot) => {
+                slot.insert(vec![tag]);
+                self.count_tagged(a, true);
+                self.count_tagged(b, true);
+            }
         }
     }
 
     /// Remove and return every tag of the edge `a b`.
     pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
-        self.edge_tags
-            .remove(&EdgeKey::new(a, b))
-            .unwrap_or_default()
+        match self.edge_tags.remove(&EdgeKey::new(a, b)) {
+            Some(list) => {
+                self.count_tagged(a, false);
+                self.count_tagged(b, false);
+                list
+            }
+            None => Vec::new(),
+        }
+    }
+
+    /// The number of tagged edges at `v` as stored (the check compares it
+    /// with the tags).
+    pub(super) fn tagged_count(&self, v: VertexId) -> u32 {
+        self.vdata(v).tagged
     }
 
     /// Every tagged edge with its tags.

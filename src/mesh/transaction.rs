@@ -226,12 +226,17 @@ impl<'a> Transaction<'a> {
     /// primary's `t` is given at `a`, then `b`), journaled.
     pub(crate) fn add_edge_tag(&mut self, a: VertexId, b: VertexId, tag: FeatureOn) {
         self.touch_tag(EdgeKey::new(a, b));
+        // (the ends' counts of tagged edges change with the tags)
+        self.touch_v(a);
+        self.touch_v(b);
         self.mesh.add_edge_tag(a, b, tag);
     }
 
     /// Remove and return every tag of the edge `a b`, journaled.
     pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
         self.touch_tag(EdgeKey::new(a, b));
+        self.touch_v(a);
+        self.touch_v(b);
         self.mesh.take_edge_tags(a, b)
     }
 

@@ -355,6 +355,14 @@ pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) 
     if tag.box_corner || tag.feature_point || tag.section_endpoint {
         return Role::Fixed;
     }
+    if !mesh.may_have_tagged_edges(v) {
+        // no feature at v: no tag to look up
+        return if ring.boundary {
+            Role::Boundary
+        } else {
+            Role::Free
+        };
+    }
     // The first two primary tags (a third makes the vertex fixed anyway).
     let mut primary = [(v, 0u32, 0.0f64, 0.0f64); 2];
     let mut n_primary = 0usize;
