@@ -19,7 +19,9 @@ use super::{
     max_energy_of, role, t_at,
 };
 use crate::exact::Orientation;
-use crate::mesh::{EdgeKey, FaceId, FeatureOn, Transaction, TriMesh, VertexId, VertexRing};
+use crate::mesh::{
+    EdgeKey, FaceId, FeatureOn, ScratchRing, Transaction, TriMesh, VertexId, VertexRing,
+};
 
 /// Everything a collapse of `v` into `u` needs, gathered from `&TriMesh`.
 #[derive(Clone, Debug)]
@@ -74,6 +76,38 @@ impl CollapsePlan {
         v: VertexId,
         ring_v: Option<&VertexRing>,
     ) -> Result<Self, (Reject, bool)> {
+        Self::new_noting_floor(mesh, ctx, u, v, ring_v, None).0
+    }
+
+    /// [`Self::new`], and whether the context's energy floor applied to its
+    /// energy rule (`v` has no feature: [`Role::Free`]); `false` when the
+    /// plan stopped before the rule. An energy refusal without the floor
+    /// (here or in [`Self::verdict`]) depends on positions alone: it stands
+    /// under any floor, where one with the floor stands under a lower floor
+    /// only. `ring_u`: a slot for `u`'s ring, filled when the plan reads
+    /// it (unless the caller had filled it).
+    pub(crate) fn new_noting_floor(
+        mesh: &TriMesh,
+        ctx: &Context,
+        u: VertexId,
+        v: VertexId,
+        ring_v: Option<&VertexRing>,
+        ring_u: Option<&mut Option<ScratchRing>>,
+    ) -> (Result<Self, (Reject, bool)>, bool) {
+        let mut floored = false;
+        let plan = Self::plan(mesh, ctx, u, v, (ring_v, ring_u), &mut floored);
+        (plan, floored)
+    }
+
+    /// [`Self::new_noting_floor`], the floor's use into `floored`.
+    fn plan(
+        mesh: &TriMesh,
+        ctx: &Context,
+        u: VertexId,
+        v: VertexId,
+        (ring_v, ring_u): (Option<&VertexRing>, Option<&mut Option<ScratchRing>>),
+        floored: &mut bool,
+    ) -> Result<Self, (Reject, bool)> {
         let eps = ctx.envelope.eps();
         if u == v || !mesh.is_vertex_alive(u) || !mesh.is_vertex_alive(v) {
             return Err((Reject::NotAnEdge, false));
@@ -101,11 +135,8 @@ impl CollapsePlan {
         // A vertex without features may go where its faces get as bad as the
         // context's floor; near features the plain rule keeps their
         // neighbourhood (and the secondary geometry) as it is.
-        let floor = if role_v == Role::Free {
-            ctx.energy_floor
-        } else {
-            0.0
-        };
+        *floored = role_v == Role::Free;
+        let floor = if *floored { ctx.energy_floor } else { 0.0 };
         // Linear mode: the energy rule needs v's ring and positions only (u
         // does not move), so it refuses here, before u's ring, the link
         // condition and the tags, what it would refuse anyway: most refused
@@ -133,7 +164,11 @@ impl CollapsePlan {
         } else {
             None
         };
-        let ru = crate::mesh::ScratchRing::of(mesh, u);
+        let mut own = None;
+        let ru: &VertexRing = ring_u
+            .unwrap_or(&mut own)
+            .get_or_insert_with(|| ScratchRing::of(mesh, u));
+        debug_assert!(ru.vertex == u, "the ring given is u's");
         // The faces on the edge, from v's ring (as `faces_on_edge` finds them).
         let edge_faces: Vec<FaceId> = rv
             .faces

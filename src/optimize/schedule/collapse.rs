@@ -24,8 +24,9 @@ enum CollapseDirection {
     /// (boxed: plans are moved through the window and the round).
     Plan(Box<PlannedCollapse>),
     /// The plan or its verdict refused it (as `try_collapse_planned` would,
-    /// with whether by the role rules).
-    Refused(Reject, bool),
+    /// with whether by the role rules, and whether the energy floor applied:
+    /// [`CollapsePlan::new_noting_floor`]).
+    Refused(Reject, bool, bool),
 }
 
 /// [`CollapseDirection::Plan`]'s plan and verdict.
@@ -187,9 +188,12 @@ impl Schedule<'_> {
             let mut applied_now = false;
             let mut tried = false;
             let mut by_length = false;
+            // The lowest energy floor under which a direction was refused by
+            // the energy rule with the floor applied (a free vertex).
+            let mut floor = f64::INFINITY;
             let ends = [(k.lo, k.hi), (k.hi, k.lo)];
             for ((u, v), direction) in ends.into_iter().zip(directions) {
-                let (out, by_role) = match direction {
+                let (out, by_role, floored) = match direction {
                     CollapseDirection::Remembered(reason) => {
                         tried = true;
                         self.stats.collapse.record(&Outcome::Rejected(reason));
@@ -202,13 +206,19 @@ impl Schedule<'_> {
                     CollapseDirection::Plan(planned) => {
                         tried = true;
                         let (plan, verdict) = *planned;
-                        try_collapse_planned(self.mesh, self.ctx, plan, verdict)
+                        let (out, by_role) =
+                            try_collapse_planned(self.mesh, self.ctx, plan, verdict);
+                        // (a refusal here, past the verdict, counts as floored)
+                        (out, by_role, true)
                     }
-                    CollapseDirection::Refused(r, by_role) => {
+                    CollapseDirection::Refused(r, by_role, floored) => {
                         tried = true;
-                        (Outcome::Rejected(r), by_role)
+                        (Outcome::Rejected(r), by_role, floored)
                     }
                 };
+                if matches!(out, Outcome::Rejected(Reject::Energy)) && floored {
+                    floor = floor.min(self.ctx.energy_floor);
+                }
                 self.touch(&out, true);
                 if let Outcome::Rejected(reason) = out
                     && by_role
@@ -227,8 +237,14 @@ impl Schedule<'_> {
             }
             if !applied_now {
                 let at = self.clock;
-                self.failed_collapse
-                    .insert(k, FailedCollapse { at, by_length });
+                self.failed_collapse.insert(
+                    k,
+                    FailedCollapse {
+                        at,
+                        by_length,
+                        floor,
+                    },
+                );
             }
             if applied_now {
                 applied += 1;
@@ -268,37 +284,72 @@ impl Schedule<'_> {
         k: EdgeKey,
         factor: f64,
     ) -> Option<[CollapseDirection; 2]> {
-        let mesh: &TriMesh = self.mesh;
         if !self.collapse_due(bits, k, factor) {
             return None;
         }
-        let direction = |u: VertexId, v: VertexId| {
+        Some(self.plan_both(k))
+    }
+
+    /// Tests: whether planning `k` now, its memo aside, refuses both
+    /// directions (`None`: the round would not try it: an end is dead or the
+    /// edge is not short).
+    #[cfg(test)]
+    pub(super) fn refused_on_replanning(&self, k: EdgeKey, factor: f64) -> Option<bool> {
+        let alive = self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi);
+        if !alive || self.mesh.distance(k.lo, k.hi) >= factor * self.edge_target(k) {
+            return None;
+        }
+        Some(
+            self.plan_both(k)
+                .iter()
+                .all(|d| !matches!(d, CollapseDirection::Plan(_))),
+        )
+    }
+
+    /// [`Self::plan_directions`] of an edge the round tries.
+    fn plan_both(&self, k: EdgeKey) -> [CollapseDirection; 2] {
+        let mesh: &TriMesh = self.mesh;
+        // The rings of both ends, each read once: `v`'s for its own
+        // direction, `u`'s for the link condition (the ring of `v` in the
+        // other direction).
+        let mut rings: [Option<crate::mesh::ScratchRing>; 2] = [None, None];
+        let mut direction = |u: VertexId, v: VertexId| {
             if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
                 && self.topo_stamp_of(v) <= at
             {
                 return CollapseDirection::Remembered(reason);
             }
-            let ring_v = crate::mesh::ScratchRing::of(mesh, v);
+            let [ring_lo, ring_hi] = &mut rings;
+            let (slot_v, slot_u) = if v == k.hi {
+                (ring_hi, ring_lo)
+            } else {
+                (ring_lo, ring_hi)
+            };
+            let ring_v: &crate::mesh::VertexRing =
+                slot_v.get_or_insert_with(|| crate::mesh::ScratchRing::of(mesh, v));
             if !lengths_kept(
                 mesh,
                 |a, b| self.pair_target(a, b),
                 self.opts.l,
                 self.stretch,
                 u,
-                &ring_v,
+                ring_v,
             ) {
                 return CollapseDirection::Length;
             }
-            let plan = CollapsePlan::new(mesh, self.ctx, u, v, Some(&ring_v));
+            let (plan, floored) =
+                CollapsePlan::new_noting_floor(mesh, self.ctx, u, v, Some(ring_v), Some(slot_u));
             let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
             // A refused plan is dropped here, in parallel, not on the
             // pipeline's thread (most plans are refused).
             match collapse_refusal(&plan, verdict) {
-                Some((r, by_role)) => CollapseDirection::Refused(r, by_role),
+                Some((r, by_role)) => CollapseDirection::Refused(r, by_role, floored),
                 None => CollapseDirection::Plan(Box::new((plan, verdict))),
             }
         };
-        Some([direction(k.lo, k.hi), direction(k.hi, k.lo)])
+        let first = direction(k.lo, k.hi);
+        let second = direction(k.hi, k.lo);
+        [first, second]
     }
 
     /// Whether the collapse round tries `k` (popped with `bits`) now: both

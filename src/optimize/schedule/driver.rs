@@ -89,9 +89,21 @@ pub(crate) fn optimize_with_field(
         return (s.stats().clone(), Vec::new());
     }
     s.coarsen();
+    tracing::debug!(
+        collapses_refused = s.stats.collapse.refused(),
+        "coarsening done"
+    );
     s.equalize();
     s.polish();
+    tracing::debug!(
+        collapses_refused = s.stats.collapse.refused(),
+        "polish done"
+    );
     s.minmax_polish();
+    tracing::debug!(
+        collapses_refused = s.stats.collapse.refused(),
+        "min-max polish done"
+    );
     s.enter(Phase::Main);
     s.stats.bad_corners_left = s.repair_angles();
     // the splits of the worst-element phase may leave rational vertices
@@ -243,6 +255,8 @@ impl Schedule<'_> {
                 max_energy = now.max_energy,
                 mean_energy = now.mean_energy,
                 faces = self.mesh.num_faces(),
+                collapses_refused = self.stats.collapse.refused(),
+                smooths_refused = self.stats.smooth.refused(),
                 "optimization pass"
             );
             // Refine the sizing field only when the operations stop paying off
@@ -277,8 +291,8 @@ impl Schedule<'_> {
             let b = self.base_of(v);
             self.set_target(v, b);
         }
-        self.failed_collapse.clear();
         self.enter(Phase::Coarsen);
+        self.keep_standing_refusals(COARSEN_FACTOR);
         self.collapse_pass(COARSEN_FACTOR);
     }
 
@@ -293,7 +307,7 @@ impl Schedule<'_> {
         // the rounds a refusal stands until its vertices move or their faces
         // change (the memos' stamps).
         self.failed_smooth.clear();
-        self.failed_collapse.clear();
+        self.keep_standing_refusals(EQUALIZE_COLLAPSE);
         for _ in 0..EQUALIZE_ROUNDS {
             if self.out_of_time() {
                 break;
@@ -301,12 +315,53 @@ impl Schedule<'_> {
             let relaxed = self.smooth_pass_with(Objective::Relax);
             let collapsed = self.collapse_pass(EQUALIZE_COLLAPSE);
             let swaps = self.swap_pass();
-            tracing::debug!(relaxed, collapsed, swaps, "equalize round");
+            tracing::debug!(
+                relaxed,
+                collapsed,
+                swaps,
+                collapses_refused = self.stats.collapse.refused(),
+                "equalize round"
+            );
             if relaxed + collapsed == 0 {
                 break;
             }
         }
         self.failed_smooth.clear();
+    }
+
+    /// Forget the refused collapses that the phase just entered (its
+    /// collapses shorter than `factor` times the target) may allow: its
+    /// sizes, stretch or energy floor differ. Keep the rest
+    /// ([`FailedCollapse::stands_under`]): re-planning them would refuse
+    /// them again (the tests re-plan every one kept and check).
+    pub(super) fn keep_standing_refusals(&mut self, factor: f64) {
+        let floor = self.ctx.energy_floor;
+        self.failed_collapse.retain(|_, f| f.stands_under(floor));
+        #[cfg(test)]
+        {
+            let kept: Vec<(crate::mesh::EdgeKey, u64)> = self
+                .failed_collapse
+                .iter()
+                .map(|(&k, f)| (k, f.at))
+                .collect();
+            for (k, at) in kept {
+                let unchanged = self.mesh.is_vertex_alive(k.lo)
+                    && self.mesh.is_vertex_alive(k.hi)
+                    && self.stamp_of(k.lo) <= at
+                    && self.stamp_of(k.hi) <= at;
+                if !unchanged {
+                    continue;
+                }
+                if let Some(refused) = self.refused_on_replanning(k, factor) {
+                    assert!(
+                        refused,
+                        "a refusal kept across phases is not refused: {k:?}"
+                    );
+                    self.standing_checked += 1;
+                }
+            }
+        }
+        let _ = factor;
     }
 
     /// Enter `phase`: its energy floor, its longest new edge and its
@@ -448,5 +503,37 @@ impl Schedule<'_> {
         self.stats.min_angle_deg = min_angle;
         self.stats.max_amips = max_e;
         self.stats
+    }
+}
+
+#[cfg(test)]
+mod standing_tests {
+    use super::*;
+    use crate::ops::EnergyRule;
+    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
+    use crate::optimize::schedule::test_options;
+
+    /// The collapses refused in the main passes and kept across the
+    /// coarsening's and the equalisation's change of rules are refused again
+    /// when planned under the new rules (`keep_standing_refusals` plans each
+    /// again in tests and asserts it); and there were such refusals to check.
+    #[test]
+    fn refusals_kept_across_phases_are_refused_when_planned_again() {
+        let meshes = (0..10)
+            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
+            .chain((0..5).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)));
+        let mut checked = 0;
+        for (mut mesh, mut ctx) in meshes {
+            let opts = test_options();
+            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
+            s.improve(&mut Vec::new());
+            s.coarsen();
+            s.equalize();
+            checked += s.standing_checked;
+        }
+        // (most refusals of these small meshes are the length rule's or at
+        // free vertices: 30 stand)
+        assert!(checked > 10, "{checked} kept refusals planned again");
     }
 }

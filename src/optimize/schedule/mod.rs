@@ -314,6 +314,10 @@ pub(crate) struct Schedule<'a> {
     /// Tests: the plans of edges queued again and staged that were popped.
     #[cfg(test)]
     staged_tally: usize,
+    /// Tests: the refusals kept across a phase change that were planned
+    /// again and found refused ([`Schedule::keep_standing_refusals`]).
+    #[cfg(test)]
+    standing_checked: usize,
 }
 
 /// A refused collapse in [`Schedule::failed_collapse`].
@@ -324,6 +328,21 @@ struct FailedCollapse {
     /// Whether the length rule (`keeps_lengths`, which reads the sizing
     /// field) refused a direction.
     by_length: bool,
+    /// The lowest energy floor ([`Context::energy_floor`](crate::ops::Context::energy_floor))
+    /// under which the energy rule refused a direction with the floor
+    /// applied (`+∞`: none did). The refusal stands under that floor or a
+    /// lower one; every other refusal but the length rule's reads only
+    /// positions, tags and faces, whatever the phase.
+    floor: f64,
+}
+
+impl FailedCollapse {
+    /// Whether the refusal stands in a phase whose rules are those of the
+    /// last one but for the sizes, the stretch and the energy floor, now
+    /// `floor`.
+    fn stands_under(&self, floor: f64) -> bool {
+        !self.by_length && floor <= self.floor
+    }
 }
 
 /// The entry of `v` in a per-vertex-slot array, grown with `fill` as needed.
@@ -388,6 +407,8 @@ impl<'a> Schedule<'a> {
             ahead_tally: (0, 0),
             #[cfg(test)]
             staged_tally: 0,
+            #[cfg(test)]
+            standing_checked: 0,
         };
         s.enter(Phase::Main);
         s

@@ -309,6 +309,8 @@ impl Schedule<'_> {
             swaps,
             smooths,
             faces = self.mesh.num_faces(),
+            collapses_refused = self.stats.collapse.refused(),
+            smooths_refused = self.stats.smooth.refused(),
             "worst-element round"
         );
     }

@@ -35,6 +35,11 @@ fn rejected_by_name<S: serde::Serializer>(
 }
 
 impl OpTally {
+    /// All refusals (the running totals of the debug log).
+    pub(crate) fn refused(&self) -> u64 {
+        self.rejected.iter().sum()
+    }
+
     /// Count `outcome`; returns whether it was applied.
     pub(crate) fn record(&mut self, outcome: &Outcome) -> bool {
         match outcome {
