@@ -68,6 +68,10 @@ impl FeatureOn {
     }
 }
 
+/// The features an edge lies on, inline for one (a lookup reads no other
+/// allocation; a second feature on an edge is rare).
+pub(crate) type TagList = smallvec::SmallVec<[FeatureOn; 1]>;
+
 /// An undirected edge, as its two vertices with `lo < hi`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub(crate) struct EdgeKey {
@@ -124,7 +128,7 @@ pub(crate) struct TriMesh {
     pub(super) faces: Vec<Option<FaceData>>,
     pub(super) free_vertices: Vec<VertexId>,
     pub(super) free_faces: Vec<FaceId>,
-    pub(super) edge_tags: FxHashMap<EdgeKey, Vec<FeatureOn>>,
+    pub(super) edge_tags: FxHashMap<EdgeKey, TagList>,
     pub(super) live_vertices: usize,
     pub(super) live_faces: usize,
 }
@@ -442,7 +446,7 @@ impl TriMesh {
         }
         self.edge_tags
             .get(&EdgeKey::new(a, b))
-            .map_or(&[][..], Vec::as_slice)
+            .map_or(&[][..], TagList::as_slice)
     }
 
     /// Whether some edge at `v` may have tags: `false` only for a live vertex
@@ -477,7 +481,7 @@ impl TriMesh {
                 }
             }
             Entry::Vacant(slot) => {
-                slot.insert(vec![tag]);
+                slot.insert(smallvec::smallvec![tag]);
                 self.count_tagged(a, true);
                 self.count_tagged(b, true);
             }
@@ -485,14 +489,14 @@ impl TriMesh {
     }
 
     /// Remove and return every tag of the edge `a b`.
-    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> TagList {
         match self.edge_tags.remove(&EdgeKey::new(a, b)) {
             Some(list) => {
                 self.count_tagged(a, false);
                 self.count_tagged(b, false);
                 list
             }
-            None => Vec::new(),
+            None => TagList::new(),
         }
     }
 

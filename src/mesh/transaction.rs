@@ -9,7 +9,7 @@
 //! changes only through a transaction.
 
 use super::ids::{FaceId, VertexId};
-use super::storage::{EdgeKey, FaceData, FeatureOn, TriMesh, VertexData, VertexTag};
+use super::storage::{EdgeKey, FaceData, FeatureOn, TagList, TriMesh, VertexData, VertexTag};
 use crate::exact::PointQ;
 use kurbo::Point;
 
@@ -28,7 +28,7 @@ enum FreeOp {
 struct Journal {
     old_vertices: Vec<(VertexId, Option<VertexData>)>,
     old_faces: Vec<(FaceId, Option<FaceData>)>,
-    old_tags: Vec<(EdgeKey, Option<Vec<FeatureOn>>)>,
+    old_tags: Vec<(EdgeKey, Option<TagList>)>,
     free_log: Vec<FreeOp>,
     /// Scratch of [`Transaction::replace_faces`]: the faces outside the region
     /// by their shared edge, and the new faces' unmatched edges.
@@ -233,7 +233,7 @@ impl<'a> Transaction<'a> {
     }
 
     /// Remove and return every tag of the edge `a b`, journaled.
-    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> Vec<FeatureOn> {
+    pub(crate) fn take_edge_tags(&mut self, a: VertexId, b: VertexId) -> TagList {
         self.touch_tag(EdgeKey::new(a, b));
         self.touch_v(a);
         self.touch_v(b);
