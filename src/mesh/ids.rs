@@ -2,7 +2,7 @@
 //!
 //! Each stores its slot index plus one, non-zero, so that an `Option` of an
 //! id takes four bytes: a face's three neighbours, `[Option<FaceId>; 3]`, take
-//! 12 bytes instead of 24, and a face slot 28 instead of 36 (the walks around
+//! 12 bytes instead of 24, and a face slot 24 instead of 36 (the walks around
 //! a vertex, the optimizer's hottest loop, read a face slot per step).
 
 use std::num::NonZeroU32;
@@ -80,5 +80,11 @@ mod tests {
         assert_eq!(FaceId::from_index(0).index(), 0);
         assert!(VertexId::from_index(2) < VertexId::from_index(3));
         assert_eq!(std::mem::size_of::<Option<FaceId>>(), 4);
+        // a face slot: three vertices and three neighbours, the `None` of a
+        // dead slot in a vertex id's niche
+        assert_eq!(
+            std::mem::size_of::<Option<super::super::storage::FaceData>>(),
+            24
+        );
     }
 }
