@@ -509,9 +509,7 @@ impl Schedule<'_> {
 #[cfg(test)]
 mod standing_tests {
     use super::*;
-    use crate::ops::EnergyRule;
-    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
-    use crate::optimize::schedule::test_options;
+    use crate::optimize::schedule::{test_meshes, test_options};
 
     /// The collapses refused in the main passes and kept across the
     /// coarsening's and the equalisation's change of rules are refused again
@@ -519,11 +517,8 @@ mod standing_tests {
     /// again in tests and asserts it); and there were such refusals to check.
     #[test]
     fn refusals_kept_across_phases_are_refused_when_planned_again() {
-        let meshes = (0..10)
-            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
-            .chain((0..5).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)));
         let mut checked = 0;
-        for (mut mesh, mut ctx) in meshes {
+        for (mut mesh, mut ctx) in test_meshes(10, 5) {
             let opts = test_options();
             let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);

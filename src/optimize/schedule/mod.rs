@@ -467,6 +467,18 @@ impl<'a> Schedule<'a> {
     }
 }
 
+/// The meshes of the schedule's whole-pass tests: `bsp` BSP meshes of random
+/// segments, then `delaunay` Delaunay meshes with a primary curve (seeds from
+/// 0), under the plain energy rule.
+#[cfg(test)]
+fn test_meshes(bsp: u64, delaunay: u64) -> impl Iterator<Item = (TriMesh, crate::ops::Context)> {
+    use crate::ops::EnergyRule;
+    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
+    (0..bsp)
+        .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
+        .chain((0..delaunay).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)))
+}
+
 /// The options of the schedule's whole-pass tests: `l` 0.1 on the unit box.
 #[cfg(test)]
 fn test_options() -> OptimizeOptions {

@@ -387,12 +387,10 @@ mod queue_tests {
 #[cfg(test)]
 mod plan_ahead_tests {
     use crate::mesh::TriMesh;
-    use crate::ops::EnergyRule;
-    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
     use crate::ops::{Context, Objective};
     use crate::optimize::schedule::driver::mesh_bounds;
     use crate::optimize::schedule::stats::measure;
-    use crate::optimize::schedule::{COARSEN_FACTOR, Schedule, test_options};
+    use crate::optimize::schedule::{COARSEN_FACTOR, Schedule, test_meshes, test_options};
     use crate::sizing::SizeField;
 
     /// The passes with their plans made ahead on two threads do exactly what
@@ -400,10 +398,7 @@ mod plan_ahead_tests {
     /// some found stale (else the check would be vacuous).
     #[test]
     fn planning_ahead_on_two_threads_changes_nothing() {
-        let meshes: Vec<_> = (0..3)
-            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
-            .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)))
-            .collect();
+        let meshes: Vec<_> = test_meshes(3, 2).collect();
         let opts = test_options();
         let run = |threads: usize, mesh: &TriMesh, ctx: &Context| {
             let pool = rayon::ThreadPoolBuilder::new()

@@ -230,21 +230,16 @@ fn swap_gain(mesh: &TriMesh, ctx: &Context, k: EdgeKey) -> Option<f64> {
 #[cfg(test)]
 mod swap_memo_tests {
     use super::*;
-    use crate::ops::EnergyRule;
-    use crate::ops::tests::{bsp_mesh, delaunay_mesh};
     use crate::optimize::schedule::driver::mesh_bounds;
-    use crate::optimize::schedule::test_options;
+    use crate::optimize::schedule::{test_meshes, test_options};
     use crate::sizing::SizeField;
 
     /// Between the passes of a schedule, the swap pass's memo (edges not
     /// evaluated again) yields exactly the candidates of a full evaluation.
     #[test]
     fn the_swap_memo_finds_what_a_full_scan_finds() {
-        let meshes = (0..3)
-            .map(|seed| bsp_mesh(seed, EnergyRule::NoWorseMax))
-            .chain((0..2).map(|seed| delaunay_mesh(seed, EnergyRule::NoWorseMax)));
         let (mut checked, mut skipped) = (0, 0);
-        for (i, (mut mesh, mut ctx)) in meshes.enumerate() {
+        for (i, (mut mesh, mut ctx)) in test_meshes(3, 2).enumerate() {
             let opts = test_options();
             let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
