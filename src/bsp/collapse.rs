@@ -236,7 +236,8 @@ mod tests {
     fn unroundable_vertex_on_a_chain_collapses_keeping_the_chain() {
         let (mut m, [u, v, w, l, r]) = one_ulp_gap();
         assert!(m.check().is_empty(), "{:?}", m.check());
-        super::super::fan::round_vertices(&mut m, 4);
+        super::super::fan::round_vertices(&mut m, 4, &crate::budget::Deadline::NONE)
+            .expect("no deadline");
         assert!(m.is_rational(v), "no f64 point fits between u and w");
         assert!(try_collapse(&mut m, v));
         assert!(!m.is_vertex_alive(v));

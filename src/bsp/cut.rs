@@ -316,15 +316,22 @@ pub(super) fn cut_all(
     let chunks: Vec<&[[u32; 3]]> = seed.triangles.chunks(CUT_CHUNK).collect();
     let mut next = chunks.first().map(|chunk| cut_chunk(chunk));
     for (c, chunk) in chunks.iter().enumerate() {
-        crate::error::check_deadline(&opts.deadline, Stage::Bsp)?;
         let cut = next
             .take()
             .expect("internal: each chunk is cut beside the one before it");
-        let (emitted, following) = rayon::join(
-            || emit_chunk(&mut mesh, &mut vmap, stats, opts, c, chunk, cut, &seed_ids),
-            || chunks.get(c + 1).map(|chunk| cut_chunk(chunk)),
-        );
-        emitted?;
+        let (emitted, following) = match crate::error::check_deadline(&opts.deadline, Stage::Bsp) {
+            Ok(()) => rayon::join(
+                || emit_chunk(&mut mesh, &mut vmap, stats, opts, c, chunk, cut, &seed_ids),
+                || chunks.get(c + 1).map(|chunk| cut_chunk(chunk)),
+            ),
+            Err(e) => (Err(e), None),
+        };
+        if let Err(e) = emitted {
+            // Millions of exact vertices take seconds to free: not on the
+            // way to the error.
+            crate::budget::dispose((mesh, vmap));
+            return Err(e);
+        }
         next = following;
     }
     mesh.link_all();

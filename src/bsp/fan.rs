@@ -1,6 +1,8 @@
 //! Triangulating convex cells, tagging segment edges, rounding vertices.
 
 use super::{BspInput, BspSegment, SegmentTag};
+use crate::budget::Deadline;
+use crate::error::check_deadline;
 use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
 use crate::stage::Stage;
@@ -152,11 +154,22 @@ fn cmp_coordinate(mesh: &TriMesh, along_x: bool, p: VertexId, q: VertexId) -> Or
     }
 }
 
+/// Segments walked (in parallel) between two checks of the deadline in
+/// [`tag_segments`], and rational vertices decided between two checks in
+/// [`round_vertices`]: a few milliseconds of work each on a large drawing.
+pub(super) const CHECK_EVERY: usize = 1 << 12;
+
 /// Walk every segment from `a` to `b` along mesh edges and tag them.
 ///
 /// # Errors
-/// [`Error::Meshing`] if a segment is not a chain of mesh edges (a bug).
-pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
+/// [`Error::Meshing`] if a segment is not a chain of mesh edges (a bug);
+/// the deadline's error when it is passed (checked every [`CHECK_EVERY`]
+/// segments).
+pub(super) fn tag_segments(
+    mesh: &mut TriMesh,
+    input: &BspInput,
+    deadline: &Deadline,
+) -> Result<()> {
     let by_pos: HashMap<(u64, u64), VertexId> = mesh
         .vertices()
         .filter(|&v| !mesh.is_rational(v) && mesh.vertex_tag(v).segment_endpoint)
@@ -253,8 +266,18 @@ pub(super) fn tag_segments(mesh: &mut TriMesh, input: &BspInput) -> Result<()> {
         }
         Ok(tags)
     };
-    let walks: Vec<_> = input.segments.par_iter().map(walk).collect();
-    for tags in walks {
+    // The walks of a chunk run in parallel; the chunks, and the tags within
+    // each, go on in segment order, so the tags are the same for any number
+    // of threads or chunk size.
+    let mut walks: Vec<Result<Vec<(VertexId, VertexId, FeatureOn)>>> = Vec::new();
+    for chunk in input.segments.chunks(CHECK_EVERY) {
+        check_deadline(deadline, Stage::Bsp)?;
+        walks.extend(chunk.par_iter().map(walk).collect::<Vec<_>>());
+    }
+    for (i, tags) in walks.into_iter().enumerate() {
+        if i % CHECK_EVERY == 0 {
+            check_deadline(deadline, Stage::Bsp)?;
+        }
         for (u, w, tag) in tags? {
             mesh.add_edge_tag(u, w, tag);
         }
@@ -314,7 +337,11 @@ pub(super) fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::
 /// earlier ones rounded. It runs in levels ([`rounding_levels`]) so that the
 /// vertices of a level are decided in parallel with exactly the outcome of
 /// the sequential order, for any number of threads.
-pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
+///
+/// # Errors
+/// The deadline's error when it is passed (checked every [`CHECK_EVERY`]
+/// vertices decided).
+pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32, deadline: &Deadline) -> Result<()> {
     for _ in 0..passes {
         let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
         for f in mesh.faces() {
@@ -326,19 +353,30 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
         }
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
+        let mut decided = 0usize;
         for level in rounding_levels(mesh, &rational, &star) {
-            let m: &TriMesh = mesh;
-            let decide = |&v: &VertexId| (v, rounded(m, v, &star[v.index()]));
-            let moves: Vec<(VertexId, Option<kurbo::Point>)> =
-                if level.len() >= PAR_ROUND_MIN && rayon::current_num_threads() > 1 {
-                    level.par_iter().map(decide).collect()
-                } else {
-                    level.iter().map(decide).collect()
-                };
-            for (v, to) in moves {
-                if let Some(to) = to {
-                    mesh.set_position(v, to);
-                    changed = true;
+            // A level's vertices share no face: deciding it a chunk at a time
+            // (each chunk's moves made before the next is decided) gives the
+            // same moves as deciding it at once.
+            for chunk in level.chunks(CHECK_EVERY) {
+                if decided >= CHECK_EVERY {
+                    check_deadline(deadline, Stage::Bsp)?;
+                    decided = 0;
+                }
+                decided += chunk.len();
+                let m: &TriMesh = mesh;
+                let decide = |&v: &VertexId| (v, rounded(m, v, &star[v.index()]));
+                let moves: Vec<(VertexId, Option<kurbo::Point>)> =
+                    if chunk.len() >= PAR_ROUND_MIN && rayon::current_num_threads() > 1 {
+                        chunk.par_iter().map(decide).collect()
+                    } else {
+                        chunk.iter().map(decide).collect()
+                    };
+                for (v, to) in moves {
+                    if let Some(to) = to {
+                        mesh.set_position(v, to);
+                        changed = true;
+                    }
                 }
             }
         }
@@ -346,6 +384,7 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32) {
             break;
         }
     }
+    Ok(())
 }
 
 /// The fewest vertices of a rounding level decided in parallel (fewer cost

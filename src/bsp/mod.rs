@@ -35,7 +35,9 @@ mod seed;
 
 use crate::Result;
 use crate::budget::Deadline;
+use crate::error::check_deadline;
 use crate::mesh::TriMesh;
+use crate::stage::Stage;
 use kurbo::{Point, Rect};
 use std::time::Instant;
 
@@ -173,6 +175,8 @@ pub struct BspStats {
     pub cut_seconds: f64,
     /// Seconds tagging edges and rounding.
     pub finish_seconds: f64,
+    /// Of those, seconds tagging edges.
+    pub tag_seconds: f64,
     /// Total seconds.
     pub seconds: f64,
 }
@@ -184,7 +188,9 @@ pub struct BspStats {
 /// outside `bbox`, or coordinates whose dynamic range no power-of-two scaling
 /// brings into the Delaunay step's range (about 2^-142 .. 2^201 after
 /// scaling); [`crate::Error::InvalidParams`] for an empty or non-finite box;
-/// [`crate::Error::Meshing`] when [`BspOptions::max_vertices`] is exceeded.
+/// [`crate::Error::Meshing`] when [`BspOptions::max_vertices`] is exceeded;
+/// the deadline's error when [`BspOptions::deadline`] passes (checked per
+/// chunk of seed triangles cut, of segments tagged, of vertices rounded).
 pub(crate) fn build(
     input: &BspInput,
     bbox: Rect,
@@ -201,25 +207,9 @@ pub(crate) fn build(
     let t1 = Instant::now();
     let mut mesh = cut::cut_all(input, &seed, opts, &mut stats)?;
     let t2 = Instant::now();
-    fan::tag_segments(&mut mesh, input)?;
-    stats.rational_before_rounding = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
-    if opts.round {
-        fan::round_vertices(&mut mesh, opts.round_passes);
-        // What no f64 point can hold is collapsed into a neighbour, which may
-        // free others to round; a few rounds at most.
-        for _ in 0..opts.round_passes {
-            let stuck: Vec<_> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
-            let before = stats.collapsed_vertices;
-            for v in stuck {
-                if mesh.is_vertex_alive(v) && collapse::try_collapse(&mut mesh, v) {
-                    stats.collapsed_vertices += 1;
-                }
-            }
-            if stats.collapsed_vertices == before {
-                break;
-            }
-            fan::round_vertices(&mut mesh, opts.round_passes);
-        }
+    if let Err(e) = tag_and_round(&mut mesh, input, opts, &mut stats) {
+        crate::budget::dispose(mesh);
+        return Err(e);
     }
     stats.rational_vertices = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
     stats.vertices = mesh.num_vertices();
@@ -232,6 +222,43 @@ pub(crate) fn build(
     stats.seconds = (t3 - t0).as_secs_f64();
     tracing::debug!(?stats, "bsp done");
     Ok((mesh, stats))
+}
+
+/// Tag the segments' edges of the cut mesh, then round its rational vertices
+/// (collapsing those no nearby `f64` point can hold), as [`build`] asks.
+fn tag_and_round(
+    mesh: &mut TriMesh,
+    input: &BspInput,
+    opts: &BspOptions,
+    stats: &mut BspStats,
+) -> Result<()> {
+    let t = Instant::now();
+    fan::tag_segments(mesh, input, &opts.deadline)?;
+    stats.tag_seconds = t.elapsed().as_secs_f64();
+    stats.rational_before_rounding = mesh.vertices().filter(|&v| mesh.is_rational(v)).count();
+    if !opts.round {
+        return Ok(());
+    }
+    fan::round_vertices(mesh, opts.round_passes, &opts.deadline)?;
+    // What no f64 point can hold is collapsed into a neighbour, which may
+    // free others to round; a few rounds at most.
+    for _ in 0..opts.round_passes {
+        let stuck: Vec<_> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
+        let before = stats.collapsed_vertices;
+        for (i, v) in stuck.into_iter().enumerate() {
+            if i % fan::CHECK_EVERY == 0 {
+                check_deadline(&opts.deadline, Stage::Bsp)?;
+            }
+            if mesh.is_vertex_alive(v) && collapse::try_collapse(mesh, v) {
+                stats.collapsed_vertices += 1;
+            }
+        }
+        if stats.collapsed_vertices == before {
+            break;
+        }
+        fan::round_vertices(mesh, opts.round_passes, &opts.deadline)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -413,7 +413,9 @@ fn rounding_in_levels_matches_the_sequential_order() {
         let mut want = unrounded.clone();
         sequential(&mut want, 2);
         let mut got = unrounded;
-        pool.install(|| fan::round_vertices(&mut got, 2));
+        pool.install(|| {
+            fan::round_vertices(&mut got, 2, &crate::budget::Deadline::NONE).expect("no deadline")
+        });
         prop_assert!(got == want, "levels and the sequential order differ");
         levelled.set(levelled.get() + stats.rational_before_rounding);
         Ok(())
@@ -514,4 +516,50 @@ fn constrained_seed_makes_no_thin_triangle() {
         assert!(twice > 1e-6, "thin seed triangle {a:?} {b:?} {c:?}");
     }
     run_both(&input);
+}
+
+/// The tagging and the rounding check the deadline as they go (issue 41: a
+/// BSP of millions of crossings spent 77 s in them after the cut's last
+/// check): with a passed deadline each stops with the time-limit error of the
+/// BSP stage, and without one the rounding moves every vertex it moved before.
+#[test]
+fn tagging_and_rounding_stop_at_a_passed_deadline() {
+    // 70 lines each way, slanted: about 4 900 crossings, each a rational vertex.
+    let mut segments = Vec::new();
+    for k in 0..70u32 {
+        let t = f64::from(k) / 7.0;
+        let i = 2 * k;
+        segments.push(seg(p(0.0, t + 0.1), p(10.0, t + 0.37), i));
+        segments.push(seg(p(t + 0.2, 0.0), p(t + 0.53, 10.0), i + 2));
+    }
+    let input = BspInput {
+        points: Vec::new(),
+        section_endpoints: Vec::new(),
+        segments,
+    };
+    let (unrounded, stats) = run(&input, false);
+    assert!(
+        stats.rational_before_rounding > fan::CHECK_EVERY,
+        "only {} rational vertices",
+        stats.rational_before_rounding
+    );
+    let passed = crate::budget::Deadline::after(Some(0.0));
+    let is_bsp_time_limit = |r: crate::Result<()>| {
+        matches!(
+            r,
+            Err(crate::Error::TimeLimit {
+                stage: crate::stage::Stage::Bsp,
+                ..
+            })
+        )
+    };
+    let mut m = unrounded.clone();
+    assert!(is_bsp_time_limit(fan::tag_segments(
+        &mut m, &input, &passed
+    )));
+    let mut m = unrounded.clone();
+    assert!(is_bsp_time_limit(fan::round_vertices(&mut m, 2, &passed)));
+    let mut m = unrounded;
+    fan::round_vertices(&mut m, 2, &crate::budget::Deadline::NONE).expect("no deadline");
+    assert!(m.vertices().filter(|&v| m.is_rational(v)).count() < stats.rational_before_rounding);
 }
