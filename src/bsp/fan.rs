@@ -216,30 +216,40 @@ pub(super) fn tag_segments(
         };
         let mut u = va;
         let mut s_u = 0.0;
+        let mut faces: Vec<FaceId> = Vec::new();
+        let mut ring: Vec<VertexId> = Vec::new();
         for _ in 0..=mesh.num_vertices() {
             if u == vb {
                 break;
             }
-            let mut best: Option<VertexId> = None;
-            for f in mesh.incident_faces(u) {
+            // The next vertex is the nearest one of u's neighbours ahead of u
+            // (not past vb) on the segment's line. The order tests read
+            // rounded coordinates and come first; the collinearity test, exact
+            // for the rational neighbours, is asked only of a neighbour
+            // nearer than the best one so far, once per neighbour.
+            mesh.incident_faces_into(u, &mut faces);
+            ring.clear();
+            for &f in &faces {
                 for w in mesh.face(f) {
-                    if w == u {
-                        continue;
+                    if w != u && !ring.contains(&w) {
+                        ring.push(w);
                     }
-                    let on_line = match mesh.exact(w) {
-                        None => orient2d(seg.a, seg.b, mesh.position(w)),
-                        Some(qw) => orient2d_q(&qa, &qb, qw),
-                    };
-                    if on_line != Orientation::Collinear {
-                        continue;
-                    }
-                    if cmp(mesh, w, u) != Ordering::Greater || cmp(mesh, w, vb) == Ordering::Greater
-                    {
-                        continue;
-                    }
-                    if best.is_none_or(|b| cmp(mesh, w, b) == Ordering::Less) {
-                        best = Some(w);
-                    }
+                }
+            }
+            let mut best: Option<VertexId> = None;
+            for &w in &ring {
+                if cmp(mesh, w, u) != Ordering::Greater || cmp(mesh, w, vb) == Ordering::Greater {
+                    continue;
+                }
+                if best.is_some_and(|b| cmp(mesh, w, b) != Ordering::Less) {
+                    continue;
+                }
+                let on_line = match mesh.exact(w) {
+                    None => orient2d(seg.a, seg.b, mesh.position(w)),
+                    Some(qw) => orient2d_q(&qa, &qb, qw),
+                };
+                if on_line == Orientation::Collinear {
+                    best = Some(w);
                 }
             }
             let Some(w) = best else {
