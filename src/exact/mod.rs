@@ -28,5 +28,7 @@ pub(crate) mod predicates;
 pub(crate) mod rational;
 
 pub(crate) use intersect::{SegmentIntersection, line_intersection, segment_intersection};
-pub(crate) use predicates::{Orientation, near_line, orient2d, orient2d_q, within};
+pub(crate) use predicates::{
+    Orientation, PointRef, near_line, orient2d, orient2d_mixed, orient2d_q, within,
+};
 pub(crate) use rational::PointQ;

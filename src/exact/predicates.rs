@@ -108,6 +108,48 @@ pub fn orient2d_q(a: &PointQ, b: &PointQ, c: &PointQ) -> Orientation {
     orient2d_q_filter(a, b, c).unwrap_or_else(|| orient2d_q_exact(a, b, c))
 }
 
+/// A point given to [`orient2d_mixed`]: an `f64` point, or a rational one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum PointRef<'a> {
+    F64(Point),
+    Q(&'a PointQ),
+}
+
+impl<'a> PointRef<'a> {
+    /// The point as a rational (made for an `f64` point).
+    fn to_q(self) -> std::borrow::Cow<'a, PointQ> {
+        match self {
+            PointRef::F64(p) => std::borrow::Cow::Owned(PointQ::from_point(p)),
+            PointRef::Q(q) => std::borrow::Cow::Borrowed(q),
+        }
+    }
+
+    /// Enclosures of the coordinates.
+    fn enclosure(self) -> [Interval; 2] {
+        match self {
+            PointRef::F64(p) => [Interval::point(p.x), Interval::point(p.y)],
+            PointRef::Q(q) => [q.ix, q.iy],
+        }
+    }
+}
+
+/// Exact orientation of three points, each an `f64` point or a rational one,
+/// as [`orient2d_q`] decides it, without making rationals of the `f64`
+/// points unless the interval filter cannot decide (the BSP's rounding asks
+/// it millions of times with an `f64` candidate beside rational neighbours).
+pub(crate) fn orient2d_mixed(a: PointRef<'_>, b: PointRef<'_>, c: PointRef<'_>) -> Orientation {
+    if let (PointRef::F64(pa), PointRef::F64(pb), PointRef::F64(pc)) = (a, b, c) {
+        return orient2d(pa, pb, pc);
+    }
+    let ([ax, ay], [bx, by], [cx, cy]) = (a.enclosure(), b.enclosure(), c.enclosure());
+    let det = bx.sub(ax).mul(cy.sub(ay)).sub(by.sub(ay).mul(cx.sub(ax)));
+    if let Some(o) = det.strict_sign() {
+        return Orientation::from_ordering(o);
+    }
+    let (qa, qb, qc) = (a.to_q(), b.to_q(), c.to_q());
+    orient2d_q_exact(&qa, &qb, &qc)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -264,6 +306,22 @@ mod tests {
                 prop_assert_eq!(f, exact);
             }
             prop_assert_eq!(orient2d_q(&a, &b, &c), exact);
+        }
+
+        /// Each point given as `f64` where it is one, else as a rational:
+        /// the same orientation as the rational predicate.
+        #[test]
+        fn mixed_agrees_with_exact((a, b, c) in near_line(), which in 0u8..8) {
+            let exact = orient2d_q_exact(&a, &b, &c);
+            fn r(q: &PointQ, as_f64: bool) -> PointRef<'_> {
+                match q.as_f64() {
+                    Some(p) if as_f64 => PointRef::F64(p),
+                    _ => PointRef::Q(q),
+                }
+            }
+            let (ra, rb, rc) = (r(&a, which & 1 != 0), r(&b, which & 2 != 0), r(&c, which & 4 != 0));
+            prop_assert_eq!(orient2d_mixed(ra, rb, rc), exact);
+            prop_assert_eq!(orient2d_mixed(rb, ra, rc), exact.reversed());
         }
 
         #[test]

@@ -1,7 +1,7 @@
 //! Slots for vertices and faces (with tombstones and free lists), positions and tags.
 
 use super::ids::{FaceId, VertexId};
-use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
+use crate::exact::{Orientation, PointQ, PointRef, orient2d, orient2d_mixed, orient2d_q};
 use kurbo::Point;
 use rustc_hash::FxHashMap;
 use std::borrow::Cow;
@@ -275,21 +275,18 @@ impl TriMesh {
 
     /// The exact orientation of face `f` if vertex `v` were at the `f64` point `p`.
     pub(crate) fn orientation_if_moved(&self, f: FaceId, v: VertexId, p: Point) -> Orientation {
-        let ids = self.face(f);
-        let rational = ids.iter().any(|&x| x != v && self.vdata(x).exact.is_some());
-        if !rational {
-            let [a, b, c] = ids.map(|x| if x == v { p } else { self.vdata(x).pos });
-            return orient2d(a, b, c);
-        }
-        let pq = PointQ::from_point(p);
-        let q = ids.map(|x| {
+        let at = |x: VertexId| {
             if x == v {
-                Cow::Borrowed(&pq)
-            } else {
-                self.point_q_ref(x)
+                return PointRef::F64(p);
             }
-        });
-        orient2d_q(&q[0], &q[1], &q[2])
+            let d = self.vdata(x);
+            match &d.exact {
+                Some(q) => PointRef::Q(q),
+                None => PointRef::F64(d.pos),
+            }
+        };
+        let [a, b, c] = self.face(f).map(at);
+        orient2d_mixed(a, b, c)
     }
 
     /// Move a vertex to an `f64` position (drops the rational one).
