@@ -3,7 +3,7 @@
 use super::{BspInput, BspSegment, SegmentTag};
 use crate::budget::Deadline;
 use crate::error::check_deadline;
-use crate::exact::{Orientation, PointQ, orient2d, orient2d_q};
+use crate::exact::{Orientation, PointQ, PointRef, orient2d_mixed, orient2d_q};
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId, VertexTag};
 use crate::stage::Stage;
 use crate::{Error, Result};
@@ -193,8 +193,6 @@ pub(super) fn tag_segments(
         if va == vb {
             return Ok(tags);
         }
-        let qa = PointQ::from_point(seg.a);
-        let qb = PointQ::from_point(seg.b);
         let d = seg.b - seg.a;
         let len2 = d.hypot2();
         let param = |p: kurbo::Point| {
@@ -244,10 +242,11 @@ pub(super) fn tag_segments(
                 if best.is_some_and(|b| cmp(mesh, w, b) != Ordering::Less) {
                     continue;
                 }
-                let on_line = match mesh.exact(w) {
-                    None => orient2d(seg.a, seg.b, mesh.position(w)),
-                    Some(qw) => orient2d_q(&qa, &qb, qw),
+                let at_w = match mesh.exact(w) {
+                    None => PointRef::F64(mesh.position(w)),
+                    Some(qw) => PointRef::Q(qw),
                 };
+                let on_line = orient2d_mixed(PointRef::F64(seg.a), PointRef::F64(seg.b), at_w);
                 if on_line == Orientation::Collinear {
                     best = Some(w);
                 }

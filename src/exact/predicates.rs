@@ -80,11 +80,16 @@ pub fn orient2d(a: Point, b: Point, c: Point) -> Orientation {
 /// interval arithmetic over enclosures of the coordinates decides the sign,
 /// `None` when only exact arithmetic can.
 pub fn orient2d_q_filter(a: &PointQ, b: &PointQ, c: &PointQ) -> Option<Orientation> {
-    let bax: Interval = b.ix.sub(a.ix);
-    let bay = b.iy.sub(a.iy);
-    let cax = c.ix.sub(a.ix);
-    let cay = c.iy.sub(a.iy);
-    let det = bax.mul(cay).sub(bay.mul(cax));
+    orient2d_enclosures([a.ix, a.iy], [b.ix, b.iy], [c.ix, c.iy])
+}
+
+/// The interval filter on enclosures of the three points' coordinates.
+fn orient2d_enclosures(
+    [ax, ay]: [Interval; 2],
+    [bx, by]: [Interval; 2],
+    [cx, cy]: [Interval; 2],
+) -> Option<Orientation> {
+    let det = bx.sub(ax).mul(cy.sub(ay)).sub(by.sub(ay).mul(cx.sub(ax)));
     det.strict_sign().map(Orientation::from_ordering)
 }
 
@@ -141,13 +146,10 @@ pub(crate) fn orient2d_mixed(a: PointRef<'_>, b: PointRef<'_>, c: PointRef<'_>) 
     if let (PointRef::F64(pa), PointRef::F64(pb), PointRef::F64(pc)) = (a, b, c) {
         return orient2d(pa, pb, pc);
     }
-    let ([ax, ay], [bx, by], [cx, cy]) = (a.enclosure(), b.enclosure(), c.enclosure());
-    let det = bx.sub(ax).mul(cy.sub(ay)).sub(by.sub(ay).mul(cx.sub(ax)));
-    if let Some(o) = det.strict_sign() {
-        return Orientation::from_ordering(o);
-    }
-    let (qa, qb, qc) = (a.to_q(), b.to_q(), c.to_q());
-    orient2d_q_exact(&qa, &qb, &qc)
+    orient2d_enclosures(a.enclosure(), b.enclosure(), c.enclosure()).unwrap_or_else(|| {
+        let (qa, qb, qc) = (a.to_q(), b.to_q(), c.to_q());
+        orient2d_q_exact(&qa, &qb, &qc)
+    })
 }
 
 #[cfg(test)]
