@@ -34,6 +34,13 @@ use std::collections::HashMap;
 const CHORDS: usize = 16;
 /// At most this many crossings split one piece.
 const MAX_PER_PIECE: usize = 32;
+/// Pieces searched together (in parallel) before their crossings are
+/// filtered: the block starts at the smallest and doubles while the blocks
+/// find few crossings.
+const BLOCK_MIN: usize = 64;
+const BLOCK_MAX: usize = 1 << 16;
+/// Crossings a block's list is kept near (64 bytes each).
+const BLOCK_FOUND: usize = 1 << 18;
 /// Newton iterations per seed.
 const NEWTON: usize = 30;
 /// Smallest crossing angle (degrees) split between two trimmable pieces.
@@ -294,13 +301,14 @@ pub(super) fn find(
         .collect();
     // (piece, s, piece, t, point, nearness bound, split the first, the second)
     type Found = (usize, f64, usize, f64, Point, f64, bool, bool);
-    // The crossings of piece i with the pieces after it that it overlaps.
-    let crossings_of = |i: usize, found: &mut Vec<Found>| {
+    // The crossings of piece i with the pieces after it that it overlaps and
+    // that are not `full` yet.
+    let crossings_of = |i: usize, full: &[bool], found: &mut Vec<Found>| {
         // The pieces after i with a box overlapping one of i's, in order.
         let mut near: Vec<u32> = Vec::new();
         let keep = |k: u32| {
-            let j = owner[k as usize];
-            j as usize > i && may_cross(class[i], class[j as usize], bins)
+            let j = owner[k as usize] as usize;
+            j > i && !full[j] && may_cross(class[i], class[j], bins)
         };
         let grids = std::iter::once(&shared).chain(
             big_classes
@@ -384,51 +392,75 @@ pub(super) fn find(
             }
         }
     };
-    // Per piece i, in parallel, its crossings with the pieces after it; then
-    // in piece order, as one pass over i would find them. Past the deadline
-    // the pieces left find nothing.
-    let by_piece: Vec<Vec<Found>> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let mut found: Vec<Found> = Vec::new();
-            if deadline.expired() {
-                return found;
-            }
-            crossings_of(i, &mut found);
-            found
-        })
-        .collect();
-    // One buffer of the exact size, reserved within the memory budget (a
-    // dense hatch crosses itself ~n²/4 times: past the budget the run stops
-    // here, at the next check, instead of doubling a list of gigabytes).
-    let total = by_piece.iter().map(Vec::len).sum();
-    let mut found: Vec<Found> = Vec::new();
-    if crate::budget::reserve(&mut found, total, deadline).is_err() {
-        return out;
-    }
-    found.extend(by_piece.into_iter().flatten());
-    // Crossings within μ of each other on one piece would make tiny sections:
-    // keep the first of such a cluster (by order found) and drop its partners.
+    // A block of pieces at a time: per piece i of the block, in parallel, its
+    // crossings with the pieces after it; then in piece order, as one pass
+    // over i would find them, the filter below. A piece with
+    // [`MAX_PER_PIECE`] splits is full, the filter drops every crossing of a
+    // full piece, and a full piece stays full: so the search skips the pieces
+    // full when its block starts, which changes no split, only the work and
+    // the memory (issue 41: a 20 000-line cross-hatch found 19 million
+    // crossings, 1.2 GB twice over, to keep 160 000). Past the deadline the
+    // pieces left find nothing.
     let mut kept: Vec<Found> = Vec::new();
     // The points kept on each piece.
     let mut on_piece: Vec<Vec<Point>> = vec![Vec::new(); n];
-    for f in found {
-        let clash = [f.0, f.2]
-            .iter()
-            .any(|&k| on_piece[k].iter().any(|x| x.distance(f.4) <= f.5));
-        let full = out.splits[f.0].len() >= MAX_PER_PIECE || out.splits[f.2].len() >= MAX_PER_PIECE;
-        if clash || full {
-            continue;
+    let mut full = vec![false; n];
+    let mut start = 0;
+    let mut block = BLOCK_MIN;
+    while start < n && !deadline.expired() {
+        let end = (start + block).min(n);
+        let by_piece: Vec<Vec<Found>> = (start..end)
+            .into_par_iter()
+            .map(|i| {
+                let mut found: Vec<Found> = Vec::new();
+                if !full[i] && !deadline.expired() {
+                    crossings_of(i, &full, &mut found);
+                }
+                found
+            })
+            .collect();
+        // The block's list in one buffer, reserved within the memory budget
+        // (past it the run stops at the next check instead of growing a list
+        // the system may refuse).
+        let total: usize = by_piece.iter().map(Vec::len).sum();
+        let mut found: Vec<Found> = Vec::new();
+        if crate::budget::reserve(&mut found, total, deadline).is_err() {
+            return out;
         }
-        if f.6 {
-            out.splits[f.0].push(f.1);
-            on_piece[f.0].push(f.4);
+        found.extend(by_piece.into_iter().flatten());
+        // Crossings within μ of each other on one piece would make tiny
+        // sections: keep the first of such a cluster (by order found) and drop
+        // its partners.
+        for f in found {
+            let clash = [f.0, f.2]
+                .iter()
+                .any(|&k| on_piece[k].iter().any(|x| x.distance(f.4) <= f.5));
+            if clash || full[f.0] || full[f.2] {
+                continue;
+            }
+            if f.6 {
+                out.splits[f.0].push(f.1);
+                on_piece[f.0].push(f.4);
+            }
+            if f.7 {
+                out.splits[f.2].push(f.3);
+                on_piece[f.2].push(f.4);
+            }
+            for k in [f.0, f.2] {
+                full[k] = out.splits[k].len() >= MAX_PER_PIECE;
+            }
+            kept.push(f);
         }
-        if f.7 {
-            out.splits[f.2].push(f.3);
-            on_piece[f.2].push(f.4);
-        }
-        kept.push(f);
+        // Blocks that find few crossings grow, blocks that find many shrink:
+        // a block's list stays near BLOCK_FOUND entries.
+        block = if total > BLOCK_FOUND {
+            (block / 2).max(BLOCK_MIN)
+        } else if total < BLOCK_FOUND / 4 {
+            (block * 2).min(BLOCK_MAX)
+        } else {
+            block
+        };
+        start = end;
     }
     for &(i, s, j, t, x, _, split_i, split_j) in &kept {
         if split_i {
@@ -502,6 +534,69 @@ mod tests {
         let hatch_splits: usize = found.splits[..200].iter().map(Vec::len).sum();
         let transversal_splits: usize = found.splits[transversals].iter().map(Vec::len).sum();
         assert_eq!((hatch_splits, transversal_splits), (brute, brute));
+    }
+
+    /// A cross-hatch whose lines each cross far more lines than
+    /// [`MAX_PER_PIECE`], over several blocks: the search keeps exactly the
+    /// crossings that a pass over all pairs in order keeps (the first ones,
+    /// until a piece is full), though it skips the pieces full at a block's
+    /// start.
+    #[test]
+    fn full_pieces_are_skipped_without_changing_the_splits() {
+        let a = (0..150).map(|k| {
+            let x = k as f64;
+            line((x - 50.0, 0.0), (x + 50.0, 100.0))
+        });
+        let b = (0..150).map(|k| {
+            let x = k as f64;
+            line((x + 50.0, 0.0), (x - 50.0, 100.0))
+        });
+        let pieces: Vec<Piece> = a.chain(b).collect();
+        assert!(pieces.len() > 2 * BLOCK_MIN);
+        let params = Params::DEFAULT.resolve(Point::new(250.0, 100.0).to_vec2().hypot());
+        let found = find(&pieces, &[], &params, &Deadline::NONE);
+        // Pair by pair, in order, with the filter's rules.
+        let mut splits: Vec<Vec<Point>> = vec![Vec::new(); pieces.len()];
+        let mut count = 0;
+        let mut candidates = 0;
+        for i in 0..pieces.len() {
+            for j in i + 1..pieces.len() {
+                let ends = |k: usize| (pieces[k].parent.eval(0.0), pieces[k].parent.eval(1.0));
+                let ((p, q), (r, t)) = (ends(i), ends(j));
+                let Some((u, _)) = chord_cross(p, q, r, t) else {
+                    continue;
+                };
+                let x = p.lerp(q, u);
+                if [p, q, r, t].iter().any(|e| e.distance(x) <= params.mu) {
+                    continue;
+                }
+                candidates += 1;
+                let clash = [i, j]
+                    .iter()
+                    .any(|&k| splits[k].iter().any(|y| y.distance(x) <= params.mu));
+                if clash || splits[i].len() >= MAX_PER_PIECE || splits[j].len() >= MAX_PER_PIECE {
+                    continue;
+                }
+                splits[i].push(x);
+                splits[j].push(x);
+                count += 1;
+            }
+        }
+        assert!(candidates > 3 * count, "{candidates} {count}");
+        assert_eq!(found.count, count);
+        for (k, want) in splits.iter().enumerate() {
+            assert_eq!(found.splits[k].len(), want.len(), "piece {k}");
+            for (s, x) in found.splits[k].iter().zip({
+                let mut w: Vec<f64> = want
+                    .iter()
+                    .map(|x| (x.y - pieces[k].parent.eval(0.0).y) / 100.0)
+                    .collect();
+                w.sort_by(f64::total_cmp);
+                w
+            }) {
+                assert!((s - x).abs() < 1e-9, "piece {k}: {s} against {x}");
+            }
+        }
     }
 
     #[test]
