@@ -164,6 +164,40 @@ fn a_stroke_narrower_than_mu_is_its_centre_line() {
 }
 
 #[test]
+fn a_dash_pattern_with_gaps_below_mu_is_stroked_whole() {
+    // μ = 1e-3·d, d ≈ 85: gaps of 0.05 would leave the dashes closer than μ
+    // (issue 41: a spiral of 80 000 such dashes took minutes); gaps of 3 do not
+    let d = load(&circle("#000000", 4.0, r#"stroke-dasharray="0.02 0.05""#));
+    assert_eq!(d.paint.dashes_closed, 1);
+    assert!(
+        d.warnings.iter().any(|w| w.contains("stroked whole")),
+        "{:?}",
+        d.warnings
+    );
+    let m = mesh(&d, Order::Cubic, RegionMode::Shape, "dashes-closed");
+    assert_eq!(names(&m), ["disk", "disk-stroke"]);
+    // the whole ring, offset exactly
+    assert_rel(
+        area(&m, "disk-stroke"),
+        PI * ((R + 2.0).powi(2) - (R - 2.0).powi(2)),
+        1e-9,
+        "ring",
+    );
+    // an odd pattern repeats, each entry a gap in turn: 0.02 on, 3 off, ...
+    let odd = load(&circle("#000000", 4.0, r#"stroke-dasharray="0.02 0.05 3""#));
+    assert_eq!(odd.paint.dashes_closed, 0);
+    let apart = load(&circle("#000000", 4.0, r#"stroke-dasharray="6 3""#));
+    assert_eq!(apart.paint.dashes_closed, 0);
+    let m = mesh(&apart, Order::Linear, RegionMode::Shape, "dashes-apart");
+    let ring = PI * ((R + 2.0).powi(2) - (R - 2.0).powi(2));
+    let dashed = area(&m, "disk-stroke");
+    assert!(
+        dashed < 0.8 * ring && dashed > 0.5 * ring,
+        "{dashed} of {ring}"
+    );
+}
+
+#[test]
 fn a_rounded_rectangle_stroke_is_offset_exactly() {
     // lines and quarter circles joined smoothly: parallel lines, concentric arcs
     let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><title>a stroked rounded rectangle</title><rect id="rr" x="20" y="30" width="60" height="40" rx="10" fill="#ffcc00" stroke="#000000" stroke-width="2"/></svg>"##;

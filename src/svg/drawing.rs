@@ -369,6 +369,11 @@ pub struct PaintCounts {
     /// Of the strokes meshed as areas, those whose paint equals their element's
     /// fill ([`ShapePaint::joins_fill`]): one region with the fill, no band.
     pub strokes_joined: usize,
+    /// Of the strokes meshed as areas, dashed ones whose every gap is
+    /// shorter than μ: stroked whole (the dashes on either side of a gap
+    /// would lie closer than the feature envelope, which does not keep them
+    /// apart; a dashed spiral of 80 000 such dashes took minutes, issue 41).
+    pub dashes_closed: usize,
     /// Of the strokes meshed as areas, the closed subpaths whose outlines are
     /// the exact offsets (concentric conics, parallel lines); the others are
     /// kurbo's stroke expansion to a tolerance far below μ.

@@ -726,6 +726,7 @@ fn resolve_items(
     let accuracy = opts.stroke_accuracy * d;
     let mut shapes = Vec::with_capacity(items.len());
     let mut below_mu: Vec<String> = Vec::new();
+    let mut closed: Vec<String> = Vec::new();
     for item in items {
         let shape = match item {
             Item::Shape(s) => Some(s),
@@ -738,12 +739,16 @@ fn resolve_items(
                     width,
                 } = *p;
                 let expanded = (width >= hairline && width >= mu)
-                    .then(|| paint::stroke_area(&area.subpaths, &stroke, to_output, accuracy))
+                    .then(|| paint::stroke_area(&area.subpaths, &stroke, to_output, accuracy, mu))
                     .flatten();
                 match expanded {
                     Some(expanded) => {
                         counts.strokes_as_areas += 1;
                         counts.exact_stroke_subpaths += expanded.exact;
+                        if expanded.dashes_closed {
+                            counts.dashes_closed += 1;
+                            closed.push(area.name());
+                        }
                         if area.paint.joins_fill {
                             counts.strokes_joined += 1;
                         }
@@ -767,8 +772,18 @@ fn resolve_items(
             shapes.push(s);
         }
     }
+    const LISTED: usize = 5;
+    if !closed.is_empty() {
+        let more = if closed.len() > LISTED { ", ..." } else { "" };
+        let n = closed.len();
+        closed.truncate(LISTED);
+        warnings.push(format!(
+            "{n} dashed stroke(s) stroked whole: every gap of the dash pattern is shorter than \
+             the feature envelope μ = {mu:.3e}, so the dashes would not be kept apart: {}{more}",
+            closed.join(", ")
+        ));
+    }
     if !below_mu.is_empty() {
-        const LISTED: usize = 5;
         let more = if below_mu.len() > LISTED { ", ..." } else { "" };
         let n = below_mu.len();
         below_mu.truncate(LISTED);

@@ -199,6 +199,28 @@ pub(super) struct StrokeArea {
     pub(super) subpaths: Vec<Subpath>,
     /// Closed subpaths of the centre line offset exactly ([`exact_offsets`]).
     pub(super) exact: usize,
+    /// The stroke was dashed, but every gap of its pattern is narrower than
+    /// μ: it was stroked whole ([`dash_gaps_below`]).
+    pub(super) dashes_closed: bool,
+}
+
+/// Whether every gap of a dash pattern (user units) is shorter than `mu`
+/// (output units) under a map that stretches lengths by at most `stretch`:
+/// the two dashes on either side of any gap would lie closer than the feature
+/// envelope, which does not keep them apart (a hatch of secondary sections
+/// every gap wide, the dashes' ends moved within ε of each other), so the
+/// pattern is detail below the envelope and the stroke is meshed whole. An
+/// odd-length pattern repeats, each entry a gap in turn (SVG 2, §13.5.6).
+pub(super) fn dash_gaps_below(dashes: &[f64], stretch: f64, mu: f64) -> bool {
+    if dashes.is_empty() {
+        return false;
+    }
+    let gaps: Box<dyn Iterator<Item = &f64>> = if dashes.len() % 2 == 0 {
+        Box::new(dashes.iter().skip(1).step_by(2))
+    } else {
+        Box::new(dashes.iter())
+    };
+    gaps.into_iter().all(|&g| g * stretch < mu)
 }
 
 /// The area `stroke` paints along `outline` (output coordinates), as subpaths to
@@ -211,11 +233,15 @@ pub(super) struct StrokeArea {
 /// at that tolerance (at most 1/200 of the width), its conic pieces first
 /// turned into cubics within a quarter of it.
 /// `None` if the map is singular or the stroke paints nothing.
+///
+/// A dashed stroke whose every gap is shorter than `mu` (output units) is
+/// stroked whole ([`dash_gaps_below`]).
 pub(super) fn stroke_area(
     outline: &[Subpath],
     stroke: &usvg::Stroke,
     to_output: Affine,
     accuracy: f64,
+    mu: f64,
 ) -> Option<StrokeArea> {
     let det = to_output.determinant();
     if !(det.abs() > 0.0 && det.is_finite()) {
@@ -228,7 +254,14 @@ pub(super) fn stroke_area(
     let (sq, prod) = (a * a + b * b + c * c + d * d, (a * d - b * c).abs());
     let stretch = (0.5 * (sq + (sq * sq - 4.0 * prod * prod).max(0.0).sqrt())).sqrt();
     let tolerance = (width * 5e-3).min(accuracy / stretch);
-    let dashed = stroke.dasharray().is_some();
+    let pattern: Option<Vec<f64>> = stroke
+        .dasharray()
+        .map(|d| d.iter().map(|&v| f64::from(v)).collect());
+    let dashes_closed = pattern
+        .as_deref()
+        .is_some_and(|d| dash_gaps_below(d, stretch, mu));
+    let pattern = pattern.filter(|_| !dashes_closed);
+    let dashed = pattern.is_some();
     let mut out_verbs: Vec<Verb> = Vec::new();
     let mut exact = 0;
     let mut path = BezPath::new();
@@ -279,11 +312,8 @@ pub(super) fn stroke_area(
         .with_join(join)
         .with_miter_limit(f64::from(stroke.miterlimit().get()))
         .with_caps(cap);
-    if let Some(dashes) = stroke.dasharray() {
-        style = style.with_dashes(
-            f64::from(stroke.dashoffset()),
-            dashes.iter().map(|&d| f64::from(d)),
-        );
+    if let Some(dashes) = pattern {
+        style = style.with_dashes(f64::from(stroke.dashoffset()), dashes);
     }
     if !path.elements().is_empty() {
         let area = kurbo::stroke(path, &style, &kurbo::StrokeOpts::default(), tolerance);
@@ -302,6 +332,7 @@ pub(super) fn stroke_area(
     (!out.is_empty()).then_some(StrokeArea {
         subpaths: out,
         exact,
+        dashes_closed,
     })
 }
 
@@ -439,4 +470,22 @@ fn exact_offsets(sp: &Subpath, half: f64) -> Option<Vec<Verb>> {
         verbs.push(Verb::Close);
     }
     Some(verbs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::dash_gaps_below;
+
+    #[test]
+    fn dash_gaps_are_the_odd_entries_or_all_of_an_odd_pattern() {
+        // gaps 0.05 and 0.08 below μ = 0.1; the dashes' own length does not count
+        assert!(dash_gaps_below(&[5.0, 0.05, 7.0, 0.08], 1.0, 0.1));
+        assert!(!dash_gaps_below(&[5.0, 0.05, 7.0, 0.2], 1.0, 0.1));
+        // an odd pattern repeats: 0.05 on, 3 off, 0.02 on, 0.05 off, 3 on, ...
+        assert!(!dash_gaps_below(&[0.05, 3.0, 0.02], 1.0, 0.1));
+        assert!(dash_gaps_below(&[0.05, 0.02, 0.01], 1.0, 0.1));
+        // lengths are in user units: a map that doubles them doubles the gaps
+        assert!(!dash_gaps_below(&[1.0, 0.06], 2.0, 0.1));
+        assert!(!dash_gaps_below(&[], 1.0, 0.1));
+    }
 }
