@@ -799,6 +799,7 @@ fn bsp_trimesh(
     times: &mut Times,
 ) -> Result<(TriMesh, BspStats)> {
     let input = bsp_input(fs, chains);
+    density::check_crossings(input.segments.iter().map(|s| [s.a, s.b]), resolved.mu)?;
     let bbox = padded_box(drawing, resolved.padding);
     let opts = BspOptions::DEFAULT.with_deadline(deadline);
     let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &opts))?;
