@@ -44,10 +44,3 @@ fn main() -> ExitCode {
     install_signal_handlers(batch);
     ExitCode::from(triwild::cli::main_with(std::env::args_os(), None))
 }
-
-/// mimalloc (feature `mimalloc`, on by default): the stages allocate and free
-/// small vectors by the million, and two threads share the system allocator's
-/// locks (Cargo.toml says what it gains and costs).
-#[cfg(feature = "mimalloc")]
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
