@@ -37,6 +37,7 @@
 
 use super::Parent;
 use super::grid::Grid;
+use crate::budget::Deadline;
 use crate::exact::{near_line, within};
 use crate::svg::{Feature, ShapeId};
 use kurbo::{Line, Point, Rect};
@@ -73,14 +74,29 @@ pub(super) struct Merged {
 /// is by piece; `features` are the drawing's (for the pieces' shapes); `tol` is
 /// the coincidence tolerance (ε_m) and `min_len` the shortest piece a split may
 /// leave (l_m: snapping already joined end points closer than that).
+///
+/// Gives up once `deadline` has passed, returning the pieces as they are then
+/// (the caller checks the deadline and discards them): a thousand collinear
+/// copies of a line, each shifted along it, split one another into a million
+/// pieces (issue 41's fuzz run: 17 s past a 10 s limit).
 pub(super) fn merge(
     pieces: Vec<Piece>,
     as_drawn: Vec<Option<Parent>>,
     features: &[Feature],
     tol: f64,
     min_len: f64,
+    deadline: &Deadline,
 ) -> Merged {
-    let (pieces, as_drawn, splits) = split_overlaps(pieces, as_drawn, tol, min_len);
+    let (pieces, as_drawn, splits) = split_overlaps(pieces, as_drawn, tol, min_len, deadline);
+    if deadline.expired() {
+        return Merged {
+            shared: vec![None; pieces.len()],
+            pieces,
+            as_drawn,
+            splits,
+            ..Merged::default()
+        };
+    }
     let n = pieces.len();
     // Candidates by their unordered end points.
     let key = |p: Point| (p.x + 0.0).to_bits() ^ (p.y + 0.0).to_bits().rotate_left(17);
@@ -92,6 +108,9 @@ pub(super) fn merge(
     let mut by_ends: HashMap<(u64, u64), Vec<usize>> = HashMap::new();
     let mut copy_of: Vec<Option<usize>> = vec![None; n];
     for (k, (_, parent, _)) in pieces.iter().enumerate() {
+        if k % CHECK_EVERY == 0 && deadline.expired() {
+            break;
+        }
         let bucket = by_ends.entry(ends_key(parent)).or_default();
         if let Some(&first) = bucket
             .iter()
@@ -163,6 +182,9 @@ fn same_curve(a: &Parent, b: &Parent, tol: f64) -> bool {
     }
 }
 
+/// Pieces between two looks at the deadline in the merging loop.
+const CHECK_EVERY: usize = 4096;
+
 /// Step 1 of the module doc: straight pieces split at the end points of the
 /// straight pieces that lie along them. Returns the pieces, their drawn curves
 /// and the number of splits.
@@ -171,6 +193,7 @@ fn split_overlaps(
     as_drawn: Vec<Option<Parent>>,
     tol: f64,
     min_len: f64,
+    deadline: &Deadline,
 ) -> (Vec<Piece>, Vec<Option<Parent>>, usize) {
     // The straight pieces (a line's one interval is [0, 1]).
     let lines: Vec<(usize, Line)> = pieces
@@ -203,6 +226,9 @@ fn split_overlaps(
     let mut cuts: Vec<Vec<(f64, Point)>> = vec![Vec::new(); lines.len()];
     let mut total = 0;
     for (li, (_, l)) in lines.iter().enumerate() {
+        if deadline.expired() {
+            return (pieces, as_drawn, 0);
+        }
         let (p, q) = (l.p0, l.p1);
         let dir = q - p;
         let len2 = dir.hypot2();
@@ -318,6 +344,49 @@ mod tests {
             .collect()
     }
 
+    /// Past the deadline nothing is split or merged (the pieces come back as
+    /// they were, one `shared` entry each); the same pieces split and merge
+    /// within it.
+    #[test]
+    fn a_passed_deadline_stops_the_splitting() {
+        let shifted = |k: u32| {
+            line(
+                k,
+                (0.01 * f64::from(k), 0.0),
+                (10.0 + 0.01 * f64::from(k), 0.0),
+            )
+        };
+        let pieces: Vec<Piece> = (0..50u32).map(shifted).collect();
+        let features: Vec<Feature> = (0..50).map(feature).collect();
+        let passed = Deadline::after(Some(0.0));
+        let m = merge(
+            pieces.clone(),
+            vec![None; 50],
+            &features,
+            1e-9,
+            1e-6,
+            &passed,
+        );
+        assert_eq!(
+            (m.splits, m.merged, m.pieces.len(), m.shared.len()),
+            (0, 0, 50, 50)
+        );
+        let m = merge(
+            pieces,
+            vec![None; 50],
+            &features,
+            1e-9,
+            1e-6,
+            &Deadline::NONE,
+        );
+        assert!(
+            m.splits > 50 * 40 && m.merged > 50 * 40,
+            "{} {}",
+            m.splits,
+            m.merged
+        );
+    }
+
     #[test]
     fn overlapping_collinear_segments_share_their_overlap_once() {
         // a: 0..10, b: 4..14 on y = 0; c crosses elsewhere.
@@ -327,7 +396,14 @@ mod tests {
             line(2, (5.0, -3.0), (5.0, 3.0)),
         ];
         let features = [feature(0), feature(1), feature(2)];
-        let m = merge(pieces, vec![None; 3], &features, 1e-9, 1e-6);
+        let m = merge(
+            pieces,
+            vec![None; 3],
+            &features,
+            1e-9,
+            1e-6,
+            &Deadline::NONE,
+        );
         assert_eq!(m.splits, 2);
         assert_eq!(m.merged, 1);
         assert_eq!(
@@ -356,7 +432,7 @@ mod tests {
             line(3, (5.0, 0.0), (5.0, 4.0)),
         ];
         let features = [feature(0), feature(1), feature(2), feature(3)];
-        let m = merge(pieces, vec![None; 4], &features, tol, 1e-3);
+        let m = merge(pieces, vec![None; 4], &features, tol, 1e-3, &Deadline::NONE);
         assert_eq!((m.splits, m.merged), (0, 1));
         assert_eq!(m.pieces.len(), 3);
         assert_eq!(m.shared[0], Some(0));
@@ -388,7 +464,14 @@ mod tests {
             (4, Parent::Conic(bent), vec![[0.0, 1.0]]),
         ];
         let features: Vec<Feature> = (0..5).map(feature).collect();
-        let m = merge(pieces, vec![None; 5], &features, 1e-9, 1e-6);
+        let m = merge(
+            pieces,
+            vec![None; 5],
+            &features,
+            1e-9,
+            1e-6,
+            &Deadline::NONE,
+        );
         assert_eq!(m.merged, 2);
         assert_eq!(m.shared, [Some(0), Some(1), None]);
     }
@@ -414,7 +497,7 @@ mod tests {
                 })
                 .collect();
             let features: Vec<Feature> = (0..segs.len()).map(feature).collect();
-            let m = merge(pieces, vec![None; segs.len()], &features, 1e-9, 1e-6);
+            let m = merge(pieces, vec![None; segs.len()], &features, 1e-9, 1e-6, &Deadline::NONE);
             // each unit step covered by some input segment is covered exactly once
             for u in 0..27u32 {
                 let mid = Point::ORIGIN + dir * (f64::from(u) + 0.5);

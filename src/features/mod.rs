@@ -755,6 +755,7 @@ impl FeatureSet {
             &drawing.features,
             params.eps_m,
             params.l_min,
+            deadline,
         );
         counts.coincident_splits = coincident.splits;
         counts.coincident_merged = coincident.merged;
@@ -765,6 +766,10 @@ impl FeatureSet {
             sharers,
             ..
         } = coincident;
+        if deadline.expired() {
+            timing.split_ms = ms(t);
+            return FeatureSet::incomplete(params, points, counts, timing);
+        }
         // 2b. Crossings: split both curves where they cross transversally.
         let flat: Vec<(usize, crossings::Piece)> = pieces
             .iter()
