@@ -772,28 +772,30 @@ fn resolve_items(
             shapes.push(s);
         }
     }
-    const LISTED: usize = 5;
     if !closed.is_empty() {
-        let more = if closed.len() > LISTED { ", ..." } else { "" };
-        let n = closed.len();
-        closed.truncate(LISTED);
         warnings.push(format!(
-            "{n} dashed stroke(s) stroked whole: every gap of the dash pattern is shorter than \
-             the feature envelope μ = {mu:.3e}, so the dashes would not be kept apart: {}{more}",
-            closed.join(", ")
+            "{} dashed stroke(s) stroked whole: every gap of the dash pattern is shorter than \
+             the feature envelope μ = {mu:.3e}, so the dashes would not be kept apart: {}",
+            closed.len(),
+            listed(&closed)
         ));
     }
     if !below_mu.is_empty() {
-        let more = if below_mu.len() > LISTED { ", ..." } else { "" };
-        let n = below_mu.len();
-        below_mu.truncate(LISTED);
         warnings.push(format!(
-            "{n} stroke(s) narrower than the feature envelope μ = {mu:.3e} kept as centre \
-             lines (their two outlines would be closer than μ): {}{more}",
-            below_mu.join(", ")
+            "{} stroke(s) narrower than the feature envelope μ = {mu:.3e} kept as centre \
+             lines (their two outlines would be closer than μ): {}",
+            below_mu.len(),
+            listed(&below_mu)
         ));
     }
     Ok(shapes)
+}
+
+/// The first few of `names`, comma-separated, with ", ..." when more follow.
+fn listed(names: &[String]) -> String {
+    const LISTED: usize = 5;
+    let more = if names.len() > LISTED { ", ..." } else { "" };
+    format!("{}{more}", names[..names.len().min(LISTED)].join(", "))
 }
 
 /// The outlines of the clips that limit a region, as feature geometry (one

@@ -215,12 +215,13 @@ pub(super) fn dash_gaps_below(dashes: &[f64], stretch: f64, mu: f64) -> bool {
     if dashes.is_empty() {
         return false;
     }
-    let gaps: Box<dyn Iterator<Item = &f64>> = if dashes.len() % 2 == 0 {
-        Box::new(dashes.iter().skip(1).step_by(2))
-    } else {
-        Box::new(dashes.iter())
-    };
-    gaps.into_iter().all(|&g| g * stretch < mu)
+    // Even: the odd entries are the gaps; odd: every entry is one in turn.
+    let step = if dashes.len() % 2 == 0 { 2 } else { 1 };
+    dashes
+        .iter()
+        .skip(step - 1)
+        .step_by(step)
+        .all(|&g| g * stretch < mu)
 }
 
 /// The area `stroke` paints along `outline` (output coordinates), as subpaths to
