@@ -47,7 +47,8 @@ use super::grid::Grid;
 use crate::budget::Deadline;
 use crate::mesh::point_segment_distance;
 use kurbo::{Line, Point, Rect};
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
+use smallvec::SmallVec;
 
 /// A sample farther than this fraction of μ from every kept segment keeps its
 /// segment (so every step of the march is at least `(1 − REJECT)·μ`).
@@ -72,7 +73,8 @@ struct Kept {
     /// The kept polylines through each vertex, bit for bit (a shared vertex must be
     /// one of theirs: a point the float distance puts on a kept segment may be off it
     /// exactly, and the exact BSP would leave a gap there).
-    at: HashMap<(u64, u64), Vec<u32>>,
+    /// (Two inline: most vertices are on one polyline, or where two meet.)
+    at: FxHashMap<(u64, u64), SmallVec<[u32; 2]>>,
 }
 
 /// A point's key, bit for bit (+0.0 makes −0.0 and 0.0, equal points, one key).
@@ -189,7 +191,7 @@ pub(super) fn merge_close(
         };
     }
     // How many features use each vertex (a closed polyline's first and last point once).
-    let mut uses: HashMap<(u64, u64), u32> = HashMap::new();
+    let mut uses: FxHashMap<(u64, u64), u32> = FxHashMap::default();
     for p in polylines {
         let closed = p.first() == p.last();
         let n = p.len() - usize::from(closed);
@@ -213,7 +215,7 @@ pub(super) fn merge_close(
         grid: Grid::new(bounds, mu, segments.max(1024)),
         piece_of: Vec::new(),
         segments: Vec::new(),
-        at: HashMap::new(),
+        at: FxHashMap::default(),
     };
     let length = |p: &Vec<Point>| -> f64 { p.windows(2).map(|w| w[0].distance(w[1])).sum() };
     let mut order: Vec<(f64, usize)> = polylines

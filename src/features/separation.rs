@@ -29,6 +29,7 @@ use crate::budget::Deadline;
 use crate::mesh::{angle_between, point_segment_distance, segment_distance};
 use crate::svg::{Drawing, ShapeKind};
 use kurbo::{CubicBez, Line, Point, Rect};
+use rustc_hash::FxHashSet;
 use std::collections::HashSet;
 
 /// Chord parts within this factor of μ of a shared end point are exempt (see module doc).
@@ -443,7 +444,7 @@ pub(super) fn simplify(
         runs = kept_runs;
     }
     // Collapse free vertices.
-    let fixed_keys: HashSet<(u64, u64)> = sections
+    let fixed_keys: FxHashSet<(u64, u64)> = sections
         .iter()
         .zip(primary.iter())
         .filter(|(_, p)| **p)
@@ -476,22 +477,31 @@ pub(super) fn simplify(
     if !segs.is_empty() {
         let boxes = segs.iter().map(|l| Rect::from_points(l.p0, l.p1));
         let grid = grid_for(boxes, segs.len(), mu);
+        // Each primary section's test on its own, in parallel; the demotions
+        // then in order.
+        let reach = mu * (1.0 + 1e-9);
+        let bad: Vec<bool> = {
+            use rayon::prelude::*;
+            sections
+                .par_iter()
+                .zip(primary.par_iter())
+                .with_min_len(SEPARATE_RUN)
+                .map(|(s, &p)| {
+                    p && grid.any(ctrl_box(&s.ctrl).inflate(reach, reach), |j| {
+                        let l = segs[j as usize];
+                        let c = CubicBez::new(
+                            l.p0,
+                            l.p0.lerp(l.p1, 1.0 / 3.0),
+                            l.p0.lerp(l.p1, 2.0 / 3.0),
+                            l.p1,
+                        );
+                        violates(&s.ctrl, &c, mu, alpha)
+                    })
+                })
+                .collect()
+        };
         for (i, s) in sections.iter().enumerate() {
-            if !primary[i] {
-                continue;
-            }
-            let reach = mu * (1.0 + 1e-9);
-            let bad = grid.any(ctrl_box(&s.ctrl).inflate(reach, reach), |j| {
-                let l = segs[j as usize];
-                let c = CubicBez::new(
-                    l.p0,
-                    l.p0.lerp(l.p1, 1.0 / 3.0),
-                    l.p0.lerp(l.p1, 2.0 / 3.0),
-                    l.p1,
-                );
-                violates(&s.ctrl, &c, mu, alpha)
-            });
-            if bad {
+            if bad[i] {
                 primary[i] = false;
                 demoted += 1;
                 runs.push(((s.feature, s.shared), vec![s.ctrl.p0, s.ctrl.p3]));
@@ -502,7 +512,7 @@ pub(super) fn simplify(
     let mut polylines = Vec::new();
     // The points so far, by value (+0.0 makes −0.0 and 0.0, equal points, one key).
     let point_key = |p: Point| key(Point::new(p.x + 0.0, p.y + 0.0));
-    let mut known: HashSet<(u64, u64)> = points.iter().map(|p| point_key(p.pos)).collect();
+    let mut known: FxHashSet<(u64, u64)> = points.iter().map(|p| point_key(p.pos)).collect();
     for ((feature, shared), mut pts) in runs {
         pts.dedup();
         let source = drawing.features[feature as usize].source;

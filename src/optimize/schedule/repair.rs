@@ -51,6 +51,9 @@ const REPAIR_ROUNDS: usize = 10;
 const REPAIR_FLOOR_DIVISOR: f64 = 16.0;
 /// Min-max smoothing passes per repair round.
 const REPAIR_SMOOTHS: usize = 3;
+/// [`Schedule::candidate_edges`] reads the region's flags in parallel chunks
+/// of at least this many.
+const REGION_CHUNK: usize = 4096;
 
 /// The smallest AMIPS energy of a triangle with a corner of `alpha` (radians,
 /// below 60°): the isosceles needle with that apex. A triangle of lower energy
@@ -116,16 +119,33 @@ impl Schedule<'_> {
         let Some(region) = &self.region else {
             return self.mesh.edge_list();
         };
-        let mut edges: Vec<EdgeKey> = Vec::new();
-        for (i, _) in region.iter().enumerate().filter(|(_, r)| **r) {
-            let v = VertexId::from_index(i);
-            if !self.mesh.is_vertex_alive(v) {
-                continue;
-            }
-            let ring = crate::mesh::ScratchRing::of(self.mesh, v);
-            edges.extend(ring.neighbours.iter().map(|&w| EdgeKey::new(v, w)));
-        }
-        edges.sort_unstable();
+        // Found in parallel and sorted (the set does not depend on how it was
+        // found). An edge between two region vertices is listed from its lower
+        // end only. On the ten slowest dev drawings this ran on the pipeline's
+        // thread alone for 0.4 s in all at two threads.
+        let mesh: &TriMesh = self.mesh;
+        let in_region = |w: VertexId| region.get(w.index()).copied().unwrap_or(false);
+        let mut edges: Vec<EdgeKey> = region
+            .par_iter()
+            .enumerate()
+            .with_min_len(REGION_CHUNK)
+            .filter(|&(i, &r)| r && mesh.is_vertex_alive(VertexId::from_index(i)))
+            .fold(Vec::new, |mut edges, (i, _)| {
+                let v = VertexId::from_index(i);
+                let ring = crate::mesh::ScratchRing::of(mesh, v);
+                edges.extend(
+                    ring.neighbours
+                        .iter()
+                        .filter(|&&w| w > v || !in_region(w))
+                        .map(|&w| EdgeKey::new(v, w)),
+                );
+                edges
+            })
+            .reduce(Vec::new, |mut a, mut b| {
+                a.append(&mut b);
+                a
+            });
+        super::queue::sort_unstable(&mut edges);
         edges.dedup();
         edges
     }

@@ -195,7 +195,15 @@ impl Schedule<'_> {
             })
             .map(|k| (self.mesh.distance(k.lo, k.hi), k))
             .collect();
-        cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        // (The edges are distinct: an unstable sort, in parallel with more
+        // than one thread, gives the one order.)
+        let longest_first =
+            |a: &(f64, EdgeKey), b: &(f64, EdgeKey)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
+        if rayon::current_num_threads() > 1 {
+            cands.par_sort_unstable_by(longest_first);
+        } else {
+            cands.sort_unstable_by(longest_first);
+        }
         cands
     }
 }
