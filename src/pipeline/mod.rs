@@ -251,19 +251,25 @@ pub struct FeatureAnalysis {
 
 impl FeatureAnalysis {
     /// Analyse `drawing` with `params`' lengths, the features resampled against
-    /// the size field the mesh would use (regions named as by default).
+    /// the size field the mesh would use (regions named as by default), on
+    /// `params.threads` workers as the mesher would.
     ///
     /// # Errors
     /// [`crate::ErrorKind::BadInput`] for a size field naming no region, a
     /// formula that does not parse, a background mesh that cannot be read.
     pub fn new(drawing: &Drawing, params: &Params) -> Result<FeatureAnalysis> {
-        let resolved = params.resolve(drawing.diagonal());
-        density::check(drawing, resolved.mu)?;
-        let field = default_field(drawing, params, Deadline::NONE)?;
-        Ok(FeatureAnalysis {
-            set: FeatureSet::build_sized(drawing, &resolved, &Deadline::NONE, &|p, source, cut| {
-                field.for_curve(p, source.shape, cut)
-            }),
+        with_threads(params.threads, || {
+            let resolved = params.resolve(drawing.diagonal());
+            density::check(drawing, resolved.mu)?;
+            let field = default_field(drawing, params, Deadline::NONE)?;
+            Ok(FeatureAnalysis {
+                set: FeatureSet::build_sized(
+                    drawing,
+                    &resolved,
+                    &Deadline::NONE,
+                    &|p, source, cut| field.for_curve(p, source.shape, cut),
+                ),
+            })
         })
     }
 
