@@ -44,10 +44,18 @@ impl<P> Default for ShortestFirst<P> {
 /// Sort `v`, in parallel when the pool has more than one thread (a
 /// parallel sort on one thread only costs more).
 pub(super) fn sort_unstable<T: Ord + Send>(v: &mut [T]) {
+    sort_unstable_by(v, T::cmp);
+}
+
+/// [`sort_unstable`] by `compare`.
+pub(super) fn sort_unstable_by<T: Send>(
+    v: &mut [T],
+    compare: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
+) {
     if rayon::current_num_threads() > 1 {
-        v.par_sort_unstable();
+        v.par_sort_unstable_by(compare);
     } else {
-        v.sort_unstable();
+        v.sort_unstable_by(compare);
     }
 }
 

@@ -195,15 +195,8 @@ impl Schedule<'_> {
             })
             .map(|k| (self.mesh.distance(k.lo, k.hi), k))
             .collect();
-        // (The edges are distinct: an unstable sort, in parallel with more
-        // than one thread, gives the one order.)
-        let longest_first =
-            |a: &(f64, EdgeKey), b: &(f64, EdgeKey)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
-        if rayon::current_num_threads() > 1 {
-            cands.par_sort_unstable_by(longest_first);
-        } else {
-            cands.sort_unstable_by(longest_first);
-        }
+        // (The edges are distinct: an unstable sort gives the one order.)
+        super::queue::sort_unstable_by(&mut cands, |a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         cands
     }
 }
