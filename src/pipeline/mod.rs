@@ -610,24 +610,28 @@ fn mesh_edge_match(
     field: &SizeField,
     refined: &[kurbo::Point],
 ) -> crate::sizing::EdgeMatch {
+    use rayon::prelude::*;
     let key = |p: kurbo::Point| (p.x.to_bits(), p.y.to_bits());
-    let refined: std::collections::HashSet<(u64, u64)> = refined.iter().map(|&p| key(p)).collect();
-    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * mesh.triangle_count());
-    for t in 0..mesh.triangle_count() {
-        let c = mesh.triangle(t);
-        for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])] {
-            edges.push((a.min(b), a.max(b)));
-        }
-    }
-    edges.sort_unstable();
+    let refined: rustc_hash::FxHashSet<(u64, u64)> = refined.iter().map(|&p| key(p)).collect();
+    // The triangles' edges, gathered and sorted in parallel, each once.
+    let mut edges: Vec<(u32, u32)> = (0..mesh.triangle_count())
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let c = mesh.triangle(t);
+            [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])]
+                .into_iter()
+                .map(|(a, b)| (a.min(b), a.max(b)))
+        })
+        .collect();
+    edges.par_sort_unstable();
     edges.dedup();
-    crate::sizing::edge_match(
-        field,
-        edges
-            .into_iter()
-            .map(|(a, b)| (mesh.nodes[a as usize], mesh.nodes[b as usize])),
-        |a, b| refined.contains(&key(a)) || refined.contains(&key(b)),
-    )
+    let ends: Vec<(kurbo::Point, kurbo::Point)> = edges
+        .par_iter()
+        .map(|&(a, b)| (mesh.nodes[a as usize], mesh.nodes[b as usize]))
+        .collect();
+    crate::sizing::edge_match(field, &ends, |a, b| {
+        refined.contains(&key(a)) || refined.contains(&key(b))
+    })
 }
 
 /// The warning for shapes whose regions the mesh lost (see

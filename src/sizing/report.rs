@@ -64,21 +64,21 @@ pub struct EdgeMatch {
 }
 
 /// The match of `edges` (end points) against `field`; `refined(a, b)` says
-/// whether the optimizer refined the edge below the field.
+/// whether the optimizer refined the edge below the field. The ratios are
+/// computed and sorted in parallel (the counts and the median do not depend
+/// on the order).
 pub(crate) fn edge_match(
     field: &SizeField,
-    edges: impl Iterator<Item = (Point, Point)>,
-    refined: impl Fn(Point, Point) -> bool,
+    edges: &[(Point, Point)],
+    refined: impl Fn(Point, Point) -> bool + Sync,
 ) -> EdgeMatch {
-    let mut ratios = Vec::new();
-    let mut left_out = 0;
-    for (a, b) in edges {
-        if refined(a, b) {
-            left_out += 1;
-            continue;
-        }
-        ratios.push(a.distance(b) / field.at_mid(a, b));
-    }
+    use rayon::prelude::*;
+    let mut ratios: Vec<f64> = edges
+        .par_iter()
+        .filter(|&&(a, b)| !refined(a, b))
+        .map(|&(a, b)| a.distance(b) / field.at_mid(a, b))
+        .collect();
+    let left_out = edges.len() - ratios.len();
     let mut histogram = [0usize; 7];
     let mut matched = 0usize;
     for &r in &ratios {
@@ -88,7 +88,8 @@ pub(crate) fn edge_match(
             matched += 1;
         }
     }
-    ratios.sort_by(f64::total_cmp);
+    // (values equal under `total_cmp` are the same bits: any sort gives one order)
+    ratios.par_sort_unstable_by(f64::total_cmp);
     let median_ratio = if ratios.is_empty() {
         0.0
     } else {

@@ -126,7 +126,7 @@ impl Schedule<'_> {
                 let this = &*self;
                 let plan = |&(b, e): &(u64, EdgeKey)| this.plan_collapse(b, e, factor);
                 let plans: Vec<CollapseAhead> = if batch.len() >= STAGE_PAR_MIN {
-                    batch.par_iter().map(plan).collect()
+                    ahead.window(|| batch.par_iter().map(plan).collect())
                 } else {
                     batch.iter().map(plan).collect()
                 };
