@@ -10,7 +10,7 @@ comparable. Python 3 standard library only.
 
     cargo build --release --locked
     python3 benches/threads.py [--reps 5] [--svg-dir ../shared/data/svg-dev]
-        [--files a.svg,b.svg] BIN [BIN ...]
+        [--files a.svg,b.svg | --largest 10] BIN [BIN ...]
 
 The default drawings are the three slowest of the dev set (issue 20's list).
 Prints a line per drawing: each build's best t1, t2 and t1/t2, then each
@@ -36,8 +36,9 @@ SLOWEST = [
 ]
 
 
-def run(binary, svg, out, threads):
-    """Wall seconds of one run and its stages' seconds; exits on a failed run."""
+def run(binary, svg, out, threads, refused_ok=False):
+    """Wall seconds of one run and its stages' seconds; exits on a failed run
+    (with `refused_ok`, returns None where the input is refused: exit 2)."""
     start = time.perf_counter()
     done = subprocess.run(
         [binary, svg, "-o", out, "--threads", str(threads), "--stats", "-q"],
@@ -46,6 +47,8 @@ def run(binary, svg, out, threads):
         text=True,
     )
     wall = time.perf_counter() - start
+    if refused_ok and done.returncode == 2:
+        return None
     if done.returncode != 0:
         sys.exit(f"{binary} {svg} --threads {threads}: exit {done.returncode}: {done.stderr.strip()}")
     try:
@@ -66,15 +69,40 @@ def main():
         help="folder the drawings are relative to",
     )
     ap.add_argument("--files", help="comma-separated drawings (default: the three slowest)")
+    ap.add_argument(
+        "--largest",
+        type=int,
+        metavar="N",
+        help="instead of --files: the N largest files of --svg-dir that mesh (issue 41's "
+        "\"ten largest dev drawings\"; a file the first build refuses, exit 2, is skipped "
+        "and the next largest taken)",
+    )
     args = ap.parse_args()
     files = args.files.split(",") if args.files else SLOWEST
+    wanted = None
+    if args.largest:
+        sized = []
+        for root, _, names in os.walk(args.svg_dir):
+            for name in names:
+                if name.endswith(".svg"):
+                    path = os.path.join(root, name)
+                    sized.append((-os.path.getsize(path), os.path.relpath(path, args.svg_dir)))
+        files = [rel for _, rel in sorted(sized)]
+        wanted = args.largest
     differ = False
     ratios = {b: [] for b in args.bins}
     # (build, threads) -> stage -> seconds of the best runs, summed over drawings
     stage_sum = {(b, t): {} for b in args.bins for t in (1, 2)}
+    measured = 0
     with tempfile.TemporaryDirectory() as tmp:
         for rel in files:
+            if wanted is not None and measured == wanted:
+                break
             svg = os.path.join(args.svg_dir, rel)
+            if wanted is not None and run(args.bins[0], svg, os.path.join(tmp, "probe.msh"), 1, True) is None:
+                print(f"{os.path.basename(rel)[:30]:30} | skipped: refused (exit 2)", flush=True)
+                continue
+            measured += 1
             best = {}
             best_stages = {}
             for _ in range(args.reps):
