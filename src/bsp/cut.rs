@@ -7,6 +7,7 @@ use crate::mesh::{TriMesh, VertexId};
 use crate::stage::Stage;
 use crate::{Error, Result};
 use kurbo::{Point, Rect};
+use smallvec::SmallVec;
 
 /// A uniform grid over the box holding, per cell, the segments whose
 /// bounding box meets it. Cell indices are monotone in the coordinate, so two
@@ -100,30 +101,55 @@ fn crosses_interior(t: [Point; 3], a: Point, b: Point) -> bool {
     o.contains(&Orientation::CounterClockwise) && o.contains(&Orientation::Clockwise)
 }
 
-/// Split `cell` by line `lines[lid]`, if the line strictly separates two of its vertices.
-fn split(cell: &Cell, lines: &[Line], lid: usize) -> Option<(Cell, Cell)> {
+/// Split `cell` by line `lines[lid]`, if the line strictly separates two of
+/// its vertices; the cell back unchanged otherwise. The cell's points move
+/// into the two halves: only a point on the line (and a crossing made) is
+/// copied, once. (Every point was copied twice before, each copy four GMP
+/// allocations: on 0335, with 685 000 exact crossings, the cut's 13.1 s
+/// went to 12.2 s, medians of three.)
+fn split(cell: Cell, lines: &[Line], lid: usize) -> Result<(Cell, Cell), Cell> {
     let l = &lines[lid];
-    let signs: Vec<Orientation> = cell
+    let signs: SmallVec<[Orientation; 16]> = cell
         .iter()
         .map(|(v, _)| orient2d_q(&l.p, &l.q, v))
         .collect();
     if !(signs.contains(&Orientation::CounterClockwise) && signs.contains(&Orientation::Clockwise))
     {
-        return None;
+        return Err(cell);
     }
-    // (point, line of the original edge it starts or lies on, lies on the cut line)
-    let mut pos: Vec<(PointQ, usize, bool)> = Vec::new();
-    let mut neg: Vec<(PointQ, usize, bool)> = Vec::new();
+    /// One side: its points with the line of the edge each starts (or lies
+    /// on) in the cell, and whether each lies on the cut line.
+    #[derive(Default)]
+    struct Side {
+        cell: Cell,
+        on: SmallVec<[bool; 16]>,
+    }
+    impl Side {
+        fn push(&mut self, v: PointQ, e: usize, on: bool) {
+            self.cell.push((v, e));
+            self.on.push(on);
+        }
+        /// An edge between two points on the cut line lies on it.
+        fn finish(mut self, lid: usize) -> Cell {
+            let m = self.cell.len();
+            for k in 0..m {
+                if self.on[k] && self.on[(k + 1) % m] {
+                    self.cell[k].1 = lid;
+                }
+            }
+            self.cell
+        }
+    }
     let n = cell.len();
-    for i in 0..n {
+    let (mut pos, mut neg) = (Side::default(), Side::default());
+    for (i, (v, e)) in cell.into_iter().enumerate() {
         let j = (i + 1) % n;
-        let (v, e) = &cell[i];
         match signs[i] {
-            Orientation::CounterClockwise => pos.push((v.clone(), *e, false)),
-            Orientation::Clockwise => neg.push((v.clone(), *e, false)),
+            Orientation::CounterClockwise => pos.push(v, e, false),
+            Orientation::Clockwise => neg.push(v, e, false),
             Orientation::Collinear => {
-                pos.push((v.clone(), *e, true));
-                neg.push((v.clone(), *e, true));
+                pos.push(v.clone(), e, true);
+                neg.push(v, e, true);
             }
         }
         let opposite = matches!(
@@ -132,24 +158,14 @@ fn split(cell: &Cell, lines: &[Line], lid: usize) -> Option<(Cell, Cell)> {
                 | (Orientation::Clockwise, Orientation::CounterClockwise)
         );
         if opposite {
-            let el = &lines[*e];
+            let el = &lines[e];
             let x = line_intersection(&el.p, &el.q, &l.p, &l.q)
                 .expect("internal: a strictly crossed edge is not parallel to the cut");
-            pos.push((x.clone(), *e, true));
-            neg.push((x, *e, true));
+            pos.push(x.clone(), e, true);
+            neg.push(x, e, true);
         }
     }
-    let finish = |poly: Vec<(PointQ, usize, bool)>| -> Cell {
-        let m = poly.len();
-        (0..m)
-            .map(|k| {
-                let next_on = poly[(k + 1) % m].2;
-                let line = if poly[k].2 && next_on { lid } else { poly[k].1 };
-                (poly[k].0.clone(), line)
-            })
-            .collect()
-    };
-    Some((finish(pos), finish(neg)))
+    Ok((pos.finish(lid), neg.finish(lid)))
 }
 
 /// Seed triangles cut at once, in parallel, before their cells go into the
@@ -206,12 +222,12 @@ fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
         let lid = lines.len() - 1;
         let mut next = Vec::with_capacity(cells.len() + 4);
         for cell in cells.drain(..) {
-            match split(&cell, &lines, lid) {
-                Some((a, b)) => {
+            match split(cell, &lines, lid) {
+                Ok((a, b)) => {
                     next.push(a);
                     next.push(b);
                 }
-                None => next.push(cell),
+                Err(cell) => next.push(cell),
             }
         }
         cells = next;
@@ -378,7 +394,9 @@ mod tests {
             p: PointQ::from_point(p(0.0, 0.0)),
             q: PointQ::from_point(p(2.0, 1.0)),
         });
-        let (a, b) = split(&cell, &lines, 4).expect("separates");
+        let Ok((a, b)) = split(cell.clone(), &lines, 4) else {
+            panic!("does not separate")
+        };
         assert_eq!(a.len() + b.len(), 7);
         let on_cut = |c: &Cell| c.iter().filter(|(_, l)| *l == 4).count();
         assert_eq!(on_cut(&a), 1);
@@ -388,6 +406,6 @@ mod tests {
             p: PointQ::from_point(p(0.0, 0.0)),
             q: PointQ::from_point(p(5.0, 0.0)),
         });
-        assert!(split(&cell, &lines, 5).is_none());
+        assert!(split(cell, &lines, 5).is_err());
     }
 }
