@@ -2,7 +2,7 @@
 
 use super::seed::Seed;
 use super::{BspInput, BspOptions, BspSegment, BspStats, fan};
-use crate::exact::{Orientation, PointQ, line_intersection, orient2d, orient2d_q};
+use crate::exact::{Orientation, PointQ, line_intersection_f64, orient2d, orient2d_q};
 use crate::mesh::{TriMesh, VertexId};
 use crate::stage::Stage;
 use crate::{Error, Result};
@@ -76,10 +76,23 @@ impl Grid {
     }
 }
 
-/// A supporting line through two `f64` points.
+/// A supporting line through two `f64` points, `a` and `b`, also held exactly.
 struct Line {
+    a: Point,
+    b: Point,
     p: PointQ,
     q: PointQ,
+}
+
+impl Line {
+    fn through(a: Point, b: Point) -> Self {
+        Line {
+            a,
+            b,
+            p: PointQ::from_point(a),
+            q: PointQ::from_point(b),
+        }
+    }
 }
 
 /// A convex cell: its vertices counter-clockwise, each with the index (into
@@ -159,7 +172,7 @@ fn split(cell: Cell, lines: &[Line], lid: usize) -> Result<(Cell, Cell), Cell> {
         );
         if opposite {
             let el = &lines[e];
-            let x = line_intersection(&el.p, &el.q, &l.p, &l.q)
+            let x = line_intersection_f64(el.a, el.b, l.a, l.b)
                 .expect("internal: a strictly crossed edge is not parallel to the cut");
             pos.push(x.clone(), e, true);
             neg.push(x, e, true);
@@ -202,10 +215,7 @@ fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
         return CutTriangle::Whole;
     }
     let mut lines: Vec<Line> = (0..3)
-        .map(|k| Line {
-            p: PointQ::from_point(tp[k]),
-            q: PointQ::from_point(tp[(k + 1) % 3]),
-        })
+        .map(|k| Line::through(tp[k], tp[(k + 1) % 3]))
         .collect();
     let mut cells: Vec<Cell> = vec![(0..3).map(|k| (PointQ::from_point(tp[k]), k)).collect()];
     let mut seen_lines: Vec<(Point, Point)> = Vec::new();
@@ -215,10 +225,7 @@ fn cut_one(input: &BspInput, grid: &Grid, tp: [Point; 3]) -> CutTriangle {
             continue;
         }
         seen_lines.push((seg.a, seg.b));
-        lines.push(Line {
-            p: PointQ::from_point(seg.a),
-            q: PointQ::from_point(seg.b),
-        });
+        lines.push(Line::through(seg.a, seg.b));
         let lid = lines.len() - 1;
         let mut next = Vec::with_capacity(cells.len() + 4);
         for cell in cells.drain(..) {
@@ -381,19 +388,13 @@ mod tests {
     fn split_square() {
         let corners = [p(0.0, 0.0), p(2.0, 0.0), p(2.0, 2.0), p(0.0, 2.0)];
         let mut lines: Vec<Line> = (0..4)
-            .map(|k| Line {
-                p: PointQ::from_point(corners[k]),
-                q: PointQ::from_point(corners[(k + 1) % 4]),
-            })
+            .map(|k| Line::through(corners[k], corners[(k + 1) % 4]))
             .collect();
         let cell: Cell = (0..4)
             .map(|k| (PointQ::from_point(corners[k]), k))
             .collect();
         // Through a corner and an edge midpoint.
-        lines.push(Line {
-            p: PointQ::from_point(p(0.0, 0.0)),
-            q: PointQ::from_point(p(2.0, 1.0)),
-        });
+        lines.push(Line::through(p(0.0, 0.0), p(2.0, 1.0)));
         let Ok((a, b)) = split(cell.clone(), &lines, 4) else {
             panic!("does not separate")
         };
@@ -402,10 +403,7 @@ mod tests {
         assert_eq!(on_cut(&a), 1);
         assert_eq!(on_cut(&b), 1);
         // A line along an edge does not split.
-        lines.push(Line {
-            p: PointQ::from_point(p(0.0, 0.0)),
-            q: PointQ::from_point(p(5.0, 0.0)),
-        });
+        lines.push(Line::through(p(0.0, 0.0), p(5.0, 0.0)));
         assert!(split(cell, &lines, 5).is_err());
     }
 }

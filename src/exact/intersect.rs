@@ -2,7 +2,8 @@
 
 use super::predicates::{Orientation, orient2d_q};
 use super::rational::PointQ;
-use rug::Rational;
+use kurbo::Point;
+use rug::{Integer, Rational};
 
 /// How two closed segments meet.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -37,6 +38,59 @@ pub(crate) fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) 
     let x = bax * &t + &a.x;
     let y = bay * &t + &a.y;
     Some(PointQ::from_rationals(x, y))
+}
+
+/// [`line_intersection`] of the lines through `f64` points, by integer
+/// arithmetic: every coordinate is an integer times a power of two, so after
+/// scaling all eight by the smallest such power the formula needs integer
+/// products and one exact division per coordinate. The rational version
+/// reduces every one of its dozen intermediate results by a gcd; the BSP
+/// cuts with lines through input points only, 685 000 crossings on 0335.
+/// The same point (rationals are kept reduced).
+pub(crate) fn line_intersection_f64(a: Point, b: Point, c: Point, d: Point) -> Option<PointQ> {
+    let parts = [a.x, a.y, b.x, b.y, c.x, c.y, d.x, d.y].map(dyadic);
+    let scale = parts
+        .iter()
+        .filter(|&&(m, _)| m != 0)
+        .map(|&(_, e)| e)
+        .min()
+        .unwrap_or(0);
+    let [ax, ay, bx, by, cx, cy, dx, dy] =
+        parts.map(|(m, e)| Integer::from(m) << u32::try_from(e - scale).unwrap_or(0));
+    let (bax, bay) = (Integer::from(&bx - &ax), Integer::from(&by - &ay));
+    let (dcx, dcy) = (dx - &cx, dy - &cy);
+    let denom = Integer::from(&bax * &dcy) - Integer::from(&bay * &dcx);
+    if denom == 0 {
+        return None;
+    }
+    let num = (cx - &ax) * &dcy - (cy - &ay) * &dcx;
+    // a + (b - a) · num / denom, scaled back.
+    let coordinate = |a: Integer, ba: Integer| {
+        let mut r = Rational::from((a * &denom + ba * &num, denom.clone()));
+        r <<= scale;
+        r
+    };
+    Some(PointQ::from_rationals(
+        coordinate(ax, bax),
+        coordinate(ay, bay),
+    ))
+}
+
+/// A finite `f64` as `m · 2^e` (`m` 0 for zero).
+fn dyadic(v: f64) -> (i64, i32) {
+    debug_assert!(v.is_finite(), "internal: finite coordinate");
+    if v == 0.0 {
+        return (0, 0);
+    }
+    let bits = v.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32;
+    let fraction = (bits & ((1 << 52) - 1)) as i64;
+    let (m, e) = if exponent == 0 {
+        (fraction, -1074)
+    } else {
+        (fraction | (1 << 52), exponent - 1075)
+    };
+    (if bits >> 63 == 1 { -m } else { m }, e)
 }
 
 /// `p · (b - a)`, exactly: a monotone parameter along the direction `a → b`.
@@ -121,7 +175,6 @@ pub(crate) fn segment_intersection(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use kurbo::Point;
     use proptest::prelude::*;
 
     fn q(x: f64, y: f64) -> PointQ {
@@ -218,6 +271,57 @@ mod tests {
                 }
                 _ => prop_assert!(false, "asymmetric: {:?} vs {:?}", r, s),
             }
+        }
+    }
+
+    /// Coordinates of every kind: small integers (parallel, collinear and
+    /// coincident lines), fractions, and far apart magnitudes down to
+    /// subnormals, either sign.
+    fn coordinate() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            (-3i32..4).prop_map(f64::from),
+            -1e3f64..1e3,
+            (-1e3f64..1e3, -320i32..300).prop_map(|(m, e)| m * 2f64.powi(e)),
+            Just(5e-324),
+            Just(-2.5e-308),
+            Just(1.7e308),
+        ]
+    }
+
+    #[test]
+    fn dyadic_parts() {
+        for v in [1.0, -1.0, 0.75, 3.0e-5, -1e300, 5e-324, 2.2e-308, f64::MAX] {
+            let (m, e) = dyadic(v);
+            let mut back = Rational::from(m);
+            back <<= e;
+            assert_eq!(back, Rational::from_f64(v).unwrap(), "{v}");
+        }
+        assert_eq!(dyadic(0.0).0, 0);
+        assert_eq!(dyadic(-0.0).0, 0);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2048, failure_persistence: None, ..ProptestConfig::default() })]
+
+        /// The integer version finds the rational version's point, or its
+        /// `None`, on lines of every kind.
+        #[test]
+        fn integer_line_intersection_is_the_rational_one(
+            c in proptest::array::uniform8(coordinate())
+        ) {
+            let [a, b, p, r] = [
+                Point::new(c[0], c[1]),
+                Point::new(c[2], c[3]),
+                Point::new(c[4], c[5]),
+                Point::new(c[6], c[7]),
+            ];
+            let exact = line_intersection(
+                &PointQ::from_point(a),
+                &PointQ::from_point(b),
+                &PointQ::from_point(p),
+                &PointQ::from_point(r),
+            );
+            prop_assert_eq!(line_intersection_f64(a, b, p, r), exact);
         }
     }
 }

@@ -27,7 +27,7 @@ mod intersect;
 pub(crate) mod predicates;
 pub(crate) mod rational;
 
-pub(crate) use intersect::{SegmentIntersection, line_intersection, segment_intersection};
+pub(crate) use intersect::{SegmentIntersection, line_intersection_f64, segment_intersection};
 pub(crate) use predicates::{
     Orientation, PointRef, near_line, orient2d, orient2d_mixed, orient2d_q, within,
 };
