@@ -1,7 +1,7 @@
 //! Exact intersections of lines and segments.
 
 use super::predicates::{Orientation, orient2d_q};
-use super::rational::PointQ;
+use super::rational::{PointQ, dyadic};
 use kurbo::Point;
 use rug::{Integer, Rational};
 
@@ -74,23 +74,6 @@ pub(crate) fn line_intersection_f64(a: Point, b: Point, c: Point, d: Point) -> O
         coordinate(ax, bax),
         coordinate(ay, bay),
     ))
-}
-
-/// A finite `f64` as `m · 2^e` (`m` 0 for zero).
-fn dyadic(v: f64) -> (i64, i32) {
-    debug_assert!(v.is_finite(), "internal: finite coordinate");
-    if v == 0.0 {
-        return (0, 0);
-    }
-    let bits = v.to_bits();
-    let exponent = ((bits >> 52) & 0x7ff) as i32;
-    let fraction = (bits & ((1 << 52) - 1)) as i64;
-    let (m, e) = if exponent == 0 {
-        (fraction, -1074)
-    } else {
-        (fraction | (1 << 52), exponent - 1075)
-    };
-    (if bits >> 63 == 1 { -m } else { m }, e)
 }
 
 /// `p · (b - a)`, exactly: a monotone parameter along the direction `a → b`.
