@@ -137,7 +137,7 @@ fn nearest_f64(r: &Rational) -> (f64, bool) {
     // r against (t + away) / 2 = sum · 2^(e - 1), times den > 0.
     let (num, den) = (r.numer(), r.denom());
     let order = if e >= 1 {
-        num.cmp(&(sum * den << u32::try_from(e - 1).unwrap_or(0)))
+        num.cmp(&((sum * den) << u32::try_from(e - 1).unwrap_or(0)))
     } else {
         Integer::from(num << u32::try_from(1 - e).unwrap_or(0)).cmp(&(sum * den))
     };
