@@ -220,7 +220,9 @@ impl Schedule<'_> {
                         (Outcome::Rejected(r), by_role, floored)
                     }
                     CollapseDirection::Unneeded => {
-                        unreachable!("internal: the collapse decided in the first direction was applied")
+                        unreachable!(
+                            "internal: the collapse decided in the first direction was applied"
+                        )
                     }
                 };
                 if matches!(out, Outcome::Rejected(Reject::Energy)) && floored {

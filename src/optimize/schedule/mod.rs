@@ -211,6 +211,9 @@ const PLAN_AHEAD: usize = 256;
 /// The step of [`ShortestFirst`](queue::ShortestFirst)'s summary of its sorted edges: a block of
 /// sixteen 16-byte entries is four cache lines.
 const SUMMARY_STEP: usize = 16;
+/// The top summary of the collapse round's sorted edges holds at most this
+/// many (16 KiB: it stays in the first-level cache).
+const SUMMARY_TOP: usize = 1024;
 
 /// The fewest edges queued again worth staging to plan in parallel: two (a
 /// lone edge is planned when popped). Staging from 16 left 9 % of organ's
