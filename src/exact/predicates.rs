@@ -2,7 +2,7 @@
 
 use super::rational::{Interval, PointQ};
 use kurbo::Point;
-use rug::Rational;
+use rug::{Integer, Rational};
 use std::cmp::Ordering;
 
 /// The orientation of an ordered triple of points.
@@ -94,13 +94,23 @@ fn orient2d_enclosures(
 }
 
 /// The orientation computed in rationals, without any filter.
+///
+/// In integers, with every fraction left unreduced: with `p - q` written
+/// `num(p, q) / (p.den · q.den)`, the determinant
+/// `(b.x - a.x)(c.y - a.y) - (b.y - a.y)(c.x - a.x)` times the positive
+/// `a.x.den · a.y.den · b.x.den · b.y.den · c.x.den · c.y.den` is
+/// `num(b.x, a.x) · num(c.y, a.y) · b.y.den · c.x.den
+///  - num(b.y, a.y) · num(c.x, a.x) · b.x.den · c.y.den`.
+/// Rational arithmetic reduced every intermediate by a gcd: on 0335 (the
+/// BSP's tagging tests every vertex exactly on its segment, where the filter
+/// cannot decide) those gcds were most of the predicate's time.
 pub fn orient2d_q_exact(a: &PointQ, b: &PointQ, c: &PointQ) -> Orientation {
-    let bax = Rational::from(&b.x - &a.x);
-    let bay = Rational::from(&b.y - &a.y);
-    let cax = Rational::from(&c.x - &a.x);
-    let cay = Rational::from(&c.y - &a.y);
-    let l = bax * cay;
-    let r = bay * cax;
+    // num(p, q) = p.num · q.den - q.num · p.den
+    fn num(p: &Rational, q: &Rational) -> Integer {
+        Integer::from(p.numer() * q.denom()) - Integer::from(q.numer() * p.denom())
+    }
+    let l = num(&b.x, &a.x) * num(&c.y, &a.y) * Integer::from(b.y.denom() * c.x.denom());
+    let r = num(&b.y, &a.y) * num(&c.x, &a.x) * Integer::from(b.x.denom() * c.y.denom());
     Orientation::from_ordering(l.cmp(&r))
 }
 
@@ -324,6 +334,33 @@ mod tests {
             let (ra, rb, rc) = (r(&a, which & 1 != 0), r(&b, which & 2 != 0), r(&c, which & 4 != 0));
             prop_assert_eq!(orient2d_mixed(ra, rb, rc), exact);
             prop_assert_eq!(orient2d_mixed(rb, ra, rc), exact.reversed());
+        }
+
+        /// Three rational points with unrelated denominators, all on one line
+        /// (the points at ratios n/d of the way between two `f64` points) or
+        /// one of them moved off it by a rational amount: the unreduced
+        /// integer determinant decides as the reduced rational one does.
+        #[test]
+        fn exact_agrees_with_reference_on_rational_triples(
+            (ax, ay, bx, by) in (-1e3..1e3f64, -1e3..1e3f64, -1e3..1e3f64, -1e3..1e3f64),
+            ratios in prop::array::uniform3((-60i32..60, 1u32..60)),
+            off in (0u8..3, -3i32..4, 1u32..97),
+        ) {
+            let (p0, p1) = (q(ax, ay), q(bx, by));
+            let mut pts: Vec<PointQ> = ratios
+                .iter()
+                .map(|&(n, d)| p0.lerp_ratio(&p1, f64::from(n), f64::from(d)))
+                .collect();
+            let (which, num, den) = off;
+            if num != 0 {
+                let delta = Rational::from((num, den)) / Rational::from(1u32 << 20);
+                let i = usize::from(which);
+                let y = Rational::from(&pts[i].y + &delta);
+                pts[i] = PointQ::from_rationals(pts[i].x.clone(), y);
+            }
+            let (a, b, c) = (&pts[0], &pts[1], &pts[2]);
+            prop_assert_eq!(orient2d_q_exact(a, b, c).sign(), reference(a, b, c));
+            prop_assert_eq!(orient2d_q_exact(b, a, c).sign(), -reference(a, b, c));
         }
 
         #[test]
