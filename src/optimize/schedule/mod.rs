@@ -305,9 +305,9 @@ pub(crate) struct Schedule<'a> {
     /// found a gain on: an edge whose ends' faces have not changed since
     /// (so neither has its quad) and that had no gain then has none now.
     swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
-    /// In the worst-element phase (`repair.rs`), by vertex slot: the vertices
-    /// whose edges and moves the passes consider (`None`: every vertex).
-    region: Option<Vec<bool>>,
+    /// In the worst-element phase (`repair.rs`): the vertices whose edges
+    /// and moves the passes consider (`None`: every vertex).
+    region: Option<repair::Region>,
     /// In the worst-element phase: splits may not make their faces worse
     /// than before or than a corner of α allows (`repair.rs`).
     split_bounded: bool,
