@@ -98,9 +98,9 @@ fn orient2d_enclosures(
 /// In integers, with every fraction left unreduced: with `p - q` written
 /// `num(p, q) / (p.den · q.den)`, the determinant
 /// `(b.x - a.x)(c.y - a.y) - (b.y - a.y)(c.x - a.x)` times the positive
-/// `a.x.den · a.y.den · b.x.den · b.y.den · c.x.den · c.y.den` is
-/// `num(b.x, a.x) · num(c.y, a.y) · b.y.den · c.x.den
-///  - num(b.y, a.y) · num(c.x, a.x) · b.x.den · c.y.den`.
+/// `a.x.den · a.y.den · b.x.den · b.y.den · c.x.den · c.y.den` is `l - r`
+/// with `l = num(b.x, a.x) · num(c.y, a.y) · b.y.den · c.x.den` and
+/// `r = num(b.y, a.y) · num(c.x, a.x) · b.x.den · c.y.den`.
 /// Rational arithmetic reduced every intermediate by a gcd: on 0335 (the
 /// BSP's tagging tests every vertex exactly on its segment, where the filter
 /// cannot decide) those gcds were most of the predicate's time.

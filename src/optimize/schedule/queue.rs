@@ -578,12 +578,14 @@ mod queue_tests {
     #[test]
     fn the_summaries_find_the_place_a_binary_search_finds() {
         for n in [0usize, 1, 2, 17, 1024, 1025, 16 * 1024 + 1, 300_000] {
-            let mut q = ShortestFirst::<u64>::default();
             // even bits, some repeated with other keys: every odd bits value
             // is absent, and equal bits order by the key
-            q.sorted = (0..n)
-                .map(|i| ((i / 3 * 2) as u64, key(i % 3, 0)))
-                .collect();
+            let mut q = ShortestFirst::<u64> {
+                sorted: (0..n)
+                    .map(|i| ((i / 3 * 2) as u64, key(i % 3, 0)))
+                    .collect(),
+                ..ShortestFirst::default()
+            };
             q.sort();
             let levels = q.summary.len();
             assert!(n <= SUMMARY_TOP || levels > 0, "{n}: no summary");
