@@ -23,7 +23,7 @@ pub(super) enum CellFan {
 
 /// Decide how to triangulate the convex cell `pts` ([`CellFan`]), from its
 /// points alone (exact orientations), so cells are planned in parallel.
-pub(super) fn plan_cell(pts: &[PointQ]) -> CellFan {
+pub(super) fn plan_cell(pts: &[&PointQ]) -> CellFan {
     let n = pts.len();
     if n == 3 {
         return CellFan::Corner(0);
@@ -31,14 +31,14 @@ pub(super) fn plan_cell(pts: &[PointQ]) -> CellFan {
     let fan_ok = |k: usize| {
         (1..n - 1).all(|i| {
             let (b, c) = (&pts[(k + i) % n], &pts[(k + i + 1) % n]);
-            orient2d_q(&pts[k], b, c) == Orientation::CounterClockwise
+            orient2d_q(pts[k], b, c) == Orientation::CounterClockwise
         })
     };
     match (0..n).find(|&k| fan_ok(k)) {
         Some(k) => CellFan::Corner(k),
-        None => {
-            CellFan::Barycentre(PointQ::barycentre(pts).expect("internal: a cell has vertices"))
-        }
+        None => CellFan::Barycentre(
+            PointQ::barycentre(pts.iter().copied()).expect("internal: a cell has vertices"),
+        ),
     }
 }
 
@@ -105,32 +105,56 @@ impl VertexMap {
     }
 }
 
-/// Triangulate one convex cell `pts` into `mesh` as `how` says
-/// ([`plan_cell`]), its corners shared through `vmap`. Returns whether a
-/// barycentre vertex was added.
-pub(super) fn emit_cell(
+/// Triangulate the convex cells of one seed triangle into `mesh`, each as
+/// its [`CellFan`] says ([`plan_cell`]): `cells` name their corners (counter-
+/// clockwise) by index into `corners`, which are shared through `vmap`. Each
+/// corner is looked up once, when a cell first uses it, so vertices are
+/// numbered as the cells' corners come, in order. Returns the number of
+/// barycentre vertices added.
+pub(super) fn emit_cells(
     mesh: &mut TriMesh,
     vmap: &mut VertexMap,
-    pts: Vec<Corner>,
-    how: CellFan,
-) -> bool {
-    let ids: Vec<VertexId> = pts.into_iter().map(|c| vmap.get_or_add(mesh, c)).collect();
-    let n = ids.len();
-    match how {
-        CellFan::Corner(k) => {
-            for i in 1..n - 1 {
-                mesh.add_face([ids[k], ids[(k + i) % n], ids[(k + i + 1) % n]]);
-            }
-            false
+    corners: Vec<Corner>,
+    cells: Vec<(Vec<u32>, CellFan)>,
+) -> usize {
+    let mut corners: Vec<Option<Corner>> = corners.into_iter().map(Some).collect();
+    let mut vertex: Vec<Option<VertexId>> = vec![None; corners.len()];
+    let mut ids: Vec<VertexId> = Vec::new();
+    let mut barycentres = 0;
+    for (cell, how) in cells {
+        ids.clear();
+        for &i in &cell {
+            let i = i as usize;
+            let id = match vertex[i] {
+                Some(id) => id,
+                None => {
+                    let c = corners[i]
+                        .take()
+                        .expect("internal: a corner is looked up once");
+                    let id = vmap.get_or_add(mesh, c);
+                    vertex[i] = Some(id);
+                    id
+                }
+            };
+            ids.push(id);
         }
-        CellFan::Barycentre(c) => {
-            let cid = mesh.add_vertex_q(c, VertexTag::default());
-            for i in 0..n {
-                mesh.add_face([cid, ids[i], ids[(i + 1) % n]]);
+        let n = ids.len();
+        match how {
+            CellFan::Corner(k) => {
+                for i in 1..n - 1 {
+                    mesh.add_face([ids[k], ids[(k + i) % n], ids[(k + i + 1) % n]]);
+                }
             }
-            true
+            CellFan::Barycentre(c) => {
+                let cid = mesh.add_vertex_q(c, VertexTag::default());
+                for i in 0..n {
+                    mesh.add_face([cid, ids[i], ids[(i + 1) % n]]);
+                }
+                barycentres += 1;
+            }
         }
     }
+    barycentres
 }
 
 /// `-0.0` and `0.0` are the same point.

@@ -231,17 +231,19 @@ impl PointQ {
 
     /// The average of `points` (for a convex polygon: a point of its
     /// interior whenever the polygon has positive area). `None` when empty.
-    pub fn barycentre(points: &[PointQ]) -> Option<PointQ> {
-        if points.is_empty() {
-            return None;
-        }
+    pub fn barycentre<'a>(points: impl IntoIterator<Item = &'a PointQ>) -> Option<PointQ> {
         let mut sx = Rational::new();
         let mut sy = Rational::new();
+        let mut count: u64 = 0;
         for p in points {
             sx += &p.x;
             sy += &p.y;
+            count += 1;
         }
-        let n = Rational::from(points.len() as u64);
+        if count == 0 {
+            return None;
+        }
+        let n = Rational::from(count);
         sx /= &n;
         sy /= &n;
         Some(PointQ::from_rationals(sx, sy))
