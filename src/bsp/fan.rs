@@ -361,6 +361,45 @@ pub(super) fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::
         .collect()
 }
 
+/// The faces of each rational vertex, in face order, in one array (one list
+/// per vertex slot was 716 000 allocations on 0335, and as many frees).
+struct Stars {
+    /// Where each vertex slot's faces start in `faces`; one entry more.
+    start: Vec<usize>,
+    faces: Vec<FaceId>,
+}
+
+impl Stars {
+    fn of_rational(mesh: &TriMesh) -> Self {
+        let mut start = vec![0usize; mesh.vertex_capacity() + 1];
+        for f in mesh.faces() {
+            for v in mesh.face(f) {
+                if mesh.is_rational(v) {
+                    start[v.index() + 1] += 1;
+                }
+            }
+        }
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
+        }
+        let mut next = start.clone();
+        let mut faces = vec![FaceId::from_index(0); start[start.len() - 1]];
+        for f in mesh.faces() {
+            for v in mesh.face(f) {
+                if mesh.is_rational(v) {
+                    faces[next[v.index()]] = f;
+                    next[v.index()] += 1;
+                }
+            }
+        }
+        Stars { start, faces }
+    }
+
+    fn of(&self, v: VertexId) -> &[FaceId] {
+        &self.faces[self.start[v.index()]..self.start[v.index() + 1]]
+    }
+}
+
 /// Round every rational vertex to an `f64` point when all its incident
 /// triangles stay exactly counter-clockwise: the nearest one, else one a few
 /// ulps away ([`round_candidates`]); repeat up to `passes` times while
@@ -376,14 +415,7 @@ pub(super) fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::
 /// vertices decided).
 pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32, deadline: &Deadline) -> Result<()> {
     for _ in 0..passes {
-        let mut star: Vec<Vec<FaceId>> = vec![Vec::new(); mesh.vertex_capacity()];
-        for f in mesh.faces() {
-            for v in mesh.face(f) {
-                if mesh.is_rational(v) {
-                    star[v.index()].push(f);
-                }
-            }
-        }
+        let star = Stars::of_rational(mesh);
         let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
         let mut changed = false;
         let mut decided = 0usize;
@@ -398,7 +430,7 @@ pub(super) fn round_vertices(mesh: &mut TriMesh, passes: u32, deadline: &Deadlin
                 }
                 decided += chunk.len();
                 let m: &TriMesh = mesh;
-                let decide = |&v: &VertexId| (v, rounded(m, v, &star[v.index()]));
+                let decide = |&v: &VertexId| (v, rounded(m, v, star.of(v)));
                 let moves: Vec<(VertexId, Option<kurbo::Point>)> =
                     if chunk.len() >= PAR_ROUND_MIN && rayon::current_num_threads() > 1 {
                         chunk.par_iter().map(decide).collect()
@@ -431,11 +463,7 @@ const PAR_ROUND_MIN: usize = 64;
 /// earlier vertices of its star rounded (lower levels) and the later ones not
 /// (higher levels), as in index order; the vertices of one level share no
 /// face and are decided independently.
-fn rounding_levels(
-    mesh: &TriMesh,
-    rational: &[VertexId],
-    star: &[Vec<FaceId>],
-) -> Vec<Vec<VertexId>> {
+fn rounding_levels(mesh: &TriMesh, rational: &[VertexId], star: &Stars) -> Vec<Vec<VertexId>> {
     let mut order = vec![usize::MAX; mesh.vertex_capacity()];
     for (i, v) in rational.iter().enumerate() {
         order[v.index()] = i;
@@ -444,7 +472,8 @@ fn rounding_levels(
     let mut levels: Vec<Vec<VertexId>> = Vec::new();
     for &v in rational {
         let mine = order[v.index()];
-        let lv = star[v.index()]
+        let lv = star
+            .of(v)
             .iter()
             .flat_map(|&f| mesh.face(f))
             .filter(|w| order[w.index()] < mine)
