@@ -443,16 +443,21 @@ mod tests {
         assert!(!crosses_interior(t, p(5.0, 1.0), p(7.0, 1.0)));
     }
 
-    #[test]
-    fn split_square() {
+    /// The square [0, 2]², as a cutting with one cell.
+    fn square() -> (Cutting, Cell) {
         let corners = [p(0.0, 0.0), p(2.0, 0.0), p(2.0, 2.0), p(0.0, 2.0)];
-        let mut cut = Cutting::new(
+        let cut = Cutting::new(
             (0..4)
                 .map(|k| Line::through(corners[k], corners[(k + 1) % 4]))
                 .collect(),
             corners.iter().map(|&c| PointQ::from_point(c)).collect(),
         );
-        let cell: Cell = (0..4).map(|k| (k as u32, k)).collect();
+        (cut, (0..4).map(|k| (k as u32, k)).collect())
+    }
+
+    #[test]
+    fn split_square() {
+        let (mut cut, cell) = square();
         // Through a corner and an edge midpoint.
         let lid = cut.push_line(p(0.0, 0.0), p(2.0, 1.0));
         let Ok((a, b)) = split(cell.clone(), &mut cut, lid) else {
@@ -478,17 +483,10 @@ mod tests {
 
     #[test]
     fn a_crossing_is_made_once_for_the_cells_beside_its_edge() {
-        // The unit square cut by a vertical line into two cells that share
+        // The square cut by a vertical line into two cells that share
         // the edge x = 1; a horizontal line then crosses that edge once and
         // the square's sides twice.
-        let corners = [p(0.0, 0.0), p(2.0, 0.0), p(2.0, 2.0), p(0.0, 2.0)];
-        let mut cut = Cutting::new(
-            (0..4)
-                .map(|k| Line::through(corners[k], corners[(k + 1) % 4]))
-                .collect(),
-            corners.iter().map(|&c| PointQ::from_point(c)).collect(),
-        );
-        let cell: Cell = (0..4).map(|k| (k as u32, k)).collect();
+        let (mut cut, cell) = square();
         let v = cut.push_line(p(1.0, -1.0), p(1.0, 3.0));
         let Ok((l, r)) = split(cell, &mut cut, v) else {
             panic!("does not separate")

@@ -48,13 +48,7 @@ pub(crate) fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) 
 /// cuts with lines through input points only, 685 000 crossings on 0335.
 /// The same point (rationals are kept reduced).
 pub(crate) fn line_intersection_f64(a: Point, b: Point, c: Point, d: Point) -> Option<PointQ> {
-    let parts = [a.x, a.y, b.x, b.y, c.x, c.y, d.x, d.y].map(dyadic);
-    let scale = parts
-        .iter()
-        .filter(|&&(m, _)| m != 0)
-        .map(|&(_, e)| e)
-        .min()
-        .unwrap_or(0);
+    let (parts, scale) = scaled_parts([a.x, a.y, b.x, b.y, c.x, c.y, d.x, d.y]);
     if let Some(words) = in_words(&parts, scale) {
         return line_intersection_words(words, scale);
     }
@@ -77,6 +71,20 @@ pub(crate) fn line_intersection_f64(a: Point, b: Point, c: Point, d: Point) -> O
         coordinate(ax, bax),
         coordinate(ay, bay),
     ))
+}
+
+/// The mantissas and exponents of eight coordinates ([`dyadic`]), and the
+/// smallest exponent of a non-zero one (0 if all are zero): the scale of
+/// [`line_intersection_f64`]'s integers.
+fn scaled_parts(c: [f64; 8]) -> ([(i64, i32); 8], i32) {
+    let parts = c.map(dyadic);
+    let scale = parts
+        .iter()
+        .filter(|&&(m, _)| m != 0)
+        .map(|&(_, e)| e)
+        .min()
+        .unwrap_or(0);
+    (parts, scale)
 }
 
 /// The eight scaled integers of [`line_intersection_f64`] as `i64`, when each
@@ -337,6 +345,15 @@ mod tests {
         assert_eq!(dyadic(-0.0).0, 0);
     }
 
+    /// The points `(c[0], c[1])` .. `(c[6], c[7])` and the crossing of the
+    /// line through the first two with the line through the last two, by the
+    /// rational version.
+    fn four_points_and_crossing(c: [f64; 8]) -> ([Point; 4], Option<PointQ>) {
+        let pts: [Point; 4] = std::array::from_fn(|i| Point::new(c[2 * i], c[2 * i + 1]));
+        let [a, b, p, r] = pts.map(PointQ::from_point);
+        (pts, line_intersection(&a, &b, &p, &r))
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: 2048, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -346,18 +363,7 @@ mod tests {
         fn integer_line_intersection_is_the_rational_one(
             c in proptest::array::uniform8(coordinate())
         ) {
-            let [a, b, p, r] = [
-                Point::new(c[0], c[1]),
-                Point::new(c[2], c[3]),
-                Point::new(c[4], c[5]),
-                Point::new(c[6], c[7]),
-            ];
-            let exact = line_intersection(
-                &PointQ::from_point(a),
-                &PointQ::from_point(b),
-                &PointQ::from_point(p),
-                &PointQ::from_point(r),
-            );
+            let ([a, b, p, r], exact) = four_points_and_crossing(c);
             prop_assert_eq!(line_intersection_f64(a, b, p, r), exact);
         }
 
@@ -374,20 +380,8 @@ mod tests {
             e in proptest::array::uniform8(-62i32..-51),
         ) {
             let c: [f64; 8] = std::array::from_fn(|i| m[i] as f64 * 2f64.powi(e[i]));
-            let parts = c.map(dyadic);
-            let scale = parts.iter().filter(|&&(m, _)| m != 0).map(|&(_, e)| e).min().unwrap_or(0);
-            let [a, b, p, r] = [
-                Point::new(c[0], c[1]),
-                Point::new(c[2], c[3]),
-                Point::new(c[4], c[5]),
-                Point::new(c[6], c[7]),
-            ];
-            let exact = line_intersection(
-                &PointQ::from_point(a),
-                &PointQ::from_point(b),
-                &PointQ::from_point(p),
-                &PointQ::from_point(r),
-            );
+            let (parts, scale) = scaled_parts(c);
+            let ([a, b, p, r], exact) = four_points_and_crossing(c);
             // Spreads up to nine bits on 53-bit mantissas fit, wider may not.
             let words = in_words(&parts, scale);
             let too_wide = parts.iter().any(|&(m, e)| {
