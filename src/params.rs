@@ -179,8 +179,10 @@ pub struct Params {
     /// Minimum angle (degrees) the CDT baseline refines to. Default
     /// [`defaults::CDT_MIN_ANGLE_DEG`].
     pub cdt_min_angle_deg: f64,
-    /// Vertex budget of the CDT baseline's refinement, so it always terminates.
-    /// Default [`defaults::MAX_VERTICES`].
+    /// Vertex budget of the mesh: the optimizer's splits and the CDT
+    /// baseline's refinement stop there (so both always terminate), and the
+    /// size field's background is resolved only as finely as a mesh of this
+    /// many vertices can follow. Default [`defaults::MAX_VERTICES`].
     pub max_vertices: u32,
     /// The mesher. Default [`defaults::MESHER`].
     pub mesher: Mesher,

@@ -73,6 +73,7 @@ fn field(d: &Drawing, params: &Params) -> SizeField {
         region_names: &names,
         bounds: input::padded_box(d, r.padding),
         deadline: crate::budget::Deadline::NONE,
+        max_vertices: params.max_vertices as usize,
     })
     .expect("the tests' size fields build")
 }

@@ -300,7 +300,10 @@ pub(crate) struct ParamArgs {
     /// Minimum angle (degrees) the CDT baseline refines to.
     #[arg(long, default_value_t = defaults::CDT_MIN_ANGLE_DEG, value_name = "DEG")]
     cdt_min_angle: f64,
-    /// Vertex budget of the CDT baseline's refinement.
+    /// Vertex budget of the mesh: the optimizer's splits (and the CDT
+    /// baseline's refinement) stop there, and the size field is resolved only
+    /// as finely as such a mesh can follow; a mesh the budget kept coarser than
+    /// the size asked comes with a warning.
     #[arg(long, default_value_t = defaults::MAX_VERTICES)]
     max_vertices: u32,
     /// Validate the mesh after every stage (slow; for debugging).

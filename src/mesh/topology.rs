@@ -226,6 +226,11 @@ impl TriMesh {
         ring.vertex = v;
         ring.neighbours.clear();
         ring.boundary = false;
+        // Each neighbour once, in the order the faces first give it: a scan
+        // of the few found so far, or a set on a huge ring (a fan of
+        // thousands of faces at a fixed vertex made the scan quadratic).
+        let mut seen: Option<rustc_hash::FxHashSet<VertexId>> =
+            (ring.faces.len() > LARGE_RING).then(rustc_hash::FxHashSet::default);
         for &f in &ring.faces {
             let d = self.fdata(f);
             let (face, adj) = (d.v, d.adj);
@@ -235,7 +240,11 @@ impl TriMesh {
                 .expect("internal: incident face has v");
             for k in [1, 2] {
                 let w = face[(i + k) % 3];
-                if !ring.neighbours.contains(&w) {
+                let new = match &mut seen {
+                    Some(set) => set.insert(w),
+                    None => !ring.neighbours.contains(&w),
+                };
+                if new {
                     ring.neighbours.push(w);
                 }
             }
@@ -261,6 +270,10 @@ impl TriMesh {
         }
     }
 }
+
+/// Faces around a vertex beyond which [`TriMesh::vertex_ring_into`] keeps its
+/// neighbours in a set rather than scanning them.
+const LARGE_RING: usize = 32;
 
 /// The two triangles on an interior edge and the quadrilateral they form:
 /// `f = (a, b, c)` and `g = (b, a, d)`, both counter-clockwise.

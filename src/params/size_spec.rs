@@ -213,10 +213,11 @@ impl SizeSpec {
         }
         for b in &self.boxes {
             let [x0, y0, x1, y1] = b.corners;
-            positive(format!("--size-box {x0},{y0},{x1},{y1}"), b.size)?;
+            // (`{:?}`: a huge corner as written, 1e300, not as 301 digits)
+            positive(format!("--size-box {x0:?},{y0:?},{x1:?},{y1:?}"), b.size)?;
             if !b.corners.iter().all(|c| c.is_finite()) || x0 == x1 || y0 == y1 {
                 return Err(Error::InvalidParams(format!(
-                    "--size-box {x0},{y0},{x1},{y1}: the corners must be finite and span a box"
+                    "--size-box {x0:?},{y0:?},{x1:?},{y1:?}: the corners must be finite and span a box"
                 )));
             }
         }

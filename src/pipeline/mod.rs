@@ -431,6 +431,7 @@ fn mesh_stages(
             region_names: &names,
             bounds: padded_box(drawing, resolved.padding),
             deadline,
+            max_vertices: params.max_vertices as usize,
         })
     })?;
     let delivered = match params.mesher {
@@ -491,6 +492,9 @@ fn mesh_stages(
                         "{} primary vertices could not be moved onto their curves",
                         stats.off_curve_left
                     ));
+                }
+                if stats.vertex_budget_reached || field.report().capped {
+                    warnings.push(vertex_budget_warning(params.max_vertices));
                 }
                 if stats.bad_corners_left > 0 {
                     warnings.push(bad_corners_warning(
@@ -746,6 +750,7 @@ pub(crate) fn default_field(
         region_names: &region_names(drawing, &RegionOptions::DEFAULT),
         bounds: padded_box(drawing, resolved.padding),
         deadline,
+        max_vertices: params.max_vertices as usize,
     })
 }
 
@@ -985,6 +990,17 @@ fn low_ratio_warning(u: &crate::quality::Unforced) -> Option<String> {
         w.x,
         w.y
     ))
+}
+
+/// The warning for a mesh that the vertex budget kept coarser than the size
+/// field asks (the optimizer's splits stopped at it, or the field itself was
+/// resolved only as far as it allows).
+fn vertex_budget_warning(max_vertices: u32) -> String {
+    format!(
+        "the vertex budget of {max_vertices} (--max-vertices) stopped refinement: the mesh is \
+         coarser than the size asked (-l, --size*); --stats sizing.edges says by how much; \
+         raise --max-vertices or ask for larger sizes"
+    )
 }
 
 /// The warning for corners below α that the worst-element phase left where

@@ -231,8 +231,9 @@ pub(crate) fn apply(
     }
     for &p in &opts.holes {
         let t = locate(mesh, p).ok_or_else(|| {
+            // (`{:?}`: 1e300 as written, not as 301 digits)
             Error::InvalidParams(format!(
-                "--hole {},{}: the point is outside the meshed box",
+                "--hole {:?},{:?}: the point is outside the meshed box",
                 p.x, p.y
             ))
         })?;

@@ -133,10 +133,42 @@ impl Background {
     }
 }
 
+/// exmex's number literals with an exponent too (`1e-3`, `2.5E+2`): its own
+/// matcher takes digits and one dot only, so `1e-3` read as `1`, a variable
+/// `e`, `-` and `3`, and failed with the parser's internal message.
+#[derive(Clone, Debug)]
+struct Number;
+
+impl exmex::MatchLiteral for Number {
+    fn is_literal(text: &str) -> Option<&str> {
+        let b = text.as_bytes();
+        let digits = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
+        let whole = digits(0);
+        let mut end = whole;
+        let mut n_digits = whole;
+        if b.get(end) == Some(&b'.') {
+            let frac = digits(end + 1);
+            end += 1 + frac;
+            n_digits += frac;
+        }
+        if n_digits == 0 {
+            return None;
+        }
+        if matches!(b.get(end), Some(b'e' | b'E')) {
+            let sign = usize::from(matches!(b.get(end + 1), Some(b'+' | b'-')));
+            let exp = digits(end + 1 + sign);
+            if exp > 0 {
+                end += 1 + sign + exp;
+            }
+        }
+        Some(&text[..end])
+    }
+}
+
 /// A parsed formula in `x` and `y`.
 struct Formula {
     text: String,
-    expr: FlatEx<f64>,
+    expr: FlatEx<f64, exmex::FloatOpsFactory<f64>, Number>,
     /// For each of the formula's variables (alphabetical): 0 for x, 1 for y.
     vars: Vec<usize>,
 }
@@ -144,7 +176,16 @@ struct Formula {
 impl Formula {
     fn parse(text: &str) -> Result<Formula> {
         let bad = |why: String| Error::InvalidParams(format!("--size-expr '{text}': {why}"));
-        let expr = exmex::parse::<f64>(text).map_err(|e| bad(e.to_string()))?;
+        let expr =
+            FlatEx::<f64, exmex::FloatOpsFactory<f64>, Number>::parse(text).map_err(|e| {
+                let why = e.to_string();
+                // exmex's words for two operands in a row are about its internals
+                bad(if why.contains("one more node than op") {
+                    "an operator is missing between two values (write 2*x, not 2x)".to_owned()
+                } else {
+                    why
+                })
+            })?;
         let vars = expr
             .var_names()
             .iter()
@@ -341,6 +382,7 @@ impl<'a> PointFields<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use exmex::MatchLiteral;
 
     #[test]
     fn a_formula_reads_x_and_y_and_refuses_other_names() {
@@ -353,6 +395,38 @@ mod tests {
         let e = Formula::parse("x - 1").unwrap().at(Point::new(0.5, 0.0));
         let msg = e.unwrap_err().to_string();
         assert!(msg.contains("(0.5, 0)"), "{msg}");
+    }
+
+    /// Numbers with an exponent, as gmsh's MathEval and every language read
+    /// them; two values in a row are refused in the user's words.
+    #[test]
+    fn a_formula_reads_numbers_with_an_exponent() {
+        let at = |text: &str| {
+            Formula::parse(text)
+                .unwrap()
+                .at(Point::new(2.0, 0.0))
+                .unwrap()
+        };
+        assert_eq!(at("1e-3"), 1e-3);
+        assert_eq!(at("2.5E+1"), 25.0);
+        assert_eq!(at(".5e1 + 0*x"), 5.0);
+        assert_eq!(at("5."), 5.0);
+        assert_eq!(at("1e1*x"), 20.0);
+        assert_eq!(at("x^1e0"), 2.0);
+        // `e` alone is exmex's constant, not an exponent
+        assert!((at("2*e") - 2.0 * std::f64::consts::E).abs() < 1e-12);
+        for bad in ["2e", "1e+", "2x"] {
+            let msg = Formula::parse(bad)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+            assert!(msg.contains(&format!("'{bad}'")), "{bad}: {msg}");
+            assert!(!msg.contains("node"), "{bad}: {msg}");
+        }
+        assert_eq!(Number::is_literal("1e-3*x"), Some("1e-3"));
+        assert_eq!(Number::is_literal("12.5e"), Some("12.5"));
+        assert_eq!(Number::is_literal(".e1"), None);
+        assert_eq!(Number::is_literal("x"), None);
     }
 
     #[test]

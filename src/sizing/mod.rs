@@ -73,7 +73,17 @@ pub(crate) struct FieldInput<'a> {
     pub region_names: &'a [Option<String>],
     pub bounds: Rect,
     pub deadline: Deadline,
+    /// The mesh's vertex budget (`--max-vertices`): a field finer than a mesh
+    /// of this many vertices could follow is resolved only to
+    /// [`LEAVES_PER_VERTEX`] leaves per vertex of it.
+    pub max_vertices: usize,
 }
+
+/// Leaves of the field's quadtree per vertex of the budget: a field that
+/// asks for a mesh of the whole budget has about 1.6 leaves per vertex (a
+/// leaf's side is between h/2 and h), so a budget of two leaves resolves every
+/// field that a mesh within the vertex budget can follow.
+pub(crate) const LEAVES_PER_VERTEX: usize = 2;
 
 impl SizeField {
     /// `l` everywhere.
@@ -123,7 +133,16 @@ impl SizeField {
             return Ok(f);
         }
         let deadline = input.deadline;
-        let keep_going = || crate::error::check_deadline(&deadline, crate::Stage::Sizing);
+        let keep_going = |bytes: u64| {
+            crate::error::check_deadline(&deadline, crate::Stage::Sizing)?;
+            if bytes >= crate::budget::LARGE_BYTES {
+                deadline
+                    .check_room(bytes)
+                    .map_err(|o| crate::Error::overrun(o, crate::Stage::Sizing))?;
+            }
+            Ok(())
+        };
+        let max_leaves = input.max_vertices.saturating_mul(LEAVES_PER_VERTEX);
         let mut build = |sources: &[tree::Source]| {
             Tree::build(
                 input.bounds,
@@ -132,6 +151,7 @@ impl SizeField {
                 slope,
                 sources,
                 &mut |pts: &[Point]| points.eval(pts),
+                max_leaves,
                 &keep_going,
             )
         };
@@ -161,6 +181,7 @@ impl SizeField {
             min_size,
             sources: n_sources,
             leaves: tree.leaves(),
+            capped: tree.capped(),
             edges: None,
         };
         Ok(SizeField {

@@ -23,6 +23,11 @@ pub struct SizingReport {
     pub sources: usize,
     /// Leaves of the background quadtree.
     pub leaves: usize,
+    /// Whether the quadtree stopped refining at its budget (twice the vertex
+    /// budget `--max-vertices` in leaves): the field asks for finer elements
+    /// than a mesh within the vertex budget can have, and is resolved only
+    /// as far as that budget.
+    pub capped: bool,
     /// How well the delivered mesh's edges match the field.
     pub edges: Option<EdgeMatch>,
 }
@@ -37,6 +42,7 @@ impl SizingReport {
             min_size: l,
             sources: 0,
             leaves: 1,
+            capped: false,
             edges: None,
         }
     }

@@ -19,6 +19,7 @@ fn field_of(drawing: &Drawing, r: &Resolved, spec: &SizeSpec) -> SizeField {
         region_names: &names,
         bounds: Rect::new(-200.0, -200.0, 200.0, 200.0),
         deadline: Deadline::NONE,
+        max_vertices: Params::DEFAULT.max_vertices as usize,
     })
     .expect("the field builds")
 }

@@ -142,10 +142,18 @@ fn segments_cross(p: Point, q: Point, r: Point, s: Point) -> bool {
 /// the value there is exact; elsewhere the bilinear interpolation of a cone
 /// errs by a few per cent at this resolution.
 const FINE: f64 = 1.0;
+/// Boxes (or spread steps) between two checks of the deadline inside a
+/// level: a level of a fine field over many sources takes seconds.
+const CHECK_EVERY: usize = 1024;
 /// Deepest refinement below a grid cell.
 const MAX_DEPTH: u32 = 24;
 /// The grid has at most this many cells.
 const MAX_CELLS: f64 = 65_536.0;
+/// What a box of the tree takes while it is built and spread, bytes: its
+/// node, its corners in the lattice and the point-field map, their
+/// neighbour lists and the spreading's state (measured: about 615 bytes per
+/// leaf at 0.3 to 1.2 million leaves).
+pub(crate) const BYTES_PER_CELL: u64 = 640;
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -175,6 +183,8 @@ pub(crate) struct Tree {
     local: Vec<Source>,
     lo: f64,
     hi: f64,
+    /// Whether refinement stopped at the leaf budget (see [`Tree::build`]).
+    capped: bool,
 }
 
 /// A box being refined: its node, its lower-left corner, its side and the
@@ -256,6 +266,7 @@ impl Tree {
             local: Vec::new(),
             lo: hi,
             hi,
+            capped: false,
         }
     }
 
@@ -264,8 +275,19 @@ impl Tree {
     /// one), bounded by `sources` and by `point_field` (sizes at a batch of
     /// points, `∞` where it sets none; an error stops the build).
     ///
+    /// Refinement goes level by level and stops before a level that would
+    /// take the tree past `max_leaves` leaves: the field is then resolved
+    /// only to the last level that fits ([`Tree::capped`]). `keep_going` is
+    /// asked before each level with the bytes that level may add (the
+    /// memory budget's check before a large allocation).
+    ///
     /// # Errors
     /// What `point_field` or `keep_going` returns.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the field's range and grading, its two inputs and its two budgets, passed \
+                  straight through by the one caller"
+    )]
     pub(crate) fn build<E>(
         bounds: Rect,
         lo: f64,
@@ -273,7 +295,8 @@ impl Tree {
         slope: f64,
         sources: &[Source],
         point_field: &mut PointField<'_, E>,
-        keep_going: &dyn Fn() -> Result<(), E>,
+        max_leaves: usize,
+        keep_going: &dyn Fn(u64) -> Result<(), E>,
     ) -> Result<Tree, E> {
         let (w, h) = (bounds.width().max(lo), bounds.height().max(lo));
         let mut cell = hi.max(lo);
@@ -352,8 +375,10 @@ impl Tree {
         // Point-field values by corner id (centres too, under ids of their own).
         let mut pointwise: FxHashMap<u32, f64> = FxHashMap::default();
         let mut local: Vec<Source> = Vec::new();
+        let mut leaves = 0usize;
+        let mut capped = false;
         while !level.is_empty() {
-            keep_going()?;
+            keep_going(0)?;
             // The point field at every corner and centre of this level not yet known.
             let mut ask: Vec<(u32, Point)> = Vec::new();
             for b in &level {
@@ -375,8 +400,12 @@ impl Tree {
                     pointwise.insert(a.0, v);
                 }
             }
-            let mut next = Vec::new();
-            for b in level {
+            // Which boxes of the level split, then whether the level fits.
+            let mut splits = Vec::with_capacity(level.len());
+            for (n, b) in level.iter().enumerate() {
+                if n % CHECK_EVERY == CHECK_EVERY - 1 {
+                    keep_going(0)?;
+                }
                 let ids = nodes[b.node as usize].corners;
                 let centre = Point::new(b.at.x + 0.5 * b.side, b.at.y + 0.5 * b.side);
                 let centre_id = lattice.id(centre);
@@ -398,7 +427,24 @@ impl Tree {
                     let want = asked(s, b.at, b.side, hi);
                     split = b.side > FINE * want.max(lo);
                 }
-                if !split || b.depth >= MAX_DEPTH || 0.5 * b.side < FINE * lo {
+                splits.push(split && b.depth < MAX_DEPTH && 0.5 * b.side >= FINE * lo);
+            }
+            let n_split = splits.iter().filter(|&&x| x).count();
+            if n_split > 0 {
+                if leaves + level.len() + 3 * n_split > max_leaves {
+                    capped = true;
+                    splits.fill(false);
+                } else {
+                    keep_going(4 * n_split as u64 * BYTES_PER_CELL)?;
+                }
+            }
+            let mut next = Vec::with_capacity(4 * n_split);
+            for (n, (b, split)) in level.into_iter().zip(splits).enumerate() {
+                if n % CHECK_EVERY == CHECK_EVERY - 1 {
+                    keep_going(0)?;
+                }
+                if !split {
+                    leaves += 1;
                     // a leaf: it keeps the sources within its side
                     let start = local.len() as u32;
                     local.extend(
@@ -456,14 +502,21 @@ impl Tree {
             local,
             lo,
             hi,
+            capped,
         };
-        tree.spread(&lattice.points, &pointwise, slope);
+        tree.spread(&lattice.points, &pointwise, slope, keep_going)?;
         Ok(tree)
     }
 
     /// Step 2 of the module doc: every corner's value from the point fields and
     /// the sources' cones, spread nearest first.
-    fn spread(&mut self, points: &[Point], pointwise: &FxHashMap<u32, f64>, slope: f64) {
+    fn spread<E>(
+        &mut self,
+        points: &[Point],
+        pointwise: &FxHashMap<u32, f64>,
+        slope: f64,
+        keep_going: &dyn Fn(u64) -> Result<(), E>,
+    ) -> Result<(), E> {
         let n = points.len();
         // Neighbours along the leaves' sides and diagonals.
         let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -511,7 +564,12 @@ impl Tree {
                 }
             }
         }
+        let mut popped = 0usize;
         while let Some(Reverse((bits, i))) = sp.heap.pop() {
+            popped += 1;
+            if popped % CHECK_EVERY == 0 {
+                keep_going(0)?;
+            }
             let i = i as usize;
             if bits != sp.value[i].to_bits() {
                 continue; // beaten since it was queued
@@ -553,6 +611,7 @@ impl Tree {
             .into_iter()
             .map(|v| v.clamp(self.lo, self.hi))
             .collect();
+        Ok(())
     }
 
     /// The leaf holding `p` (clamped into the grid), and `p`'s coordinates in
@@ -596,6 +655,12 @@ impl Tree {
         h.clamp(self.lo, self.hi)
     }
 
+    /// Whether refinement stopped at the leaf budget: the field is coarser
+    /// than asked where it is finest.
+    pub(crate) fn capped(&self) -> bool {
+        self.capped
+    }
+
     /// Number of leaves (for the report).
     pub(crate) fn leaves(&self) -> usize {
         self.nodes.iter().filter(|n| n.child == 0).count()
@@ -619,7 +684,17 @@ mod tests {
     fn a_source_is_resolved_and_its_cone_graded() {
         let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
         let src = [Source::point(Point::new(31.3, 47.9), 0.5, 0.5)];
-        let t = Tree::build(bounds, 0.01, 5.0, 0.5, &src, &mut no_points, &|| Ok(())).unwrap();
+        let t = Tree::build(
+            bounds,
+            0.01,
+            5.0,
+            0.5,
+            &src,
+            &mut no_points,
+            usize::MAX,
+            &|_| Ok(()),
+        )
+        .unwrap();
         let at_source = t.at(src[0].a);
         assert_eq!(at_source, 0.5, "exact at the source");
         for d in [1.0, 2.0, 4.0, 8.0] {
@@ -640,7 +715,17 @@ mod tests {
         // 0.5): the spread must not flatten it to the grading's slope.
         let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
         let src = [Source::point(Point::new(50.0, 50.0), 0.2, 1.0)];
-        let t = Tree::build(bounds, 0.01, 5.0, 0.5, &src, &mut no_points, &|| Ok(())).unwrap();
+        let t = Tree::build(
+            bounds,
+            0.01,
+            5.0,
+            0.5,
+            &src,
+            &mut no_points,
+            usize::MAX,
+            &|_| Ok(()),
+        )
+        .unwrap();
         for d in [1.0, 2.0, 3.0] {
             let got = t.at(Point::new(50.0 + d, 50.0));
             let want = 0.2 + d;
@@ -659,7 +744,10 @@ mod tests {
                 .map(|q| if q.x < 5.0 { 0.05 } else { 2.0 })
                 .collect())
         };
-        let t = Tree::build(bounds, 0.1, 1.0, 0.5, &[], &mut step, &|| Ok(())).unwrap();
+        let t = Tree::build(bounds, 0.1, 1.0, 0.5, &[], &mut step, usize::MAX, &|_| {
+            Ok(())
+        })
+        .unwrap();
         assert!(
             (t.at(Point::new(2.0, 5.0)) - 0.1).abs() < 1e-12,
             "clamped to lo"
@@ -672,11 +760,65 @@ mod tests {
         );
     }
 
+    /// A field finer than the leaf budget stops refining at the last level
+    /// that fits, the same everywhere (a uniform field gives a uniform
+    /// tree), and says so; the memory check sees each level's bytes before
+    /// they are allocated, and its refusal stops the build.
+    #[test]
+    fn the_leaf_budget_bounds_a_field_too_fine_for_it() {
+        let bounds = Rect::new(0.0, 0.0, 10.0, 10.0);
+        let mut fine = |p: &[Point]| -> Result<Vec<f64>, ()> { Ok(vec![0.001; p.len()]) };
+        let free = Tree::build(bounds, 0.04, 1.0, 0.5, &[], &mut fine, usize::MAX, &|_| {
+            Ok(())
+        })
+        .unwrap();
+        assert!(!free.capped());
+        // 10^2 roots of side 1 split while half a side is at least lo = 0.04:
+        // down to side 1/16, 4^4 leaves each
+        assert_eq!(free.leaves(), 100 << 8);
+        for budget in [100, 399, 400, 2_000, 100 << 8] {
+            let t =
+                Tree::build(bounds, 0.04, 1.0, 0.5, &[], &mut fine, budget, &|_| Ok(())).unwrap();
+            assert!(t.leaves() <= budget.max(100), "{budget}: {}", t.leaves());
+            assert_eq!(t.capped(), budget < 100 << 8, "{budget}");
+            // the whole level or none: a power of four of the roots
+            assert!(t.leaves() / 100 == 1 << (2 * (t.leaves() / 100).trailing_zeros() / 2));
+            let v = t.at(Point::new(3.3, 7.1));
+            assert!(
+                (v - 0.04).abs() < 1e-12,
+                "the value is still the field's: {v}"
+            );
+        }
+        let asked = std::cell::RefCell::new(Vec::new());
+        let r = Tree::build(
+            bounds,
+            0.04,
+            1.0,
+            0.5,
+            &[],
+            &mut fine,
+            usize::MAX,
+            &|bytes| {
+                asked.borrow_mut().push(bytes);
+                if bytes > 1 << 20 { Err(()) } else { Ok(()) }
+            },
+        );
+        assert!(r.is_err(), "refused before the level past 1 MB");
+        let asked = asked.into_inner();
+        let last = *asked.last().unwrap();
+        assert!(
+            last > 1 << 20 && last <= (100 << 8) * BYTES_PER_CELL,
+            "{asked:?}"
+        );
+    }
+
     #[test]
     fn an_error_of_the_point_field_stops_the_build() {
         let bounds = Rect::new(0.0, 0.0, 1.0, 1.0);
         let mut fail = |_: &[Point]| -> Result<Vec<f64>, &'static str> { Err("no") };
-        let r = Tree::build(bounds, 0.01, 0.1, 0.5, &[], &mut fail, &|| Ok(()));
+        let r = Tree::build(bounds, 0.01, 0.1, 0.5, &[], &mut fail, usize::MAX, &|_| {
+            Ok(())
+        });
         assert_eq!(r.err(), Some("no"));
     }
 }

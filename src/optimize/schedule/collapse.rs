@@ -144,7 +144,7 @@ impl Schedule<'_> {
             let Some((bits, k, popped)) = queue.pop_indexed() else {
                 break;
             };
-            if budget == 0 {
+            if budget == 0 || self.out_of_time_at(budget) {
                 break;
             }
             budget -= 1;

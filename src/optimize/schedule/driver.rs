@@ -156,7 +156,19 @@ fn stalled(history: &[(f64, f64)]) -> bool {
         })
 }
 
+/// Items of a pass between two checks of the deadline inside it.
+pub(super) const DEADLINE_EVERY: usize = 64;
+
 impl Schedule<'_> {
+    /// Inside a pass's loop, at its `n`-th item: whether the deadline has
+    /// passed, asked every [`DEADLINE_EVERY`] items (one item on a vertex of a
+    /// huge ring can take milliseconds, a pass many seconds). A pass cut
+    /// short here ends the run with the time limit's error, so no mesh that
+    /// is written depends on where it stopped.
+    pub(super) fn out_of_time_at(&mut self, n: usize) -> bool {
+        n % DEADLINE_EVERY == DEADLINE_EVERY - 1 && self.out_of_time()
+    }
+
     /// Whether the deadline has passed (then the stop reason says so).
     pub(super) fn out_of_time(&mut self) -> bool {
         let expired = self.opts.deadline.expired();

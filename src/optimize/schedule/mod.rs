@@ -392,6 +392,7 @@ impl<'a> Schedule<'a> {
                 rational_left: 0,
                 envelope_stages: 0,
                 bad_corners_left: 0,
+                vertex_budget_reached: false,
                 min_angle_deg: 0.0,
                 max_amips: 0.0,
             },

@@ -40,6 +40,9 @@ impl Schedule<'_> {
         // used only while its vertex is unchanged since.
         let mut ahead = PlanAhead::new();
         for (n, &v) in verts.iter().enumerate() {
+            if self.out_of_time_at(n) {
+                break;
+            }
             let i = v.index();
             if i >= self.failed_smooth.len() {
                 self.failed_smooth.resize(i + 1, u64::MAX);

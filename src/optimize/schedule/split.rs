@@ -11,6 +11,12 @@ impl Schedule<'_> {
     /// Split every edge longer than 4/3 of its mean target once, longest first.
     /// Returns the number of candidates and of splits applied.
     pub(super) fn split_pass(&mut self) -> (usize, u64) {
+        if !self.split_bounded {
+            // the budget's mark says whether the last sizing pass was cut
+            // short (a pass cut early whose mesh then lost vertices to
+            // collapses does the rest later)
+            self.stats.vertex_budget_reached = false;
+        }
         let edges: Vec<EdgeKey> = self.candidate_edges();
         let mut cands: Vec<(f64, EdgeKey, f64)> = edges
             .into_par_iter()
@@ -28,7 +34,11 @@ impl Schedule<'_> {
         // neither end has changed since.
         let mut ahead = PlanAhead::new();
         for (i, &(_, k, t)) in cands.iter().enumerate() {
+            if self.out_of_time_at(i) {
+                break;
+            }
             if self.mesh.num_vertices() >= self.opts.max_vertices {
+                self.stats.vertex_budget_reached = true;
                 break;
             }
             let this = &*self;

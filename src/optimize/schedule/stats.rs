@@ -103,6 +103,11 @@ pub struct OptimizeStats {
     /// Triangles left with a corner below α that the mesh's feature edges
     /// leave room for (the worst-element phase's goal: 0).
     pub bad_corners_left: usize,
+    /// Whether the last split pass of the main passes (or a split pass of
+    /// the worst-element phase) left splits undone because the mesh had
+    /// reached the vertex budget (`--max-vertices`): the mesh is then coarser
+    /// than the size field asks somewhere.
+    pub vertex_budget_reached: bool,
     /// Smallest angle at the end, degrees.
     pub min_angle_deg: f64,
     /// Largest AMIPS energy at the end.

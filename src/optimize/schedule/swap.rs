@@ -64,6 +64,9 @@ impl Schedule<'_> {
         // its quad are unchanged since.
         let mut ahead = PlanAhead::new();
         for (n, &(_, k)) in cands.iter().enumerate() {
+            if self.out_of_time_at(n) {
+                break;
+            }
             let this = &*self;
             let planned = ahead
                 .take(n, &cands, |&(_, e)| this.plan_swap(e, scanned_at))
