@@ -58,6 +58,10 @@ const PARAMS: &[&str] = &["-q", "-l", "0.1", "--order", "2"];
 /// writes to (opening it for reading blocks), and a URL of a listener that must
 /// never be connected to.
 const FIFO_MARK: &str = "@FIFO@";
+/// A case that starts with this comment carries its own options, one per
+/// line up to `-->`, each without its leading `--` (a comment may not hold
+/// `--`): `order=3`, `cut-outside`. They replace [`PARAMS`] (but `-q`).
+const ARGS_MARK: &str = "<!--triwild-args";
 const URL_MARK: &str = "@URL@";
 /// The default seed (CI replays the same cases); `TRIWILD_FUZZ_SEED` for fresh ones.
 const DEFAULT_SEED: u64 = 0x7219_1d17;
@@ -199,8 +203,15 @@ impl Runner {
         fs::write(&input, self.substitute(bytes)).unwrap();
         let before = self.poll_connections();
         let start = Instant::now();
+        let case_args = case_args(bytes);
+        let params: Vec<String> = match &case_args {
+            Some(args) => std::iter::once("-q".to_owned())
+                .chain(args.iter().cloned())
+                .collect(),
+            None => PARAMS.iter().map(|&a| a.to_owned()).collect(),
+        };
         let mut child = Command::new(exe())
-            .args(PARAMS)
+            .args(&params)
             .args(&self.budget_args)
             .arg(&input)
             .arg("-o")
@@ -234,7 +245,17 @@ impl Runner {
         let stderr = fs::read_to_string(&err_path).unwrap_or_default();
         let outcome = match status {
             None => Outcome::Hang,
-            Some(status) => self.classify(status, &stderr, &input, &output),
+            Some(status) => {
+                let outcome = self.classify(status, &stderr, &input, &output);
+                // A case's own options may be refused by the option parser,
+                // which says so in its own words (a usage error, not an input's).
+                let usage = case_args.is_some()
+                    && status.code() == Some(2)
+                    && stderr.starts_with("error: ")
+                    && stderr.contains("For more information, try '--help'")
+                    && !output.exists();
+                if usage { Outcome::Error(2) } else { outcome }
+            }
         };
         let outcome = if self.poll_connections() > before {
             Outcome::Network
@@ -334,6 +355,20 @@ impl Runner {
             None => Outcome::OtherExit(-1),
         }
     }
+}
+
+/// The options a case carries ([`ARGS_MARK`]), each with its `--` back.
+fn case_args(bytes: &[u8]) -> Option<Vec<String>> {
+    let rest = bytes.strip_prefix(ARGS_MARK.as_bytes())?;
+    let text = String::from_utf8_lossy(rest);
+    let (head, _) = text.split_once("-->")?;
+    Some(
+        head.lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .map(|l| format!("--{l}"))
+            .collect(),
+    )
 }
 
 /// `VmHWM` (peak resident memory) of a `/proc/<pid>/status` text, MiB.
@@ -1319,6 +1354,168 @@ fn real_drawing() -> BoxedStrategy<Vec<u8>> {
         .boxed()
 }
 
+/// Size formulas: plain, with exponents, graded, trigonometric, and some
+/// that parse but give no size somewhere (zero, negative, NaN, infinite) or
+/// do not parse.
+const SIZE_EXPRS: &[&str] = &[
+    "0.5",
+    "1e-3",
+    "2.5E+1",
+    "0.05 + 0.01*abs(x)",
+    "1 + 0*y",
+    "0.1 + 0.1*sin(x)^2",
+    "exp(-x*x)",
+    "1e-300",
+    "1e300",
+    "x",
+    "0",
+    "-1",
+    "1/0",
+    "sqrt(-1)",
+    "2x",
+    "((1)",
+    "0.2*(1.5 + cos(x/7)*sin(y/5))",
+    "1e-9 + 0*x",
+    "z",
+];
+
+/// Numbers for the options: ordinary ones (four times in five, so that most
+/// cases mesh) ...
+const OPTION_NUMS: &[&str] = &["0.5", "0.1", "0.02", "1", "3", "10", "1.5", "0.05", "2e-2"];
+/// ... and tiny, huge, zero, negative and not finite ones.
+const ODD_OPTION_NUMS: &[&str] = &["1e-9", "1e-300", "1e9", "1e300", "0", "-1", "NaN", "inf"];
+
+/// One option, without its `--` (see [`ARGS_MARK`]), from a menu of every
+/// kind the command line has: element order and format, units and scale,
+/// regions and holes, strokes, every size field, the envelopes and the
+/// optimizer's limits.
+fn one_option() -> BoxedStrategy<String> {
+    let n = || {
+        prop_oneof![
+            4 => prop::sample::select(OPTION_NUMS),
+            1 => prop::sample::select(ODD_OPTION_NUMS),
+        ]
+    };
+    let name = || {
+        prop_oneof![
+            4 => prop::sample::select(&["background", "shape-0"][..]),
+            1 => prop::sample::select(&["shape-1", "domain", "fill-#000000", "nope"][..]),
+        ]
+    };
+    prop_oneof![
+        prop::sample::select(
+            &[
+                "order=1",
+                "order=2",
+                "order=3",
+                "linear",
+                "stop-after=bsp",
+                "stop-after=optimize",
+                "mesher=cdt",
+                "msh-version=2.2",
+                "binary",
+                "units=px",
+                "regions=colour",
+                "regions=none",
+                "regions=shape",
+                "cut-outside",
+                "strokes=line",
+                "strokes=ignore",
+                "strokes=area",
+                "keep-decoration",
+                "feature-size=on",
+                "threads=2",
+                "edge-length=0.1",
+                "edge-length=0.2",
+                "edge-length=0.05",
+                "edge-length=0.03",
+                "max-passes=0",
+                "max-passes=1",
+                "max-passes-curved=0",
+                "max-vertices=16",
+                "max-vertices=300",
+                "stop-energy=1",
+                "stop-energy=50",
+                "min-opacity=0",
+                "min-opacity=1",
+                "alpha=1",
+                "alpha=59.9"
+            ][..]
+        )
+        .prop_map(str::to_owned),
+        (
+            prop::sample::select(
+                &[
+                    "scale",
+                    "grading",
+                    "mu",
+                    "eps",
+                    "padding",
+                    "eps-m",
+                    "min-edge-length",
+                    "alpha",
+                    "stop-energy",
+                    "stop-energy-curved",
+                    "edge-length",
+                    "edge-length-abs",
+                    "mu-abs",
+                    "padding-abs",
+                    "min-opacity",
+                    "cdt-min-angle"
+                ][..]
+            ),
+            n()
+        )
+            .prop_map(|(k, v)| format!("{k}={v}")),
+        prop::sample::select(SIZE_EXPRS).prop_map(|e| format!("size-expr={e}")),
+        (name(), n()).prop_map(|(r, v)| format!("size={r}={v}")),
+        (name(), n(), prop::option::of(n())).prop_map(|(r, v, d)| match d {
+            Some(d) => format!("size-near={r}={v}:{d}"),
+            None => format!("size-near={r}={v}"),
+        }),
+        (prop::collection::vec(n(), 4), n())
+            .prop_map(|(c, v)| format!("size-box={}={v}", c.join(","))),
+        (n(), n()).prop_map(|(x, y)| format!("hole={x},{y}")),
+        name().prop_map(|r| format!("keep={r}")),
+    ]
+    .boxed()
+}
+
+/// A drawing of `data/svg` (or a grammar document) with one to five options
+/// of [`one_option`]: what the options do to a good input, and to an odd one.
+fn with_options() -> BoxedStrategy<Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg");
+    let mut drawings: Vec<Vec<u8>> = fs::read_dir(&dir)
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+                .map(|p| fs::read(p).unwrap())
+                .collect()
+        })
+        .unwrap_or_default();
+    drawings.sort();
+    let doc = prop_oneof![
+        3 => prop::sample::select(drawings),
+        1 => plain_doc().prop_map(String::into_bytes),
+    ];
+    (doc, prop::collection::vec(one_option(), 1..6))
+        .prop_map(|(doc, mut opts)| {
+            // each option once (the parser refuses most twice)
+            let mut seen = std::collections::HashSet::new();
+            opts.retain(|o| seen.insert(o.split('=').next().unwrap_or(o).to_owned()));
+            // the mark leads the case, so an XML declaration (which must come
+            // first in a document) is left out
+            let text = String::from_utf8_lossy(&doc);
+            let body = match text.trim_start().strip_prefix("<?xml") {
+                Some(rest) => rest.split_once("?>").map_or("", |(_, b)| b),
+                None => &text,
+            };
+            format!("{ARGS_MARK}\n{}\n-->\n{body}", opts.join("\n")).into_bytes()
+        })
+        .boxed()
+}
+
 fn replace_number(doc: &[u8], r: u64, with: &str) -> Vec<u8> {
     let text = String::from_utf8_lossy(doc);
     let mut spans = Vec::new();
@@ -1445,6 +1642,7 @@ fn kinds(max_path_segments: usize) -> Vec<(&'static str, BoxedStrategy<Vec<u8>>)
                 .boxed(),
         ),
         ("real-drawing", real_drawing()),
+        ("options", with_options()),
     ]
 }
 
@@ -1585,10 +1783,17 @@ fn save_failure(runner: &Runner, f: &Failure) -> PathBuf {
     fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{}.svg", f.name));
     fs::write(&path, &f.bytes).unwrap();
+    // the case's own options, quoted for a shell, or the fixed ones
+    let params = case_args(&f.bytes).map_or_else(
+        || PARAMS.join(" "),
+        |args| {
+            let quoted: Vec<String> = args.iter().map(|a| format!("'{a}'")).collect();
+            format!("-q {}", quoted.join(" "))
+        },
+    );
     let note = format!(
-        "outcome: {:?}\ncommand: triwild {} {} IN.svg -o OUT.msh\nstderr:\n{}\n",
+        "outcome: {:?}\ncommand: triwild {params} {} IN.svg -o OUT.msh\nstderr:\n{}\n",
         f.outcome,
-        PARAMS.join(" "),
         runner.budget_args.join(" "),
         f.stderr
     );
@@ -1663,7 +1868,16 @@ fn fuzz_the_binary() {
     let _ = fs::remove_dir_all(&out);
     fs::create_dir_all(&out).unwrap();
     let runner = Runner::new(&out);
-    let kinds = kinds(runner.max_path_segments);
+    let mut kinds = kinds(runner.max_path_segments);
+    // TRIWILD_FUZZ_KINDS=a,b: only those kinds (round-robin over them).
+    if let Ok(only) = std::env::var("TRIWILD_FUZZ_KINDS") {
+        let only: Vec<&str> = only.split(',').map(str::trim).collect();
+        kinds.retain(|(k, _)| only.contains(k));
+        assert!(
+            !kinds.is_empty(),
+            "TRIWILD_FUZZ_KINDS={only:?}: no such kind"
+        );
+    }
     eprintln!(
         "fuzz: seed {seed:#x}, {cases} cases over {} kinds, {jobs} job(s), budget flags [{}], watchdog {:?}{}",
         kinds.len(),
