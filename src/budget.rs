@@ -193,6 +193,14 @@ impl Deadline {
                 && (self.latched().is_some() || self.over_now(sample_memory())))
     }
 
+    /// [`Self::expired`] for the inside of a stage's loops, asked every few
+    /// dozen items: the time, and an overrun some other check has already
+    /// latched, without a reading of the process's memory (one costs some
+    /// 20 µs; the loops' passes and their large allocations read it).
+    pub(crate) fn expired_in_loop(&self) -> bool {
+        self.time_passed() || (self.memory.is_some() && self.latched().is_some())
+    }
+
     /// Whether reading `m` is past a memory limit (latched if so).
     fn over_now(&self, m: Option<MemorySample>) -> bool {
         match self.memory_over(m) {

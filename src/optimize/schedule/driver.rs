@@ -160,13 +160,18 @@ fn stalled(history: &[(f64, f64)]) -> bool {
 pub(super) const DEADLINE_EVERY: usize = 64;
 
 impl Schedule<'_> {
-    /// Inside a pass's loop, at its `n`-th item: whether the deadline has
-    /// passed, asked every [`DEADLINE_EVERY`] items (one item on a vertex of a
+    /// Inside a pass's loop, at its `n`-th item: whether the time limit has
+    /// passed (or a memory overrun is latched; the memory itself is read
+    /// between the passes), asked every [`DEADLINE_EVERY`] items (one item on a vertex of a
     /// huge ring can take milliseconds, a pass many seconds). A pass cut
     /// short here ends the run with the time limit's error, so no mesh that
     /// is written depends on where it stopped.
     pub(super) fn out_of_time_at(&mut self, n: usize) -> bool {
-        n % DEADLINE_EVERY == DEADLINE_EVERY - 1 && self.out_of_time()
+        if n % DEADLINE_EVERY != DEADLINE_EVERY - 1 || !self.opts.deadline.expired_in_loop() {
+            return false;
+        }
+        self.stats.stop = StopReason::TimeLimit;
+        true
     }
 
     /// Whether the deadline has passed (then the stop reason says so).
