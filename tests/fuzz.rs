@@ -1288,7 +1288,8 @@ const ENTITY_VALUES: &[&str] = &[
 ];
 
 /// Mutations of the real drawings (read from `data/svg` when the strategy is built).
-fn real_drawing() -> BoxedStrategy<Vec<u8>> {
+/// The drawings of `data/svg`, in a fixed order.
+fn data_drawings() -> Vec<Vec<u8>> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg");
     let mut drawings: Vec<Vec<u8>> = fs::read_dir(&dir)
         .map(|entries| {
@@ -1301,6 +1302,11 @@ fn real_drawing() -> BoxedStrategy<Vec<u8>> {
         .unwrap_or_default();
     drawings.sort();
     assert!(!drawings.is_empty(), "no drawings under {}", dir.display());
+    drawings
+}
+
+fn real_drawing() -> BoxedStrategy<Vec<u8>> {
+    let drawings = data_drawings();
     let pick = prop::sample::select(drawings);
     let r = any::<(u64, u64, u64)>();
     (pick, 0..7u8, r, extreme_num(), transform(num(4)))
@@ -1484,17 +1490,7 @@ fn one_option() -> BoxedStrategy<String> {
 /// A drawing of `data/svg` (or a grammar document) with one to five options
 /// of [`one_option`]: what the options do to a good input, and to an odd one.
 fn with_options() -> BoxedStrategy<Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg");
-    let mut drawings: Vec<Vec<u8>> = fs::read_dir(&dir)
-        .map(|entries| {
-            entries
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|e| e == "svg"))
-                .map(|p| fs::read(p).unwrap())
-                .collect()
-        })
-        .unwrap_or_default();
-    drawings.sort();
+    let drawings = data_drawings();
     let doc = prop_oneof![
         3 => prop::sample::select(drawings),
         1 => plain_doc().prop_map(String::into_bytes),

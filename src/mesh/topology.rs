@@ -230,9 +230,22 @@ impl TriMesh {
         // of the few found so far, or a set on a huge ring (a fan of
         // thousands of faces at a fixed vertex made the scan quadratic).
         if ring.faces.len() > LARGE_RING {
-            self.large_ring_neighbours(v, ring);
-            return;
+            let mut seen = rustc_hash::FxHashSet::default();
+            self.ring_neighbours(v, ring, |_, w| seen.insert(w));
+        } else {
+            self.ring_neighbours(v, ring, |found, w| !found.contains(&w));
         }
+    }
+
+    /// The rest of [`Self::vertex_ring_into`]: the neighbours, those that
+    /// `new` (given the ones found so far) says are new, and whether the ring
+    /// is open.
+    fn ring_neighbours(
+        &self,
+        v: VertexId,
+        ring: &mut VertexRing,
+        mut new: impl FnMut(&[VertexId], VertexId) -> bool,
+    ) {
         for &f in &ring.faces {
             let d = self.fdata(f);
             let (face, adj) = (d.v, d.adj);
@@ -242,35 +255,11 @@ impl TriMesh {
                 .expect("internal: incident face has v");
             for k in [1, 2] {
                 let w = face[(i + k) % 3];
-                if !ring.neighbours.contains(&w) {
+                if new(&ring.neighbours, w) {
                     ring.neighbours.push(w);
                 }
             }
             // The two edges of f at v are opposite v[i+1] and v[i+2].
-            if adj[(i + 1) % 3].is_none() || adj[(i + 2) % 3].is_none() {
-                ring.boundary = true;
-            }
-        }
-    }
-
-    /// The rest of [`Self::vertex_ring_into`] on a ring of more than
-    /// [`LARGE_RING`] faces: the same neighbours in the same order, found
-    /// with a set.
-    fn large_ring_neighbours(&self, v: VertexId, ring: &mut VertexRing) {
-        let mut seen = rustc_hash::FxHashSet::default();
-        for &f in &ring.faces {
-            let d = self.fdata(f);
-            let (face, adj) = (d.v, d.adj);
-            let i = face
-                .iter()
-                .position(|&x| x == v)
-                .expect("internal: incident face has v");
-            for k in [1, 2] {
-                let w = face[(i + k) % 3];
-                if seen.insert(w) {
-                    ring.neighbours.push(w);
-                }
-            }
             if adj[(i + 1) % 3].is_none() || adj[(i + 2) % 3].is_none() {
                 ring.boundary = true;
             }

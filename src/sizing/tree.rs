@@ -680,21 +680,27 @@ mod tests {
         Ok(vec![f64::INFINITY; p.len()])
     }
 
-    #[test]
-    fn a_source_is_resolved_and_its_cone_graded() {
-        let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
-        let src = [Source::point(Point::new(31.3, 47.9), 0.5, 0.5)];
-        let t = Tree::build(
+    /// The field of `src` alone over `bounds`, within [0.01, 5], graded 1.5.
+    fn from_sources(bounds: Rect, src: &[Source]) -> Tree {
+        let no_budget = |_: u64| Ok(());
+        Tree::build(
             bounds,
             0.01,
             5.0,
             0.5,
-            &src,
+            src,
             &mut no_points,
             usize::MAX,
-            &|_| Ok(()),
+            &no_budget,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn a_source_is_resolved_and_its_cone_graded() {
+        let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
+        let src = [Source::point(Point::new(31.3, 47.9), 0.5, 0.5)];
+        let t = from_sources(bounds, &src);
         let at_source = t.at(src[0].a);
         assert_eq!(at_source, 0.5, "exact at the source");
         for d in [1.0, 2.0, 4.0, 8.0] {
@@ -715,17 +721,7 @@ mod tests {
         // 0.5): the spread must not flatten it to the grading's slope.
         let bounds = Rect::new(0.0, 0.0, 100.0, 100.0);
         let src = [Source::point(Point::new(50.0, 50.0), 0.2, 1.0)];
-        let t = Tree::build(
-            bounds,
-            0.01,
-            5.0,
-            0.5,
-            &src,
-            &mut no_points,
-            usize::MAX,
-            &|_| Ok(()),
-        )
-        .unwrap();
+        let t = from_sources(bounds, &src);
         for d in [1.0, 2.0, 3.0] {
             let got = t.at(Point::new(50.0 + d, 50.0));
             let want = 0.2 + d;
