@@ -18,6 +18,7 @@ use crate::mesh::{TriMesh, VertexId};
 use crate::ops::invariants::on_curve;
 use crate::ops::{Context, Objective};
 use crate::sizing::SizeField;
+use rustc_hash::FxHashSet;
 
 /// Parameters of the schedule, in user units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,30 +83,33 @@ pub(crate) fn optimize_with_field(
     opts: &OptimizeOptions,
     field: &SizeField,
 ) -> (OptimizeStats, Vec<kurbo::Point>) {
-    let mut ever_off = Vec::new();
+    let mut ever_off = FxHashSet::default();
     let mut s = Schedule::new(mesh, ctx, opts, SEED, field);
     let rational = s.improve(&mut ever_off);
-    if s.stats().stop == StopReason::TimeLimit {
-        return (s.stats().clone(), Vec::new());
+    // Past the deadline the run ends with the time limit's error, so the
+    // phases left are not run (each is a pass or more over the whole mesh).
+    let stopped = |s: &Schedule| (s.timed_out()).then(|| (s.stats().clone(), Vec::new()));
+    if let Some(out) = stopped(&s) {
+        return out;
     }
-    s.coarsen();
-    tracing::debug!(
-        collapses_refused = s.stats.collapse.refused(),
-        "coarsening done"
-    );
-    s.equalize();
-    s.polish();
-    tracing::debug!(
-        collapses_refused = s.stats.collapse.refused(),
-        "polish done"
-    );
-    s.minmax_polish();
-    tracing::debug!(
-        collapses_refused = s.stats.collapse.refused(),
-        "min-max polish done"
-    );
+    let phases: [(fn(&mut _), &str); 4] = [
+        (Schedule::coarsen, "coarsening done"),
+        (Schedule::equalize, "equalizing done"),
+        (Schedule::polish, "polish done"),
+        (Schedule::minmax_polish, "min-max polish done"),
+    ];
+    for (phase, done) in phases {
+        phase(&mut s);
+        tracing::debug!(collapses_refused = s.stats.collapse.refused(), "{done}");
+        if let Some(out) = stopped(&s) {
+            return out;
+        }
+    }
     s.enter(Phase::Main);
     s.stats.bad_corners_left = s.repair_angles();
+    if let Some(out) = stopped(&s) {
+        return out;
+    }
     // the splits of the worst-element phase may leave rational vertices
     let rational = if rational > 0 || s.mesh.vertices().any(|v| s.mesh.is_rational(v)) {
         s.round_all()
@@ -113,6 +117,9 @@ pub(crate) fn optimize_with_field(
         0
     };
     let rational = s.envelope_stages(rational);
+    if let Some(out) = stopped(&s) {
+        return out;
+    }
     let refined: Vec<kurbo::Point> = s
         .mesh
         .vertices()
@@ -174,6 +181,12 @@ impl Schedule<'_> {
         true
     }
 
+    /// Whether a check has found the deadline passed (the stop reason says
+    /// so): the run then ends with the time limit's error.
+    pub(super) fn timed_out(&self) -> bool {
+        self.stats.stop == StopReason::TimeLimit
+    }
+
     /// Whether the deadline has passed (then the stop reason says so).
     pub(super) fn out_of_time(&mut self) -> bool {
         let expired = self.opts.deadline.expired();
@@ -186,7 +199,7 @@ impl Schedule<'_> {
     /// The main passes (split, collapse, swap, smooth, round, project), the
     /// sizing field refined when they stop paying off, until a stop rule holds
     /// or the pass limit. Returns how many vertices stay rational.
-    fn improve(&mut self, ever_off: &mut Vec<VertexId>) -> usize {
+    fn improve(&mut self, ever_off: &mut FxHashSet<VertexId>) -> usize {
         let opts = self.opts;
         let mut rational = self.round_all();
         let mut off = self.project_all(ever_off);
@@ -441,6 +454,9 @@ impl Schedule<'_> {
         let mut before = measure(self.mesh);
         for _ in 0..POLISH_PASSES {
             let changed = self.swap_pass() + self.smooth_pass();
+            if self.timed_out() {
+                return;
+            }
             let now = measure(self.mesh);
             let gain = before.mean_energy - now.mean_energy;
             before = now;
@@ -458,6 +474,9 @@ impl Schedule<'_> {
         let mut worst = measure(self.mesh).max_energy;
         for _ in 0..MINMAX_PASSES {
             let changed = self.smooth_pass_with(Objective::MinMax) + self.swap_pass();
+            if self.timed_out() {
+                return;
+            }
             let now = measure(self.mesh).max_energy;
             let gain = worst - now;
             worst = now;
@@ -483,8 +502,8 @@ impl Schedule<'_> {
             for _ in 0..ENVELOPE_ROUNDS {
                 self.smooth_pass();
                 rational = self.round_all();
-                if rational == 0 {
-                    break;
+                if rational == 0 || self.timed_out() {
+                    return rational;
                 }
             }
         }
@@ -494,7 +513,7 @@ impl Schedule<'_> {
     /// The last projection of off-curve primary vertices, and the final
     /// statistics (`rational` vertices left; `ever_off`: the primary vertices
     /// that were ever off their curve).
-    fn finish(mut self, rational: usize, ever_off: &mut Vec<VertexId>) -> OptimizeStats {
+    fn finish(mut self, rational: usize, ever_off: &mut FxHashSet<VertexId>) -> OptimizeStats {
         let off = self.project_all(ever_off);
         let (min_angle, max_e) = measure(self.mesh).all;
         self.stats.rational_left = rational;
@@ -539,7 +558,7 @@ mod standing_tests {
             let opts = test_options();
             let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
-            s.improve(&mut Vec::new());
+            s.improve(&mut FxHashSet::default());
             s.coarsen();
             s.equalize();
             checked += s.standing_checked;
@@ -547,5 +566,52 @@ mod standing_tests {
         // (most refusals of these small meshes are the length rule's or at
         // free vertices: 30 stand)
         assert!(checked > 10, "{checked} kept refusals planned again");
+    }
+
+    /// Past the deadline every pass stops and says so: the swap pass after
+    /// its scan with nothing applied, the others and the rounding within
+    /// their first [`DEADLINE_EVERY`] items; the phases after the main passes
+    /// are not entered (a whole optimization stops before its first pass).
+    #[test]
+    fn passes_past_the_deadline_stop_and_say_so() {
+        let mut swapped_without = 0;
+        for (mut mesh, mut ctx) in test_meshes(4, 2) {
+            // what a swap pass does with time to spare
+            {
+                let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
+                let opts = test_options();
+                let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
+                swapped_without += s.swap_pass();
+            }
+            let opts = OptimizeOptions {
+                deadline: Deadline::after(Some(0.0)),
+                ..test_options()
+            };
+            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let (mut fresh, mut fresh_ctx) = (mesh.clone(), ctx.clone());
+            {
+                let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
+                assert_eq!(s.swap_pass(), 0);
+                assert!(s.timed_out());
+                let limit = (DEADLINE_EVERY - 1) as u64;
+                for pass in 0..3 {
+                    s.stats.stop = StopReason::PassLimit;
+                    let applied = match pass {
+                        0 => s.split_pass().1,
+                        1 => s.collapse_pass(COLLAPSE_FACTOR),
+                        _ => s.smooth_pass(),
+                    };
+                    assert!(s.timed_out() || applied < limit, "pass {pass}");
+                    assert!(applied <= limit, "pass {pass}: {applied} applied");
+                }
+            }
+            // (the passes above may have changed the mesh: a fresh copy)
+            let stats = optimize_with_field(&mut fresh, &mut fresh_ctx, &opts, &field).0;
+            assert_eq!(stats.stop, StopReason::TimeLimit);
+            assert_eq!(stats.passes, 0);
+            assert_eq!(stats.collapse.applied + stats.smooth.applied, 0);
+        }
+        assert!(swapped_without > 0, "the meshes had swaps to do");
     }
 }

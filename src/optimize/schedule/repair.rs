@@ -214,6 +214,9 @@ impl Schedule<'_> {
                 refined: self.refined.clone(),
             };
             self.repair_round(round, &bad, false);
+            if self.timed_out() {
+                return bad.len();
+            }
             let now = bad_faces(self.mesh, self.ctx, alpha);
             if worst_corner(&now) < worst {
                 tracing::debug!(round, "worst-element round rolled back");
@@ -229,6 +232,9 @@ impl Schedule<'_> {
             }
         }
         self.region = None;
+        if self.timed_out() {
+            return bad.len();
+        }
         // The rounds' collapses and swaps may have made faces with two curved
         // edges again: split them, and smooth around the new vertices only
         // (no change of topology after that).

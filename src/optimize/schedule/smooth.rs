@@ -10,6 +10,7 @@ use crate::ops::{
     Context, Objective, Outcome, Reject, SmoothPlan, try_project, try_round, try_smooth_planned,
 };
 use rayon::prelude::*;
+use rustc_hash::FxHashSet;
 
 /// A smoothing planned ahead at clock `at`: it stands while the vertex's stamp
 /// has not passed `at`.
@@ -118,7 +119,11 @@ impl Schedule<'_> {
             .filter(|&v| self.mesh.is_rational(v))
             .collect();
         let mut left = 0;
-        for v in rational {
+        let count = rational.len();
+        for (n, v) in rational.into_iter().enumerate() {
+            if self.out_of_time_at(n) {
+                return left + count - n;
+            }
             let out = try_round(self.mesh, self.ctx, v);
             self.touch(&out, false);
             if !self.stats.round.record(&out) {
@@ -129,13 +134,15 @@ impl Schedule<'_> {
     }
 
     /// Move off-curve primary vertices toward their curve; returns how many stay off.
-    pub(super) fn project_all(&mut self, ever_off: &mut Vec<VertexId>) -> usize {
+    pub(super) fn project_all(&mut self, ever_off: &mut FxHashSet<VertexId>) -> usize {
         let off = off_curve_vertices(self.mesh, self.ctx);
         let mut left = 0;
-        for v in off {
-            if !ever_off.contains(&v) {
-                ever_off.push(v);
+        let count = off.len();
+        for (n, v) in off.into_iter().enumerate() {
+            if self.out_of_time_at(n) {
+                return left + count - n;
             }
+            ever_off.insert(v);
             let out = try_project(self.mesh, self.ctx, v);
             self.touch(&out, false);
             self.stats.project.record(&out);

@@ -10,6 +10,9 @@ use crate::ops::{Context, Reject, ReroutePlan, SwapPlan, try_reroute_planned, tr
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
+/// Edges of the swap scan between two readings of the deadline.
+const SCAN_BLOCK: usize = 4096;
+
 /// What the swap pass does with an edge, by its tags: swap an untagged edge,
 /// reroute a secondary one, leave a primary one.
 enum SwapKind {
@@ -56,6 +59,11 @@ impl Schedule<'_> {
         let scanned_at = self.clock;
         let last = self.swap_scan.take();
         let cands = self.swap_candidates(last.as_ref());
+        if self.opts.deadline.expired_in_loop() {
+            // (the scan may have skipped blocks: the run ends here)
+            self.stats.stop = super::StopReason::TimeLimit;
+            return 0;
+        }
         self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next
@@ -176,27 +184,37 @@ impl Schedule<'_> {
     /// and so is the answer.
     fn swap_candidates(&self, last: Option<&(u64, FxHashSet<EdgeKey>)>) -> Vec<(f64, EdgeKey)> {
         let edges: Vec<EdgeKey> = self.candidate_edges();
+        let deadline = &self.opts.deadline;
+        let keep = |&k: &EdgeKey| {
+            if !self.edge_in_region(k.lo, k.hi) {
+                return false;
+            }
+            if let Some((at, found)) = last
+                && self.stamp_of(k.lo) <= *at
+                && self.stamp_of(k.hi) <= *at
+                && !found.contains(&k)
+            {
+                return false;
+            }
+            let primary = self
+                .mesh
+                .edge_tags(k.lo, k.hi)
+                .iter()
+                .any(|t| matches!(t, FeatureOn::Primary { .. }));
+            !primary && swap_gain(self.mesh, self.ctx, k).is_some()
+        };
+        // In blocks, each asking the deadline first (a scan of a large mesh
+        // takes a good part of a second); past it the rest are skipped and
+        // the pass stops before it applies anything.
         let mut cands: Vec<(f64, EdgeKey)> = edges
-            .into_par_iter()
-            .filter(|&k| {
-                if !self.edge_in_region(k.lo, k.hi) {
-                    return false;
-                }
-                if let Some((at, found)) = last
-                    && self.stamp_of(k.lo) <= *at
-                    && self.stamp_of(k.hi) <= *at
-                    && !found.contains(&k)
-                {
-                    return false;
-                }
-                let primary = self
-                    .mesh
-                    .edge_tags(k.lo, k.hi)
+            .par_chunks(SCAN_BLOCK)
+            .flat_map_iter(|block| {
+                let skip = deadline.expired_in_loop();
+                block
                     .iter()
-                    .any(|t| matches!(t, FeatureOn::Primary { .. }));
-                !primary && swap_gain(self.mesh, self.ctx, k).is_some()
+                    .filter(move |k| !skip && keep(k))
+                    .map(|&k| (self.mesh.distance(k.lo, k.hi), k))
             })
-            .map(|k| (self.mesh.distance(k.lo, k.hi), k))
             .collect();
         // (The edges are distinct: an unstable sort gives the one order.)
         super::queue::sort_unstable_by(&mut cands, |a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
