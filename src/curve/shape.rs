@@ -106,18 +106,16 @@ pub(super) fn uncertified(
     order: Order,
     opts: &CertifyOptions,
 ) -> Vec<FaceId> {
-    let mut bad: Vec<FaceId> = Vec::new();
+    let mut faces: Vec<FaceId> = Vec::new();
     let mut on_edge = Vec::new();
     for key in shape.edges.keys() {
         mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
-        for &f in &on_edge {
-            if !bad.contains(&f) && !shape.certified(mesh, order, f, opts) {
-                bad.push(f);
-            }
-        }
+        faces.extend_from_slice(&on_edge);
     }
-    bad.sort_unstable();
-    bad
+    faces.sort_unstable();
+    faces.dedup();
+    faces.retain(|&f| !shape.certified(mesh, order, f, opts));
+    faces
 }
 
 /// The exact shape of the primary edges of the faces around `v`.

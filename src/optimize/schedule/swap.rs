@@ -10,8 +10,9 @@ use crate::ops::{Context, Reject, ReroutePlan, SwapPlan, try_reroute_planned, tr
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
-/// Edges of the swap scan between two readings of the deadline.
-const SCAN_BLOCK: usize = 4096;
+/// Edges of the swap scan between two readings of the deadline (small
+/// enough that the blocks still share out well between threads).
+const SCAN_BLOCK: usize = 512;
 
 /// What the swap pass does with an edge, by its tags: swap an untagged edge,
 /// reroute a secondary one, leave a primary one.
