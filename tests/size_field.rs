@@ -652,3 +652,41 @@ fn a_field_finer_than_the_vertex_budget_is_followed_up_to_it_with_a_warning() {
         fine.report.warnings
     );
 }
+
+/// A size below 2μ along a curve: its sections are shorter than μ, so each is
+/// within μ of its curve's next-but-one and the μ-separation demotes the curve
+/// to straight secondary edges. The run says so and what keeps it curved (a μ
+/// of at most half the size); with that μ the disk's outline stays primary.
+#[test]
+fn sizes_below_two_mu_along_a_curve_are_said_and_a_smaller_mu_keeps_it_curved() {
+    let near = SizeSpec::DEFAULT.with_near("steel", Length::Abs(0.1), Some(Length::Abs(2.0)));
+    let fine = mesh("below_two_mu", &params(near.clone()));
+    let counts = fine.report.features.expect("feature counts");
+    println!(
+        "h 0.1 near the disk: {counts:?}\n{:?}",
+        fine.report.warnings
+    );
+    assert!(counts.not_separated_fine > 100, "{counts:?}");
+    let said: Vec<&String> = fine
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("below 2μ"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", fine.report.warnings);
+    assert!(said[0].contains("--mu-abs 0.05"), "{}", said[0]);
+    let kept = mesh(
+        "below_two_mu_small_mu",
+        &params(near).with_mu(Length::Abs(0.05)),
+    );
+    let kept_counts = kept.report.features.expect("feature counts");
+    println!("with μ = 0.05: {kept_counts:?}");
+    assert_eq!(kept_counts.not_separated_fine, 0, "{kept_counts:?}");
+    assert!(
+        kept_counts.primary > counts.primary + 500,
+        "{} primary sections against {}",
+        kept_counts.primary,
+        counts.primary
+    );
+    assert!(!kept.report.warnings.iter().any(|w| w.contains("below 2μ")));
+}

@@ -522,6 +522,9 @@ pub struct FeatureCounts {
     pub high_curvature: usize,
     /// Eligible sections demoted by the μ-separation test.
     pub not_separated: usize,
+    /// Of those, the sections where the size asked is below 2μ (too short to
+    /// be kept μ apart from their curve's next-but-one section).
+    pub not_separated_fine: usize,
     /// Primary sections shorter than μ sharing no end point with another primary
     /// section, demoted (a lone sliver-maker between secondary features).
     pub short_isolated: usize,
@@ -916,12 +919,24 @@ impl FeatureSet {
             .zip(&primary)
             .filter(|(s, p)| s.eligible && !**p)
             .count();
+        // Of those, the ones where the size asked is below 2μ: a section that
+        // short is within μ of its curve's next-but-one section, so the curve
+        // cannot stay primary there (the pipeline's warning says what keeps it).
+        let source = |s: &Section| drawing.features[s.feature as usize].source;
+        counts.not_separated_fine = sections
+            .iter()
+            .zip(&primary)
+            .filter(|(s, p)| {
+                s.eligible
+                    && !**p
+                    && size(s.ctrl.eval(0.5), source(s), CutFor::Any) < 2.0 * params.mu
+            })
+            .count();
         counts.short_isolated =
             separation::demote_short_isolated(&sections, &mut primary, params.mu);
         // 4b. Runs of secondary sections cut finer than a secondary section
         // needs (a thin stroke's own outline where it is not kept apart) are cut
         // again at their secondary size.
-        let source = |s: &Section| drawing.features[s.feature as usize].source;
         let (sections, mut primary, recut) =
             resample::recut_secondary(sections, primary, &window_start, params, &|s, p, cut| {
                 size(p, source(s), cut)

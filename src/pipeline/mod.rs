@@ -459,6 +459,13 @@ fn mesh_stages(
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
+            if fs.counts.not_separated_fine > 0 {
+                warnings.push(fine_sections_warning(
+                    fs.counts.not_separated_fine,
+                    resolved.mu,
+                    field.report().min_size.max(resolved.l_min),
+                ));
+            }
             let chains = fs.primary_chains();
             let (mut mesh, stats) = bsp_trimesh(
                 drawing, &fs, &chains, params, &resolved, deadline, &mut times,
@@ -995,6 +1002,19 @@ fn low_ratio_warning(u: &crate::quality::Unforced) -> Option<String> {
 /// The warning for a mesh that the vertex budget kept coarser than the size
 /// field asks (the optimizer's splits stopped at it, or the field itself was
 /// resolved only as far as it allows).
+/// Curve sections lost to sizes below 2μ ([`FeatureCounts::not_separated_fine`]):
+/// what keeps them curved is a μ of at most half the smallest size asked.
+fn fine_sections_warning(n: usize, mu: f64, smallest: f64) -> String {
+    format!(
+        "{n} curve sections where the size asked is below 2μ ({:.4}) are meshed as \
+         straight edges: a section that short cannot be kept μ apart from its curve's \
+         next-but-one; to keep those curves curved, make μ at most half the smallest size \
+         (--mu-abs {:.4})",
+        2.0 * mu,
+        0.5 * smallest
+    )
+}
+
 fn vertex_budget_warning(max_vertices: u32) -> String {
     format!(
         "the vertex budget of {max_vertices} (--max-vertices) stopped refinement: the mesh is \
