@@ -174,7 +174,13 @@ impl Schedule<'_> {
     /// short here ends the run with the time limit's error, so no mesh that
     /// is written depends on where it stopped.
     pub(super) fn out_of_time_at(&mut self, n: usize) -> bool {
-        if n % DEADLINE_EVERY != DEADLINE_EVERY - 1 || !self.opts.deadline.expired_in_loop() {
+        n % DEADLINE_EVERY == DEADLINE_EVERY - 1 && self.out_of_time_in_loop()
+    }
+
+    /// [`Self::out_of_time_at`] now, whatever the item: the time and a
+    /// latched overrun only (then the stop reason says so).
+    pub(super) fn out_of_time_in_loop(&mut self) -> bool {
+        if !self.opts.deadline.expired_in_loop() {
             return false;
         }
         self.stats.stop = StopReason::TimeLimit;

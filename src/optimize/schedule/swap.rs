@@ -60,9 +60,8 @@ impl Schedule<'_> {
         let scanned_at = self.clock;
         let last = self.swap_scan.take();
         let cands = self.swap_candidates(last.as_ref());
-        if self.opts.deadline.expired_in_loop() {
+        if self.out_of_time_in_loop() {
             // (the scan may have skipped blocks: the run ends here)
-            self.stats.stop = super::StopReason::TimeLimit;
             return 0;
         }
         self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
