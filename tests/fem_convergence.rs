@@ -142,11 +142,28 @@ fn h(s: &Solution) -> f64 {
 
 /// Least-squares slope of `log e` against `log h` over the rows with `e > FLOOR`.
 fn slope(rows: &[Solution], e: impl Fn(&Solution) -> f64) -> f64 {
-    let pts: Vec<(f64, f64)> = rows
+    slope_of(rows, e, usize::MAX)
+}
+
+/// The rate the assertions read: [`slope`] over the three finest levels above
+/// the floor, where the error is asymptotic. The coarse levels are not: on the
+/// graded circle the BSP seeded from the size field made the two coarsest
+/// levels' P3 errors 8 % and 61 % smaller than before and the finest the same
+/// (2.57e-8 against 2.55e-8), which took the all-level slope from 3.77 to 3.50
+/// and the finest three's from 4.38 to 4.34.
+fn asymptotic_slope(rows: &[Solution], e: impl Fn(&Solution) -> f64) -> f64 {
+    slope_of(rows, e, 3)
+}
+
+/// The least-squares slope of log e over log h, on the `finest` finest levels
+/// above the floor.
+fn slope_of(rows: &[Solution], e: impl Fn(&Solution) -> f64, finest: usize) -> f64 {
+    let all: Vec<(f64, f64)> = rows
         .iter()
         .filter(|s| e(s) > FLOOR)
         .map(|s| (h(s).ln(), e(s).ln()))
         .collect();
+    let pts = &all[all.len().saturating_sub(finest)..];
     assert!(pts.len() >= 3, "too few levels above the floor");
     let n = pts.len() as f64;
     let (mx, my) = (
@@ -184,16 +201,18 @@ fn print_table(name: &str, rows: &[Solution]) {
         );
     }
     println!(
-        "  fitted slopes: L2 {:.2}, H1 {:.2}",
+        "  fitted slopes: L2 {:.2}, H1 {:.2}; the finest three levels: L2 {:.2}, H1 {:.2}",
         slope(rows, |s| s.l2),
-        slope(rows, |s| s.h1)
+        slope(rows, |s| s.h1),
+        asymptotic_slope(rows, |s| s.l2),
+        asymptotic_slope(rows, |s| s.h1)
     );
 }
 
 /// Mesh `drawing` at every level and order 1–3 (with the size fields `size(level)`),
 /// solve, print the tables and return
-/// every failed expectation (so a regression shows its whole picture): L2 rates at
-/// least k + 0.6, h falling at every level, the order-3 area within `area_tol`
+/// every failed expectation (so a regression shows its whole picture): L2 rates
+/// (over the finest three levels) at least k + 0.6, h falling at every level, the order-3 area within `area_tol`
 /// (relative) of `exact_area`, and P2 on the cubic meshes as accurate as on the
 /// quadratic ones.
 fn study(
@@ -234,7 +253,7 @@ fn study(
                 failed.push(format!("{name} P{}: h does not decrease: {rows:?}", p + 1));
             }
         }
-        let r = slope(rows, |s| s.l2);
+        let r = asymptotic_slope(rows, |s| s.l2);
         if r < min_rate {
             failed.push(format!("{name} P{} L2 rate {r:.2} < {min_rate}", p + 1));
         }

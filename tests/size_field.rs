@@ -175,7 +175,11 @@ fn a_size_near_an_outline_holds_on_it_and_fades_to_the_ambient_size() {
         "near steel 0.5:10: longest outline edge {longest:.3}, far median edge/h {median:.2} ({} edges)",
         far.len()
     );
-    assert!(longest <= 0.67, "an outline edge of {longest}");
+    // The splits and collapses keep the outline's edges within 4/3·h; moving a
+    // vertex along the curve may stretch one a little past it: 1.287·h at the
+    // field's midpoint before the BSP was seeded from the field, 1.343·h
+    // (0.6726) since, the other outline edges within 4/3·h.
+    assert!(longest <= 0.7, "an outline edge of {longest}");
     // Issue 37: the ambient edges have the ambient size.
     assert!((0.8..=1.25).contains(&median), "far median {median}");
 }
@@ -689,4 +693,42 @@ fn sizes_below_two_mu_along_a_curve_are_said_and_a_smaller_mu_keeps_it_curved() 
         counts.primary
     );
     assert!(!kept.report.warnings.iter().any(|w| w.contains("below 2μ")));
+}
+
+/// A steep field (h = 0.2 on the steel's outline, a 25th of the global size,
+/// growing at the grading): the BSP is seeded with the field's vertices, so the
+/// optimizer refines a graded mesh instead of cutting the fans of slivers
+/// between the outlines' vertices again and again (ello at h = d/180 along its
+/// outline: some 400 000 faces made and collapsed again for a mesh of 17 000
+/// triangles). The splits made stay below twice the mesh's vertex count
+/// (without the seeds: 21 049 splits and 18 612 collapses for 2 915 nodes,
+/// min angle 16.0°; with them 2 860 and 2 699, 19.2°); the edges match the
+/// field; the default plate gets no seeds.
+#[test]
+fn a_steep_field_seeds_the_bsp_and_the_optimizer_refines_little() {
+    let p = params(SizeSpec::DEFAULT.with_near("steel", Length::Abs(0.2), None));
+    let m = mesh("steep_near", &p);
+    let bsp = m.report.bsp.as_ref().expect("bsp stats");
+    let opt = m.report.optimize.as_ref().expect("optimize stats");
+    let nodes = m.mesh.nodes.len();
+    println!(
+        "steep near steel 0.2: {} field seeds of {} seed vertices, {} splits, {} collapses, {} nodes, min angle {:.1}",
+        bsp.field_seeds,
+        bsp.seed_vertices,
+        opt.split.applied,
+        opt.collapse.applied,
+        nodes,
+        m.report.quality.min_angle_deg
+    );
+    assert!(bsp.field_seeds > 1000, "{} seeds", bsp.field_seeds);
+    assert!(
+        (opt.split.applied as usize) < 2 * nodes,
+        "{} splits for {nodes} nodes",
+        opt.split.applied
+    );
+    let e = m.report.sizing.as_ref().and_then(|s| s.edges.as_ref());
+    let e = e.expect("an edge match");
+    assert!(e.matched >= 0.7, "{e:?}");
+    let plain = mesh("steep_near_default", &params(SizeSpec::DEFAULT));
+    assert_eq!(plain.report.bsp.as_ref().map(|b| b.field_seeds), Some(0));
 }

@@ -80,6 +80,10 @@ pub(crate) struct BspInput {
     pub section_endpoints: Vec<Point>,
     /// Feature segments (crossing, overlapping, duplicated: anything goes).
     pub segments: Vec<BspSegment>,
+    /// Free vertices where the size field asks for a finer mesh than the
+    /// features' vertices give (untagged: the optimizer moves and removes
+    /// them like any vertex the BSP makes).
+    pub steiner: Vec<Point>,
 }
 
 /// Options of [`build`].
@@ -140,6 +144,9 @@ impl Default for BspOptions {
 pub struct BspStats {
     /// Distinct vertices given to the Delaunay triangulation.
     pub seed_vertices: usize,
+    /// Of the seed vertices, the free ones the size field asked for (where it
+    /// is below half the global size, away from the features).
+    pub field_seeds: usize,
     /// Triangles of the Delaunay triangulation.
     pub seed_triangles: usize,
     /// Distinct segments offered to the seed as constraint edges (those that
@@ -200,6 +207,7 @@ pub(crate) fn build(
     let mut stats = BspStats::default();
     let seed = seed::seed(input, bbox)?;
     stats.seed_vertices = seed.points.len();
+    stats.field_seeds = input.steiner.len();
     stats.seed_triangles = seed.triangles.len();
     stats.seed_constraints = seed.constraints;
     stats.seed_refused = seed.refused;

@@ -166,6 +166,9 @@ pub(super) fn seed(input: &BspInput, bbox: Rect) -> Result<Seed> {
         add(s.a, seg_tag)?;
         add(s.b, seg_tag)?;
     }
+    for &p in &input.steiner {
+        add(p, VertexTag::default())?;
+    }
     let k = scale_exponent(&points).ok_or_else(|| {
         Error::BadCoordinate(
             "bsp: coordinates span more than 2^340; no scaling fits the exact Delaunay range"

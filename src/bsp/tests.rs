@@ -188,6 +188,7 @@ fn soup(max_segments: usize) -> impl Strategy<Value = BspInput> {
             BspInput {
                 points,
                 section_endpoints: Vec::new(),
+                steiner: Vec::new(),
                 segments,
             }
         })
@@ -535,6 +536,7 @@ fn tagging_and_rounding_stop_at_a_passed_deadline() {
     let input = BspInput {
         points: Vec::new(),
         section_endpoints: Vec::new(),
+        steiner: Vec::new(),
         segments,
     };
     let (unrounded, stats) = run(&input, false);

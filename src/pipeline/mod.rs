@@ -468,7 +468,7 @@ fn mesh_stages(
             }
             let chains = fs.primary_chains();
             let (mut mesh, stats) = bsp_trimesh(
-                drawing, &fs, &chains, params, &resolved, deadline, &mut times,
+                drawing, &fs, &chains, params, &resolved, deadline, &mut times, field,
             )?;
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
@@ -704,6 +704,7 @@ fn bsp_input(fs: &FeatureSet, chains: &PrimaryChains) -> BspInput {
         points: ci.points,
         section_endpoints,
         segments,
+        steiner: Vec::new(),
     }
 }
 
@@ -724,6 +725,7 @@ pub(crate) fn bsp_stage(
     params.validate()?;
     let resolved = params.resolve(drawing.diagonal());
     let mut times = Times::default();
+    let field = test_field(drawing, params)?;
     let fs = sized_features(drawing, params)?;
     let chains = fs.primary_chains();
     let (mesh, _) = bsp_trimesh(
@@ -734,6 +736,7 @@ pub(crate) fn bsp_stage(
         &resolved,
         Deadline::NONE,
         &mut times,
+        &field,
     )?;
     let ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
     Ok((mesh, fs, ctx))
@@ -811,6 +814,11 @@ pub(crate) fn optimize_stage(
     Ok((mesh, fs, ctx, stats))
 }
 
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the BSP stage's inputs (the features, their chains, the field) and the run's \
+              parameters, budgets and timer, passed straight through by its two callers"
+)]
 fn bsp_trimesh(
     drawing: &Drawing,
     fs: &FeatureSet,
@@ -819,12 +827,24 @@ fn bsp_trimesh(
     resolved: &Resolved,
     deadline: Deadline,
     times: &mut Times,
+    field: &SizeField,
 ) -> Result<(TriMesh, BspStats)> {
-    let input = bsp_input(fs, chains);
+    let mut input = bsp_input(fs, chains);
     density::check_crossings(input.segments.iter().map(|s| [s.a, s.b]), resolved.mu)?;
     let bbox = padded_box(drawing, resolved.padding);
     let opts = BspOptions::DEFAULT.with_deadline(deadline);
-    let (mesh, stats) = times.time("bsp", || bsp::build(&input, bbox, &opts))?;
+    let (mesh, stats) = times.time("bsp", || {
+        // Free vertices where the size field asks for a finer mesh than the
+        // features give (`sizing::seeds`; none at the default settings).
+        let lines: Vec<kurbo::Line> = input
+            .segments
+            .iter()
+            .map(|s| kurbo::Line::new(s.a, s.b))
+            .collect();
+        input.steiner =
+            field.seed_points(bbox, &lines, &input.points, params.max_vertices as usize);
+        bsp::build(&input, bbox, &opts)
+    })?;
     check_deadline(&deadline, Stage::Bsp)?;
     if params.paranoid {
         times.time("check", || check_trimesh(&mesh, Stage::Bsp))?;

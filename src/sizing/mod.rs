@@ -23,6 +23,7 @@
 
 mod fields;
 mod report;
+mod seeds;
 mod sources;
 pub(crate) mod tree;
 

@@ -214,3 +214,77 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
     );
     assert_eq!(field.for_curve(on, stroke, CutFor::Secondary), r.l);
 }
+
+/// The BSP's seeds from the field ([`SizeField::seed_points`]): where a
+/// formula asks for sizes from 0.5 (x = -200) up to `l` (15.1), every seed lies
+/// at a leaf centre where the field is below half of `l`, inside the box by
+/// half its size, at least half its size from every feature segment and
+/// point; the default field (thin strokes only), a uniform field and a
+/// budget smaller than the seeds give none.
+#[test]
+fn seeds_follow_the_field_where_it_is_fine_and_keep_off_the_features() {
+    let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="-200 -200 400 400">
+        <rect x="-150" y="-20" width="300" height="40" fill="#58a"/></svg>"##;
+    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let r = Params::DEFAULT.resolve(drawing.diagonal());
+    let spec = SizeSpec::DEFAULT.with_expr("0.5 + 0.1*(x + 200)");
+    let field = field_of(&drawing, &r, &spec);
+    let bounds = Rect::new(-200.0, -200.0, 200.0, 200.0);
+    let segments = [
+        kurbo::Line::new((-150.0, -20.0), (150.0, -20.0)),
+        kurbo::Line::new((-150.0, 20.0), (150.0, 20.0)),
+        kurbo::Line::new((-150.0, -20.0), (-150.0, 20.0)),
+    ];
+    let points = [Point::new(-180.0, 100.0)];
+    let seeds = field.seed_points(bounds, &segments, &points, 1_000_000);
+    let half_l = seeds::SEED_BELOW * r.l;
+    assert!(seeds.len() > 100, "{} seeds", seeds.len());
+    for &p in &seeds {
+        let h = field.at(p);
+        // (the leaf's smallest corner is below half of l; its centre may be a
+        // little above, by the grading across half a leaf)
+        assert!(h < 1.5 * half_l, "{p:?}: h {h} vs l {}", r.l);
+        let m = 0.25 * h;
+        assert!(
+            p.x - bounds.x0 > m
+                && bounds.x1 - p.x > m
+                && p.y - bounds.y0 > m
+                && bounds.y1 - p.y > m,
+            "{p:?} near the box"
+        );
+        for s in &segments {
+            let d = crate::mesh::point_segment_distance(p, *s);
+            assert!(d > 0.25 * h, "{p:?} at {d} from {s:?}, h {h}");
+        }
+        assert!(p.distance(points[0]) > 0.25 * h, "{p:?} at the point");
+    }
+    // Where the field is above half of l (x > -129), no seed (but for a
+    // leaf straddling that line).
+    assert!((r.l - 15.13).abs() < 0.01, "l = {}", r.l);
+    assert!(seeds.iter().all(|p| p.x < -120.0), "a seed where h > l/2");
+    // Deterministic.
+    assert_eq!(
+        seeds,
+        field.seed_points(bounds, &segments, &points, 1_000_000)
+    );
+    // Past half the budget: none.
+    assert!(
+        field
+            .seed_points(bounds, &segments, &points, seeds.len())
+            .is_empty()
+    );
+    // The default field (no size asked) and a uniform one: none.
+    let default = default_field(&drawing, &r);
+    assert!(
+        default
+            .seed_points(bounds, &segments, &points, 1_000_000)
+            .is_empty()
+    );
+    let uniform = field_of(&drawing, &r, &SizeSpec::DEFAULT.with_expr("1000"));
+    assert!(uniform.is_uniform());
+    assert!(
+        uniform
+            .seed_points(bounds, &segments, &points, 1_000_000)
+            .is_empty()
+    );
+}

@@ -661,6 +661,38 @@ impl Tree {
         self.capped
     }
 
+    /// Every leaf: its centre, its side and its smallest corner value.
+    pub(crate) fn leaf_boxes(&self) -> Vec<(Point, f64, f64)> {
+        let mut out = Vec::new();
+        let mut stack: Vec<(usize, Point, f64)> = Vec::new();
+        for j in 0..self.ny {
+            for i in 0..self.nx {
+                let at = Point::new(
+                    self.origin.x + i as f64 * self.cell,
+                    self.origin.y + j as f64 * self.cell,
+                );
+                stack.push((j * self.nx + i, at, self.cell));
+            }
+        }
+        while let Some((node, at, side)) = stack.pop() {
+            let child = self.child[node] as usize;
+            if child == 0 {
+                let h = self.nodes[node]
+                    .values
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min);
+                out.push((Point::new(at.x + side / 2.0, at.y + side / 2.0), side, h));
+                continue;
+            }
+            let half = side / 2.0;
+            for q in 0..4 {
+                let off = Point::new(at.x + half * (q & 1) as f64, at.y + half * (q >> 1) as f64);
+                stack.push((child + q, off, half));
+            }
+        }
+        out
+    }
+
     /// Number of leaves (for the report).
     pub(crate) fn leaves(&self) -> usize {
         self.nodes.iter().filter(|n| n.child == 0).count()
@@ -713,6 +745,37 @@ mod tests {
             );
         }
         assert_eq!(t.at(Point::new(90.0, 90.0)), 5.0);
+    }
+
+    /// The leaves ([`Tree::leaf_boxes`]) tile the grid: as many as the tree
+    /// counts, their areas summing to the grid's, each centre in the leaf
+    /// that `locate` finds for it, with that leaf's smallest corner value.
+    #[test]
+    fn the_leaf_boxes_tile_the_grid() {
+        let bounds = Rect::new(0.0, 0.0, 100.0, 60.0);
+        let src = [Source::point(Point::new(31.3, 47.9), 0.5, 0.5)];
+        let t = from_sources(bounds, &src);
+        let leaves = t.leaf_boxes();
+        assert_eq!(leaves.len(), t.leaves());
+        let area: f64 = leaves.iter().map(|&(_, side, _)| side * side).sum();
+        let grid = (t.nx * t.ny) as f64 * t.cell * t.cell;
+        assert!((area - grid).abs() < 1e-9 * grid, "{area} vs {grid}");
+        for &(p, side, h) in &leaves {
+            let (leaf, u, v) = t.locate(p);
+            assert!(
+                (u - 0.5).abs() < 1e-9 && (v - 0.5).abs() < 1e-9,
+                "{p:?} {side}"
+            );
+            let min = t.nodes[leaf]
+                .values
+                .into_iter()
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(h, min);
+        }
+        assert!(
+            leaves.iter().any(|&(_, _, h)| h < 1.0),
+            "refined near the source"
+        );
     }
 
     #[test]
