@@ -1,11 +1,12 @@
 //! A uniform grid of bounding boxes: the broad phase of the μ-separation test, so it never
-//! compares all pairs.
+//! compares all pairs (and of the size field's seeds' distance to the features,
+//! `sizing::seeds`).
 
 use kurbo::Rect;
 
 /// Items (by `u32` id) bucketed by the grid cells their boxes overlap.
 #[derive(Clone, Debug)]
-pub(super) struct Grid {
+pub(crate) struct Grid {
     x0: f64,
     y0: f64,
     cell: f64,
@@ -19,7 +20,7 @@ pub(super) struct Grid {
 impl Grid {
     /// A grid over `bounds` with cells of about `cell` (enlarged so that there are at most
     /// `4·expected_items + 16` cells, and at least a positive size).
-    pub(super) fn new(bounds: Rect, cell: f64, expected_items: usize) -> Grid {
+    pub(crate) fn new(bounds: Rect, cell: f64, expected_items: usize) -> Grid {
         let (w, h) = (bounds.width().max(0.0), bounds.height().max(0.0));
         let max_cells = 4.0 * expected_items as f64 + 16.0;
         let mut cell = if cell.is_finite() && cell > 0.0 {
@@ -67,7 +68,7 @@ impl Grid {
     }
 
     /// Add item `id` with box `r` (once per id).
-    pub(super) fn insert(&mut self, id: u32, r: Rect) {
+    pub(crate) fn insert(&mut self, id: u32, r: Rect) {
         let (x0, x1, y0, y1) = self.span(r);
         for y in y0..=y1 {
             for x in x0..=x1 {
@@ -87,7 +88,7 @@ impl Grid {
     /// An item is reported only from the cell holding the lower-left corner of its
     /// box's intersection with `r` (a cell both spans share), so no item is seen
     /// twice and nothing is sorted: the work is the items in the cells `r` covers.
-    pub(super) fn any(&self, r: Rect, f: impl FnMut(u32) -> bool) -> bool {
+    pub(crate) fn any(&self, r: Rect, f: impl FnMut(u32) -> bool) -> bool {
         self.any_of(r, |_| true, f)
     }
 

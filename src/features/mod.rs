@@ -55,7 +55,7 @@ mod classify;
 mod coincide;
 mod continuation;
 mod crossings;
-mod grid;
+pub(crate) mod grid;
 mod json;
 mod merge;
 mod preview;

@@ -22,17 +22,13 @@
 //! optimizer's split passes stop at the budget as before.
 
 use super::SizeField;
+use crate::features::grid::Grid;
 use kurbo::{Line, Point, Rect};
-use rustc_hash::FxHashMap;
 
 /// Leaves whose smallest corner value is below this fraction of `l` get a
 /// seed. Where the field is near `l` the features' vertices and the usual
 /// split passes make the mesh as before.
 pub(crate) const SEED_BELOW: f64 = 0.5;
-
-/// The most steps [`Near`] samples the segments at (the cells grow past
-/// half of `l` for longer segments; a larger cell only holds more of them).
-const MAX_SAMPLES: f64 = 1e7;
 
 /// The area per vertex of a mesh of equilateral triangles of side 1 (each
 /// vertex has six triangles of area √3/4, each shared by three vertices).
@@ -61,18 +57,29 @@ impl SizeField {
             .into_iter()
             .filter(|&(_, _, h)| h < below)
             .collect();
-        if leaves.is_empty() {
+        if leaves.is_empty() || leaves.len() > max_vertices {
             return Vec::new();
         }
-        if leaves.len() > max_vertices {
-            return Vec::new();
+        // The features in a grid of cells of about half of l (each segment by
+        // its box; points after the segments' ids).
+        let mut near = Grid::new(bounds, below, segments.len() + points.len());
+        let boxes = segments
+            .iter()
+            .map(|s| Rect::from_points(s.p0, s.p1))
+            .chain(points.iter().map(|&p| Rect::from_points(p, p)));
+        for (id, b) in boxes.enumerate() {
+            near.insert(id as u32, b);
         }
-        // Cells of half of l at least (a seed keeps r ≤ l/4 clear), larger
-        // where the segments are so long in all that sampling them at a
-        // quarter cell would take more than `MAX_SAMPLES` steps.
-        let length: f64 = segments.iter().map(|s| s.length()).sum();
-        let cell = below.max(4.0 * length / MAX_SAMPLES);
-        let near = Near::new(cell, segments, points);
+        let within = |p: Point, r: f64| {
+            let around = Rect::new(p.x - r, p.y - r, p.x + r, p.y + r);
+            near.any(around, |id| {
+                let d = match segments.get(id as usize) {
+                    Some(&s) => crate::mesh::point_segment_distance(p, s),
+                    None => points[id as usize - segments.len()].distance(p),
+                };
+                d < r
+            })
+        };
         // A mesh of edges h has a vertex per √3/2·h² of area; a leaf's side is
         // between h/2 and h, so one seed per leaf would be up to 3.5 times too
         // many. Each leaf adds its area in vertices and a seed is placed where
@@ -86,7 +93,7 @@ impl SizeField {
                 && p.x + r < bounds.x1
                 && p.y - r > bounds.y0
                 && p.y + r < bounds.y1)
-                || near.within(p, r, segments, points)
+                || within(p, r)
             {
                 continue;
             }
@@ -100,85 +107,5 @@ impl SizeField {
             return Vec::new();
         }
         seeds
-    }
-}
-
-/// A uniform hash grid of the features' segments and points, for "is any
-/// within r of p" with r at most half a cell.
-struct Near {
-    cell: f64,
-    /// Per cell: indices into the segments, then (offset by their count) the points.
-    cells: FxHashMap<(i64, i64), Vec<u32>>,
-    n_segments: usize,
-}
-
-impl Near {
-    fn new(cell: f64, segments: &[Line], points: &[Point]) -> Near {
-        let mut near = Near {
-            cell,
-            cells: FxHashMap::default(),
-            n_segments: segments.len(),
-        };
-        for (i, s) in segments.iter().enumerate() {
-            // Samples at most a quarter cell apart along the segment: every
-            // point of it is within a quarter cell of one, so a segment
-            // within r ≤ cell/2 of p has a sample in p's cell or a neighbour.
-            let steps = (s.length() / (0.25 * cell)).ceil() as usize;
-            let mut last = None;
-            for k in 0..=steps {
-                let t = if steps == 0 {
-                    0.0
-                } else {
-                    k as f64 / steps as f64
-                };
-                let key = near.key(s.p0.lerp(s.p1, t));
-                if last != Some(key) {
-                    let list = near.cells.entry(key).or_default();
-                    if list.last() != Some(&(i as u32)) {
-                        list.push(i as u32);
-                    }
-                    last = Some(key);
-                }
-            }
-        }
-        for (i, &p) in points.iter().enumerate() {
-            let key = near.key(p);
-            near.cells
-                .entry(key)
-                .or_default()
-                .push((segments.len() + i) as u32);
-        }
-        near
-    }
-
-    fn key(&self, p: Point) -> (i64, i64) {
-        (
-            (p.x / self.cell).floor() as i64,
-            (p.y / self.cell).floor() as i64,
-        )
-    }
-
-    /// Whether a segment or point lies within `r` (at most half a cell) of `p`.
-    fn within(&self, p: Point, r: f64, segments: &[Line], points: &[Point]) -> bool {
-        let (x, y) = self.key(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                let Some(list) = self.cells.get(&(x + dx, y + dy)) else {
-                    continue;
-                };
-                for &i in list {
-                    let i = i as usize;
-                    let d = if i < self.n_segments {
-                        crate::mesh::point_segment_distance(p, segments[i])
-                    } else {
-                        points[i - self.n_segments].distance(p)
-                    };
-                    if d < r {
-                        return true;
-                    }
-                }
-            }
-        }
-        false
     }
 }
