@@ -41,6 +41,7 @@ use crate::budget::Deadline;
 use crate::exact::{near_line, within};
 use crate::svg::{Feature, ShapeId};
 use kurbo::{Line, Point, Rect};
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// The conic weight's tolerance (absolute; weights are cosines, at most 1 for
@@ -222,12 +223,12 @@ fn split_overlaps(
         );
     }
     let step = grid.cell();
-    // By straight piece: its split points, with their parameter along it.
-    let mut cuts: Vec<Vec<(f64, Point)>> = vec![Vec::new(); lines.len()];
-    let mut total = 0;
-    for (li, (_, l)) in lines.iter().enumerate() {
-        if deadline.expired() {
-            return (pieces, as_drawn, 0);
+    // By straight piece: its split points, with their parameter along it
+    // (each piece's from the grid alone, so in parallel, in any order).
+    let cuts_of = |li: usize, l: &Line| -> Vec<(f64, Point)> {
+        let mut cuts = Vec::new();
+        if deadline.expired_in_loop() {
+            return cuts;
         }
         let (p, q) = (l.p0, l.p1);
         let dir = q - p;
@@ -265,16 +266,31 @@ fn split_overlaps(
                     return false;
                 }
                 if near_line(p, q, x, tol) && near_line(p, q, y, tol) {
-                    cuts[li].push((t, x));
+                    cuts.push((t, x));
                 }
                 false
             });
         }
-        let c = &mut cuts[li];
-        c.sort_by(|a, b| a.0.total_cmp(&b.0));
-        c.dedup_by(|a, b| a.1 == b.1);
-        total += c.len();
+        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        cuts.dedup_by(|a, b| a.1 == b.1);
+        cuts
+    };
+    let mut cuts: Vec<Vec<(f64, Point)>> = Vec::with_capacity(lines.len());
+    for (block, from) in lines.chunks(CHECK_EVERY).zip((0..).step_by(CHECK_EVERY)) {
+        if deadline.expired() {
+            return (pieces, as_drawn, 0);
+        }
+        cuts.par_extend(
+            block
+                .par_iter()
+                .enumerate()
+                .map(|(i, (_, l))| cuts_of(from + i, l)),
+        );
     }
+    if deadline.expired() {
+        return (pieces, as_drawn, 0);
+    }
+    let total: usize = cuts.iter().map(Vec::len).sum();
     if total == 0 {
         return (pieces, as_drawn, 0);
     }
@@ -472,6 +488,35 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig {
             cases: 64, failure_persistence: None, ..proptest::prelude::ProptestConfig::default()
         })]
+        /// The straight pieces' split points are found in parallel: one
+        /// thread and two split the same pieces at the same points.
+        #[test]
+        fn overlaps_split_the_same_on_one_and_two_threads(
+            segs in proptest::collection::vec((0u32..40, 1u32..12, 0u32..3), 2..60),
+        ) {
+            let dir = kurbo::Vec2::new(3.0, 1.0);
+            let at = |s: u32, row: u32| Point::new(0.0, 7.0 * f64::from(row)) + dir * f64::from(s);
+            let pieces: Vec<Piece> = segs
+                .iter()
+                .enumerate()
+                .map(|(f, &(s, len, row))| {
+                    (f as u32, Parent::Line(Line::new(at(s, row), at(s + len, row))), vec![[0.0, 1.0]])
+                })
+                .collect();
+            let features: Vec<Feature> = (0..segs.len()).map(feature).collect();
+            let on = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a pool")
+                    .install(|| {
+                        let m = merged(pieces.clone(), &features, 1e-9, 1e-6);
+                        (ends(&m), m.splits, m.merged)
+                    })
+            };
+            proptest::prop_assert_eq!(on(1), on(2));
+        }
+
         /// Random collinear segments on one slanted line (end points on a grid
         /// of the line's parameter, so some coincide): after merging, no two
         /// pieces overlap, and every point of the union is on exactly one piece.

@@ -727,7 +727,21 @@ impl FeatureSet {
         let mut pieces: Vec<(u32, Parent, Vec<[f64; 2]>)> = Vec::with_capacity(curves.len());
         // By piece: its curve as drawn, where snapping moved it (see `trim`).
         let mut as_drawn: Vec<Option<Parent>> = Vec::with_capacity(curves.len());
+        // Each curve's splits on its own, in parallel; taken in order below.
+        let mut splits: std::vec::IntoIter<Option<split::Splits>> = {
+            use rayon::prelude::*;
+            curves
+                .par_iter()
+                .map(|(_, class)| match class {
+                    classify::Class::Curve(c) => Some(split::split(c)),
+                    classify::Class::Conic(c) => Some(split::split_conic(c)),
+                    _ => None,
+                })
+                .collect::<Vec<_>>()
+                .into_iter()
+        };
         for ((i, class), drawn) in curves.into_iter().zip(drawn) {
+            let split = splits.next().flatten();
             match class {
                 classify::Class::Point(_) => {}
                 classify::Class::Lines(lines) => {
@@ -741,7 +755,7 @@ impl FeatureSet {
                     }
                 }
                 classify::Class::Curve(c) => {
-                    let s = split::split(&c);
+                    let s = split.expect("internal: a curve's splits");
                     counts.inflection_splits += s.inflection_splits;
                     counts.curvature_splits += s.curvature_splits;
                     pieces.push((i, Parent::Cubic(c), s.intervals));
@@ -751,7 +765,7 @@ impl FeatureSet {
                     });
                 }
                 classify::Class::Conic(c) => {
-                    let s = split::split_conic(&c);
+                    let s = split.expect("internal: a conic's splits");
                     counts.curvature_splits += s.curvature_splits;
                     pieces.push((i, Parent::Conic(c), s.intervals));
                     as_drawn.push(match drawn {

@@ -20,6 +20,7 @@
 //!    to thin strokes, whose cones are steeper.
 
 use kurbo::{Point, Rect};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -195,6 +196,20 @@ struct Pending {
     side: f64,
     depth: u32,
     sources: Vec<u32>,
+}
+
+/// What a box of a level keeps ([`Tree::build`]): a leaf its own sources, a
+/// box that splits the sources that still matter to each quadrant.
+enum Kept {
+    Leaf(Vec<Source>),
+    Children([Vec<u32>; 4]),
+}
+
+/// The lower-left corners of the four quadrants of the square at `at` of
+/// side `2·half`, in the children's order.
+fn quadrants(at: Point, half: f64) -> [Point; 4] {
+    [(0.0, 0.0), (half, 0.0), (0.0, half), (half, half)]
+        .map(|(dx, dy)| Point::new(at.x + dx, at.y + dy))
 }
 
 /// The lattice of corner positions: integer coordinates in units of the
@@ -381,6 +396,7 @@ impl Tree {
             keep_going(0)?;
             // The point field at every corner and centre of this level not yet known.
             let mut ask: Vec<(u32, Point)> = Vec::new();
+            let mut centres: Vec<u32> = Vec::with_capacity(level.len());
             for b in &level {
                 let centre = Point::new(b.at.x + 0.5 * b.side, b.at.y + 0.5 * b.side);
                 let ids = nodes[b.node as usize].corners;
@@ -388,7 +404,9 @@ impl Tree {
                 for (id, p) in ids.into_iter().zip(pts) {
                     ask.push((id, p));
                 }
-                ask.push((lattice.id(centre), centre));
+                let centre_id = lattice.id(centre);
+                centres.push(centre_id);
+                ask.push((centre_id, centre));
             }
             ask.sort_unstable_by_key(|a| a.0);
             ask.dedup_by_key(|a| a.0);
@@ -400,34 +418,38 @@ impl Tree {
                     pointwise.insert(a.0, v);
                 }
             }
-            // Which boxes of the level split, then whether the level fits.
-            let mut splits = Vec::with_capacity(level.len());
-            for (n, b) in level.iter().enumerate() {
-                if n % CHECK_EVERY == CHECK_EVERY - 1 {
-                    keep_going(0)?;
-                }
-                let ids = nodes[b.node as usize].corners;
-                let centre = Point::new(b.at.x + 0.5 * b.side, b.at.y + 0.5 * b.side);
-                let centre_id = lattice.id(centre);
-                let field = ids
-                    .iter()
-                    .chain([&centre_id])
-                    .map(|id| pointwise[id])
-                    .fold(f64::INFINITY, f64::min);
-                let mut split = field < hi && b.side > FINE * field.max(lo);
-                for &k in &b.sources {
-                    if split {
-                        break;
+            // Which boxes of the level split, then whether the level fits; then
+            // each leaf's own sources and each split box's children's. Both in
+            // parallel, a block of boxes between two checks of the deadline;
+            // the nodes and the lattice grow in the level's order after, so the
+            // tree is the same on any number of threads.
+            let mut splits: Vec<bool> = Vec::with_capacity(level.len());
+            for (block, ids) in level.chunks(CHECK_EVERY).zip(centres.chunks(CHECK_EVERY)) {
+                keep_going(0)?;
+                let nodes = &nodes;
+                let pointwise = &pointwise;
+                splits.par_extend(block.par_iter().zip(ids).map(|(b, &centre_id)| {
+                    let field = nodes[b.node as usize]
+                        .corners
+                        .iter()
+                        .chain([&centre_id])
+                        .map(|id| pointwise[id])
+                        .fold(f64::INFINITY, f64::min);
+                    let mut split = field < hi && b.side > FINE * field.max(lo);
+                    for &k in &b.sources {
+                        if split {
+                            break;
+                        }
+                        let s = &sources[k as usize];
+                        let bound = s.h + s.slope * s.box_distance_bound(b.at, b.side);
+                        if bound >= hi || b.side <= FINE * bound.max(lo) {
+                            continue;
+                        }
+                        let want = asked(s, b.at, b.side, hi);
+                        split = b.side > FINE * want.max(lo);
                     }
-                    let s = &sources[k as usize];
-                    let bound = s.h + s.slope * s.box_distance_bound(b.at, b.side);
-                    if bound >= hi || b.side <= FINE * bound.max(lo) {
-                        continue;
-                    }
-                    let want = asked(s, b.at, b.side, hi);
-                    split = b.side > FINE * want.max(lo);
-                }
-                splits.push(split && b.depth < MAX_DEPTH && 0.5 * b.side >= FINE * lo);
+                    split && b.depth < MAX_DEPTH && 0.5 * b.side >= FINE * lo
+                }));
             }
             let n_split = splits.iter().filter(|&&x| x).count();
             if n_split > 0 {
@@ -439,51 +461,65 @@ impl Tree {
                 }
             }
             let mut next = Vec::with_capacity(4 * n_split);
-            for (n, (b, split)) in level.into_iter().zip(splits).enumerate() {
-                if n % CHECK_EVERY == CHECK_EVERY - 1 {
-                    keep_going(0)?;
-                }
-                if !split {
-                    leaves += 1;
-                    // a leaf: it keeps the sources within its side
-                    let start = local.len() as u32;
-                    local.extend(
-                        b.sources
-                            .iter()
-                            .map(|&k| sources[k as usize])
-                            .filter(|s| s.box_distance(b.at, b.side) <= b.side),
-                    );
-                    nodes[b.node as usize].local = (start, local.len() as u32 - start);
-                    continue;
-                }
-                let half = 0.5 * b.side;
-                let first = nodes.len() as u32;
-                nodes[b.node as usize].child = first;
-                for (q, off) in [(0.0, 0.0), (half, 0.0), (0.0, half), (half, half)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    let at = Point::new(b.at.x + off.0, b.at.y + off.1);
-                    let corners = corner_points(at, half).map(|p| lattice.id(p));
-                    nodes.push(Node {
-                        child: 0,
-                        corners,
-                        local: (0, 0),
-                        values: [0.0; 4],
-                    });
-                    let kept: Vec<u32> = b
-                        .sources
-                        .iter()
-                        .copied()
-                        .filter(|&k| sources[k as usize].matters(at, half, lo, hi))
-                        .collect();
-                    next.push(Pending {
-                        node: first + q as u32,
-                        at,
-                        side: half,
-                        depth: b.depth + 1,
-                        sources: kept,
-                    });
+            let mut boxes = level.into_iter().zip(splits).peekable();
+            while boxes.peek().is_some() {
+                keep_going(0)?;
+                let block: Vec<(Pending, bool)> = boxes.by_ref().take(CHECK_EVERY).collect();
+                let kept: Vec<Kept> = block
+                    .par_iter()
+                    .map(|(b, split)| {
+                        if !split {
+                            // a leaf: it keeps the sources within its side
+                            return Kept::Leaf(
+                                b.sources
+                                    .iter()
+                                    .map(|&k| sources[k as usize])
+                                    .filter(|s| s.box_distance(b.at, b.side) <= b.side)
+                                    .collect(),
+                            );
+                        }
+                        let half = 0.5 * b.side;
+                        Kept::Children(quadrants(b.at, half).map(|at| {
+                            b.sources
+                                .iter()
+                                .copied()
+                                .filter(|&k| sources[k as usize].matters(at, half, lo, hi))
+                                .collect()
+                        }))
+                    })
+                    .collect();
+                for ((b, _), kept) in block.into_iter().zip(kept) {
+                    match kept {
+                        Kept::Leaf(own) => {
+                            leaves += 1;
+                            let start = local.len() as u32;
+                            local.extend(own);
+                            nodes[b.node as usize].local = (start, local.len() as u32 - start);
+                        }
+                        Kept::Children(children) => {
+                            let half = 0.5 * b.side;
+                            let first = nodes.len() as u32;
+                            nodes[b.node as usize].child = first;
+                            for (q, (at, kept)) in
+                                quadrants(b.at, half).into_iter().zip(children).enumerate()
+                            {
+                                let corners = corner_points(at, half).map(|p| lattice.id(p));
+                                nodes.push(Node {
+                                    child: 0,
+                                    corners,
+                                    local: (0, 0),
+                                    values: [0.0; 4],
+                                });
+                                next.push(Pending {
+                                    node: first + q as u32,
+                                    at,
+                                    side: half,
+                                    depth: b.depth + 1,
+                                    sources: kept,
+                                });
+                            }
+                        }
+                    }
                 }
             }
             level = next;
@@ -745,6 +781,48 @@ mod tests {
             );
         }
         assert_eq!(t.at(Point::new(90.0, 90.0)), 5.0);
+    }
+
+    /// The levels' split decisions and kept sources are made in parallel:
+    /// the tree is the same on one thread and on two (its nodes, corners,
+    /// values and leaves' own sources), over many sources of either kind.
+    #[test]
+    fn the_tree_is_the_same_on_one_and_two_threads() {
+        let bounds = Rect::new(0.0, 0.0, 100.0, 60.0);
+        let src: Vec<Source> = (0..400)
+            .map(|i| {
+                let t = f64::from(i) * 0.37;
+                let a = Point::new(50.0 + 40.0 * t.cos(), 30.0 + 25.0 * (1.3 * t).sin());
+                if i % 3 == 0 {
+                    Source::point(a, 0.05 + 0.01 * f64::from(i % 7), 0.5)
+                } else {
+                    let b = Point::new(a.x + 0.8 * t.sin(), a.y + 0.6);
+                    Source {
+                        a,
+                        b,
+                        h: 0.1 + 0.02 * f64::from(i % 5),
+                        slope: 1.5,
+                    }
+                }
+            })
+            .collect();
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool")
+                .install(|| from_sources(bounds, &src))
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(one.leaves() > 1000, "{} leaves", one.leaves());
+        assert_eq!(one.leaves(), two.leaves());
+        assert_eq!(one.child, two.child);
+        assert_eq!(one.values, two.values);
+        assert_eq!(one.local, two.local);
+        let nodes = |t: &Tree| -> Vec<([u32; 4], (u32, u32))> {
+            t.nodes.iter().map(|n| (n.corners, n.local)).collect()
+        };
+        assert_eq!(nodes(&one), nodes(&two));
     }
 
     /// The leaves ([`Tree::leaf_boxes`]) tile the grid: as many as the tree
