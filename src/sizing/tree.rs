@@ -168,6 +168,18 @@ struct Node {
     values: [f64; 4],
 }
 
+impl Node {
+    /// A box not split (yet), with its corners' ids.
+    fn unsplit(corners: [u32; 4]) -> Node {
+        Node {
+            child: 0,
+            corners,
+            local: (0, 0),
+            values: [0.0; 4],
+        }
+    }
+}
+
 /// The quadtree background (see the module doc).
 #[derive(Clone, Debug)]
 pub(crate) struct Tree {
@@ -339,13 +351,9 @@ impl Tree {
         for j in 0..ny {
             for i in 0..nx {
                 let at = Point::new(origin.x + i as f64 * cell, origin.y + j as f64 * cell);
-                let corners = corner_points(at, cell).map(|p| lattice.id(p));
-                nodes.push(Node {
-                    child: 0,
-                    corners,
-                    local: (0, 0),
-                    values: [0.0; 4],
-                });
+                nodes.push(Node::unsplit(
+                    corner_points(at, cell).map(|p| lattice.id(p)),
+                ));
             }
         }
         // Sources by grid cell: those whose cone may ask for a cell smaller
@@ -503,13 +511,9 @@ impl Tree {
                             for (q, (at, kept)) in
                                 quadrants(b.at, half).into_iter().zip(children).enumerate()
                             {
-                                let corners = corner_points(at, half).map(|p| lattice.id(p));
-                                nodes.push(Node {
-                                    child: 0,
-                                    corners,
-                                    local: (0, 0),
-                                    values: [0.0; 4],
-                                });
+                                nodes.push(Node::unsplit(
+                                    corner_points(at, half).map(|p| lattice.id(p)),
+                                ));
                                 next.push(Pending {
                                     node: first + q as u32,
                                     at,
