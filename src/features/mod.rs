@@ -728,7 +728,7 @@ impl FeatureSet {
         // By piece: its curve as drawn, where snapping moved it (see `trim`).
         let mut as_drawn: Vec<Option<Parent>> = Vec::with_capacity(curves.len());
         // Each curve's splits on its own, in parallel; taken in order below.
-        let mut splits: std::vec::IntoIter<Option<split::Splits>> = {
+        let splits: Vec<Option<split::Splits>> = {
             use rayon::prelude::*;
             curves
                 .par_iter()
@@ -737,11 +737,9 @@ impl FeatureSet {
                     classify::Class::Conic(c) => Some(split::split_conic(c)),
                     _ => None,
                 })
-                .collect::<Vec<_>>()
-                .into_iter()
+                .collect()
         };
-        for ((i, class), drawn) in curves.into_iter().zip(drawn) {
-            let split = splits.next().flatten();
+        for (((i, class), drawn), split) in curves.into_iter().zip(drawn).zip(splits) {
             match class {
                 classify::Class::Point(_) => {}
                 classify::Class::Lines(lines) => {

@@ -725,8 +725,7 @@ impl Tree {
                 continue;
             }
             let half = side / 2.0;
-            for q in 0..4 {
-                let off = Point::new(at.x + half * (q & 1) as f64, at.y + half * (q >> 1) as f64);
+            for (q, off) in quadrants(at, half).into_iter().enumerate() {
                 stack.push((child + q, off, half));
             }
         }
