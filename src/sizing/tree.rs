@@ -469,13 +469,12 @@ impl Tree {
                 }
             }
             let mut next = Vec::with_capacity(4 * n_split);
-            let mut boxes = level.into_iter().zip(splits).peekable();
-            while boxes.peek().is_some() {
+            for (block, block_splits) in level.chunks(CHECK_EVERY).zip(splits.chunks(CHECK_EVERY)) {
                 keep_going(0)?;
-                let block: Vec<(Pending, bool)> = boxes.by_ref().take(CHECK_EVERY).collect();
                 let kept: Vec<Kept> = block
                     .par_iter()
-                    .map(|(b, split)| {
+                    .zip(block_splits)
+                    .map(|(b, &split)| {
                         if !split {
                             // a leaf: it keeps the sources within its side
                             return Kept::Leaf(
@@ -496,7 +495,7 @@ impl Tree {
                         }))
                     })
                     .collect();
-                for ((b, _), kept) in block.into_iter().zip(kept) {
+                for (b, kept) in block.iter().zip(kept) {
                     match kept {
                         Kept::Leaf(own) => {
                             leaves += 1;
