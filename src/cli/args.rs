@@ -251,9 +251,11 @@ pub(crate) struct ParamArgs {
     /// Target edge length l in output units (overrides --edge-length).
     #[arg(long, value_name = "UNITS")]
     edge_length_abs: Option<f64>,
-    /// Minimal edge length l_m, relative to d.
-    #[arg(long, default_value_t = defaults::MIN_EDGE_LENGTH_REL, value_name = "REL")]
-    min_edge_length: f64,
+    /// Minimal edge length l_m, relative to d; in output units when
+    /// --edge-length-abs is given (the form of the edge length, as the size
+    /// fields take it) [default: 1e-4, relative to d].
+    #[arg(long, value_name = "REL")]
+    min_edge_length: Option<f64>,
     /// Minimal edge length l_m in output units.
     #[arg(long, value_name = "UNITS")]
     min_edge_length_abs: Option<f64>,
@@ -485,7 +487,11 @@ impl ParamArgs {
                 _ => Order::Cubic,
             })
             .with_l(len(self.edge_length, self.edge_length_abs))
-            .with_l_min(len(self.min_edge_length, self.min_edge_length_abs))
+            .with_l_min(match (self.min_edge_length_abs, self.min_edge_length) {
+                (Some(abs), _) => Length::Abs(abs),
+                (None, Some(v)) if self.edge_length_abs.is_some() => Length::Abs(v),
+                (None, v) => Length::Rel(v.unwrap_or(defaults::MIN_EDGE_LENGTH_REL)),
+            })
             .with_mu(len(self.mu, self.mu_abs))
             .with_eps(len(self.eps, self.eps_abs))
             .with_eps_m(len(self.eps_m, self.eps_m_abs))

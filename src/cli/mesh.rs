@@ -66,8 +66,13 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
             return exit_code(err.kind());
         }
     }
-    match triwild::run_file(input, &output, &opts) {
-        Ok(report) => {
+    let result = triwild::run_file(input, &output, &opts);
+    // The parser's own warnings: one line among the run's warnings (and in
+    // --stats) on success, none beside the error's one line.
+    let parser = super::parser_log::folded(&super::parser_log::take());
+    match result {
+        Ok(mut report) => {
+            report.warnings.extend(parser);
             if !quiet {
                 for w in &report.warnings {
                     errln!("warning: {}: {w}", input.display());

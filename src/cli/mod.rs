@@ -15,6 +15,7 @@ pub(crate) mod features;
 #[cfg(feature = "test-hooks")]
 pub(crate) mod hooks;
 pub(crate) mod mesh;
+pub(crate) mod parser_log;
 pub(crate) mod report;
 
 use crate::cli::batch::BatchArgs;
@@ -109,13 +110,25 @@ fn init_logging(log: &LogArgs) {
     };
     let filter = tracing_subscriber::EnvFilter::try_from_env("TRIWILD_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
-    // `try_init`: a second run in the same process (the Python package) keeps
-    // the first run's subscriber instead of panicking
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
+    use std::io::IsTerminal;
+    use tracing_subscriber::layer::SubscriberExt;
+    use tracing_subscriber::util::SubscriberInitExt;
+    use tracing_subscriber::{Layer, filter};
+    // triwild's own events on stderr (colour only on a terminal); the parser's
+    // (usvg and its crates, through `log`) collected, to be folded into one
+    // warning line per file (`parser_log`). `try_init`: a second run in the
+    // same process (the Python package) keeps the first run's subscriber
+    // instead of panicking.
+    let own = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .without_time()
         .with_target(false)
+        .with_filter(filter::filter_fn(|m| !parser_log::is_foreign(m.target())))
+        .with_filter(filter);
+    let _ = tracing_subscriber::registry()
+        .with(own)
+        .with(parser_log::Collect)
         .try_init();
 }
 

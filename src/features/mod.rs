@@ -28,26 +28,32 @@
 //!    overlapping, within ε_m, decided exactly) become one feature whose shapes
 //!    share it (`FeatureSet::sharers`), so a shared boundary stays exact instead
 //!    of two copies closer than μ demoting each other; then `crossings`.
-//! 3. `resample`: pieces are halved until each is shorter than l, within μ of its chord and
-//!    turns less than α (Theorem 4.4); parts with curvature above 2/l_m, and windows shorter
-//!    than l_m (a cut next to a curve's end), are not eligible.
+//! 3. `resample`: pieces are halved until each is shorter than the size asked along it (at
+//!    least [`SEPARATION_SIZE_PER_MU`] μ here), within μ of its chord and turns less than α
+//!    (Theorem 4.4); a straight piece is cut where the integral of 1/h along it reaches whole
+//!    numbers; parts with curvature above 2/l_m, and windows shorter than l_m (a cut next to
+//!    a curve's end), are not eligible.
 //! 4. `separation`: μ-separation (Definition 4.1), decided conservatively on the sections'
 //!    control hulls with a uniform grid; a primary section shorter than μ that shares no end
 //!    point with another primary section is demoted too (its fixed ends, within μ of the
 //!    secondary features around it, would only force slivers); runs of secondary
 //!    sections cut finer than a secondary section needs (the size field gives a thin
 //!    stroke's size to its own outline only where that outline may be primary) are cut
-//!    again at their secondary size; then the secondary simplification (endpoints
-//!    closer than μ collapse to their barycentre).
+//!    again at their secondary size; primary sections longer than the size asked (below
+//!    the test's floor of [`SEPARATION_SIZE_PER_MU`] μ) are cut to it, every piece primary;
+//!    then the secondary simplification (endpoints closer than μ collapse to their
+//!    barycentre).
 //! 5. `merge`: an open secondary polyline within μ of kept secondary segments of other
 //!    polylines goes (the longest polylines stay first), so the lines of a hatch or a
 //!    stroked soup closer than μ reach the linear mesher about μ apart.
 //!
 //! Guarantees to the next stage (checked by the property tests with an independent checker):
 //! every primary section has constant-sign curvature, turns less than α, is no longer than
-//! l and not shorter than l_m (control polygon), lies within μ of its chord, and is at least μ away from every section, secondary
-//! segment and point it does not share an endpoint with; no primary chord crosses any other
-//! chord or secondary segment. Sections that share an endpoint share it bit for bit.
+//! l and not shorter than l_m (control polygon), lies within μ of its chord; the sections as the
+//! μ-separation judged them (each primary section, or the pieces cut from one of them to a
+//! size below [`SEPARATION_SIZE_PER_MU`] μ, [`PrimarySection::judged`]) are at least μ away
+//! from every section, secondary segment and point they do not share an endpoint with; no
+//! primary chord crosses any other chord or secondary segment. Sections that share an endpoint share it bit for bit.
 //! [`FeatureSet::conforming_input`] lists what the linear mesher must conform to.
 
 mod chains;
@@ -80,6 +86,14 @@ use std::time::Instant;
 /// that joins them (`continuation`): far below the 1e-9·d to which nodes must lie on the
 /// drawing's curves, far above the rounding of the pieces' own evaluation.
 const JOIN_TOL_REL: f64 = 1e-11;
+/// The smallest size, in units of μ, that the sections are cut to for the
+/// μ-separation test. Sections shorter than μ along one curve would be within
+/// μ of their next-but-one and fail it against their own neighbours; at this
+/// size and above a section's next-but-one along a curve that turns less than
+/// α per section is more than μ away. Where a smaller size is asked, primary
+/// sections are cut to it after the test (their pieces lie in their hulls, so
+/// they keep the separation the test found).
+pub(crate) const SEPARATION_SIZE_PER_MU: f64 = 4.0;
 /// The trimming and resampling take the pieces in parallel, at least this
 /// many to a task.
 const RESAMPLE_CHUNK: usize = 16;
@@ -433,6 +447,10 @@ pub(crate) struct PrimarySection {
     pub prev: Option<SectionId>,
     /// Same as `prev`, at `ctrl.p3`.
     pub next: Option<SectionId>,
+    /// The section the μ-separation judged that this one was cut from: the
+    /// consecutive pieces cut from one judged section share it (no other
+    /// section does), and together they are that section.
+    pub judged: u32,
 }
 
 impl PrimarySection {
@@ -522,9 +540,9 @@ pub struct FeatureCounts {
     pub high_curvature: usize,
     /// Eligible sections demoted by the μ-separation test.
     pub not_separated: usize,
-    /// Of those, the sections where the size asked is below 2μ (too short to
-    /// be kept μ apart from their curve's next-but-one section).
-    pub not_separated_fine: usize,
+    /// Pieces added by cutting primary sections to a size asked below the
+    /// separation's ([`SEPARATION_SIZE_PER_MU`] μ).
+    pub refined_sections: usize,
     /// Primary sections shorter than μ sharing no end point with another primary
     /// section, demoted (a lone sliver-maker between secondary features).
     pub short_isolated: usize,
@@ -847,7 +865,10 @@ impl FeatureSet {
             cuts.push(piece.t[1]);
             let source = drawing.features[i as usize].source;
             let shape = source.shape;
-            let size = |p: Point| size(p, source, CutFor::Any);
+            // Cut for the separation test no finer than SEPARATION_SIZE_PER_MU μ:
+            // primary sections are cut to the size asked after it.
+            let floor = SEPARATION_SIZE_PER_MU * params.mu;
+            let size = |p: Point| size(p, source, CutFor::Any).max(floor);
             let mut out = Vec::new();
             let mut trimmed = 0;
             for w in cuts.windows(2) {
@@ -931,28 +952,28 @@ impl FeatureSet {
             .zip(&primary)
             .filter(|(s, p)| s.eligible && !**p)
             .count();
-        // Of those, the ones where the size asked is below 2μ: a section that
-        // short is within μ of its curve's next-but-one section, so the curve
-        // cannot stay primary there (the pipeline's warning says what keeps it).
         let source = |s: &Section| drawing.features[s.feature as usize].source;
-        counts.not_separated_fine = sections
-            .iter()
-            .zip(&primary)
-            .filter(|(s, p)| {
-                s.eligible
-                    && !**p
-                    && size(s.ctrl.eval(0.5), source(s), CutFor::Any) < 2.0 * params.mu
-            })
-            .count();
         counts.short_isolated =
             separation::demote_short_isolated(&sections, &mut primary, params.mu);
         // 4b. Runs of secondary sections cut finer than a secondary section
         // needs (a thin stroke's own outline where it is not kept apart) are cut
         // again at their secondary size.
-        let (sections, mut primary, recut) =
+        let (sections, primary, recut) =
             resample::recut_secondary(sections, primary, &window_start, params, &|s, p, cut| {
                 size(p, source(s), cut)
             });
+        // 4c. Primary sections cut to the size asked where it is below the
+        // separation's.
+        let resample::Refined {
+            sections,
+            mut primary,
+            recut,
+            judged,
+            added,
+        } = resample::refine_primary(sections, primary, recut, params, &|s, p| {
+            size(p, source(s), CutFor::Any)
+        });
+        counts.refined_sections = added;
         timing.separation_ms = ms(t);
 
         // 5. Secondary simplification and assembly.
@@ -969,7 +990,7 @@ impl FeatureSet {
         counts.collapsed_vertices = simplified.collapsed;
         counts.demoted_after_simplify = simplified.demoted;
         counts.merged_segments = simplified.merged;
-        let primary_sections = assemble_primary(&sections, &primary, drawing);
+        let primary_sections = assemble_primary(&sections, &primary, &judged, drawing);
         counts.primary = primary_sections.len();
         counts.secondary_polylines = simplified.polylines.len();
         counts.secondary_segments = simplified
@@ -1022,6 +1043,7 @@ impl FeatureSet {
 fn assemble_primary(
     sections: &[Section],
     primary: &[bool],
+    judged: &[u32],
     drawing: &Drawing,
 ) -> Vec<PrimarySection> {
     use std::collections::HashMap;
@@ -1029,6 +1051,7 @@ fn assemble_primary(
     for (i, s) in sections.iter().enumerate() {
         if primary[i] {
             out.push(PrimarySection {
+                judged: judged[i],
                 parent: s.parent,
                 source: drawing.features[s.feature as usize].source,
                 shared: s.shared,

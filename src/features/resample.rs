@@ -81,6 +81,94 @@ fn size_along(ctrl: &CubicBez, r: &Resolved, size: &dyn Fn(kurbo::Point) -> f64)
     r.l.min(size(ctrl.p0)).min(size(mid)).min(size(ctrl.p3))
 }
 
+/// Samples of the size along a line per size: the cuts follow a field that
+/// changes by the grading from one element to the next to within a few
+/// percent of its own integral.
+const LINE_SAMPLES_PER_SIZE: f64 = 4.0;
+
+/// The parameters that cut the line `l` on `[t0, t1]` into pieces that follow
+/// the size field `size` (at most `l_max`), `t0` and `t1` included: as many
+/// pieces as the integral of 1/h along the line rounded up, each spanning an
+/// equal share of that integral, so a piece's length is the size at it where
+/// the field varies (a graded field near a corner: the pieces shrink toward
+/// it, instead of all taking the smallest size), and equal pieces where the
+/// field is the same at every sample.
+fn line_cuts(
+    l: &Line,
+    t0: f64,
+    t1: f64,
+    l_max: f64,
+    size: &dyn Fn(kurbo::Point) -> f64,
+) -> Vec<f64> {
+    let len = l.length() * (t1 - t0);
+    let at = |s: f64| {
+        let f = if len > 0.0 {
+            (s / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let t = t0 + (t1 - t0) * f;
+        l_max.min(size(kurbo::ParamCurve::eval(l, t)))
+    };
+    // (arc length, size) samples, a fraction of the local size apart, and the
+    // running integral of 1/h by the trapezoid rule.
+    let mut samples = vec![(0.0, at(0.0))];
+    let mut integral = vec![0.0];
+    let (mut lo, mut hi) = (samples[0].1, samples[0].1);
+    let mut s = 0.0;
+    let max_samples = (LINE_SAMPLES_PER_SIZE as usize + 1) * MAX_SECTIONS;
+    while s < len && samples.len() < max_samples {
+        let h = samples.last().expect("internal: a first sample").1;
+        let next = if samples.len() + 1 == max_samples {
+            len
+        } else {
+            (s + h / LINE_SAMPLES_PER_SIZE).min(len)
+        };
+        if next <= s {
+            break;
+        }
+        let hn = at(next);
+        let acc = integral.last().expect("internal: a first integral")
+            + 0.5 * (next - s) * (1.0 / h + 1.0 / hn);
+        samples.push((next, hn));
+        integral.push(acc);
+        lo = lo.min(hn);
+        hi = hi.max(hn);
+        s = next;
+    }
+    let total = *integral.last().expect("internal: a first integral");
+    let even = lo == hi || len == 0.0;
+    let n = if even { len / lo } else { total }
+        .ceil()
+        .clamp(1.0, MAX_SECTIONS as f64) as usize;
+    let mut ts = Vec::with_capacity(n + 1);
+    ts.push(t0);
+    let mut k = 1;
+    for i in 1..n {
+        let t = if even {
+            t0 + (t1 - t0) * i as f64 / n as f64
+        } else {
+            let want = total * i as f64 / n as f64;
+            while k + 1 < integral.len() && integral[k] < want {
+                k += 1;
+            }
+            let (a, b) = (integral[k - 1], integral[k]);
+            let f = if b > a {
+                ((want - a) / (b - a)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let s = samples[k - 1].0 + f * (samples[k].0 - samples[k - 1].0);
+            t0 + (t1 - t0) * (s / len)
+        };
+        if t > *ts.last().expect("internal: t0") && t < t1 {
+            ts.push(t);
+        }
+    }
+    ts.push(t1);
+    ts
+}
+
 /// Cut `parent` on `[t0, t1]` into sections no longer than the size field
 /// `size` along them (at most l). For a line: equal pieces.
 pub(super) fn resample(
@@ -94,15 +182,7 @@ pub(super) fn resample(
     match parent {
         Parent::Line(l) => {
             let len = l.length() * (t1 - t0);
-            let h = size_along(&parent.restrict(t0, t1), r, size);
-            let n = (len / h).ceil().clamp(1.0, MAX_SECTIONS as f64) as usize;
-            let ts: Vec<f64> = (0..=n)
-                .map(|i| match i {
-                    0 => t0,
-                    i if i == n => t1,
-                    i => t0 + (t1 - t0) * i as f64 / n as f64,
-                })
-                .collect();
+            let ts = line_cuts(l, t0, t1, r.l, size);
             for w in ts.windows(2) {
                 out.push(Piece {
                     t0: w[0],
@@ -147,6 +227,95 @@ pub(super) fn resample(
         }
     }
     out
+}
+
+/// Primary sections longer than the size asked along them (`size(section,
+/// p)`) cut again at that size, each piece primary: the μ-separation judged
+/// the sections at a size of at least [`super::SEPARATION_SIZE_PER_MU`] μ, and
+/// a piece of a section lies in its control hull (a straight piece on its
+/// segment), so what kept the section apart from every other keeps its pieces
+/// apart; its pieces are neighbours along one curve, which separation never
+/// compares. The section's end points stay bit for bit (crossing points).
+pub(super) fn refine_primary(
+    sections: Vec<Section>,
+    primary: Vec<bool>,
+    recut: Vec<bool>,
+    r: &Resolved,
+    size: &dyn Fn(&Section, kurbo::Point) -> f64,
+) -> Refined {
+    // (a hair over the size is rounding: n equal pieces of a line n·h long)
+    let longer = |s: &Section| {
+        polygon_length(&s.ctrl) > (1.0 + 1e-9) * size_along(&s.ctrl, r, &|p| size(s, p))
+    };
+    if !sections.iter().zip(&primary).any(|(s, &p)| p && longer(s)) {
+        let judged = (0..sections.len() as u32).collect();
+        return Refined {
+            sections,
+            primary,
+            recut,
+            judged,
+            added: 0,
+        };
+    }
+    let mut out = Vec::with_capacity(sections.len());
+    let mut out_primary = Vec::with_capacity(sections.len());
+    let mut out_recut = Vec::with_capacity(sections.len());
+    let mut judged = Vec::with_capacity(sections.len());
+    let mut added = 0;
+    for (i, s) in sections.into_iter().enumerate() {
+        let was_recut = recut.get(i).copied().unwrap_or(false);
+        let id = u32::try_from(i).expect("internal: section count fits u32");
+        if !primary[i] || !longer(&s) {
+            out.push(s);
+            out_primary.push(primary[i]);
+            out_recut.push(was_recut);
+            judged.push(id);
+            continue;
+        }
+        let pieces = resample(&s.parent, s.t0, s.t1, r, &|p| size(&s, p));
+        let n = pieces.len();
+        added += n - 1;
+        for (k, p) in pieces.into_iter().enumerate() {
+            let mut ctrl = p.ctrl;
+            if k == 0 {
+                ctrl.p0 = s.ctrl.p0;
+            }
+            if k + 1 == n {
+                ctrl.p3 = s.ctrl.p3;
+            }
+            out.push(Section {
+                t0: p.t0,
+                t1: p.t1,
+                ctrl,
+                ..s
+            });
+            out_primary.push(true);
+            out_recut.push(was_recut);
+            judged.push(id);
+        }
+    }
+    Refined {
+        sections: out,
+        primary: out_primary,
+        recut: out_recut,
+        judged,
+        added,
+    }
+}
+
+/// What [`refine_primary`] returns.
+pub(super) struct Refined {
+    /// The sections, in order.
+    pub(super) sections: Vec<Section>,
+    /// Whether each is primary.
+    pub(super) primary: Vec<bool>,
+    /// Whether each was cut again as a secondary run (`recut`, by section).
+    pub(super) recut: Vec<bool>,
+    /// By section: the section the μ-separation judged that it was cut from
+    /// (its index then; the pieces of one judged section share it).
+    pub(super) judged: Vec<u32>,
+    /// Pieces added.
+    pub(super) added: usize,
 }
 
 /// Runs of consecutive secondary sections (one feature, one parent, one window

@@ -39,7 +39,12 @@
 //! - a clip or mask outline ([`ShapeKind::ClipOutline`]): by the tests of the
 //!   filled shapes painted through that clip (kept where any of them changes);
 //! - a clipped centre line (an unfilled element): kept where it lies inside its
-//!   clips.
+//!   clips;
+//! - an unclipped fill under its own element's opaque stroke (painted right
+//!   over it, another region): dropped where the stroke paints both of its
+//!   sides. The fill's outline runs in the middle of the stroke, half its width
+//!   from both of the stroke's outlines: kept, it would make a stroke only
+//!   twice μ wide fail the μ-separation, whatever else the drawing holds.
 //!
 //! Other unclipped fills and centre lines are never trimmed: every input curve
 //! of the drawing stays a feature, as in TriWild.
@@ -70,6 +75,11 @@ enum Judge {
     Union(Vec<u32>),
     /// Kept where the piece lies inside these clips (a clipped centre line).
     Inside(Vec<ClipTest>),
+    /// Kept unless this test (an opaque stroke painted over the piece's fill)
+    /// certainly paints both sides of it: a fill's outline under its own
+    /// stroke bounds nothing the picture shows, and kept it lies half the
+    /// stroke's width from both of the stroke's outlines.
+    Covered(u32),
 }
 
 /// The trimming tests of a drawing's shapes.
@@ -135,6 +145,20 @@ impl Trimmer {
             let &(f, st) = joined.iter().find(|&&(f, st)| f == i || st == i)?;
             Some(vec![own[f]?, own[st]?])
         };
+        // The opaque stroke of a fill's own element painted right over it.
+        let stroke_over = |i: usize| {
+            let f = &drawing.shapes[i];
+            let st = drawing.shapes.get(i + 1)?;
+            let over = f.paint.kind == ShapeKind::Element
+                && f.filled
+                && f.paint.clips.is_empty()
+                && st.paint.kind == ShapeKind::Stroke
+                && !st.paint.joins_fill
+                && st.paint.alpha >= 1.0
+                && st.element_index == f.element_index
+                && st.svg_id == f.svg_id;
+            if over { own[i + 1] } else { None }
+        };
         let judges = drawing
             .shapes
             .iter()
@@ -143,6 +167,9 @@ impl Trimmer {
             .map(|(i, (s, own))| match (s.paint.kind, own) {
                 (_, Some(_)) if union_of(i).is_some() => {
                     Judge::Union(union_of(i).expect("internal: checked"))
+                }
+                (_, None) if stroke_over(i).is_some() => {
+                    Judge::Covered(stroke_over(i).expect("internal: checked"))
                 }
                 (ShapeKind::ClipOutline, _) => {
                     let shapes = s
@@ -231,6 +258,16 @@ impl Trimmer {
                     let (ib, cb) = test.paints(b, self.eps_abs);
                     !(ca && cb) || ia != ib
                 })
+            }),
+            Judge::Covered(k) => SAMPLES.iter().any(|&f| {
+                let t = t0 + f * (t1 - t0);
+                let Some(n) = normal(curve, t) else {
+                    return true;
+                };
+                let p = curve.eval(t);
+                let test = &self.tests[*k as usize];
+                let covers = |q| test.paints(q, self.eps_abs) == (true, true);
+                !(covers(p + n * step) && covers(p - n * step))
             }),
             Judge::Union(list) => SAMPLES.iter().any(|&f| {
                 let t = t0 + f * (t1 - t0);

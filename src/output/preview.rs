@@ -98,6 +98,38 @@ fn edge_curve(a: Point, b: Point, inner: &[Point]) -> Curve {
     }
 }
 
+/// The longest path data one `<path>` element carries: longer data is split
+/// at subpath starts into several elements, since SVG readers bound an
+/// attribute's length (libxml2, under librsvg, refuses one of 10 MB).
+const PATH_DATA_MAX: usize = 1 << 19;
+
+/// `d` cut at subpath starts (`M`) into pieces of at most [`PATH_DATA_MAX`]
+/// bytes (a single subpath longer than that stays whole), trimmed.
+fn path_chunks(d: &str) -> Vec<&str> {
+    let d = d.trim_end();
+    let mut out = Vec::new();
+    let mut start = 0;
+    while d.len() - start > PATH_DATA_MAX {
+        let window = &d[start..start + PATH_DATA_MAX];
+        let cut = window
+            .rfind('M')
+            .filter(|&i| i > 0)
+            .map(|i| start + i)
+            .or_else(|| {
+                d[start + PATH_DATA_MAX..]
+                    .find('M')
+                    .map(|i| start + PATH_DATA_MAX + i)
+            });
+        let Some(cut) = cut else { break };
+        out.push(d[start..cut].trim_end());
+        start = cut;
+    }
+    if start < d.len() {
+        out.push(&d[start..]);
+    }
+    out
+}
+
 /// Appends SVG path commands, flipping y.
 struct PathData {
     d: String,
@@ -219,12 +251,8 @@ pub(crate) fn write_svg<W: Write>(
         for t in members {
             triangle_outline(order, mesh.triangle(t), &node, &mut fill);
         }
-        if !fill.d.is_empty() {
-            writeln!(
-                w,
-                "<path fill=\"{colour}\" stroke=\"none\" d=\"{}\"/>",
-                fill.d.trim_end()
-            )?;
+        for d in path_chunks(&fill.d) {
+            writeln!(w, "<path fill=\"{colour}\" stroke=\"none\" d=\"{d}\"/>")?;
         }
     }
 
@@ -327,7 +355,7 @@ fn write_marks<W: Write>(
             -2.0 * dot
         ));
     }
-    if !d.is_empty() {
+    for d in path_chunks(&d) {
         writeln!(
             w,
             "<path fill=\"#ff7f0e\" fill-opacity=\"0.8\" stroke=\"none\" d=\"{d}\"/>"
@@ -457,20 +485,33 @@ fn inner_nodes(
 }
 
 fn write_path<W: Write>(w: &mut W, d: &str, colour: &str, width: f64) -> io::Result<()> {
-    if d.is_empty() {
-        return Ok(());
+    for d in path_chunks(d) {
+        writeln!(
+            w,
+            "<path fill=\"none\" stroke=\"{colour}\" stroke-width=\"{width:?}\" \
+             stroke-linecap=\"round\" stroke-linejoin=\"round\" d=\"{d}\"/>"
+        )?;
     }
-    writeln!(
-        w,
-        "<path fill=\"none\" stroke=\"{colour}\" stroke-width=\"{width:?}\" \
-         stroke-linecap=\"round\" stroke-linejoin=\"round\" d=\"{}\"/>",
-        d.trim_end()
-    )
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_path_data_is_cut_at_subpath_starts_into_bounded_pieces() {
+        let one = "M1.0 2.0 L3.0 4.0 L5.0 6.0 Z ";
+        let d = one.repeat(3 * PATH_DATA_MAX / one.len());
+        let pieces = path_chunks(&d);
+        assert!(pieces.len() >= 3, "{}", pieces.len());
+        for p in &pieces {
+            assert!(p.len() <= PATH_DATA_MAX && p.starts_with('M') && !p.ends_with(' '));
+        }
+        assert_eq!(pieces.join(" "), d.trim_end());
+        assert_eq!(path_chunks(""), Vec::<&str>::new());
+        assert_eq!(path_chunks("M0 0 L1 1 "), vec!["M0 0 L1 1"]);
+    }
 
     fn eval_cubic(p: [Point; 4], t: f64) -> Point {
         let s = 1.0 - t;

@@ -434,6 +434,9 @@ fn mesh_stages(
             max_vertices: params.max_vertices as usize,
         })
     })?;
+    if let Some(w) = size_clamp_warning(field.report()) {
+        warnings.push(w);
+    }
     let delivered = match params.mesher {
         Mesher::Cdt => {
             check_deadline(&deadline, Stage::Baseline)?;
@@ -459,13 +462,6 @@ fn mesh_stages(
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
-            if fs.counts.not_separated_fine > 0 {
-                warnings.push(fine_sections_warning(
-                    fs.counts.not_separated_fine,
-                    resolved.mu,
-                    field.report().min_size.max(resolved.l_min),
-                ));
-            }
             let chains = fs.primary_chains();
             let (mut mesh, stats) = bsp_trimesh(
                 drawing, &fs, &chains, params, &resolved, deadline, &mut times, field,
@@ -1019,22 +1015,22 @@ fn low_ratio_warning(u: &crate::quality::Unforced) -> Option<String> {
     ))
 }
 
+/// The warning for size fields that ask below the minimal edge length l_min:
+/// the field is clamped there, and the flag that follows them.
+fn size_clamp_warning(report: &crate::sizing::SizingReport) -> Option<String> {
+    (report.asked_min < report.l_min).then(|| {
+        format!(
+            "the size fields ask for sizes below the minimal edge length l_min = {:.3e} \
+             (down to {:.3e} where the field was sampled): sizes are clamped to l_min; \
+             --min-edge-length-abs {:.3e} or smaller follows them",
+            report.l_min, report.asked_min, report.asked_min
+        )
+    })
+}
+
 /// The warning for a mesh that the vertex budget kept coarser than the size
 /// field asks (the optimizer's splits stopped at it, or the field itself was
 /// resolved only as far as it allows).
-/// Curve sections lost to sizes below 2μ ([`FeatureCounts::not_separated_fine`]):
-/// what keeps them curved is a μ of at most half the smallest size asked.
-fn fine_sections_warning(n: usize, mu: f64, smallest: f64) -> String {
-    format!(
-        "{n} curve sections where the size asked is below 2μ ({:.4}) are meshed as \
-         straight edges: a section that short cannot be kept μ apart from its curve's \
-         next-but-one; to keep those curves curved, make μ at most half the smallest size \
-         (--mu-abs {:.4})",
-        2.0 * mu,
-        0.5 * smallest
-    )
-}
-
 fn vertex_budget_warning(max_vertices: u32) -> String {
     format!(
         "the vertex budget of {max_vertices} (--max-vertices) stopped refinement: the mesh is \

@@ -118,7 +118,9 @@ impl SizeField {
         if n_strokes > 0 {
             applied.push("strokes".into());
         }
-        sources.extend(sources::user(input, slope, &mut applied)?);
+        let user = sources::user(input, slope, &mut applied)?;
+        let mut asked_min = user.iter().map(|s| s.h).fold(l, f64::min);
+        sources.extend(user);
         if input.spec.feature_size {
             let lfs = sources::feature_size(input, slope);
             if !lfs.is_empty() {
@@ -151,7 +153,11 @@ impl SizeField {
                 l,
                 slope,
                 sources,
-                &mut |pts: &[Point]| points.eval(pts),
+                &mut |pts: &[Point]| {
+                    let v = points.eval(pts)?;
+                    asked_min = v.iter().copied().fold(asked_min, f64::min);
+                    Ok(v)
+                },
                 max_leaves,
                 &keep_going,
             )
@@ -180,6 +186,7 @@ impl SizeField {
             l,
             l_min,
             min_size,
+            asked_min,
             sources: n_sources,
             leaves: tree.leaves(),
             capped: tree.capped(),

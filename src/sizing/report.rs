@@ -19,6 +19,11 @@ pub struct SizingReport {
     pub l_min: f64,
     /// The smallest size the field gives.
     pub min_size: f64,
+    /// The smallest size the user's fields asked for before the clamp to
+    /// `[l_min, l]` (at the field's own sample points: the quadtree's corners
+    /// and centres, the outline fields' sources); below `l_min` the field is
+    /// clamped there and the run warns.
+    pub asked_min: f64,
     /// Source points on outlines (thin strokes, outline fields, feature size).
     pub sources: usize,
     /// Leaves of the background quadtree.
@@ -40,6 +45,7 @@ impl SizingReport {
             l,
             l_min: l,
             min_size: l,
+            asked_min: l,
             sources: 0,
             leaves: 1,
             capped: false,

@@ -726,6 +726,7 @@ fn resolve_items(
     let accuracy = opts.stroke_accuracy * d;
     let mut shapes = Vec::with_capacity(items.len());
     let mut below_mu: Vec<String> = Vec::new();
+    let mut narrowest = f64::INFINITY;
     let mut closed: Vec<String> = Vec::new();
     for item in items {
         let shape = match item {
@@ -761,6 +762,7 @@ fn resolve_items(
                         if width >= hairline && width < mu {
                             counts.strokes_below_mu += 1;
                             below_mu.push(area.name());
+                            narrowest = narrowest.min(width);
                         }
                         centre
                     }
@@ -771,6 +773,14 @@ fn resolve_items(
             s.paint_order = u32::try_from(shapes.len()).unwrap_or(u32::MAX);
             shapes.push(s);
         }
+    }
+    if counts.dropped_decoration > 0 {
+        warnings.push(format!(
+            "{} paint(s) (fills or strokes) below --min-opacity {} dropped as decoration, \
+             with no region (their effective opacity: the groups' opacities times the paint's; \
+             a lower --min-opacity meshes them, --keep-decoration keeps their outlines)",
+            counts.dropped_decoration, opts.min_opacity
+        ));
     }
     if !closed.is_empty() {
         warnings.push(format!(
@@ -783,8 +793,10 @@ fn resolve_items(
     if !below_mu.is_empty() {
         warnings.push(format!(
             "{} stroke(s) narrower than the feature envelope μ = {mu:.3e} kept as centre \
-             lines (their two outlines would be closer than μ): {}",
+             lines, with no area of their own (their two outlines would be closer than μ; \
+             --mu-abs {:.3e}, half the narrowest width, meshes them as areas): {}",
             below_mu.len(),
+            0.5 * narrowest,
             listed(&below_mu)
         ));
     }

@@ -149,7 +149,8 @@ struct Item {
 pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
     let r = &fs.params;
     let mut bad = Vec::new();
-    let mut items = Vec::new();
+    let mut items: Vec<Item> = Vec::new();
+    let mut judged_seen = std::collections::HashSet::new();
     for (i, s) in fs.primary.iter().enumerate() {
         let pc = curve_of(&s.parent);
         let [t0, t1] = s.t;
@@ -255,13 +256,34 @@ pub(crate) fn check(fs: &FeatureSet) -> Vec<String> {
         let bbox = pts
             .iter()
             .fold(Rect::from_points(a, a), |r, p| r.union_pt(*p));
-        items.push(Item {
-            samples: pts,
-            a,
-            b,
-            bbox,
-            primary: Some(i),
-        });
+        // The pieces cut from one judged section after the μ-separation are
+        // compared as that section: consecutive, each starting where the one
+        // before ends.
+        let joins = i > 0 && fs.primary[i - 1].judged == s.judged;
+        match items.last_mut() {
+            Some(it) if joins => {
+                if it.b != a {
+                    bad.push(format!(
+                        "p{i}: a piece of a judged section not joining the one before"
+                    ));
+                }
+                it.samples.extend(pts);
+                it.b = b;
+                it.bbox = it.bbox.union(bbox);
+            }
+            _ => {
+                if !judged_seen.insert(s.judged) {
+                    bad.push(format!("p{i}: pieces of one judged section apart"));
+                }
+                items.push(Item {
+                    samples: pts,
+                    a,
+                    b,
+                    bbox,
+                    primary: Some(i),
+                });
+            }
+        }
     }
     for pl in &fs.secondary {
         if pl.points.len() < 2 {
