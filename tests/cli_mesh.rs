@@ -493,15 +493,17 @@ fn the_size_preview_shades_a_graded_mesh_with_a_legend() {
     let svg = std::fs::read_to_string(&preview).unwrap();
     assert!(svg.contains("id=\"size-legend\"") && svg.contains("edge / h"));
     usvg::Tree::from_str(&svg, &usvg::Options::default()).expect("the preview is valid SVG");
-    // the fills of the shaded triangles (closed outlines per colour), legend aside
-    let fills: Vec<(String, usize)> = svg
-        .lines()
-        .filter(|l| l.starts_with("<path fill=\"#"))
-        .map(|l| {
-            let colour = l["<path fill=\"".len()..].split('"').next().unwrap();
-            (colour.to_owned(), l.matches('Z').count())
-        })
-        .collect();
+    // the fills of the shaded triangles (closed outlines per colour, a colour's
+    // path data in several elements when long), legend aside
+    let mut fills: Vec<(String, usize)> = Vec::new();
+    for l in svg.lines().filter(|l| l.starts_with("<path fill=\"#")) {
+        let colour = l["<path fill=\"".len()..].split('"').next().unwrap();
+        let n = l.matches('Z').count();
+        match fills.iter_mut().find(|f| f.0 == colour) {
+            Some(f) => f.1 += n,
+            None => fills.push((colour.to_owned(), n)),
+        }
+    }
     let triangles: usize = fills.iter().map(|f| f.1).sum();
     assert!(fills.len() >= 2, "distinct fills: {fills:?}");
     // most triangles are within [4/5, 4/3] of the field: the neutral fill
