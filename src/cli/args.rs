@@ -544,3 +544,42 @@ impl ParamArgs {
         self.max_memory.saturating_mul(1 << 20)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Flags {
+        #[command(flatten)]
+        params: ParamArgs,
+    }
+
+    fn l_min(args: &[&str]) -> Length {
+        Flags::try_parse_from(std::iter::once("triwild").chain(args.iter().copied()))
+            .expect("the flags parse")
+            .params
+            .to_params()
+            .l_min
+    }
+
+    /// `--min-edge-length` takes the edge length's form: relative to d, or
+    /// in output units with `--edge-length-abs`; `-abs` wins; the default
+    /// stays relative.
+    #[test]
+    fn the_minimal_edge_length_follows_the_edge_lengths_form() {
+        let default = Length::Rel(defaults::MIN_EDGE_LENGTH_REL);
+        assert_eq!(l_min(&[]), default);
+        assert_eq!(l_min(&["--edge-length-abs", "5"]), default);
+        assert_eq!(l_min(&["--min-edge-length", "0.01"]), Length::Rel(0.01));
+        assert_eq!(
+            l_min(&["--edge-length-abs", "5", "--min-edge-length", "0.01"]),
+            Length::Abs(0.01)
+        );
+        assert_eq!(
+            l_min(&["--min-edge-length", "0.5", "--min-edge-length-abs", "2"]),
+            Length::Abs(2.0)
+        );
+    }
+}
