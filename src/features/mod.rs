@@ -543,6 +543,10 @@ pub struct FeatureCounts {
     /// Pieces added by cutting primary sections to a size asked below the
     /// separation's ([`SEPARATION_SIZE_PER_MU`] μ).
     pub refined_sections: usize,
+    /// Primary sections left at the separation's size because cutting them
+    /// to the size asked would pass the section budget (half the vertex
+    /// budget, `--max-vertices`).
+    pub unrefined_over_budget: usize,
     /// Primary sections shorter than μ sharing no end point with another primary
     /// section, demoted (a lone sliver-maker between secondary features).
     pub short_isolated: usize,
@@ -661,7 +665,7 @@ impl FeatureSet {
         params: &Resolved,
         deadline: &Deadline,
     ) -> FeatureSet {
-        Self::build_sized(drawing, params, deadline, &|_, _, _| params.l)
+        Self::build_sized(drawing, params, deadline, &|_, _, _| params.l, usize::MAX)
     }
 
     /// Preprocess the features of `drawing` against the size field `size`
@@ -674,11 +678,19 @@ impl FeatureSet {
     /// where `size(p, source, CutFor::Secondary)` is larger (the pipeline gives a thin
     /// stroke's size to the stroke's own outline only, and only where it is primary:
     /// `SizeField::for_curve`).
+    ///
+    /// Primary sections are cut below the separation's size
+    /// ([`SEPARATION_SIZE_PER_MU`] μ) only while the primary sections stay
+    /// within `max_sections` (the pipeline gives half the vertex budget): past
+    /// it they keep the separation's size, [`FeatureCounts::unrefined_over_budget`]
+    /// counts them, and the optimizer refines toward the field as far as its
+    /// budget goes.
     pub(crate) fn build_sized(
         drawing: &Drawing,
         params: &Resolved,
         deadline: &Deadline,
         size: &(dyn Fn(kurbo::Point, FeatureSource, CutFor) -> f64 + Sync),
+        max_sections: usize,
     ) -> FeatureSet {
         let _span = tracing::debug_span!("features").entered();
         let start = Instant::now();
@@ -970,10 +982,17 @@ impl FeatureSet {
             recut,
             judged,
             added,
-        } = resample::refine_primary(sections, primary, recut, params, &|s, p| {
-            size(p, source(s), CutFor::Any)
-        });
+            unrefined,
+        } = resample::refine_primary(
+            sections,
+            primary,
+            recut,
+            params,
+            &|s, p| size(p, source(s), CutFor::Any),
+            max_sections,
+        );
         counts.refined_sections = added;
+        counts.unrefined_over_budget = unrefined;
         timing.separation_ms = ms(t);
 
         // 5. Secondary simplification and assembly.

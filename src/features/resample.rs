@@ -236,32 +236,46 @@ pub(super) fn resample(
 /// segment), so what kept the section apart from every other keeps its pieces
 /// apart; its pieces are neighbours along one curve, which separation never
 /// compares. The section's end points stay bit for bit (crossing points).
+/// When the pieces would take the primary sections past `max_primary`, no
+/// section is cut (`unrefined` counts those that were to be).
 pub(super) fn refine_primary(
     sections: Vec<Section>,
     primary: Vec<bool>,
     recut: Vec<bool>,
     r: &Resolved,
     size: &dyn Fn(&Section, kurbo::Point) -> f64,
+    max_primary: usize,
 ) -> Refined {
     // (a hair over the size is rounding: n equal pieces of a line n·h long)
     let longer = |s: &Section| {
         polygon_length(&s.ctrl) > (1.0 + 1e-9) * size_along(&s.ctrl, r, &|p| size(s, p))
     };
-    if !sections.iter().zip(&primary).any(|(s, &p)| p && longer(s)) {
+    let unchanged = |sections: Vec<Section>, primary, recut, unrefined| {
         let judged = (0..sections.len() as u32).collect();
-        return Refined {
+        Refined {
             sections,
             primary,
             recut,
             judged,
             added: 0,
-        };
+            unrefined,
+        }
+    };
+    let to_cut = sections
+        .iter()
+        .zip(&primary)
+        .filter(|(s, p)| **p && longer(s))
+        .count();
+    if to_cut == 0 {
+        return unchanged(sections, primary, recut, 0);
     }
     let mut out = Vec::with_capacity(sections.len());
     let mut out_primary = Vec::with_capacity(sections.len());
     let mut out_recut = Vec::with_capacity(sections.len());
     let mut judged = Vec::with_capacity(sections.len());
     let mut added = 0;
+    let n_primary = primary.iter().filter(|&&p| p).count();
+    let original = sections.clone();
     for (i, s) in sections.into_iter().enumerate() {
         let was_recut = recut.get(i).copied().unwrap_or(false);
         let id = u32::try_from(i).expect("internal: section count fits u32");
@@ -275,6 +289,9 @@ pub(super) fn refine_primary(
         let pieces = resample(&s.parent, s.t0, s.t1, r, &|p| size(&s, p));
         let n = pieces.len();
         added += n - 1;
+        if n_primary + added > max_primary {
+            return unchanged(original, primary, recut, to_cut);
+        }
         for (k, p) in pieces.into_iter().enumerate() {
             let mut ctrl = p.ctrl;
             if k == 0 {
@@ -300,6 +317,7 @@ pub(super) fn refine_primary(
         recut: out_recut,
         judged,
         added,
+        unrefined: 0,
     }
 }
 
@@ -316,6 +334,9 @@ pub(super) struct Refined {
     pub(super) judged: Vec<u32>,
     /// Pieces added.
     pub(super) added: usize,
+    /// Sections that were to be cut but stayed whole: their pieces would have
+    /// passed `max_primary` primary sections.
+    pub(super) unrefined: usize,
 }
 
 /// Runs of consecutive secondary sections (one feature, one parent, one window

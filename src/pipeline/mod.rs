@@ -268,6 +268,7 @@ impl FeatureAnalysis {
                     &resolved,
                     &Deadline::NONE,
                     &|p, source, cut| field.for_curve(p, source.shape, cut),
+                    section_budget(params),
                 ),
             })
         })
@@ -456,9 +457,13 @@ fn mesh_stages(
             check_deadline(&deadline, Stage::Features)?;
             density::check(drawing, resolved.mu)?;
             let fs = times.time("features", || {
-                FeatureSet::build_sized(drawing, &resolved, &deadline, &|p, source, cut| {
-                    field.for_curve(p, source.shape, cut)
-                })
+                FeatureSet::build_sized(
+                    drawing,
+                    &resolved,
+                    &deadline,
+                    &|p, source, cut| field.for_curve(p, source.shape, cut),
+                    section_budget(params),
+                )
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
@@ -496,7 +501,10 @@ fn mesh_stages(
                         stats.off_curve_left
                     ));
                 }
-                if stats.vertex_budget_reached || field.report().capped {
+                if stats.vertex_budget_reached
+                    || field.report().capped
+                    || features.is_some_and(|c| c.unrefined_over_budget > 0)
+                {
                     warnings.push(vertex_budget_warning(params.max_vertices));
                 }
                 if stats.bad_corners_left > 0 {
@@ -783,6 +791,7 @@ pub(crate) fn sized_features(drawing: &Drawing, params: &Params) -> Result<Featu
         &resolved,
         &Deadline::NONE,
         &|p, source, cut| field.for_curve(p, source.shape, cut),
+        section_budget(params),
     ))
 }
 
@@ -1013,6 +1022,13 @@ fn low_ratio_warning(u: &crate::quality::Unforced) -> Option<String> {
         w.x,
         w.y
     ))
+}
+
+/// The most primary sections the features stage cuts to a size below the
+/// separation's: half the vertex budget, so the outlines leave room for the
+/// mesh inside them.
+fn section_budget(params: &Params) -> usize {
+    params.max_vertices as usize / 2
 }
 
 /// The warning for size fields that ask below the minimal edge length l_min:

@@ -59,9 +59,13 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
         "the test needs the stroke's size well below l"
     );
 
-    let fs = FeatureSet::build_sized(&drawing, &r, &Deadline::NONE, &|p, s, cut| {
-        field.for_curve(p, s.shape, cut)
-    });
+    let fs = FeatureSet::build_sized(
+        &drawing,
+        &r,
+        &Deadline::NONE,
+        &|p, s, cut| field.for_curve(p, s.shape, cut),
+        usize::MAX,
+    );
     // Every section, primary or secondary, as (shape, chord).
     let mut chords: Vec<(ShapeId, Point, Point)> = fs
         .primary
@@ -194,9 +198,13 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
             .position(|s| s.paint.stroke_width.is_some())
             .expect("the stroke is meshed as an area") as u32,
     );
-    let fs = FeatureSet::build_sized(&drawing, &r, &Deadline::NONE, &|p, s, cut| {
-        field.for_curve(p, s.shape, cut)
-    });
+    let fs = FeatureSet::build_sized(
+        &drawing,
+        &r,
+        &Deadline::NONE,
+        &|p, s, cut| field.for_curve(p, s.shape, cut),
+        usize::MAX,
+    );
     assert!(fs.primary.iter().all(|s| s.source.shape != stroke));
     let longest = fs
         .secondary
