@@ -261,11 +261,12 @@ pub(super) fn refine_primary(
             unrefined,
         }
     };
-    let to_cut = sections
+    let cut: Vec<bool> = sections
         .iter()
         .zip(&primary)
-        .filter(|(s, p)| **p && longer(s))
-        .count();
+        .map(|(s, &p)| p && longer(s))
+        .collect();
+    let to_cut = cut.iter().filter(|&&c| c).count();
     if to_cut == 0 {
         return unchanged(sections, primary, recut, 0);
     }
@@ -279,7 +280,7 @@ pub(super) fn refine_primary(
     for (i, s) in sections.into_iter().enumerate() {
         let was_recut = recut.get(i).copied().unwrap_or(false);
         let id = u32::try_from(i).expect("internal: section count fits u32");
-        if !primary[i] || !longer(&s) {
+        if !cut[i] {
             out.push(s);
             out_primary.push(primary[i]);
             out_recut.push(was_recut);
@@ -292,24 +293,14 @@ pub(super) fn refine_primary(
         if n_primary + added > max_primary {
             return unchanged(original, primary, recut, to_cut);
         }
-        for (k, p) in pieces.into_iter().enumerate() {
-            let mut ctrl = p.ctrl;
-            if k == 0 {
-                ctrl.p0 = s.ctrl.p0;
-            }
-            if k + 1 == n {
-                ctrl.p3 = s.ctrl.p3;
-            }
-            out.push(Section {
-                t0: p.t0,
-                t1: p.t1,
-                ctrl,
-                ..s
-            });
-            out_primary.push(true);
-            out_recut.push(was_recut);
-            judged.push(id);
-        }
+        // (a primary section's pieces stay eligible whatever their length)
+        out.extend(as_sections(pieces, &s, s.ctrl.p3).map(|p| Section {
+            eligible: true,
+            ..p
+        }));
+        out_primary.extend(std::iter::repeat_n(true, n));
+        out_recut.extend(std::iter::repeat_n(was_recut, n));
+        judged.extend(std::iter::repeat_n(id, n));
     }
     Refined {
         sections: out,
@@ -319,6 +310,36 @@ pub(super) fn refine_primary(
         added,
         unrefined: 0,
     }
+}
+
+/// `pieces` of `from`'s parent as sections of `from`'s feature, the first
+/// starting at `from`'s start and the last ending at `end` bit for bit (the
+/// pieces' own ends are the parent evaluated there; a run's ends may be
+/// crossing points).
+fn as_sections(
+    pieces: Vec<Piece>,
+    from: &Section,
+    end: kurbo::Point,
+) -> impl Iterator<Item = Section> {
+    let n = pieces.len();
+    let start = from.ctrl.p0;
+    let from = *from;
+    pieces.into_iter().enumerate().map(move |(k, p)| {
+        let mut ctrl = p.ctrl;
+        if k == 0 {
+            ctrl.p0 = start;
+        }
+        if k + 1 == n {
+            ctrl.p3 = end;
+        }
+        Section {
+            t0: p.t0,
+            t1: p.t1,
+            ctrl,
+            eligible: p.eligible,
+            ..from
+        }
+    })
 }
 
 /// What [`refine_primary`] returns.
@@ -390,26 +411,9 @@ pub(super) fn recut_secondary(
             });
             if pieces.len() < j - i {
                 let n = pieces.len();
-                for (k, p) in pieces.into_iter().enumerate() {
-                    let mut ctrl = p.ctrl;
-                    if k == 0 {
-                        ctrl.p0 = first.ctrl.p0;
-                    }
-                    if k + 1 == n {
-                        ctrl.p3 = last.ctrl.p3;
-                    }
-                    out.push(Section {
-                        feature: first.feature,
-                        shared: first.shared,
-                        parent: first.parent,
-                        t0: p.t0,
-                        t1: p.t1,
-                        ctrl,
-                        eligible: p.eligible,
-                    });
-                    out_primary.push(false);
-                    recut.push(true);
-                }
+                out.extend(as_sections(pieces, &first, last.ctrl.p3));
+                out_primary.extend(std::iter::repeat_n(false, n));
+                recut.extend(std::iter::repeat_n(true, n));
                 i = j;
                 continue;
             }
