@@ -42,6 +42,13 @@ pub mod defaults {
     /// Padding of the meshed box around the drawing = 0.05·d (the reference
     /// implementation's).
     pub const PADDING_REL: f64 = 0.05;
+    /// Area tolerance 1e-6 (relative to the region's drawn area, with
+    /// 1e-9·d² the floor): a region of the cubic mesh whose area differs from
+    /// its drawn area by more is named in a warning. The drawn area is exact
+    /// to rounding and a cubic mesh that keeps the outlines has the drawn
+    /// area to rounding (about 1e-13 relative), so this flags what the mesh
+    /// changed: outlines meshed within ε, lost slivers, moved corners.
+    pub const AREA_TOLERANCE: f64 = 1e-6;
     /// Minimal angle α = 10° the optimizer aims for, also the turning bound of
     /// a primary section (thesis §4.4, Theorem 4.4).
     pub const ALPHA_DEG: f64 = 10.0;
@@ -230,6 +237,11 @@ pub struct Params {
     /// near outlines, boxes, a formula, a background mesh, a function, the
     /// automatic feature size and the grading. Default [`SizeSpec::DEFAULT`].
     pub size: SizeSpec,
+    /// The area check's tolerance: a region whose area on the cubic mesh
+    /// differs from its area in the drawing by more than this fraction (or
+    /// 1e-9·d², if larger) is named in a warning. Default
+    /// [`defaults::AREA_TOLERANCE`].
+    pub area_tolerance: f64,
 }
 
 impl Params {
@@ -272,6 +284,7 @@ impl Params {
         time_limit: defaults::TIME_LIMIT,
         threads: defaults::THREADS,
         size: SizeSpec::DEFAULT,
+        area_tolerance: defaults::AREA_TOLERANCE,
     };
 
     /// Set the feature envelope μ.
@@ -317,6 +330,11 @@ impl Params {
     /// Set the CDT baseline's vertex budget.
     pub fn with_max_vertices(mut self, n: u32) -> Self {
         self.max_vertices = n;
+        self
+    }
+    /// Set the area check's tolerance (see [`Params::area_tolerance`]).
+    pub fn with_area_tolerance(mut self, tolerance: f64) -> Self {
+        self.area_tolerance = tolerance;
         self
     }
     /// Set the element order of the TriWild mesher.
@@ -440,6 +458,12 @@ impl Params {
             return Err(Error::InvalidParams(format!(
                 "--cdt-min-angle must be in [0, 34] degrees (refinement may not terminate above), got {}",
                 self.cdt_min_angle_deg
+            )));
+        }
+        if !(self.area_tolerance.is_finite() && self.area_tolerance > 0.0) {
+            return Err(Error::InvalidParams(format!(
+                "--area-tolerance must be a positive finite number, got {}",
+                self.area_tolerance
             )));
         }
         if self.max_vertices < 16 {

@@ -308,6 +308,11 @@ pub(crate) struct ParamArgs {
     /// the size asked comes with a warning.
     #[arg(long, default_value_t = defaults::MAX_VERTICES)]
     max_vertices: u32,
+    /// The area check: a region whose area on the cubic mesh differs from its
+    /// area in the drawing by more than this fraction (or 1e-9·d², if larger)
+    /// is named in a warning.
+    #[arg(long, default_value_t = defaults::AREA_TOLERANCE, value_name = "REL")]
+    area_tolerance: f64,
     /// Validate the mesh after every stage (slow; for debugging).
     #[arg(long)]
     paranoid: bool,
@@ -501,6 +506,7 @@ impl ParamArgs {
             .with_stop_curved(self.stop_energy_curved, self.max_passes_curved)
             .with_cdt_min_angle_deg(self.cdt_min_angle)
             .with_max_vertices(self.max_vertices)
+            .with_area_tolerance(self.area_tolerance)
             .with_paranoid(self.paranoid)
             .with_limits(self.max_segments, self.max_shapes, self.max_memory)
             .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))

@@ -555,11 +555,23 @@ fn mesh_stages(
             regions,
             resolved.eps_m,
             resolved.l_min,
+            Some(crate::regions::AreaCheck {
+                bounds: padded_box(drawing, resolved.padding),
+                d: resolved.d,
+            }),
             deadline,
         )
     })?;
     if !lost.is_empty() {
         warnings.push(lost_regions_warning(drawing, &lost, resolved.mu));
+    }
+    // The area check warns on cubic meshes: there a mesh that keeps the
+    // outlines has the drawn areas to rounding (chords at lower orders and
+    // the baseline's flattened curves change areas by design).
+    if matches!(delivered, Delivered::Curved(_)) && params.order == crate::element::Order::Cubic {
+        if let Some(w) = area_warning(&region_report, &mesh, params, &resolved) {
+            warnings.push(w);
+        }
     }
     // The quality of the elements as written (what `triwild check` reads back):
     // the curving stage's own ratio also saw the elements regions dropped.
@@ -666,6 +678,73 @@ fn lost_regions_warning(drawing: &Drawing, lost: &[crate::svg::ShapeId], mu: f64
         lost.len(),
         names.join(", ")
     )
+}
+
+/// One warning naming the regions whose area on the mesh differs from their
+/// drawn area by more than the tolerance, with the cause the mesh shows and
+/// the flag that keeps them.
+fn area_warning(
+    report: &crate::regions::RegionReport,
+    mesh: &FemMesh,
+    params: &Params,
+    resolved: &Resolved,
+) -> Option<String> {
+    const NAMED: usize = 3;
+    let floor = 1e-9 * resolved.d * resolved.d;
+    let secondary = crate::regions::secondary_lengths(mesh);
+    let mut off: Vec<(f64, &crate::regions::RegionStat, f64)> = report
+        .surfaces
+        .iter()
+        .zip(&secondary)
+        .filter_map(|(s, &sec)| {
+            let (drawn, err) = (s.drawn_area?, s.area_error?);
+            let allowed = (params.area_tolerance * drawn.abs()).max(floor) + report.drawn_unsure;
+            (err.abs() > allowed).then_some((err.abs() / allowed, s, sec))
+        })
+        .collect();
+    if off.is_empty() {
+        return None;
+    }
+    off.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let named: Vec<String> = off
+        .iter()
+        .take(NAMED)
+        .map(|(_, s, _)| {
+            let drawn = s.drawn_area.unwrap_or(0.0);
+            let rel = if drawn != 0.0 {
+                format!(" ({:+.2} %)", 100.0 * (s.area - drawn) / drawn.abs())
+            } else {
+                String::new()
+            };
+            format!(
+                "{} {:.6e} on the mesh against {:.6e} drawn{rel}",
+                s.name, s.area, drawn
+            )
+        })
+        .collect();
+    let more = if off.len() > NAMED { ", ..." } else { "" };
+    let with_secondary = off.iter().filter(|o| o.2 > 0.0).count();
+    let cause = if with_secondary > 0 {
+        format!(
+            "{with_secondary} of them border outlines meshed within eps = {:.3e} (outlines \
+             closer than mu = {:.3e} to another are secondary features); --mu-abs {:.3e} \
+             keeps more outlines exact",
+            resolved.eps,
+            resolved.mu,
+            resolved.mu / 4.0
+        )
+    } else {
+        "their outlines are exact on the mesh: a region's triangles were given to a \
+         neighbour (see regions.lost_shapes and relabelled)"
+            .to_owned()
+    };
+    Some(format!(
+        "{} region(s) differ from the drawing by more than --area-tolerance {:e} (or \
+         1e-9*d^2): {}{more}; {cause}",
+        off.len(),
+        params.area_tolerance,
+        named.join(", ")
+    ))
 }
 
 /// The box the TriWild meshers cover: the drawing's bounding box padded by

@@ -50,17 +50,32 @@
 //! the same rule gives exact areas.
 
 mod classify;
+mod drawn;
 mod element;
 mod orient;
 pub(crate) mod select;
 
 pub(crate) use classify::{ClassifyOptions, classify};
+pub(crate) use drawn::DrawnAreas;
 pub(crate) use orient::orient_lines;
-pub(crate) use select::{DOMAIN, RegionOptions, RegionStat, apply, colour_name, stats_of};
+pub(crate) use select::{
+    DOMAIN, RegionOptions, RegionStat, apply, colour_name, secondary_lengths, stats_of,
+};
 
 use crate::Result;
 use crate::fem::FemMesh;
 use crate::svg::Drawing;
+use kurbo::Rect;
+
+/// What the area check needs beyond the drawing: the meshed box (the
+/// background's extent) and the drawing's diagonal d.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct AreaCheck {
+    /// The box the mesh covers.
+    pub bounds: Rect,
+    /// The drawing's diagonal.
+    pub d: f64,
+}
 
 /// What the region stage did, for `--stats`.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -78,6 +93,10 @@ pub struct RegionReport {
     /// triangle once each face took its majority label (their outlines are
     /// closer than the mesh resolves; `--stats` warns with their names).
     pub lost_shapes: usize,
+    /// A bound on what the drawn areas ([`RegionStat::drawn_area`]) may be
+    /// off by: the outline pieces whose sides could not be sampled (shorter
+    /// than rounding resolves, or between outlines closer than 1e-10·d).
+    pub drawn_unsure: f64,
     /// Surfaces of at most [`SmallRegions::MAX_TRIANGLES`] triangles, which a
     /// solver meets as a material of a handful of elements.
     pub small: SmallRegions,
@@ -147,7 +166,9 @@ impl SmallRegions {
 /// surface `domain`.
 /// Either way the kept domain's boundary is added as the physical curve
 /// [`crate::fem::BOUNDARY`] (the module's guarantees). Also returns the shapes
-/// whose region was lost ([`RegionReport::lost_shapes`]).
+/// whose region was lost ([`RegionReport::lost_shapes`]). With `area`, each
+/// surface's [`RegionStat::drawn_area`] is computed from the drawing
+/// ([`drawn`]) and set beside its area on the mesh.
 ///
 /// # Errors
 /// As [`apply`]: a `--keep` name that matches no region, a `--hole` outside the
@@ -159,6 +180,7 @@ pub(crate) fn tag(
     opts: &RegionOptions,
     eps_abs: f64,
     l_min: f64,
+    area: Option<AreaCheck>,
     deadline: crate::budget::Deadline,
 ) -> Result<(FemMesh, RegionReport, Vec<crate::svg::ShapeId>)> {
     if !opts.needs_classification() {
@@ -166,8 +188,15 @@ pub(crate) fn tag(
         out.surfaces = vec![DOMAIN.to_owned()];
         out.triangle_group = vec![0; mesh.triangle_count()];
         orient::add_boundary(&mut out);
+        let mut surfaces = stats_of(&out);
+        if let Some(check) = area {
+            // one domain: the whole box
+            for s in &mut surfaces {
+                s.set_drawn(check.bounds.area());
+            }
+        }
         let report = RegionReport {
-            surfaces: stats_of(&out),
+            surfaces,
             ..RegionReport::default()
         };
         return Ok((out, report, Vec::new()));
@@ -177,7 +206,16 @@ pub(crate) fn tag(
         .with_deadline(deadline);
     let asg = classify(drawing, mesh, &classify_opts);
     crate::error::check_deadline(&deadline, crate::stage::Stage::Regions)?;
-    let (mut out, surfaces) = apply(drawing, mesh, &asg, opts)?;
+    let drawn = match area {
+        Some(check) => {
+            let painting = crate::svg::winding::Painting::new(drawing);
+            let drawn = drawn::drawn_areas(drawing, &painting, check.bounds, check.d, &deadline);
+            crate::error::check_deadline(&deadline, crate::stage::Stage::Regions)?;
+            drawn
+        }
+        None => None,
+    };
+    let (mut out, surfaces) = apply(drawing, mesh, &asg, opts, drawn.as_ref())?;
     orient::add_boundary(&mut out);
     Ok((
         out,
@@ -187,6 +225,7 @@ pub(crate) fn tag(
             relabelled: asg.relabelled,
             relabelled_area: asg.relabelled_area,
             lost_shapes: asg.lost.len(),
+            drawn_unsure: drawn.as_ref().map_or(0.0, |d| d.unsure),
             small: SmallRegions::default(),
         },
         asg.lost,

@@ -2,6 +2,7 @@
 //! or one domain), dropping regions (`--cut-outside`, `--keep`, `--hole`) and
 //! compacting the mesh.
 
+use super::DrawnAreas;
 use super::classify::{RegionAssignment, edge_key};
 use super::element::element_area;
 use crate::exact::{Orientation, orient2d};
@@ -95,6 +96,22 @@ pub struct RegionStat {
     /// translucent; a gradient's average colour): the first shape's in paint
     /// order; `None` for the background, a pattern or a mesh without a drawing.
     pub colour: Option<String>,
+    /// The region's area in the drawing: the paint model on the input curves
+    /// (topmost painted shape, fill rules, clips, strokes as areas), never the
+    /// mesh; exact for polygons and conics, to rounding for cubics. `None`
+    /// where it was not computed (no drawing, or curves that overlap along a
+    /// stretch without being equal).
+    pub drawn_area: Option<f64>,
+    /// `area − drawn_area`: what the mesh gained (positive) or lost.
+    pub area_error: Option<f64>,
+}
+
+impl RegionStat {
+    /// Set the drawn area, and the error against [`RegionStat::area`].
+    pub(crate) fn set_drawn(&mut self, drawn: f64) {
+        self.drawn_area = Some(drawn);
+        self.area_error = Some(self.area - drawn);
+    }
 }
 
 /// Name of the surface of triangles no filled shape covers.
@@ -133,7 +150,7 @@ fn labels(
     drawing: &Drawing,
     asg: &RegionAssignment,
     mode: RegionMode,
-) -> (Vec<u32>, Vec<String>, Vec<Option<String>>) {
+) -> (Vec<u32>, Vec<String>, Vec<Option<String>>, Vec<u32>) {
     let mut names = vec![BACKGROUND.to_owned()];
     let mut colours: Vec<Option<String>> = vec![None];
     let mut index: HashMap<String, u32> = HashMap::from([(BACKGROUND.to_owned(), 0)]);
@@ -168,7 +185,7 @@ fn labels(
         .iter()
         .map(|o| o.map_or(0, |s| of_shape[s.index()]))
         .collect();
-    (tri, names, colours)
+    (tri, names, colours, of_shape)
 }
 
 /// A shape's paint as a CSS colour (see [`RegionStat::colour`]).
@@ -200,10 +217,11 @@ pub(crate) fn apply(
     mesh: &FemMesh,
     asg: &RegionAssignment,
     opts: &RegionOptions,
+    drawn: Option<&DrawnAreas>,
 ) -> Result<(FemMesh, Vec<RegionStat>)> {
     let n = mesh.triangle_count();
     debug_assert_eq!(asg.owner.len(), n, "internal: assignment of another mesh");
-    let (tri_label, names, label_colours) = labels(drawing, asg, opts.mode);
+    let (tri_label, names, label_colours, of_shape) = labels(drawing, asg, opts.mode);
     let mut count = vec![0usize; names.len()];
     for &l in &tri_label {
         count[l as usize] += 1;
@@ -341,6 +359,8 @@ pub(crate) fn apply(
             triangles: 0,
             area: 0.0,
             colour,
+            drawn_area: None,
+            area_error: None,
         })
         .collect();
     for &t in &kept {
@@ -362,6 +382,25 @@ pub(crate) fn apply(
         out.line_group.push(curve_of[mesh.line_group[i] as usize]);
         out.line_kind.push(mesh.line_kind[i]);
     }
+    if let Some(drawn) = drawn.filter(|d| d.overlaps == 0) {
+        // Each label's drawn area, then each surface's (the labels it merges).
+        let mut by_label = vec![0.0; names.len()];
+        by_label[0] = drawn.background;
+        for (i, &l) in of_shape.iter().enumerate() {
+            if drawing.shapes[i].filled {
+                by_label[l as usize] += drawn.by_shape[i];
+            }
+        }
+        let mut by_surface = vec![0.0; stats.len()];
+        for (l, a) in by_label.iter().enumerate() {
+            if let Some(s) = by_surface.get_mut(surface_of[l] as usize) {
+                *s += a;
+            }
+        }
+        for (s, a) in stats.iter_mut().zip(by_surface) {
+            s.set_drawn(a);
+        }
+    }
     Ok((out, stats))
 }
 
@@ -375,6 +414,8 @@ pub(crate) fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
             triangles: 0,
             area: 0.0,
             colour: None,
+            drawn_area: None,
+            area_error: None,
         })
         .collect();
     let order = mesh.order();
@@ -390,4 +431,35 @@ pub(crate) fn stats_of(mesh: &FemMesh) -> Vec<RegionStat> {
         }
     }
     stats
+}
+
+/// For each surface of `mesh`, the length of the secondary feature lines on
+/// its rim (the outlines the mesh follows only within ε).
+pub(crate) fn secondary_lengths(mesh: &FemMesh) -> Vec<f64> {
+    let mut surfaces_of_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for t in 0..mesh.triangle_count() {
+        let c = mesh.triangle(t);
+        for e in 0..3 {
+            surfaces_of_edge
+                .entry(edge_key(c[e], c[(e + 1) % 3]))
+                .or_default()
+                .push(mesh.triangle_group[t]);
+        }
+    }
+    let mut out = vec![0.0; mesh.surfaces.len()];
+    for i in 0..mesh.line_count() {
+        if mesh.line_kind[i] != crate::fem::LineKind::Secondary {
+            continue;
+        }
+        let l = mesh.line(i);
+        let len = mesh.nodes[l[0] as usize].distance(mesh.nodes[l[1] as usize]);
+        for &g in surfaces_of_edge
+            .get(&edge_key(l[0], l[1]))
+            .into_iter()
+            .flatten()
+        {
+            out[g as usize] += len;
+        }
+    }
+    out
 }

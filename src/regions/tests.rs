@@ -146,7 +146,7 @@ fn tag_no_limit(
     mesh: &FemMesh,
     opts: &RegionOptions,
 ) -> Result<(FemMesh, RegionReport, Vec<ShapeId>)> {
-    tag(d, mesh, opts, 1e-9, 1e-5, Deadline::NONE)
+    tag(d, mesh, opts, 1e-9, 1e-5, None, Deadline::NONE)
 }
 
 fn stat<'a>(stats: &'a [RegionStat], name: &str) -> &'a RegionStat {
@@ -226,7 +226,7 @@ fn topmost_shape_wins_and_areas_add_up() {
         );
         assert_eq!(asg.near_boundary, 0);
         assert_eq!(asg.relabelled, 0);
-        let (out, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+        let (out, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT, None).unwrap();
         check_mesh(&out);
         assert_eq!(out.surfaces, ["background", "a", "b"]);
         assert_eq!(stat(&stats, "a").area, 12.0);
@@ -243,7 +243,7 @@ fn paint_order_not_document_order_decides() {
     let (mut d, mesh) = two_squares();
     d.shapes[0].paint_order = 5;
     let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
-    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT, None).unwrap();
     assert_eq!(stat(&stats, "a").area, 16.0);
     assert_eq!(stat(&stats, "b").area, 12.0);
 }
@@ -259,7 +259,7 @@ fn an_opacity_that_rounds_to_opaque_names_the_opaque_region() {
     d.shapes[1].paint.alpha = 0.999;
     let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
     let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
-    let (out, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    let (out, stats) = apply(&d, &mesh, &asg, &opts, None).unwrap();
     assert_eq!(out.surfaces, ["background", "fill-#5d432e"]);
     assert_eq!(stat(&stats, "fill-#5d432e").area, 28.0);
     assert_eq!(
@@ -272,7 +272,7 @@ fn an_opacity_that_rounds_to_opaque_names_the_opaque_region() {
         (0.0, "fill-#5d432e00"),
     ] {
         d.shapes[1].paint.alpha = alpha;
-        let (out, _) = apply(&d, &mesh, &asg, &opts).unwrap();
+        let (out, _) = apply(&d, &mesh, &asg, &opts, None).unwrap();
         assert_eq!(
             out.surfaces,
             ["background", "fill-#5d432e", name],
@@ -286,11 +286,11 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     let (mut d, mesh) = two_squares();
     let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
     let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
-    let (_, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    let (_, stats) = apply(&d, &mesh, &asg, &opts, None).unwrap();
     assert_eq!(stat(&stats, "fill-#ff0000").area, 12.0);
     assert_eq!(stat(&stats, "fill-#0000ff").area, 16.0);
     d.shapes[1].fill_colour = Some([255, 0, 0]);
-    let (out, stats) = apply(&d, &mesh, &asg, &opts).unwrap();
+    let (out, stats) = apply(&d, &mesh, &asg, &opts, None).unwrap();
     assert_eq!(out.surfaces, ["background", "fill-#ff0000"]);
     assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
 
@@ -298,7 +298,7 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     // naming it (a drawing whose winding queries are slow once took 11 s here
     // under a 10 s limit and still wrote its mesh).
     let passed = Deadline::after(Some(0.0));
-    match tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5, passed) {
+    match tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5, None, passed) {
         Err(crate::Error::TimeLimit { stage, .. }) => assert_eq!(stage, crate::Stage::Regions),
         other => panic!("expected a time-limit error, got {:?}", other.map(|r| r.1)),
     }
@@ -440,14 +440,14 @@ fn a_face_is_labelled_by_its_majority() {
     let asg = classify(&d, &mesh, &ClassifyOptions::new(1e-9));
     assert_eq!(asg.relabelled, 8);
     assert_eq!(asg.relabelled_area, 4.0);
-    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT).unwrap();
+    let (_, stats) = apply(&d, &mesh, &asg, &RegionOptions::DEFAULT, None).unwrap();
     assert_eq!(stat(&stats, "a").area, 12.0);
     let own = classify(
         &d,
         &mesh,
         &ClassifyOptions::new(1e-9).with_vote_per_face(false),
     );
-    let (_, stats) = apply(&d, &mesh, &own, &RegionOptions::DEFAULT).unwrap();
+    let (_, stats) = apply(&d, &mesh, &own, &RegionOptions::DEFAULT, None).unwrap();
     assert_eq!(stat(&stats, "a").area, 16.0);
 }
 

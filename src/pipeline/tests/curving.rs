@@ -68,6 +68,7 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
         &RegionOptions::DEFAULT,
         1e-8 * d,
         1e-4 * d,
+        None,
         crate::budget::Deadline::NONE,
     )
     .expect("regions");
