@@ -146,20 +146,41 @@ fn a_vtu_holds_the_mesh_as_lagrange_cells_with_its_tags_and_area() {
         assert_eq!(offsets[nt - 1] as usize, nt * tn);
         assert_eq!(*offsets.last().unwrap() as usize, nt * tn + nl * ln);
         assert_eq!(conn.len(), nt * tn + nl * ln);
+        // triangles by region, lines by curve, each in the mesh's order
+        let by_group = |groups: &[u32]| {
+            let mut order: Vec<usize> = (0..groups.len()).collect();
+            order.sort_by_key(|&i| groups[i]);
+            order
+        };
         let region = &a["region"];
         let curve = &a["curve"];
-        for t in 0..nt {
-            assert_eq!(region[t] as u32, mesh.triangle_group[t] + 1);
-            assert_eq!(curve[t], 0.0);
+        for (j, t) in by_group(&mesh.triangle_group).into_iter().enumerate() {
+            assert_eq!(region[j] as u32, mesh.triangle_group[t] + 1);
+            assert_eq!(curve[j], 0.0);
+            let nodes: Vec<u32> = conn[j * tn..(j + 1) * tn]
+                .iter()
+                .map(|&n| n as u32)
+                .collect();
+            assert_eq!(nodes, mesh.triangle(t));
         }
-        for l in 0..nl {
-            assert_eq!(region[nt + l], 0.0);
-            assert_eq!(curve[nt + l] as u32, mesh.line_group[l] + 1);
+        for (j, l) in by_group(&mesh.line_group).into_iter().enumerate() {
+            assert_eq!(region[nt + j], 0.0);
+            assert_eq!(curve[nt + j] as u32, mesh.line_group[l] + 1);
+            let at = nt * tn + j * ln;
+            let nodes: Vec<u32> = conn[at..at + ln].iter().map(|&n| n as u32).collect();
+            assert_eq!(nodes, mesh.line(l));
         }
-        // the physical names of the .msh file, each with [tag, dim]
+        // the .msh file's triangles in the same order (cell j is element j + 1),
+        // and its physical names, each with [tag, dim]
         let mut msh = Vec::new();
         triwild::write_msh_to(mesh, &mut msh, MshOptions::DEFAULT).unwrap();
         let back = triwild::read_msh(&msh).unwrap();
+        let file_triangles: Vec<f64> = back
+            .triangle_blocks
+            .iter()
+            .flat_map(|b| b.nodes.iter().map(|&n| f64::from(n)))
+            .collect();
+        assert_eq!(file_triangles, conn[..nt * tn]);
         assert!(!back.physical_names.is_empty());
         for (dim, tag, name) in &back.physical_names {
             assert_eq!(
@@ -170,8 +191,8 @@ fn a_vtu_holds_the_mesh_as_lagrange_cells_with_its_tags_and_area() {
         }
         assert_eq!(
             a.len(),
-            back.physical_names.len() + 7,
-            "groups, points, 3 cell arrays, 2 tags"
+            back.physical_names.len() + 6,
+            "the groups, the points, 3 cell arrays, 2 tag arrays"
         );
         // the Lagrange triangles' area, from the file alone
         let area: f64 = (0..nt)

@@ -1,10 +1,14 @@
-"""NGSolve (`pip install ngsolve`): -Δu = f on triwild's order-2 mesh read by
-netgen's gmsh reader (`netgen.read_gmsh.ReadGmsh`, MSH 2.2 ASCII, 3- and
-6-node triangles: order 2 is the highest it takes; materials and boundary
-names from the file's $PhysicalNames), u = u_exact on the curve `disk-curve`,
-the source integrated over `mesh.Materials("disk|core")`. Prints the L2 and H1
-errors of P1, P2 at three sizes and checks the optimal rates (L2: k + 1, H1:
-k) and the area.
+"""NGSolve (`pip install ngsolve`): -Δu = f on triwild's order-1 mesh read by
+netgen's gmsh reader (`netgen.read_gmsh.ReadGmsh`, MSH 2.2 ASCII; materials
+and boundary names from the file's $PhysicalNames, one per elementary entity,
+so MSH 2.2's entity per curve keeps every curve's name), u = 0 on the curve
+`disk-curve`, the source integrated over `mesh.Materials("disk|core")`.
+
+Order 1 is the highest a 2D mesh can have there: the reader makes a mesh 3D
+(a surface in space) as soon as an element type above 3 appears, and a 6-node
+triangle is type 9. So the geometry is the polygon through the curves'
+vertices: P1 converges at its optimal rates (L2: 2, H1: 1), P2 is held by the
+geometry to about L2: 2, H1: 1.5. Prints both at three sizes and checks that.
 
     python docs/solvers/ngsolve_poisson.py
 """
@@ -28,19 +32,16 @@ def run(k: int, path: str):
     mesh = ngs.Mesh(ReadGmsh(path))
     assert {"disk", "core"} <= set(mesh.GetMaterials()), mesh.GetMaterials()
     assert "disk-curve" in mesh.GetBoundaries(), mesh.GetBoundaries()
-    mesh.Curve(2)  # the 6-node triangles' edge nodes as the geometry
     x, y = ngs.x, ngs.y
-    exact = ngs.sin(ngs.pi * x) * ngs.cos(ngs.pi * y)
-    grad_exact = ngs.CF((ngs.pi * ngs.cos(ngs.pi * x) * ngs.cos(ngs.pi * y), -ngs.pi * ngs.sin(ngs.pi * x) * ngs.sin(ngs.pi * y)))
-    f = 2 * ngs.pi**2 * exact
+    exact = (1 - x**2 - y**2) * ngs.exp(x)
+    grad_exact = ngs.CF(((1 - x**2 - y**2 - 2 * x) * ngs.exp(x), -2 * y * ngs.exp(x)))
+    f = (3 + 4 * x + x**2 + y**2) * ngs.exp(x)
     fes = ngs.H1(mesh, order=k, dirichlet="disk-curve")
     u, v = fes.TnT()
     a = ngs.BilinearForm(ngs.grad(u) * ngs.grad(v) * ngs.dx).Assemble()
     b = ngs.LinearForm(f * v * ngs.dx(definedon=mesh.Materials("disk|core"), bonus_intorder=4)).Assemble()
-    gfu = ngs.GridFunction(fes)
-    gfu.Set(exact, ngs.BND, definedon=mesh.Boundaries("disk-curve"))
-    r = b.vec - a.mat * gfu.vec
-    gfu.vec.data += a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky") * r
+    gfu = ngs.GridFunction(fes)  # u = 0 on disk-curve
+    gfu.vec.data = a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky") * b.vec
     l2 = ngs.sqrt(ngs.Integrate((gfu - exact) ** 2, mesh, order=2 * k + 6))
     h1 = ngs.sqrt(ngs.Integrate((ngs.grad(gfu) - grad_exact) ** 2, mesh, order=2 * k + 6))
     area = ngs.Integrate(ngs.CF(1), mesh, order=6)
@@ -49,16 +50,16 @@ def run(k: int, path: str):
 
 def main() -> None:
     failures: list[str] = []
-    paths = [common.msh_file(2, level, version="2.2") for level in common.LEVELS]
+    paths = [common.msh_file(1, level, version="2.2") for level in common.LEVELS]
     for k in (1, 2):
         rows = []
         for level, path in zip(common.LEVELS, paths):
             n, l2, h1, area = run(k, path)
             rows.append((n, l2, h1))
-            common.expect(abs(area - common.AREA) < 2e-3 * level**2, f"area {area!r} at -l {level}", failures)
-        l2_rate, h1_rate = common.table(f"NGSolve P{k} on order-2 geometry", rows)[-1]
-        common.expect(l2_rate > k + 1 - 0.3, f"P{k}: L2 rate {l2_rate:.2f} < {k + 0.7}", failures)
-        common.expect(h1_rate > k - 0.3, f"P{k}: H1 rate {h1_rate:.2f} < {k - 0.3}", failures)
+            common.expect(abs(area - common.AREA) < 4 * level**2, f"area {area!r} at -l {level}", failures)
+        l2_rate, h1_rate = common.table(f"NGSolve P{k} on order-1 geometry", rows)[-1]
+        common.expect(l2_rate > 2 - 0.3, f"P{k}: L2 rate {l2_rate:.2f} < 1.7", failures)
+        common.expect(h1_rate > min(k, 1.5) - 0.3, f"P{k}: H1 rate {h1_rate:.2f} < {min(k, 1.5) - 0.3}", failures)
     common.finish(failures)
 
 

@@ -17,7 +17,7 @@ BASE = dict(cut_outside=True, edge_length_abs=5)
 
 def with_node_data(path, h) -> None:
     """Append a gmsh view of one value per node to the MSH 2.2 ASCII file at `path`."""
-    rows = "".join(f"{i + 1} {v!r}\n" for i, v in enumerate(h))
+    rows = "".join(f"{i + 1} {float(v)!r}\n" for i, v in enumerate(h))
     with open(path, "a") as f:
         f.write(f'$NodeData\n1\n"h"\n1\n0.0\n3\n0\n1\n{len(h)}\n{rows}$EndNodeData\n')
 

@@ -194,7 +194,7 @@ struct Layout {
 }
 
 /// Group element indices by group (stable counting sort); only non-empty groups.
-fn bucket(groups: &[u32], count: usize) -> Vec<(u32, Vec<u32>)> {
+pub(super) fn bucket(groups: &[u32], count: usize) -> Vec<(u32, Vec<u32>)> {
     let mut sizes = vec![0usize; count];
     for &g in groups {
         sizes[g as usize] += 1;

@@ -5,10 +5,12 @@
 //! Layout (ASCII, one piece):
 //! - points: the nodes in the .msh file's order (point `i` is node tag `i + 1`),
 //!   with z = 0, written to the last bit (shortest round-trip decimal);
-//! - cells: every triangle (`VTK_LAGRANGE_TRIANGLE` = 69, 3, 6 or 10 points),
-//!   then every line element of the physical curves (`VTK_LAGRANGE_CURVE` = 68,
-//!   2, 3 or 4 points), one cell per line and per physical curve it belongs to
-//!   (as MSH 2.2 writes them);
+//! - cells: every triangle (`VTK_LAGRANGE_TRIANGLE` = 69, 3, 6 or 10 points)
+//!   in the .msh file's element order (by region), so cell `j` below the
+//!   triangle count is element tag `j + 1`; then the line elements of the
+//!   physical curves (`VTK_LAGRANGE_CURVE` = 68, 2, 3 or 4 points) grouped by
+//!   curve, one cell per line and per physical curve it belongs to (as MSH 2.2
+//!   writes them);
 //! - node order: VTK's Lagrange triangle numbers the corners, then each edge's
 //!   inner points from its first corner to its second (edges 0-1, 1-2, 2-0),
 //!   then the inner point: for 3, 6 and 10 nodes that is gmsh's order (VTK's
@@ -109,7 +111,17 @@ pub(crate) fn write_vtu(w: &mut impl Write, mesh: &FemMesh) -> io::Result<()> {
         w,
         "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
     )?;
-    numbers(w, mesh.triangles.iter().chain(&mesh.lines))?;
+    let triangles: Vec<u32> = super::msh::bucket(&mesh.triangle_group, mesh.surfaces.len())
+        .into_iter()
+        .flat_map(|(_, members)| members)
+        .collect();
+    let lines: Vec<u32> = super::msh::bucket(&mesh.line_group, mesh.curves.len())
+        .into_iter()
+        .flat_map(|(_, members)| members)
+        .collect();
+    let triangle_nodes = triangles.iter().flat_map(|&t| mesh.triangle(t as usize));
+    let line_nodes = lines.iter().flat_map(|&l| mesh.line(l as usize));
+    numbers(w, triangle_nodes.chain(line_nodes))?;
     writeln!(w, "</DataArray>")?;
     writeln!(
         w,
@@ -136,19 +148,17 @@ pub(crate) fn write_vtu(w: &mut impl Write, mesh: &FemMesh) -> io::Result<()> {
         w,
         "<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">"
     )?;
-    numbers(
-        w,
-        (mesh.triangle_group.iter().map(|&g| g + 1)).chain(std::iter::repeat_n(0, nl)),
-    )?;
+    let region = triangles
+        .iter()
+        .map(|&t| mesh.triangle_group[t as usize] + 1);
+    numbers(w, region.chain(std::iter::repeat_n(0, nl)))?;
     writeln!(w, "</DataArray>")?;
     writeln!(
         w,
         "<DataArray type=\"Int32\" Name=\"curve\" format=\"ascii\">"
     )?;
-    numbers(
-        w,
-        std::iter::repeat_n(0, nt).chain(mesh.line_group.iter().map(|&g| g + 1)),
-    )?;
+    let curve = lines.iter().map(|&l| mesh.line_group[l as usize] + 1);
+    numbers(w, std::iter::repeat_n(0, nt).chain(curve))?;
     writeln!(w, "</DataArray>")?;
     writeln!(w, "</CellData>")?;
     writeln!(w, "</Piece>")?;
