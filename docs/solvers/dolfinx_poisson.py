@@ -97,6 +97,8 @@ def main() -> None:
     tags = {name: len(data.facet_tags.find(g.tag)) for name, g in data.physical_groups.items() if g.dim == 1}
     lines = {name: len(triangles) for name, triangles in _lines_per_curve(paths[0]).items()}
     print(f"facet tags (facets per curve): {tags}; line elements in the file: {lines}")
+    # a facet on two curves keeps one tag: the shape's curve, not `boundary`
+    common.expect(tags == {**lines, "boundary": 0}, "facet tags: the shape's curves whole, boundary none", failures)
     for k in (1, 2, 3):
         rows = []
         for level, path in zip(common.LEVELS, paths):

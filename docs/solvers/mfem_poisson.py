@@ -103,8 +103,22 @@ def run(k: int, path: str):
     return fes.GetTrueVSize(), l2, h1, area
 
 
+def shared_edge_attributes() -> dict[str, int]:
+    """Boundary elements per curve name when MFEM reads MSH 4.1."""
+    path = common.msh_file(3, common.LEVELS[0], version="4.1")
+    names = {tag: name for name, tag in physical_names(path).items()}
+    mesh = mfem.Mesh(path, 1, 1)
+    counts = {name: 0 for name in ("boundary", "disk-curve", "core-curve")}
+    for i in range(mesh.GetNBE()):
+        counts[names[mesh.GetBdrAttribute(i)]] += 1
+    return counts
+
+
 def main() -> None:
     failures: list[str] = []
+    counts = shared_edge_attributes()
+    print(f"MSH 4.1: boundary elements per attribute {counts} (the outer circle is boundary and disk-curve)")
+    common.expect(counts["disk-curve"] == 0 < counts["boundary"], "MSH 4.1: the shared edges are boundary only", failures)
     paths = [common.msh_file(3, level, version=VERSION) for level in common.LEVELS]
     for k in (1, 2, 3):
         rows = []

@@ -50,6 +50,9 @@ def run(k: int, path: str):
 
 def main() -> None:
     failures: list[str] = []
+    order2 = ngs.Mesh(ReadGmsh(common.msh_file(2, common.LEVELS[0], version="2.2")))
+    print(f"an order-2 file read by ReadGmsh: a mesh of dimension {order2.dim}")
+    common.expect(order2.dim == 3, "ReadGmsh makes an order-2 mesh 3D", failures)
     paths = [common.msh_file(1, level, version="2.2") for level in common.LEVELS]
     for k in (1, 2):
         rows = []
