@@ -6,7 +6,8 @@ Each step solves on the current mesh, estimates the error per element with the
 residual estimator of the gradient's jumps (η_T² = ½ Σ_{E ⊂ T} h_E ‖[∂u_h/∂n]‖²_E
 over interior edges), turns it into a size field by equidistribution (η_T ≈
 C_T h_T^(k+1): h_new = h_T (η*/η_T)^(1/(k+1)), η* chosen so that the new mesh
-has about GROWTH times as many triangles), and remeshes the drawing with
+has about GROWTH times as many triangles; at a vertex the geometric mean of its
+triangles' sizes), and remeshes the drawing with
 `triwild.mesh(..., size_from=(points, triangles, h))`: the current mesh's
 vertices and the new sizes there, in memory. A background mesh must cover the
 drawing's bounding box, the L's missing quadrant too, so the vertices and the
@@ -117,10 +118,12 @@ def sizes(mesh, eta: np.ndarray, k: int, target: float) -> np.ndarray:
     s = np.sum(area / (math.sqrt(3) / 4 * h**2) * eta ** (2 / (k + 1)))
     star = (s / target) ** ((k + 1) / 2)
     h_new = h * (star / eta) ** (1 / (k + 1))
-    at_vertex = np.full(p.shape[1], np.inf)
+    # the mean of log h over the triangles at a vertex
+    log_sum, count = np.zeros(p.shape[1]), np.zeros(p.shape[1])
     for corner in range(3):
-        np.minimum.at(at_vertex, t[corner], h_new)
-    return at_vertex
+        np.add.at(log_sum, t[corner], np.log(h_new))
+        np.add.at(count, t[corner], 1)
+    return np.exp(log_sum / count)
 
 
 def covering(points: np.ndarray, h: np.ndarray):
