@@ -16,7 +16,10 @@ and what survives `meshio convert` to XDMF.
 2. `meshio convert` of each order's .msh (4.1) to XDMF (needs h5py), read
    back: the cell types, and which of cell data, cell sets and names survive.
 
-    python docs/solvers/meshio_tags.py [--quick]   (--quick: two drawings)
+    python docs/solvers/meshio_tags.py [--quick] [--dir DIR]
+    (--quick: two drawings; --dir: every SVG below DIR instead of data/svg,
+    e.g. the dev set ../shared/data/svg-dev; a drawing triwild refuses, or
+    does not mesh within 120 s, is named and left out)
 """
 
 from __future__ import annotations
@@ -104,7 +107,11 @@ def check_groups(drawings: list[str], folder: str, failures: list[str]) -> None:
     for svg in drawings:
         for cut in (False, True):
             for order in (1, 2, 3):
-                m = triwild.mesh(svg, order=order, cut_outside=cut)
+                try:
+                    m = triwild.mesh(svg, order=order, cut_outside=cut, time_limit=120)
+                except triwild.Error as e:
+                    print(f"{os.path.basename(svg)}: not meshed ({type(e).__name__}: {e})")
+                    continue
                 for version in ("4.1", "2.2"):
                     tag = f"{os.path.basename(svg)} order {order}{' --cut-outside' if cut else ''} {version}"
                     path = os.path.join(folder, f"m{n}_{version.replace('.', '')}.msh")
@@ -125,8 +132,9 @@ def check_groups(drawings: list[str], folder: str, failures: list[str]) -> None:
                             missing = sum((elements - per_cell.get(name, Counter())).values())
                             if missing:
                                 shared_report.add((name == "boundary", missing == sum(elements.values())))
+                    os.remove(path)
                 print(f"{os.path.basename(svg):>18} order {order}{' --cut-outside' if cut else '              '}: "
-                      f"{len(want)} physical groups")
+                      f"{len(want)} physical groups", flush=True)
     print(f"{n} files: meshio's groups (4.1: cell_sets, 2.2: gmsh:physical) are gmsh's, element for element")
     for is_boundary, all_missing in sorted(shared_report):
         who = "`boundary`" if is_boundary else "a shape's curve"
@@ -166,7 +174,8 @@ def check_xdmf(folder: str, failures: list[str]) -> None:
 def main() -> None:
     failures: list[str] = []
     folder = tempfile.mkdtemp(prefix="triwild-meshio-")
-    drawings = sorted(glob.glob(os.path.join(REPO, "data", "svg", "*.svg")))
+    root = sys.argv[sys.argv.index("--dir") + 1] if "--dir" in sys.argv else os.path.join(REPO, "data", "svg")
+    drawings = sorted(glob.glob(os.path.join(root, "**", "*.svg"), recursive=True))
     if "--quick" in sys.argv:
         drawings = drawings[:2]
     check_groups(drawings, folder, failures)
