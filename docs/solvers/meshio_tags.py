@@ -16,7 +16,7 @@ and what survives `meshio convert` to XDMF.
 2. `meshio convert` of each order's .msh (4.1) to XDMF (needs h5py), read
    back: the cell types, and which of cell data, cell sets and names survive.
 
-    python docs/solvers/meshio_tags.py [--quick] [--dir DIR]
+    python docs/solvers/meshio_tags.py [--quick] [--dir DIR] [--every N]
     (--quick: two drawings; --dir: every SVG below DIR instead of data/svg,
     e.g. the dev set ../shared/data/svg-dev; a drawing triwild refuses, or
     does not mesh within 120 s, is named and left out)
@@ -178,6 +178,8 @@ def main() -> None:
     drawings = sorted(glob.glob(os.path.join(root, "**", "*.svg"), recursive=True))
     if "--quick" in sys.argv:
         drawings = drawings[:2]
+    if "--every" in sys.argv:  # a sample: every n-th drawing
+        drawings = drawings[:: int(sys.argv[sys.argv.index("--every") + 1])]
     check_groups(drawings, folder, failures)
     check_xdmf(folder, failures)
     common.finish(failures)

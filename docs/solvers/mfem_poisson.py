@@ -11,7 +11,6 @@ optimal rates (L2: k + 1, H1: k) and the exact area.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 

@@ -1,9 +1,9 @@
 """scikit-fem: -Δu = f on triwild's mesh through `triwild.to_skfem` (order 1
-and 2 geometry; scikit-fem has no cubic triangle geometry), u = u_exact on the
-curve `disk-curve` (u = 0 there), the source assembled on the regions `disk` and `core` by
-name. Prints the L2 and H1 errors of P1 on order-1 and P1, P2 on order-2
-(isoparametric) meshes at three sizes, u = 0 on `disk-curve`, and checks
-the optimal rates (L2: k + 1, H1: k) and the area.
+and 2 geometry; scikit-fem has no cubic triangle geometry), u = 0 on the curve
+`disk-curve` (its facets by name), the source assembled on the regions `disk`
+and `core` by name. Prints the L2 and H1 errors of P1 on order-1 and P1, P2 on
+order-2 (isoparametric) meshes at three sizes, and checks the optimal rates
+(L2: k + 1, H1: k) and the area.
 
     python docs/solvers/skfem_poisson.py
 """
