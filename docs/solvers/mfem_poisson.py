@@ -42,9 +42,9 @@ class ExactGrad(mfem.VectorPyCoefficient):
 
 # MFEM reads MSH 2.2 and 4.1 (ASCII) at order 3. A boundary element has one
 # attribute: in 4.1 an edge of two physical curves (the outer circle is
-# `disk-curve` and `boundary`) is one line element and MFEM gives it the last
-# of its entity's physical tags (`boundary`); 2.2 writes the line once per
-# curve, so each curve's attribute covers all its edges.
+# `disk-curve` and `boundary`) is one line element and MFEM gives it one
+# attribute, `boundary`'s (shared_edge_attributes checks it); 2.2 writes the
+# line once per curve, so each curve's attribute covers all its edges.
 VERSION = "2.2"
 
 
