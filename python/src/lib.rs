@@ -312,7 +312,9 @@ fn background_mesh(points: &[u8], triangles: &[u8], h: &[u8]) -> triwild::Backgr
         triangles: triangles
             .chunks_exact(12)
             .map(|t| {
-                let n = |k: usize| u32::from_le_bytes(t[k..k + 4].try_into().expect("4 bytes"));
+                let n = |k: usize| {
+                    u32::from_le_bytes(t[k..k + 4].try_into().expect("internal: 4 bytes"))
+                };
                 [n(0), n(4), n(8)]
             })
             .collect(),
