@@ -102,6 +102,7 @@ def physical_groups(m) -> dict[str, Counter]:
 
 
 def check_groups(drawings: list[str], folder: str, failures: list[str]) -> None:
+    failed_before = len(failures)
     shared_report = set()
     n = 0
     for svg in drawings:
@@ -135,7 +136,8 @@ def check_groups(drawings: list[str], folder: str, failures: list[str]) -> None:
                     os.remove(path)
                 print(f"{os.path.basename(svg):>18} order {order}{' --cut-outside' if cut else '              '}: "
                       f"{len(want)} physical groups", flush=True)
-    print(f"{n} files: meshio's groups (4.1: cell_sets, 2.2: gmsh:physical) are gmsh's, element for element")
+    verdict = "are" if len(failures) == failed_before else "are NOT all"
+    print(f"{n} files: meshio's groups (4.1: cell_sets, 2.2: gmsh:physical) {verdict} gmsh's, element for element")
     for is_boundary, all_missing in sorted(shared_report):
         who = "`boundary`" if is_boundary else "a shape's curve"
         print(f"  MSH 4.1 gmsh:physical misses {'all' if all_missing else 'some'} of the elements of {who} "
