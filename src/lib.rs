@@ -88,12 +88,12 @@ pub use input::msh::{
     LineBlock, MshEntity, MshFormat, MshMesh, NodeData, TriangleBlock, read_msh, read_msh_file,
 };
 pub use output::{
-    MshOptions, MshVersion, check_writable, remove_temporaries, write_file, write_msh,
-    write_msh_to, write_preview, write_preview_coloured,
+    MeshFormat, MshOptions, MshVersion, check_writable, remove_temporaries, write_file, write_msh,
+    write_msh_to, write_preview, write_preview_coloured, write_vtu, write_vtu_to,
 };
 pub use params::{
-    BoxSize, Length, Mesher, NearSize, Params, RegionSize, SizeFn, SizeFnSignature, SizeSpec,
-    defaults,
+    BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, RegionSize, SizeFn, SizeFnSignature,
+    SizeSpec, defaults,
 };
 pub use pipeline::{
     FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,

@@ -110,7 +110,9 @@ pub mod defaults {
 }
 
 mod size_spec;
-pub use size_spec::{BoxSize, NearSize, RegionSize, SizeFn, SizeFnSignature, SizeSpec};
+pub use size_spec::{
+    BackgroundMesh, BoxSize, NearSize, RegionSize, SizeFn, SizeFnSignature, SizeSpec,
+};
 
 /// A length, relative to the bounding-box diagonal `d` or absolute.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]

@@ -214,6 +214,46 @@ fn the_default_output_sits_beside_the_input() {
     support::check_msh(&dir.join("drawing.msh")).assert_valid("default output");
 }
 
+/// `--format vtu`, or an output named `.vtu`, writes the VTK file of the mesh:
+/// the flag wins over the output's name (any name; not `.msh` here, since CI
+/// reads every .msh under target/test-out with gmsh), the default output takes
+/// the extension `.vtu`, and the points are the .msh file's nodes in order.
+#[test]
+fn the_vtu_format_follows_the_flag_else_the_output_name() {
+    let dir = support::out_dir("cli_vtu");
+    let svg = dir.join("drawing.svg");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/star-evenodd.svg"),
+        &svg,
+    )
+    .unwrap();
+    let by_name = dir.join("by-name.vtu");
+    succeeds(bin().arg(&svg).arg("-q").arg("-o").arg(&by_name), "-o .vtu");
+    let by_flag = dir.join("by-flag.mesh");
+    let flag = ["-q", "--format", "vtu", "-o"];
+    succeeds(bin().arg(&svg).args(flag).arg(&by_flag), "--format vtu");
+    succeeds(bin().arg(&svg).args(["-q", "--format", "vtu"]), "default");
+    let msh = dir.join("drawing.msh");
+    succeeds(bin().arg(&svg).arg("-q").arg("-o").arg(&msh), ".msh");
+    let vtu = std::fs::read(&by_name).unwrap();
+    assert!(vtu.starts_with(b"<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\""));
+    assert_eq!(std::fs::read(&by_flag).unwrap(), vtu);
+    assert_eq!(std::fs::read(dir.join("drawing.vtu")).unwrap(), vtu);
+    // the .msh file's nodes, in its node order
+    let nodes = triwild::read_msh_file(&msh).unwrap().nodes;
+    let text = String::from_utf8(vtu).unwrap();
+    let points: Vec<f64> = text
+        .split("NumberOfComponents=\"3\" format=\"ascii\">\n")
+        .nth(1)
+        .and_then(|s| s.split("</DataArray>").next())
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let xyz: Vec<f64> = nodes.iter().flat_map(|p| [p.x, p.y, 0.0]).collect();
+    assert_eq!(points, xyz);
+}
+
 #[test]
 fn named_shapes_give_named_physical_curves() {
     // star-evenodd.svg has ids `path1` (filled) and `frame` (stroked).

@@ -252,6 +252,18 @@ impl MeshData {
         })
         .map_err(Failure::into_py)
     }
+
+    /// Write the mesh to `path` as a VTK XML unstructured grid, as the
+    /// command line's `--format vtu` does (atomically).
+    fn write_vtu(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| {
+            guarded(|| {
+                triwild::write_vtu(&self.mesh, &path)
+                    .map_err(|e| Failure::Lib(e, Some(path.clone())))
+            })
+        })
+        .map_err(Failure::into_py)
+    }
 }
 
 /// The first exception a size function raised, kept to become the cause of
@@ -285,21 +297,49 @@ fn size_function(call: Py<PyAny>, raised: Raised) -> SizeFn {
     })
 }
 
+/// The background mesh of `size_from`: points (x, y float64), triangles (three
+/// uint32 node indices each) and one float64 size per point, as little-endian
+/// bytes.
+fn background_mesh(points: &[u8], triangles: &[u8], h: &[u8]) -> triwild::BackgroundMesh {
+    let f64s = |b: &[u8]| -> Vec<f64> {
+        b.chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("internal: 8 bytes")))
+            .collect()
+    };
+    let xy = f64s(points);
+    triwild::BackgroundMesh {
+        points: xy.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
+        triangles: triangles
+            .chunks_exact(12)
+            .map(|t| {
+                let n = |k: usize| {
+                    u32::from_le_bytes(t[k..k + 4].try_into().expect("internal: 4 bytes"))
+                };
+                [n(0), n(4), n(8)]
+            })
+            .collect(),
+        h: f64s(h),
+    }
+}
+
 /// Mesh the SVG file `path` or the SVG document `data` with the single-file
 /// command's `flags` (`--edge-length 0.05`, …) and, if given, the size
-/// function `size_fn` (see [`size_function`]).
+/// function `size_fn` (see [`size_function`]) and the background mesh
+/// `size_from` (see [`background_mesh`]).
 #[pyfunction]
-#[pyo3(signature = (path, data, flags, size_fn=None))]
+#[pyo3(signature = (path, data, flags, size_fn=None, size_from=None))]
 fn mesh(
     py: Python<'_>,
     path: Option<PathBuf>,
     data: Option<&Bound<'_, PyBytes>>,
     flags: Vec<String>,
     size_fn: Option<Py<PyAny>>,
+    size_from: Option<(Vec<u8>, Vec<u8>, Vec<u8>)>,
 ) -> PyResult<MeshData> {
     let data: Option<Vec<u8>> = data.map(|b| b.as_bytes().to_vec());
     let raised = Raised::default();
     let function = size_fn.map(|f| size_function(f, Arc::clone(&raised)));
+    let background = size_from.map(|(p, t, h)| background_mesh(&p, &t, &h));
     let result = py.detach(move || {
         guarded(|| {
             let t0 = Instant::now();
@@ -308,6 +348,10 @@ fn mesh(
                     .map_err(Failure::Flag)?;
             if let Some(f) = function {
                 let size = params.size.clone().with_function(f);
+                params = params.with_size(size);
+            }
+            if let Some(m) = background {
+                let size = params.size.clone().with_background_mesh(m);
                 params = params.with_size(size);
             }
             params.validate().map_err(|e| Failure::Lib(e, None))?;

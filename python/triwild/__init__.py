@@ -10,8 +10,12 @@ accepted as ``**advanced`` keywords.
 
 The size field takes Python forms beside the flags' strings: ``size={"steel":
 0.5}``, ``size_near={"steel": (0.5, 10)}``, ``size_box=[(x0, y0, x1, y1, L)]``
-(one flag per entry), and a function ``size_fn(x, y) -> h`` of numpy arrays,
-called in batches of points while meshing.
+(one flag per entry), a function ``size_fn(x, y) -> h`` of numpy arrays,
+called in batches of points while meshing, and a background mesh in memory
+``size_from=(points, triangles, h)`` (``--size-from`` without a file).
+
+Solvers: :meth:`Mesh.write` (gmsh), :meth:`Mesh.write_vtu` (VTK Lagrange
+cells, for ParaView), :meth:`Mesh.to_meshio` and :func:`to_skfem`.
 
 Errors are exceptions: :class:`BadInput` (the command line's exit code 2),
 :class:`MeshingError` (3) and :class:`IoError` (4), all subclasses of
@@ -35,6 +39,8 @@ __all__ = [
     "Mesh",
     "mesh",
     "check",
+    "to_skfem",
+    "write_vtu",
     "Error",
     "BadInput",
     "MeshingError",
@@ -111,6 +117,18 @@ class Mesh:
         Raises :class:`IoError` when the file cannot be written.
         """
         self._data.write(os.fspath(path), str(version), bool(binary))
+
+    def write_vtu(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Write the mesh as a VTK XML unstructured grid (``.vtu``), as
+        ``triwild --format vtu`` does, atomically: the triangles as VTK
+        Lagrange triangles (cell type 69) of the mesh's order, the physical
+        curves' lines as Lagrange curves (68), cell data ``region`` and
+        ``curve`` (physical tags, ``region_names.index(name) + 1``, 0 where a
+        cell has none) and field data ``{name: [tag, dim]}``.
+
+        Raises :class:`IoError` when the file cannot be written.
+        """
+        self._data.write_vtu(os.fspath(path))
 
     def to_meshio(self) -> Any:
         """The mesh as a ``meshio.Mesh``, as meshio reads the MSH 2.2 file
@@ -269,6 +287,7 @@ def mesh(
     mesher: str = "triwild",
     units: str = "user",
     size_fn: Optional[Callable[[np.ndarray, np.ndarray], Any]] = None,
+    size_from: Optional[Union[str, "os.PathLike[str]", Tuple[Any, Any, Any]]] = None,
     **advanced: Any,
 ) -> Mesh:
     """Mesh an SVG drawing, as ``triwild SVG [flags]`` does.
@@ -300,6 +319,16 @@ def mesh(
             ``size_expr="0.5 + 0.05*x"``. An exception, a wrong number of
             values, or a non-finite or non-positive value raises
             :class:`BadInput` naming the point (the exception as its cause).
+        size_from: a background mesh: a .msh file with a ``$NodeData`` view
+            (``--size-from``), or in memory ``(points, triangles, h)``:
+            ``points`` an ``(N, 2)`` array of output coordinates, ``triangles``
+            an ``(M, 3)`` array of point indices (more columns, a curved
+            mesh's, are dropped: its corners are used), ``h`` one size per
+            point (output units). The size is interpolated linearly over each
+            triangle and bounds the size like the other fields (the field of
+            ``--size-from`` with the mesh given in memory, no file). It must
+            cover the drawing; a size that is not positive and finite, or an
+            index out of range, raises :class:`BadInput`.
         **advanced: any other flag of the command line, by its long name with
             ``_`` for ``-`` (``eps=1e-3``, ``stop_after="bsp"``,
             ``scale=2.0``, ``max_passes=10``, ...). The repeatable size flags
@@ -349,7 +378,79 @@ def mesh(
     else:
         raise TypeError(f"svg must be a path, bytes or an SVG string, not {type(svg).__name__}")
     callback = None if size_fn is None else _size_callback(size_fn)
-    return Mesh(_triwild.mesh(path, data, flags, callback))
+    background = None
+    if isinstance(size_from, (str, os.PathLike)):
+        flags.append(f"--size-from={os.fspath(size_from)}")  # a file, as the flag takes it
+    elif size_from is not None:
+        background = _background_mesh(size_from)
+    return Mesh(_triwild.mesh(path, data, flags, callback, background))
+
+
+def _background_mesh(size_from: Any) -> Tuple[bytes, bytes, bytes]:
+    """``size_from=(points, triangles, h)`` as the native module takes it."""
+    try:
+        points, triangles, h = size_from
+    except (TypeError, ValueError):
+        raise TypeError("size_from must be a tuple (points, triangles, h)") from None
+    p = np.asarray(points, dtype=np.float64)
+    t = np.asarray(triangles)
+    v = np.asarray(h, dtype=np.float64).reshape(-1)
+    if p.ndim != 2 or p.shape[1] < 2:
+        raise ValueError(f"size_from: points must be an (N, 2) array, got shape {p.shape}")
+    if t.ndim != 2 or t.shape[1] < 3 or not np.issubdtype(t.dtype, np.integer):
+        raise ValueError(f"size_from: triangles must be an (M, 3) integer array, got {t.dtype} {t.shape}")
+    if len(t) and (t[:, :3].min() < 0 or t[:, :3].max() >= len(p)):
+        raise ValueError(f"size_from: a triangle's point index is outside 0..{len(p) - 1}")
+    return (
+        p[:, :2].astype("<f8").tobytes(),
+        t[:, :3].astype("<u4").tobytes(),
+        v.astype("<f8").tobytes(),
+    )
+
+
+def write_vtu(mesh: Mesh, path: Union[str, "os.PathLike[str]"]) -> None:
+    """``mesh.write_vtu(path)``: see :meth:`Mesh.write_vtu`."""
+    mesh.write_vtu(path)
+
+
+def to_skfem(mesh: Mesh) -> Any:
+    """The mesh as a scikit-fem mesh: a ``MeshTri1`` (order 1) or an
+    isoparametric ``MeshTri2`` (order 2; gmsh's 6-node order is
+    scikit-fem's), with ``subdomains`` named by the regions (element indices)
+    and ``boundaries`` named by the physical curves (facet indices, every
+    curve, ``boundary`` included; a facet on two curves is in both).
+
+    Needs ``scikit-fem``. Raises ``ValueError`` for an order-3 mesh
+    (scikit-fem has no cubic triangle geometry: mesh with ``order=2``).
+    """
+    import skfem
+
+    if mesh.order == 3:
+        raise ValueError("scikit-fem has no cubic triangle geometry: mesh with order=1 or order=2")
+    cls = skfem.MeshTri1 if mesh.order == 1 else skfem.MeshTri2
+    m = cls(mesh.points.T.copy(), mesh.triangles.T.copy())
+    subdomains = {
+        name: np.flatnonzero(mesh.region == k)
+        for k, name in enumerate(mesh.region_names)
+        if np.any(mesh.region == k)
+    }
+    # a line's facet: the facet joining its two end points (scikit-fem's
+    # `facets` index its vertices `p`, the corners)
+    corner = {tuple(xy): i for i, xy in enumerate(np.asarray(m.p.T).tolist())}
+    facet_of = {
+        frozenset((int(a), int(b))): f for f, (a, b) in enumerate(np.asarray(m.facets.T).tolist())
+    }
+    boundaries = {}
+    for k, name in enumerate(mesh.line_names):
+        ends = mesh.lines[mesh.line_tags == k][:, :2]
+        if len(ends) == 0:
+            continue
+        facets = [
+            facet_of[frozenset((corner[tuple(mesh.points[a])], corner[tuple(mesh.points[b])]))]
+            for a, b in ends.tolist()
+        ]
+        boundaries[name] = np.unique(np.asarray(facets, dtype=np.int64))
+    return m.with_subdomains(subdomains).with_boundaries(boundaries)
 
 
 def check(path: Union[str, "os.PathLike[str]"]) -> Dict[str, Any]:

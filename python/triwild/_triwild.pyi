@@ -24,17 +24,22 @@ class MeshData:
     def stats(self) -> str: ...
     def arrays(self) -> Dict[str, Union[bytes, List[str], int]]: ...
     def write(self, path: str, version: str, binary: bool) -> None: ...
+    def write_vtu(self, path: str) -> None: ...
 
 def mesh(
     path: Optional[str],
     data: Optional[bytes],
     flags: List[str],
     size_fn: Optional[Callable[[bytes, bytes], bytes]] = None,
+    size_from: Optional[Tuple[bytes, bytes, bytes]] = None,
 ) -> MeshData:
     """Mesh ``path`` or ``data`` with the command line's ``flags``.
     ``size_fn`` takes a batch's x and y as little-endian float64 bytes and
     returns the sizes the same way; it is called with the GIL taken again
-    while meshing, and its exception becomes the cause of the error raised."""
+    while meshing, and its exception becomes the cause of the error raised.
+    ``size_from`` is a background mesh as little-endian bytes: x, y float64
+    per point, three uint32 point indices per triangle, one float64 size per
+    point."""
 def mesh_flags() -> List[str]: ...
 def check(path: str) -> str: ...
 def cli(argv: List[str], child: List[str]) -> int: ...

@@ -7,17 +7,22 @@ use crate::exit_code;
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use triwild::Error;
-use triwild::RunOptions;
+use triwild::{Error, MeshFormat, RunOptions};
 
 /// The single-file command's arguments.
 #[derive(Args, Debug, Clone)]
 pub(crate) struct MeshArgs {
     /// Input SVG file.
     input: Option<PathBuf>,
-    /// Output .msh file [default: the input's path with extension .msh].
+    /// Output mesh file [default: the input's path with extension .msh, or
+    /// .vtu with --format vtu].
     #[arg(short, long, value_name = "OUT.msh")]
     output: Option<PathBuf>,
+    /// Mesh file format: gmsh .msh, or a VTK XML unstructured grid of Lagrange
+    /// cells tagged by region and curve (for ParaView) [default: vtu when the
+    /// output's name ends in .vtu, else msh].
+    #[arg(long, value_enum)]
+    format: Option<FormatArg>,
     /// Also write an SVG drawing of the mesh.
     #[arg(long, value_name = "OUT.svg")]
     preview: Option<PathBuf>,
@@ -30,16 +35,42 @@ pub(crate) struct MeshArgs {
     #[arg(long)]
     stats: bool,
     #[command(flatten)]
-    format: FormatArgs,
+    msh: FormatArgs,
     #[command(flatten)]
     params: ParamArgs,
     #[command(flatten)]
     regions: RegionArgs,
 }
 
-/// The default output path: the input with extension `.msh`.
-fn default_output(input: &Path) -> PathBuf {
-    input.with_extension("msh")
+/// The mesh file formats of `--format`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+enum FormatArg {
+    /// gmsh MSH (4.1 or 2.2: --msh-version).
+    Msh,
+    /// VTK XML unstructured grid (.vtu).
+    Vtu,
+}
+
+/// The format asked for, else the one the output's extension names (`.vtu`),
+/// else .msh.
+fn mesh_format(format: Option<FormatArg>, output: Option<&Path>) -> MeshFormat {
+    let by_name = output
+        .and_then(|p| p.extension())
+        .is_some_and(|e| e.eq_ignore_ascii_case("vtu"));
+    match format {
+        Some(FormatArg::Vtu) => MeshFormat::Vtu,
+        Some(FormatArg::Msh) => MeshFormat::Msh,
+        None if by_name => MeshFormat::Vtu,
+        None => MeshFormat::Msh,
+    }
+}
+
+/// The default output path: the input with extension `.msh` (`.vtu`).
+fn default_output(input: &Path, format: MeshFormat) -> PathBuf {
+    input.with_extension(match format {
+        MeshFormat::Msh => "msh",
+        MeshFormat::Vtu => "vtu",
+    })
 }
 
 /// Mesh one file, print its warnings (unless `quiet`) and statistics; exit 0,
@@ -51,9 +82,14 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     };
     #[cfg(feature = "test-hooks")]
     super::hooks::trigger(input);
-    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    let format = mesh_format(args.format, args.output.as_deref());
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(input, format));
     let opts = RunOptions::new(args.params.to_params())
-        .with_msh(args.format.to_options())
+        .with_msh(args.msh.to_options())
+        .with_format(format)
         .with_preview(args.preview.clone())
         .with_preview_size(args.preview_size)
         .with_regions(args.regions.to_options())
@@ -97,5 +133,22 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
             errln!("error: {}: {err}", file.display());
             exit_code(err.kind())
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_format_is_the_flag_else_the_extension() {
+        let vtu = Some(Path::new("out/a.VTU"));
+        assert_eq!(mesh_format(None, vtu), MeshFormat::Vtu);
+        assert_eq!(mesh_format(None, Some(Path::new("a.msh"))), MeshFormat::Msh);
+        assert_eq!(mesh_format(None, None), MeshFormat::Msh);
+        assert_eq!(mesh_format(Some(FormatArg::Msh), vtu), MeshFormat::Msh);
+        assert_eq!(mesh_format(Some(FormatArg::Vtu), None), MeshFormat::Vtu);
+        let input = Path::new("d/x.svg");
+        assert_eq!(default_output(input, MeshFormat::Vtu), Path::new("d/x.vtu"));
     }
 }

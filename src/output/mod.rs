@@ -12,11 +12,14 @@
 //!   (point entities where curves meet, curve entities per piece of a physical curve,
 //!   one surface entity per physical surface with its bounding curves, each node on
 //!   the entity of lowest dimension it lies on), one element type per entity; 2.2
-//!   carries the same elementary tags (see `msh.rs` for the layout).
+//!   carries the same elementary tags (see `msh.rs` for the layout);
+//! - the VTK XML unstructured grid (`.vtu`) holds the same nodes, triangles and
+//!   physical lines as Lagrange cells, tagged by physical group (see `vtu.rs`).
 
 mod atomic;
 mod msh;
 mod preview;
+mod vtu;
 
 use crate::{Error, FemMesh, Result};
 pub use atomic::remove_temporaries;
@@ -30,6 +33,16 @@ pub enum MshVersion {
     V41,
     /// MSH 2.2 (legacy readers).
     V22,
+}
+
+/// The file format of a mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum MeshFormat {
+    /// gmsh .msh, as [`MshOptions`] say (default).
+    #[default]
+    Msh,
+    /// VTK XML unstructured grid (`.vtu`) of Lagrange cells ([`write_vtu`]).
+    Vtu,
 }
 
 /// How to write a .msh file.
@@ -100,6 +113,32 @@ pub fn write_msh_to(mesh: &FemMesh, w: &mut impl std::io::Write, opts: MshOption
     msh::validate(mesh).map_err(Error::Write)?;
     let mut w = std::io::BufWriter::new(w);
     write_format(&mut w, mesh, opts)
+        .and_then(|()| std::io::Write::flush(&mut w))
+        .map_err(Error::Write)
+}
+
+/// Write `mesh` as a VTK XML unstructured grid at `path` (atomically): the
+/// triangles as VTK Lagrange triangles (type 69) of the mesh's order, the
+/// physical curves' line elements as Lagrange curves (type 68), cell data
+/// `region` and `curve` (the physical tags of the .msh file, 0 where a cell
+/// has none) and one field data array `[tag, dim]` per physical name.
+///
+/// # Errors
+/// As [`write_msh`].
+pub fn write_vtu(mesh: &FemMesh, path: &Path) -> Result<()> {
+    msh::validate(mesh).map_err(Error::Write)?;
+    let _span = tracing::debug_span!("write_vtu", path = %path.display()).entered();
+    atomic::write_atomic(path, |w| vtu::write_vtu(w, mesh))
+}
+
+/// [`write_vtu`] to any writer.
+///
+/// # Errors
+/// [`crate::Error::Write`] when `mesh` is malformed (as [`write_msh`]) or the writer fails.
+pub fn write_vtu_to(mesh: &FemMesh, w: &mut impl std::io::Write) -> Result<()> {
+    msh::validate(mesh).map_err(Error::Write)?;
+    let mut w = std::io::BufWriter::new(w);
+    vtu::write_vtu(&mut w, mesh)
         .and_then(|()| std::io::Write::flush(&mut w))
         .map_err(Error::Write)
 }

@@ -194,7 +194,7 @@ struct Layout {
 }
 
 /// Group element indices by group (stable counting sort); only non-empty groups.
-fn bucket(groups: &[u32], count: usize) -> Vec<(u32, Vec<u32>)> {
+pub(super) fn bucket(groups: &[u32], count: usize) -> Vec<(u32, Vec<u32>)> {
     let mut sizes = vec![0usize; count];
     for &g in groups {
         sizes[g as usize] += 1;
@@ -696,11 +696,27 @@ fn with_suffix(base: &str, suffix: &str) -> String {
 /// `-surface` / `-curve`, then `-2`, `-3`, … until it is free. Listed surfaces
 /// first, then curves, each in tag order.
 fn physical_names_of(mesh: &FemMesh, layout: &Layout) -> Vec<(i32, i32, String)> {
-    let mut groups: Vec<(i32, i32)> = layout
+    let groups: Vec<(i32, i32)> = layout
         .entities
         .iter()
         .flat_map(|e| e.physical.iter().map(|&p| (e.dim, p)))
         .collect();
+    names_of_groups(mesh, groups)
+}
+
+/// The physical names of the groups with elements (as [`physical_names_of`]),
+/// found from the element lists alone: what the .vtu writer names its groups.
+pub(crate) fn group_names(mesh: &FemMesh) -> Vec<(i32, i32, String)> {
+    let tag = |g: u32| i32::try_from(g).unwrap_or(i32::MAX - 1) + 1;
+    let groups = (mesh.triangle_group.iter().map(|&g| (2, tag(g))))
+        .chain(mesh.line_group.iter().map(|&g| (1, tag(g))))
+        .collect();
+    names_of_groups(mesh, groups)
+}
+
+/// Name `groups` (`(dim, tag)`, any order, repeats allowed) as
+/// [`physical_names_of`] says.
+fn names_of_groups(mesh: &FemMesh, mut groups: Vec<(i32, i32)>) -> Vec<(i32, i32, String)> {
     groups.sort_unstable_by_key(|&(dim, tag)| (std::cmp::Reverse(dim), tag));
     groups.dedup();
     let mut is_boundary = vec![false; mesh.curves.len()];

@@ -79,6 +79,41 @@ impl serde::Serialize for SizeFn {
     }
 }
 
+/// A background mesh held in memory (the Python package's `size_from`): the
+/// field of `--size-from` without a file. Node `i` is at `points[i]` with size
+/// `h[i]` (absolute, output units); `triangles` index `points`; the size is
+/// interpolated linearly over each triangle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BackgroundMesh {
+    /// Node coordinates (output coordinates, y up).
+    pub points: Vec<[f64; 2]>,
+    /// Triangles as three node indices each.
+    pub triangles: Vec<[u32; 3]>,
+    /// The size at each node.
+    pub h: Vec<f64>,
+}
+
+impl serde::Serialize for BackgroundMesh {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(&format!(
+            "{} nodes, {} triangles",
+            self.points.len(),
+            self.triangles.len()
+        ))
+    }
+}
+
+/// `SizeSpec::background_mesh` in the report: its counts.
+fn serialize_background_mesh<S: serde::Serializer>(
+    mesh: &Option<Arc<BackgroundMesh>>,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    match mesh {
+        Some(m) => serde::Serialize::serialize(m.as_ref(), s),
+        None => s.serialize_none(),
+    }
+}
+
 /// The inputs of the size field h(x): every field is a bound on the size, they
 /// combine by minimum with the global `l` (the largest size), are clamped to
 /// `[l_min, l]` and graded so that h grows by at most [`SizeSpec::grading`] from
@@ -99,6 +134,13 @@ pub struct SizeSpec {
     /// `--size-from FILE.msh`: a triangle mesh with one `$NodeData` value per
     /// node (what gmsh writes for a view), interpolated linearly; absolute output units.
     pub background: Option<PathBuf>,
+    /// A background mesh in memory (the Python package's `size_from`),
+    /// interpolated as `background` is; absolute output units.
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "serialize_background_mesh"
+    )]
+    pub background_mesh: Option<Arc<BackgroundMesh>>,
     /// A size function (the Python package's `size_fn`); absolute output units.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub function: Option<SizeFn>,
@@ -118,6 +160,7 @@ impl SizeSpec {
         boxes: Vec::new(),
         expr: None,
         background: None,
+        background_mesh: None,
         function: None,
         feature_size: defaults::FEATURE_SIZE,
         grading: defaults::GRADING,
@@ -160,6 +203,11 @@ impl SizeSpec {
         self.background = Some(path.into());
         self
     }
+    /// Set the background mesh held in memory.
+    pub fn with_background_mesh(mut self, mesh: BackgroundMesh) -> Self {
+        self.background_mesh = Some(Arc::new(mesh));
+        self
+    }
     /// Set the size function.
     pub fn with_function(mut self, f: SizeFn) -> Self {
         self.function = Some(f);
@@ -183,6 +231,7 @@ impl SizeSpec {
             && self.boxes.is_empty()
             && self.expr.is_none()
             && self.background.is_none()
+            && self.background_mesh.is_none()
             && self.function.is_none())
     }
 

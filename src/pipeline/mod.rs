@@ -20,7 +20,7 @@ use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::forced::ForcedCorners;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
-use crate::output::{self, MshOptions};
+use crate::output::{self, MeshFormat, MshOptions};
 use crate::params::{Length, Mesher, Params, Resolved, Stage};
 use crate::quality::Quality;
 use crate::regions::select::RegionMode;
@@ -39,8 +39,10 @@ use std::time::Instant;
 pub struct RunOptions {
     /// Meshing parameters.
     pub params: Params,
-    /// Output format.
+    /// The .msh format (when `format` is [`MeshFormat::Msh`]).
     pub msh: MshOptions,
+    /// The mesh file's format. Default [`MeshFormat::Msh`].
+    pub format: MeshFormat,
     /// Where to write an SVG preview, if anywhere.
     pub preview: Option<PathBuf>,
     /// Fill the preview's triangles by edge / h (their mean edge length over
@@ -60,6 +62,7 @@ impl RunOptions {
         RunOptions {
             params,
             msh: MshOptions::DEFAULT,
+            format: MeshFormat::Msh,
             preview: None,
             preview_size: false,
             regions: RegionOptions::DEFAULT,
@@ -74,6 +77,11 @@ impl RunOptions {
     /// Set the output format.
     pub fn with_msh(mut self, msh: MshOptions) -> Self {
         self.msh = msh;
+        self
+    }
+    /// Set the mesh file's format (.msh or .vtu).
+    pub fn with_format(mut self, format: MeshFormat) -> Self {
+        self.format = format;
         self
     }
     /// Write a preview to `path`.
@@ -1044,7 +1052,10 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
         let (Meshed { mesh, report }, field, mask) =
             mesh_stages(&drawing, params, &opts.regions, deadline)?;
         let t = Instant::now();
-        output::write_msh(&mesh, output, opts.msh)?;
+        match opts.format {
+            MeshFormat::Msh => output::write_msh(&mesh, output, opts.msh)?,
+            MeshFormat::Vtu => output::write_vtu(&mesh, output)?,
+        }
         if let Some(p) = opts.preview.as_ref().filter(|_| opts.preview_size) {
             output::write_preview_sized(&mesh, &|x| field.at(x), p)?;
         } else if let Some(p) = &opts.preview {

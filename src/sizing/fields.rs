@@ -65,6 +65,43 @@ impl Background {
         Ok(Background::new(mesh.nodes, values, triangles))
     }
 
+    /// The mesh the caller holds in memory (`size_from`): its indices in
+    /// range and a positive finite size at every node a triangle uses.
+    pub(super) fn from_memory(m: &crate::params::BackgroundMesh) -> Result<Background> {
+        let what = |e: String| Error::InvalidParams(format!("size_from: {e}"));
+        if m.h.len() != m.points.len() {
+            return Err(what(format!(
+                "{} sizes for {} points (one per point)",
+                m.h.len(),
+                m.points.len()
+            )));
+        }
+        if m.triangles.is_empty() {
+            return Err(what("no triangles".into()));
+        }
+        for t in &m.triangles {
+            for &n in t {
+                let Some(&v) = m.h.get(n as usize) else {
+                    return Err(what(format!(
+                        "a triangle uses point {n}, but there are {} points",
+                        m.points.len()
+                    )));
+                };
+                let [x, y] = m.points[n as usize];
+                if !(x.is_finite() && y.is_finite()) {
+                    return Err(what(format!("point {n} is ({x}, {y}), not finite")));
+                }
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(what(format!(
+                        "the size at point {n} ({x}, {y}) is {v}, not a positive finite number"
+                    )));
+                }
+            }
+        }
+        let nodes = m.points.iter().map(|&[x, y]| Point::new(x, y)).collect();
+        Ok(Background::new(nodes, m.h.clone(), m.triangles.clone()))
+    }
+
     fn new(nodes: Vec<Point>, values: Vec<f64>, triangles: Vec<[u32; 3]>) -> Background {
         let tri_box = |t: &[u32; 3]| {
             let [a, b, c] = t.map(|i| nodes[i as usize]);
@@ -236,7 +273,9 @@ pub(super) struct PointFields<'a> {
     /// How near an outline a point may be and still be inside (eps_m).
     eps: f64,
     formula: Option<Formula>,
-    mesh: Option<Background>,
+    /// The background meshes, each with the name its errors give
+    /// (`--size-from`, `size_from`).
+    meshes: Vec<(Background, &'static str)>,
     /// Where the background mesh must cover: the drawing's extent.
     extent: Rect,
     function: Option<&'a crate::params::SizeFn>,
@@ -269,11 +308,13 @@ impl<'a> PointFields<'a> {
         let painting = (!spec.regions.is_empty()).then(|| Painting::new(input.drawing));
         let eps = input.resolved.eps_m;
         let formula = spec.expr.as_deref().map(Formula::parse).transpose()?;
-        let mesh = spec
-            .background
-            .as_deref()
-            .map(Background::read)
-            .transpose()?;
+        let mut meshes = Vec::new();
+        if let Some(path) = spec.background.as_deref() {
+            meshes.push((Background::read(path)?, "--size-from"));
+        }
+        if let Some(m) = spec.background_mesh.as_deref() {
+            meshes.push((Background::from_memory(m)?, "size_from"));
+        }
         Ok(PointFields {
             boxes,
             region_size,
@@ -281,7 +322,7 @@ impl<'a> PointFields<'a> {
             painting,
             eps,
             formula,
-            mesh,
+            meshes,
             extent: input.drawing.extent(),
             function: spec.function.as_ref(),
         })
@@ -299,7 +340,7 @@ impl<'a> PointFields<'a> {
         if self.formula.is_some() {
             out.push("size-expr".into());
         }
-        if self.mesh.is_some() {
+        if !self.meshes.is_empty() {
             out.push("size-from".into());
         }
         if self.function.is_some() {
@@ -327,12 +368,12 @@ impl<'a> PointFields<'a> {
             if let Some(f) = &self.formula {
                 *h = h.min(f.at(p)?);
             }
-            if let Some(m) = &self.mesh {
+            for (m, name) in &self.meshes {
                 match m.at(p) {
                     Some(v) => *h = h.min(v),
                     None if self.extent.contains(p) => {
                         return Err(Error::InvalidParams(format!(
-                            "--size-from: the background mesh does not cover the drawing: \
+                            "{name}: the background mesh does not cover the drawing: \
                              no triangle holds ({}, {})",
                             p.x, p.y
                         )));
@@ -444,5 +485,21 @@ mod tests {
             assert!((bg.at(p).unwrap() - (1.0 + p.x + p.y)).abs() < 1e-12);
         }
         assert_eq!(bg.at(Point::new(2.5, 1.0)), None);
+    }
+
+    #[test]
+    fn a_background_mesh_in_memory_is_checked_then_interpolated() {
+        let mesh = |h: Vec<f64>, t: [u32; 3]| crate::params::BackgroundMesh {
+            points: vec![[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]],
+            triangles: vec![[0, 1, 2], t],
+            h,
+        };
+        let bg = Background::from_memory(&mesh(vec![1.0, 3.0, 5.0, 3.0], [0, 2, 3])).unwrap();
+        assert!((bg.at(Point::new(0.5, 1.5)).unwrap() - 3.0).abs() < 1e-12);
+        let err = |m| Background::from_memory(&m).err().unwrap().to_string();
+        assert!(err(mesh(vec![1.0; 3], [0, 2, 3])).contains("3 sizes for 4 points"));
+        assert!(err(mesh(vec![1.0; 4], [0, 2, 4])).contains("point 4"));
+        let zero = err(mesh(vec![1.0, 1.0, 1.0, 0.0], [0, 2, 3]));
+        assert!(zero.contains("size_from: the size at point 3"), "{zero}");
     }
 }
