@@ -65,6 +65,11 @@ const STEP_REL: f64 = 1e-8;
 const MAX_LEAVES: usize = 4096;
 /// Subdivision depth at which a pair is given up on (2⁻⁶⁰ of a piece).
 const MAX_DEPTH: u32 = 60;
+/// Subdivision steps over all pairs, per piece, past which the drawn areas
+/// are not computed (outlines so dense and so close that finding where they
+/// cross would cost more than meshing them): the check then reports none
+/// rather than slow the run.
+const STEPS_PER_PIECE: usize = 400;
 
 /// The areas the drawing's owners have, before any mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -267,6 +272,10 @@ fn gauss_area(c: &Conic) -> f64 {
     sum
 }
 
+/// The owners left and right of a piece and how many pieces run there
+/// together (see [`sides`]).
+type Sides = (Option<ShapeId>, Option<ShapeId>, usize);
+
 /// A monotone piece of a curve: parameters `t` of `curve`.
 #[derive(Clone, Copy, Debug)]
 struct Piece {
@@ -305,7 +314,7 @@ pub(crate) fn drawn_areas(
     let origin = bounds.center().to_vec2();
     let step = STEP_REL * d;
     // Each piece's windows between cuts: the area term and the owners either side.
-    let terms: Vec<Vec<(f64, Option<(Option<ShapeId>, Option<ShapeId>, usize)>)>> = pieces
+    let terms: Vec<Vec<(f64, Option<Sides>)>> = pieces
         .par_iter()
         .zip(cuts.par_iter())
         .enumerate()
@@ -440,7 +449,7 @@ fn sides(
     t1: f64,
     painting: &Painting,
     step: f64,
-) -> Option<(Option<ShapeId>, Option<ShapeId>, usize)> {
+) -> Option<Sides> {
     let curve = &near.curves[near.pieces[k].curve as usize];
     let (a, b) = (curve.eval(t0), curve.eval(t1));
     let chord = (b - a).hypot();
@@ -451,7 +460,7 @@ fn sides(
     let tm = 0.5 * (t0 + t1);
     let m = curve.eval(tm);
     let mut tangent = curve.deriv(tm);
-    if !(tangent.hypot() > 0.0) {
+    if tangent.hypot() <= 0.0 || tangent.hypot().is_nan() {
         tangent = b - a;
     }
     let normal = Vec2::new(-tangent.y, tangent.x) / tangent.hypot();
@@ -469,7 +478,7 @@ fn sides(
         1e-14 * (m.x.abs() + m.y.abs() + tau / TOGETHER_REL)
     };
     for _ in 0..8 {
-        if !(h > floor) {
+        if h <= floor || h.is_nan() {
             break;
         }
         let (left, left_clear) = painting.owner_at(m + normal * h, 0.25 * h);
@@ -681,33 +690,56 @@ fn crossings(
     deadline: &Deadline,
 ) -> Option<(Vec<Vec<f64>>, usize)> {
     // Per piece i: the cuts it finds on itself and on later pieces j > i.
-    let found: Vec<(Vec<(u32, f64)>, usize)> = (0..pieces.len())
+    let budget = STEPS_PER_PIECE * pieces.len() + 100_000;
+    let spent = std::sync::atomic::AtomicUsize::new(0);
+    let found: Vec<(Vec<(u32, f64)>, usize, usize, usize)> = (0..pieces.len())
         .into_par_iter()
         .map(|i| {
-            if i % 64 == 0 && deadline.expired() {
-                return (Vec::new(), 0);
+            if (i % 64 == 0 && deadline.expired())
+                || spent.load(std::sync::atomic::Ordering::Relaxed) > budget
+            {
+                return (Vec::new(), 0, 0, 0);
             }
             let mut out = Vec::new();
             let mut overlaps = 0;
+            let mut steps = 0;
             let mut near = Vec::new();
             grid.candidates(i, &mut near);
             for &j in &near {
                 let (a, b) = (&pieces[i], &pieces[j as usize]);
                 let (ca, cb) = (&curves[a.curve as usize], &curves[b.curve as usize]);
-                let pair = cut_pair(ca, a.t, cb, b.t, tol, together);
+                let pair = cut_pair(ca, a.t, cb, b.t, tol, together, budget);
                 overlaps += usize::from(pair.overlap);
+                steps += pair.steps;
                 out.extend(pair.on_a.into_iter().map(|t| (i as u32, t)));
                 out.extend(pair.on_b.into_iter().map(|t| (j, t)));
             }
-            (out, overlaps)
+            let pairs = near.len();
+            spent.fetch_add(steps, std::sync::atomic::Ordering::Relaxed);
+            (out, overlaps, steps, pairs)
         })
         .collect();
     if deadline.expired() {
         return None;
     }
+    if spent.load(std::sync::atomic::Ordering::Relaxed) > budget {
+        tracing::debug!(
+            pieces = pieces.len(),
+            budget,
+            "drawn areas: not computed, over budget"
+        );
+        return None;
+    }
     let mut cuts = vec![Vec::new(); pieces.len()];
     let mut overlaps = 0;
-    for (list, o) in found {
+    let (steps, pairs): (usize, usize) = found.iter().fold((0, 0), |a, f| (a.0 + f.2, a.1 + f.3));
+    tracing::debug!(
+        pieces = pieces.len(),
+        pairs,
+        steps,
+        "drawn areas: crossings"
+    );
+    for (list, o, _, _) in found {
         overlaps += o;
         for (k, t) in list {
             cuts[k as usize].push(t);
@@ -722,15 +754,30 @@ struct PairCuts {
     on_a: Vec<f64>,
     on_b: Vec<f64>,
     overlap: bool,
+    steps: usize,
 }
 
 /// Where two monotone pieces cross or come within `together` of each other
 /// (subdivided until flat to `tol`).
-fn cut_pair(a: &Curve, ta: [f64; 2], b: &Curve, tb: [f64; 2], tol: f64, together: f64) -> PairCuts {
+/// Past `max_steps` subdivisions the pair counts as overlapping.
+fn cut_pair(
+    a: &Curve,
+    ta: [f64; 2],
+    b: &Curve,
+    tb: [f64; 2],
+    tol: f64,
+    together: f64,
+    max_steps: usize,
+) -> PairCuts {
     let mut out = PairCuts::default();
     let mut stack = vec![(ta, tb, 0u32)];
     let mut leaves = 0;
     while let Some((sa, sb, depth)) = stack.pop() {
+        out.steps += 1;
+        if out.steps > max_steps {
+            out.overlap = true;
+            return out;
+        }
         let (pa, na) = a.controls(sa[0], sa[1]);
         let (pb, nb) = b.controls(sb[0], sb[1]);
         let ba = hull_box(&pa[..na]).inflate(together, together);
@@ -813,7 +860,7 @@ fn cones_apart(apex: Point, a: &[Point], b: &[Point]) -> bool {
             .map(|v| v / v.hypot())
             .collect();
         let mean = dirs.iter().fold(Vec2::ZERO, |s, v| s + *v);
-        if dirs.is_empty() || !(mean.hypot2() > 0.0) {
+        if dirs.is_empty() || mean.hypot2() <= 0.0 {
             return None;
         }
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -844,7 +891,7 @@ fn run_together(p0: Point, p1: Point, q0: Point, q1: Point, dist: f64) -> bool {
     for (e, c0, c1) in [(q0, p0, p1), (q1, p0, p1), (p0, q0, q1), (p1, q0, q1)] {
         let d = c1 - c0;
         let len2 = d.hypot2();
-        if !(len2 > 0.0) {
+        if len2 <= 0.0 || len2.is_nan() {
             continue;
         }
         let w = (e - c0).dot(d) / len2;
@@ -895,7 +942,7 @@ fn flatness(p: &[Point]) -> f64 {
 fn param_at(curve: &Curve, s: [f64; 2], x: Point) -> f64 {
     let (a, b) = (curve.eval(s[0]), curve.eval(s[1]));
     let d = b - a;
-    if !(d.hypot2() > 0.0) {
+    if d.hypot2() <= 0.0 || d.hypot2().is_nan() {
         return 0.5 * (s[0] + s[1]);
     }
     let target = (x - a).dot(d);
