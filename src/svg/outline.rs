@@ -73,14 +73,18 @@ struct Ctx {
     clips: Vec<Arc<Clip>>,
     /// A group on the chain has a filter.
     filtered: bool,
+    /// usvg's coordinates to output coordinates (with the transforms usvg
+    /// was kept from on the chain, [`Source::usvg_omits`]).
+    frame: Frame,
 }
 
 impl Ctx {
-    fn root() -> Ctx {
+    fn root(frame: Frame) -> Ctx {
         Ctx {
             opacity: 1.0,
             clips: Vec::new(),
             filtered: false,
+            frame,
         }
     }
 }
@@ -153,7 +157,7 @@ pub(super) fn collect(
     let mut texts_with_outline: Vec<&str> = Vec::new();
     let mut instances: Vec<Instance<'_, '_>> = Vec::new();
     let mut stack: Vec<Step<'_>> = Vec::new();
-    let mut root = Ctx::root();
+    let mut root = Ctx::root(*frame);
     if !tree.root().filters().is_empty() {
         filters += 1;
         root.filtered = true;
@@ -173,7 +177,17 @@ pub(super) fn collect(
                 if !g.filters().is_empty() {
                     filters += 1;
                 }
-                let ctx = group_ctx(g, &ctx, frame)?;
+                let ctx = match source
+                    .usvg_omits(g.id())
+                    .and_then(|t| ctx.frame.with_omitted(g.abs_transform(), t))
+                {
+                    Some(frame) => Rc::new(Ctx {
+                        frame,
+                        ..(*ctx).clone()
+                    }),
+                    None => ctx,
+                };
+                let ctx = group_ctx(g, &ctx)?;
                 let inherited = if facts.use_ids.contains(g.id()) {
                     source.public(g.id()).or(inherited)
                 } else {
@@ -201,7 +215,11 @@ pub(super) fn collect(
             }
             Step::Visit(usvg::Node::Path(p), inherited, scope, ctx) => {
                 let id = source.public(p.id()).or(inherited);
-                let mut shape = convert_path(p, paths, id, frame)?;
+                let frame = source
+                    .usvg_omits(p.id())
+                    .and_then(|t| ctx.frame.with_omitted(p.abs_transform(), t))
+                    .unwrap_or(ctx.frame);
+                let mut shape = convert_path(p, paths, id, &frame)?;
                 paths += 1;
                 match exact_subpaths(p, scope, source, &mut instances, map, &shape.subpaths) {
                     Ok(subpaths) => {
@@ -220,7 +238,7 @@ pub(super) fn collect(
                     p,
                     shape,
                     &ctx,
-                    frame,
+                    &frame,
                     opts,
                     &servers,
                     &mut items,
@@ -239,7 +257,7 @@ pub(super) fn collect(
                 if !flat.filters().is_empty() {
                     filters += 1;
                 }
-                let ctx = group_ctx(flat, &ctx, frame)?;
+                let ctx = group_ctx(flat, &ctx)?;
                 for child in flat.children().iter().rev() {
                     stack.push(Step::Visit(child, id, Scope::Text, ctx.clone()));
                 }
@@ -392,7 +410,8 @@ fn holds_marker_instances(g: &usvg::Group) -> bool {
 }
 
 /// The context of a group's children: its opacity, clip path, mask and filters added.
-fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>, frame: &Frame) -> Result<Rc<Ctx>> {
+fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>) -> Result<Rc<Ctx>> {
+    let frame = &parent.frame;
     let plain = g.opacity().get() >= 1.0
         && g.clip_path().is_none()
         && g.mask().is_none()

@@ -65,36 +65,103 @@ const MAX_EXPANDED: usize = 200_000;
 /// At most this many `<use>` levels are followed.
 const MAX_USE_DEPTH: usize = 64;
 
-/// `text` with an `id` attribute added to every shape element and `<use>` that
-/// has none, and the prefix of those private ids (chosen so that no id of the
-/// document starts with it). `None` when nothing needs one, or when a style
-/// sheet selects on `[id…]` (the ids could change its matches).
+/// The smallest scale factor usvg keeps: an element whose own `transform`,
+/// rounded to f32, maps a unit vector to a length at most this (f32's epsilon)
+/// is not rendered by usvg, with its content.
+const USVG_MIN_SCALE: f32 = f32::EPSILON;
+
+/// Whether usvg drops an element for its `transform` (`value` parsed as usvg
+/// parses it, rounded to f32, a row scale factor at most [`USVG_MIN_SCALE`]),
+/// although the transform is invertible in f64 and the element is drawn.
+fn tiny_for_usvg(value: &str) -> bool {
+    let Ok(t) = svgtypes::Transform::from_str(value) else {
+        return false;
+    };
+    let f64_invertible = [t.a, t.b, t.c, t.d, t.e, t.f]
+        .iter()
+        .all(|v| v.is_finite())
+        && (t.a * t.d - t.b * t.c).abs() >= f64::MIN_POSITIVE;
+    #[expect(
+        clippy::cast_possible_truncation,
+        reason = "usvg's own rounding of the transform to f32"
+    )]
+    let [a, b, c, d] = [t.a, t.b, t.c, t.d].map(|v| v as f32);
+    let (x_scale, y_scale) = ((a * a + c * c).sqrt(), (b * b + d * d).sqrt());
+    f64_invertible && (x_scale <= USVG_MIN_SCALE || y_scale <= USVG_MIN_SCALE)
+}
+
+/// The document's text as usvg is given it, and the prefix of the private
+/// names in it (chosen so that no id of the document starts with it).
+///
+/// - Every shape element and `<use>` without an `id` gets a private one.
+/// - A `<g>` or shape element drawn in place (not inside `<defs>`, a clip path,
+///   a mask, a marker, a pattern, a symbol or text, nor within an element a
+///   `<use>` refers to; when it is a shape, without a clip path, mask or
+///   markers of its own) whose `transform` has a scale factor below f32's precision,
+///   which usvg would drop with all its content, has that attribute renamed to
+///   `{prefix}transform` (and gets a private id if it has none): usvg then
+///   draws the content in the element's own coordinates, well conditioned,
+///   and [`Source`] reads the true transform in f64 from the renamed
+///   attribute. `outline.rs` composes the same transform onto usvg's geometry
+///   below the element ([`Source::usvg_omits`]), so its single-precision
+///   geometry (clips, strokes, glyphs, the check of the f64 reconstruction)
+///   is in the true coordinates too.
+///
+/// `None` when nothing needs a change, or when a style sheet selects on `[id…]`
+/// or `[transform…]`, or sets transforms (the changes could alter its matches).
 pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String, String)> {
     let ids: Vec<&str> = doc
         .descendants()
         .filter_map(|n| n.attribute("id"))
         .collect();
-    let style_selects_ids = doc
-        .descendants()
-        .filter(|n| n.tag_name().name() == "style")
-        .any(|n| n.text().is_some_and(|t| t.contains("[id")));
-    if style_selects_ids {
+    let style_sheet = |needle: &dyn Fn(&str) -> bool| {
+        doc.descendants()
+            .filter(|n| n.tag_name().name() == "style")
+            .any(|n| n.text().is_some_and(needle))
+    };
+    if style_sheet(&|t| t.contains("[id") || t.contains("[transform")) {
         return None;
     }
-    let prefix = (0u32..)
-        .map(|k| format!("triwild{k}-"))
-        .find(|p| !ids.iter().any(|id| id.starts_with(p.as_str())))?;
+    let may_rename = !style_sheet(&declares_transform);
+    let prefix = (0u32..).map(|k| format!("triwild{k}-")).find(|p| {
+        !ids.iter().any(|id| id.starts_with(p.as_str()))
+            && !doc
+                .descendants()
+                .any(|n| n.attributes().any(|a| a.name().starts_with(p.as_str())))
+    })?;
+    let referenced = use_targets(doc);
     let body_start = doc.root_element().range().start;
     let bytes = text.as_bytes();
-    let mut inserts: Vec<usize> = Vec::new();
+    // (position, replaced length, new text)
+    let mut edits: Vec<(usize, usize, String)> = Vec::new();
     let mut seen = HashSet::new();
+    let mut private = 0usize;
     for node in doc.descendants().filter(Node::is_element) {
         let name = node.tag_name();
         if !matches!(name.namespace(), None | Some(SVG_NS))
-            || !(SHAPES.contains(&name.name()) || name.name() == "use")
-            || node.attribute("id").is_some()
             || node.ancestors().any(|a| a.tag_name().name() == "text")
         {
+            continue;
+        }
+        let shape = SHAPES.contains(&name.name());
+        let rename = may_rename
+            && (shape || name.name() == "g")
+            && drawn_in_place(node, &referenced)
+            && !(shape && ["clip-path", "mask"].iter().any(|p| has_property(node, p)))
+            && !(shape
+                && node.ancestors().any(|a| {
+                    ["marker", "marker-start", "marker-mid", "marker-end"]
+                        .iter()
+                        .any(|p| has_property(a, p))
+                }))
+            && !node.attribute("style").is_some_and(declares_transform)
+            && node.attribute("id").is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1)
+            && node
+                .attributes()
+                .find(|a| a.name() == "transform" && a.namespace().is_none())
+                .is_some_and(|a| tiny_for_usvg(a.value()));
+        let wants_id = (shape || name.name() == "use" || rename) && node.attribute("id").is_none();
+        if !wants_id && !rename {
             continue;
         }
         // The start tag in the text: `<` then the (possibly prefixed) name. An
@@ -110,23 +177,72 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
         let end = start + 1 + name_len;
         let qname = &text[start + 1..end];
         let local = qname.rsplit(':').next().unwrap_or(qname);
-        if local == name.name() && seen.insert(end) {
-            inserts.push(end);
+        if local != name.name() || !seen.insert(end) {
+            continue;
+        }
+        if rename {
+            let attr = node
+                .attributes()
+                .find(|a| a.name() == "transform" && a.namespace().is_none())
+                .expect("internal: the transform attribute exists");
+            let at = attr.range_qname();
+            if text.get(at.clone()) != Some("transform") {
+                continue;
+            }
+            edits.push((at.start, at.len(), format!("{prefix}transform")));
+        }
+        if wants_id {
+            edits.push((end, 0, format!(" id=\"{prefix}{private}\"")));
+            private += 1;
         }
     }
-    if inserts.is_empty() {
+    if edits.is_empty() {
         return None;
     }
-    inserts.sort_unstable();
-    let mut out = String::with_capacity(text.len() + inserts.len() * (prefix.len() + 12));
+    edits.sort_unstable_by_key(|e| e.0);
+    let mut out = String::with_capacity(text.len() + edits.len() * (prefix.len() + 12));
     let mut last = 0;
-    for (k, at) in inserts.into_iter().enumerate() {
+    for (at, len, new) in edits {
         out.push_str(&text[last..at]);
-        out.push_str(&format!(" id=\"{prefix}{k}\""));
-        last = at;
+        out.push_str(&new);
+        last = at + len;
     }
     out.push_str(&text[last..]);
     Some((out, prefix))
+}
+
+/// The elements some `<use>` refers to (by `href` or `xlink:href`).
+fn use_targets<'a, 'input>(doc: &'a Document<'input>) -> HashSet<Node<'a, 'input>> {
+    let by_id: HashMap<&str, Node<'a, 'input>> = doc
+        .descendants()
+        .filter_map(|n| Some((n.attribute("id")?, n)))
+        .rev()
+        .collect();
+    doc.descendants()
+        .filter(|n| n.tag_name().name() == "use")
+        .flat_map(|u| u.attributes().filter(|a| a.name() == "href"))
+        .filter_map(|a| svgtypes::IRI::from_str(a.value()).ok())
+        .filter_map(|iri| by_id.get(iri.0).copied())
+        .collect()
+}
+
+/// Whether `node` is drawn in its place only: no ancestor (or itself) is a
+/// container whose content is drawn by reference, or the target of a `<use>`.
+fn drawn_in_place(node: Node<'_, '_>, referenced: &HashSet<Node<'_, '_>>) -> bool {
+    node.ancestors().filter(Node::is_element).all(|a| {
+        !referenced.contains(&a)
+            && (a == node || !NOT_RENDERED.contains(&a.tag_name().name()))
+            && !matches!(a.tag_name().name(), "symbol" | "switch")
+    })
+}
+
+/// Whether `node` sets `property` (as an attribute or in its `style`).
+fn has_property(node: Node<'_, '_>, property: &str) -> bool {
+    node.has_attribute(property)
+        || node.attribute("style").is_some_and(|s| {
+            s.split(';')
+                .any(|d| d.split_once(':').is_some_and(|(k, _)| k.trim() == property))
+        })
 }
 
 /// A shape element as one instance: the element and the `<use>` elements it is
@@ -399,14 +515,41 @@ impl<'a, 'input> Source<'a, 'input> {
         Err(unexpected)
     }
 
+    /// The text of an element's `transform`: the attribute usvg was kept from
+    /// (see [`with_private_ids`]) if there is one, else `transform`.
+    fn transform_attribute(&self, e: Node<'a, 'input>) -> Option<&'a str> {
+        self.private_prefix
+            .as_deref()
+            .and_then(|p| {
+                e.attributes()
+                    .find(|a| a.namespace().is_none() && a.name().strip_prefix(p) == Some("transform"))
+            })
+            .map_or_else(|| e.attribute("transform"), |a| Some(a.value()))
+    }
+
+    /// The transform usvg did not apply to the `<g>` or shape element with
+    /// this id (its own, about its `transform-origin`; see
+    /// [`with_private_ids`]); `None` for every other element.
+    pub(super) fn usvg_omits(&self, id: &str) -> Option<Affine> {
+        let prefix = self.private_prefix.as_deref()?;
+        let e = self
+            .elements_with_id(id, |n| n == "g" || SHAPES.contains(&n))
+            .into_iter()
+            .next()?;
+        e.attributes()
+            .any(|a| a.namespace().is_none() && a.name().strip_prefix(prefix) == Some("transform"))
+            .then(|| self.own_transform(e).ok())
+            .flatten()
+    }
+
     /// An element's own `transform` (about its `transform-origin`).
     fn own_transform(&self, e: Node<'a, 'input>) -> Result<Affine, Unsupported> {
         if self.css_transform || e.attribute("style").is_some_and(declares_transform) {
             return Err("a transform set by CSS");
         }
         // usvg ignores a transform it cannot parse (an invalid one hides the element)
-        let t = e
-            .attribute("transform")
+        let t = self
+            .transform_attribute(e)
             .and_then(|s| svgtypes::Transform::from_str(s).ok())
             .map_or(Affine::IDENTITY, |t| {
                 Affine::new([t.a, t.b, t.c, t.d, t.e, t.f])

@@ -595,6 +595,15 @@ impl Painting {
         self.layers.iter().filter(|l| l.0 == l.1).map(|l| l.0)
     }
 
+    /// Whether shape `id`'s own fill paints `p` (see [`PaintTest::paints`]);
+    /// `false` for a shape that is not a layer.
+    pub(crate) fn shape_paints(&self, id: ShapeId, p: Point, eps_abs: f64) -> bool {
+        self.layers
+            .iter()
+            .find(|l| l.1 == id)
+            .is_some_and(|l| l.2.paints(p, eps_abs).0)
+    }
+
     /// The topmost region covering `p` (a shape, or the fill a stroke joins),
     /// and whether that answer is certain: it is
     /// unless `p` is within `eps_abs` of the outline of a shape at or above the
