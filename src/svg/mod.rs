@@ -83,6 +83,7 @@ pub(crate) use drawing::{
 };
 pub use paint::{PaintOptions, StrokeMode};
 
+pub(crate) use outline::one_digit_below;
 pub(crate) use reconstruct::Precision;
 
 use crate::budget::Limits;

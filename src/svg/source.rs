@@ -542,6 +542,47 @@ impl<'a, 'input> Source<'a, 'input> {
             .flatten()
     }
 
+    /// The transform on `element`'s chain (its own and its ancestors') that
+    /// stretches most unevenly, as written and where (`skewX(89.9) on <g
+    /// id='s'>`; a private id is not shown), when its largest stretch is more
+    /// than [`ShapePaint::UNEVEN`](super::drawing::ShapePaint::UNEVEN) times its
+    /// smallest.
+    pub(super) fn most_uneven(&self, element: Node<'a, 'input>) -> Option<String> {
+        let mut best: Option<(f64, Node<'a, 'input>, &str)> = None;
+        for e in element.ancestors().filter(Node::is_element) {
+            let Some(text) = self.transform_attribute(e) else {
+                continue;
+            };
+            let Ok(t) = svgtypes::Transform::from_str(text) else {
+                continue;
+            };
+            // singular values: s1·s2 = |det|, s1² + s2² = the squares' sum
+            let det = (t.a * t.d - t.b * t.c).abs();
+            let sum = t.a * t.a + t.b * t.b + t.c * t.c + t.d * t.d;
+            let root = (sum * sum - 4.0 * det * det).max(0.0).sqrt();
+            let (s1, s2) = ((0.5 * (sum + root)).sqrt(), det / (0.5 * (sum + root)).sqrt());
+            let ratio = if s2 > 0.0 { s1 / s2 } else { f64::INFINITY };
+            if ratio.is_finite()
+                && ratio > super::drawing::ShapePaint::UNEVEN
+                && best.is_none_or(|b| ratio > b.0)
+            {
+                best = Some((ratio, e, text));
+            }
+        }
+        best.map(|(_, e, text)| {
+            let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+            let mut shown: String = text.chars().take(40).collect();
+            if text.chars().count() > 40 {
+                shown.push('…');
+            }
+            let tag = e.tag_name().name();
+            match e.attribute("id").and_then(|id| self.public(id)) {
+                Some(id) => format!("{shown} on <{tag} id='{id}'>"),
+                None => format!("{shown} on <{tag}>"),
+            }
+        })
+    }
+
     /// An element's own `transform` (about its `transform-origin`).
     fn own_transform(&self, e: Node<'a, 'input>) -> Result<Affine, Unsupported> {
         if self.css_transform || e.attribute("style").is_some_and(declares_transform) {
