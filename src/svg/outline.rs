@@ -288,6 +288,10 @@ pub(super) fn collect(
         }
     }
     out.shapes = resolve_items(items, opts, &mut out.paint, &mut out.warnings)?;
+    out.warnings.extend(source.dropped_for_tiny_transforms());
+    if paths == 0 {
+        out.warnings.extend(source.all_under_references());
+    }
     add_clip_outlines(&mut out.shapes, paths);
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
     // usvg keeps an image node only for data it could decode (never, here)

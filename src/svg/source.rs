@@ -236,6 +236,18 @@ fn drawn_in_place(node: Node<'_, '_>, referenced: &HashSet<Node<'_, '_>>) -> boo
     })
 }
 
+/// The value `node` itself gives `property`: the last declaration in its
+/// `style`, else its attribute.
+fn property_value<'a>(node: Node<'a, '_>, property: &str) -> Option<&'a str> {
+    let in_style = node.attribute("style").and_then(|style| {
+        style.split(';').rev().find_map(|d| {
+            let (k, v) = d.split_once(':')?;
+            (k.trim() == property).then(|| v.trim())
+        })
+    });
+    in_style.or_else(|| node.attribute(property).map(str::trim))
+}
+
 /// Whether `node` sets `property` (as an attribute or in its `style`).
 fn has_property(node: Node<'_, '_>, property: &str) -> bool {
     node.has_attribute(property)
@@ -580,6 +592,85 @@ impl<'a, 'input> Source<'a, 'input> {
                 Some(id) => format!("{shown} on <{tag} id='{id}'>"),
                 None => format!("{shown} on <{tag}>"),
             }
+        })
+    }
+
+    /// The elements drawn in place that usvg drops for a transform with a
+    /// scale factor below f32's precision and that [`with_private_ids`] did
+    /// not hand over (a `<use>`, `<text>`, nested `<svg>`, a shape with a
+    /// clip path, mask or markers, ...), as one warning; `None` for none.
+    pub(super) fn dropped_for_tiny_transforms(&self) -> Option<String> {
+        const NAMED: usize = 5;
+        let empty = HashSet::new();
+        let names: Vec<String> = self
+            .doc
+            .descendants()
+            .filter(|n| {
+                is_svg(*n)
+                    && n.parent_element().is_some()
+                    && n.attribute("transform").is_some_and(tiny_for_usvg)
+                    && drawn_in_place(*n, &empty)
+            })
+            .map(|n| {
+                let tag = n.tag_name().name();
+                match n.attribute("id").and_then(|id| self.public(id)) {
+                    Some(id) => format!("<{tag} id='{id}'>"),
+                    None => format!("<{tag}>"),
+                }
+            })
+            .collect();
+        let more = if names.len() > NAMED { ", ..." } else { "" };
+        (!names.is_empty()).then(|| {
+            format!(
+                "{} element(s) not drawn: a transform with a scale factor below {:.1e} (the SVG \
+                 parser's single precision) drops the element with its content, and triwild \
+                 carries such a transform itself only on a <g> or on a shape without clip \
+                 path, mask or markers (wrap the element in a <g> with that transform): {}{more}",
+                names.len(),
+                f64::from(USVG_MIN_SCALE),
+                names[..names.len().min(NAMED)].join(", ")
+            )
+        })
+    }
+
+    /// Why a drawing usvg found nothing in may be empty: when every shape
+    /// element drawn in place lies under a `clip-path` or `mask` (its own or
+    /// an ancestor's), the references, as one sentence; `None` otherwise.
+    pub(super) fn all_under_references(&self) -> Option<String> {
+        let empty = HashSet::new();
+        let mut refs: Vec<String> = Vec::new();
+        let mut shapes = 0usize;
+        for node in self.doc.descendants().filter(|n| is_svg(*n)) {
+            if !SHAPES.contains(&node.tag_name().name()) || !drawn_in_place(node, &empty) {
+                continue;
+            }
+            shapes += 1;
+            let mut found = false;
+            for a in node.ancestors().filter(Node::is_element) {
+                for (property, what) in [("clip-path", "clip path"), ("mask", "mask")] {
+                    let Some(value) = property_value(a, property) else {
+                        continue;
+                    };
+                    let Ok(link) = svgtypes::FuncIRI::from_str(value) else {
+                        continue;
+                    };
+                    found = true;
+                    let named = format!("{what} '{}'", link.0);
+                    if !refs.contains(&named) {
+                        refs.push(named);
+                    }
+                }
+            }
+            if !found {
+                return None;
+            }
+        }
+        (shapes > 0).then(|| {
+            format!(
+                "all {shapes} shape element(s) lie under {}, which leaves nothing painted \
+                 (an empty or invalid clip path or mask hides what it applies to)",
+                refs.join(", ")
+            )
         })
     }
 
