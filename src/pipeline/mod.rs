@@ -689,7 +689,11 @@ fn lost_regions_warning(
         let mut flags = Vec::new();
         for (limit, name, flag) in [
             (mu, "the feature envelope mu", "--mu-abs"),
-            (l_min, "the minimal edge length l_min", "--min-edge-length-abs"),
+            (
+                l_min,
+                "the minimal edge length l_min",
+                "--min-edge-length-abs",
+            ),
         ] {
             if widest < limit {
                 limits.push(format!("{name} = {limit:.3e}"));

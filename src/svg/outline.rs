@@ -650,8 +650,7 @@ fn paint_items(
             stroke_item = Some(Item::Decoration(
                 format!("{}-stroke", shape.name()),
                 stroke_alpha.unwrap_or(0.0),
-                (opts.keep_decoration && !outline_kept && !fill_is_region)
-                    .then(|| centre(&shape)),
+                (opts.keep_decoration && !outline_kept && !fill_is_region).then(|| centre(&shape)),
             ));
         }
         (Fate::Painted, StrokeMode::Line) => {

@@ -77,9 +77,7 @@ fn tiny_for_usvg(value: &str) -> bool {
     let Ok(t) = svgtypes::Transform::from_str(value) else {
         return false;
     };
-    let f64_invertible = [t.a, t.b, t.c, t.d, t.e, t.f]
-        .iter()
-        .all(|v| v.is_finite())
+    let f64_invertible = [t.a, t.b, t.c, t.d, t.e, t.f].iter().all(|v| v.is_finite())
         && (t.a * t.d - t.b * t.c).abs() >= f64::MIN_POSITIVE;
     #[expect(
         clippy::cast_possible_truncation,
@@ -155,7 +153,9 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
                         .any(|p| has_property(a, p))
                 }))
             && !node.attribute("style").is_some_and(declares_transform)
-            && node.attribute("id").is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1)
+            && node
+                .attribute("id")
+                .is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1)
             && node
                 .attributes()
                 .find(|a| a.name() == "transform" && a.namespace().is_none())
@@ -533,8 +533,9 @@ impl<'a, 'input> Source<'a, 'input> {
         self.private_prefix
             .as_deref()
             .and_then(|p| {
-                e.attributes()
-                    .find(|a| a.namespace().is_none() && a.name().strip_prefix(p) == Some("transform"))
+                e.attributes().find(|a| {
+                    a.namespace().is_none() && a.name().strip_prefix(p) == Some("transform")
+                })
             })
             .map_or_else(|| e.attribute("transform"), |a| Some(a.value()))
     }
@@ -572,7 +573,10 @@ impl<'a, 'input> Source<'a, 'input> {
             let det = (t.a * t.d - t.b * t.c).abs();
             let sum = t.a * t.a + t.b * t.b + t.c * t.c + t.d * t.d;
             let root = (sum * sum - 4.0 * det * det).max(0.0).sqrt();
-            let (s1, s2) = ((0.5 * (sum + root)).sqrt(), det / (0.5 * (sum + root)).sqrt());
+            let (s1, s2) = (
+                (0.5 * (sum + root)).sqrt(),
+                det / (0.5 * (sum + root)).sqrt(),
+            );
             let ratio = if s2 > 0.0 { s1 / s2 } else { f64::INFINITY };
             if ratio.is_finite()
                 && ratio > super::drawing::ShapePaint::UNEVEN

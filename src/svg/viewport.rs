@@ -9,8 +9,8 @@
 //! transform's factors divided by the mapping's are exactly the document's.
 
 use crate::units::Units;
-use kurbo::Affine;
 use crate::{Error, Result};
+use kurbo::Affine;
 use usvg::roxmltree;
 
 /// The root `viewBox` and `preserveAspectRatio` attributes, parsed as usvg parses them.
