@@ -25,7 +25,9 @@ pub(crate) struct ClassifyOptions {
     /// region is missing (see [`lost_shapes`]; user units). The pipeline uses
     /// half the hairline width l_min: a stroke narrower than l_min stays a line,
     /// and a sliver that thin (a shape peeking out from under a near-copy of
-    /// itself) is no region anybody sees.
+    /// itself) is no region anybody sees. A shape that is itself thinner than
+    /// this beside its outline (a shape a transform thinned out) counts as
+    /// shown where it is topmost at a finer probe inside it (`shows_thin`).
     pub probe_step: f64,
     /// The run's time limit: once it has passed, the triangles left are not
     /// classified (the caller checks it and stops the run).

@@ -106,7 +106,8 @@ fn tiny_for_usvg(value: &str) -> bool {
 ///   is in the true coordinates too.
 ///
 /// `None` when nothing needs a change, or when a style sheet selects on `[id…]`
-/// or `[transform…]`, or sets transforms (the changes could alter its matches).
+/// (the ids could change its matches); no transform is renamed when a style
+/// sheet selects on `[transform…]` or sets transforms.
 pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String, String)> {
     let ids: Vec<&str> = doc
         .descendants()
@@ -117,10 +118,10 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
             .filter(|n| n.tag_name().name() == "style")
             .any(|n| n.text().is_some_and(needle))
     };
-    if style_sheet(&|t| t.contains("[id") || t.contains("[transform")) {
+    if style_sheet(&|t| t.contains("[id")) {
         return None;
     }
-    let may_rename = !style_sheet(&declares_transform);
+    let may_rename = !style_sheet(&|t| t.contains("[transform") || declares_transform(t));
     let prefix = (0u32..).map(|k| format!("triwild{k}-")).find(|p| {
         !ids.iter().any(|id| id.starts_with(p.as_str()))
             && !doc
@@ -942,6 +943,50 @@ mod tests {
         // a style sheet selecting on ids: no private ids
         let text = r#"<svg xmlns="http://www.w3.org/2000/svg"><style>[id] { fill: red }</style><rect/></svg>"#;
         assert!(with_private_ids(text, &doc(text)).is_none());
+    }
+
+    #[test]
+    fn transforms_usvg_drops_are_those_below_f32_precision_that_f64_inverts() {
+        assert!(tiny_for_usvg("scale(1e-7)"));
+        assert!(tiny_for_usvg("scale(1e-7 1)"));
+        assert!(tiny_for_usvg("matrix(0 1e-7 1e-7 0 0 0)"));
+        assert!(tiny_for_usvg("translate(5 5) scale(1e-9)"));
+        assert!(!tiny_for_usvg("scale(3e-7)"));
+        assert!(!tiny_for_usvg("skewX(89.9)"));
+        // singular in f64 too: not drawn by SVG's rules, nothing to carry
+        assert!(!tiny_for_usvg("scale(0)"));
+        assert!(!tiny_for_usvg("matrix(1 1 1 1 0 0)"));
+        assert!(!tiny_for_usvg("not a transform"));
+    }
+
+    #[test]
+    fn a_tiny_transform_is_renamed_on_groups_and_plain_shapes_drawn_in_place() {
+        let text = r##"<svg xmlns="http://www.w3.org/2000/svg"><g transform="scale(1e-8)"><rect width="1" height="1"/></g><circle id="c" r="1" transform="scale(1e-8)"/><circle id="m" r="1" transform="scale(1e-8)" clip-path="url(#k)"/><use id="u" href="#d" transform="scale(1e-8)"/><defs><g id="d" transform="scale(1e-8)"><rect width="1" height="1"/></g></defs><g transform="scale(2)"/></svg>"##;
+        let (marked, prefix) = with_private_ids(text, &doc(text)).expect("changes made");
+        assert_eq!(prefix, "triwild0-");
+        let d = doc(&marked);
+        let renamed: Vec<(&str, Option<&str>)> = d
+            .descendants()
+            .filter(|n| n.has_attribute("triwild0-transform"))
+            .map(|n| (n.tag_name().name(), n.attribute("id")))
+            .collect();
+        // the group (which gets an id) and the plain circle; not the clipped
+        // circle, the <use>, nor the group drawn only through it
+        assert_eq!(renamed, [("g", Some("triwild0-0")), ("circle", Some("c"))]);
+        let source = Source::new(&d, Some(prefix));
+        assert_eq!(
+            source.usvg_omits("c"),
+            Some(Affine::scale(1e-8)),
+            "the true transform, read from the renamed attribute"
+        );
+        assert_eq!(source.usvg_omits("m"), None);
+        assert_eq!(source.usvg_omits("d"), None);
+        let dropped = source.dropped_for_tiny_transforms().expect("a warning");
+        assert!(
+            dropped.starts_with("2 element(s) not drawn")
+                && dropped.ends_with("<circle id='m'>, <use id='u'>"),
+            "{dropped}"
+        );
     }
 
     #[test]
