@@ -79,7 +79,7 @@ fn tiny_for_usvg(value: &str) -> bool {
     };
     let f64_invertible = [t.a, t.b, t.c, t.d, t.e, t.f].iter().all(|v| v.is_finite())
         && (t.a * t.d - t.b * t.c).abs() >= f64::MIN_POSITIVE;
-    #[expect(
+    #[allow(
         clippy::cast_possible_truncation,
         reason = "usvg's own rounding of the transform to f32"
     )]
