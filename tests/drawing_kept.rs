@@ -34,11 +34,14 @@ const CORNERS: [(f64, f64); 6] = [
 ];
 
 fn mesh(name: &str, svg: &str, p: &Params) -> Meshed {
+    mesh_regions(name, svg, p, &RegionOptions::DEFAULT.with_cut_outside(true))
+}
+
+fn mesh_regions(name: &str, svg: &str, p: &Params, regions: &RegionOptions) -> Meshed {
     // loaded as the command line loads it: strokes narrower than this μ are lines
     let drawing = triwild::load_bytes_params(svg.as_bytes(), p, &PaintOptions::DEFAULT)
         .expect("the drawing loads");
-    let regions = RegionOptions::DEFAULT.with_cut_outside(true);
-    let m = triwild::mesh_drawing_with(&drawing, p, &regions).expect("the drawing meshes");
+    let m = triwild::mesh_drawing_with(&drawing, p, regions).expect("the drawing meshes");
     let path = support::out_dir("drawing_kept").join(format!("{name}.msh"));
     triwild::write_msh(&m.mesh, &path, MshOptions::DEFAULT).expect("written");
     m
@@ -268,10 +271,11 @@ fn lost_warning(m: &Meshed) -> &str {
 
 #[test]
 fn shapes_thinned_by_a_skew_are_each_counted_and_named_with_the_rule() {
-    let m = mesh(
+    let m = mesh_regions(
         "thin_under_skew",
         &fixture("thin-under-skew.svg"),
         &Params::DEFAULT,
+        &RegionOptions::DEFAULT,
     );
     assert_eq!(m.report.regions.lost_shapes, 3, "{:?}", m.report.warnings);
     let w = lost_warning(&m);
@@ -307,10 +311,11 @@ fn the_flags_the_skew_warning_gives_keep_the_shapes() {
 
 #[test]
 fn shapes_thinned_by_an_anisotropic_scale_are_all_counted() {
-    let m = mesh(
+    let m = mesh_regions(
         "thin_under_scale_1e6_1",
         &fixture("thin-under-scale-1e6-1.svg"),
         &Params::DEFAULT,
+        &RegionOptions::DEFAULT,
     );
     assert_eq!(m.report.regions.lost_shapes, 3, "{:?}", m.report.warnings);
     let w = lost_warning(&m);
