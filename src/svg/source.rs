@@ -128,7 +128,11 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
                 .descendants()
                 .any(|n| n.attributes().any(|a| a.name().starts_with(p.as_str())))
     })?;
-    let referenced = use_targets(doc);
+    let referenced = if may_rename {
+        use_targets(doc)
+    } else {
+        HashSet::new()
+    };
     let body_start = doc.root_element().range().start;
     let bytes = text.as_bytes();
     // (position, replaced length, new text)
@@ -143,8 +147,13 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
             continue;
         }
         let shape = SHAPES.contains(&name.name());
+        // the cheap test first: the rest reads ancestors and every id
         let rename = may_rename
             && (shape || name.name() == "g")
+            && node
+                .attributes()
+                .find(|a| a.name() == "transform" && a.namespace().is_none())
+                .is_some_and(|a| tiny_for_usvg(a.value()))
             && drawn_in_place(node, &referenced)
             && !(shape && ["clip-path", "mask"].iter().any(|p| has_property(node, p)))
             && !(shape
@@ -156,11 +165,7 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
             && !node.attribute("style").is_some_and(declares_transform)
             && node
                 .attribute("id")
-                .is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1)
-            && node
-                .attributes()
-                .find(|a| a.name() == "transform" && a.namespace().is_none())
-                .is_some_and(|a| tiny_for_usvg(a.value()));
+                .is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1);
         let wants_id = (shape || name.name() == "use" || rename) && node.attribute("id").is_none();
         if !wants_id && !rename {
             continue;
