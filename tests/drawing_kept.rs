@@ -290,10 +290,8 @@ fn shapes_thinned_by_a_skew_are_each_counted_and_named_with_the_rule() {
     }
 }
 
-/// The flags the warning gives keep the three shapes (about 30 s in a release
-/// build).
+/// The flags the warning gives keep the three shapes.
 #[test]
-#[ignore = "slow: meshes the skewed shapes at mu = l_min = 0.008"]
 fn the_flags_the_skew_warning_gives_keep_the_shapes() {
     let p = Params::DEFAULT
         .with_mu(Length::Abs(0.008))
