@@ -704,8 +704,8 @@ fn lost_regions_warning(
         }
         let remedy = if value < eps_m {
             format!(
-                "too thin for the numerical tolerance eps_m = {eps_m:.3e} too: no flag keeps \
-                 them beside the rest of the drawing"
+                "thinner than the numerical tolerance eps_m = {eps_m:.3e} as well: no flag \
+                 keeps them beside the rest of the drawing"
             )
         } else {
             format!("they are kept with {}", flags.join(" "))
