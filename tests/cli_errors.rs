@@ -375,3 +375,30 @@ fn budgets_fail_with_one_line_naming_the_flag() {
         );
     }
 }
+
+/// A drawing with nothing left to mesh says why, on its one line: here every
+/// shape lies under a clip path with no area, and the parser skipped the
+/// clip's rectangle.
+#[test]
+fn no_geometry_says_why_on_one_line() {
+    let input =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/kept/empty-clip-hides-all.svg");
+    let dir = scratch("no-geometry-why");
+    let out = bin()
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.join("out.msh"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    for part in [
+        "empty-clip-hides-all.svg: no geometry",
+        "all 2 shape element(s) lie under clip path 'cp'",
+        "the SVG parser ignored what it could not read",
+    ] {
+        assert!(stderr.contains(part), "{part:?} not in {stderr}");
+    }
+    assert!(!dir.join("out.msh").exists());
+}

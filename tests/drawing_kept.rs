@@ -1,9 +1,13 @@
-//! The mesh keeps the drawing where the sizes asked, or the strokes drawn, go
-//! below the feature envelope μ (at its default, 1e-3·d): a straight outline
-//! stays on its lines with every corner a vertex under a size field graded
-//! down to far below μ, and a stroke twice μ wide keeps its area beside a
-//! shape that makes d large. Every mesh is written under
-//! `target/test-out/drawing_kept/` for the independent checker.
+//! The mesh keeps the drawing, or says why. Where the sizes asked, or the
+//! strokes drawn, go below the feature envelope μ (at its default, 1e-3·d): a
+//! straight outline stays on its lines with every corner a vertex under a size
+//! field graded down to far below μ, and a stroke twice μ wide keeps its area
+//! beside a shape that makes d large. Shapes under transforms whose scale
+//! factors single precision cannot carry are meshed (fixtures in
+//! `tests/fixtures/kept/`); shapes a transform thins out below μ and l_min are
+//! each counted and named, with the transform and the flags that keep them.
+//! Every mesh is written under `target/test-out/drawing_kept/` for the
+//! independent checker.
 #![allow(
     clippy::print_stdout,
     reason = "the figures are the test's report (shown with --nocapture)"
@@ -30,11 +34,14 @@ const CORNERS: [(f64, f64); 6] = [
 ];
 
 fn mesh(name: &str, svg: &str, p: &Params) -> Meshed {
+    mesh_regions(name, svg, p, &RegionOptions::DEFAULT.with_cut_outside(true))
+}
+
+fn mesh_regions(name: &str, svg: &str, p: &Params, regions: &RegionOptions) -> Meshed {
     // loaded as the command line loads it: strokes narrower than this μ are lines
     let drawing = triwild::load_bytes_params(svg.as_bytes(), p, &PaintOptions::DEFAULT)
         .expect("the drawing loads");
-    let regions = RegionOptions::DEFAULT.with_cut_outside(true);
-    let m = triwild::mesh_drawing_with(&drawing, p, &regions).expect("the drawing meshes");
+    let m = triwild::mesh_drawing_with(&drawing, p, regions).expect("the drawing meshes");
     let path = support::out_dir("drawing_kept").join(format!("{name}.msh"));
     triwild::write_msh(&m.mesh, &path, MshOptions::DEFAULT).expect("written");
     m
@@ -167,4 +174,154 @@ fn a_stroke_twice_mu_wide_keeps_its_area_beside_a_large_plate() {
     let ring = std::f64::consts::PI * (30.05_f64.powi(2) - 29.95_f64.powi(2));
     let got = area(&kept, "disk-stroke");
     assert!(((got - ring) / ring).abs() < 1e-6, "ring {got} of {ring}");
+}
+
+/// A fixture of `tests/fixtures/kept/`, as text.
+fn fixture(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/kept")
+        .join(name);
+    std::fs::read_to_string(&path).expect("the fixture reads")
+}
+
+/// The area of the region named `name`, 0 when there is none.
+fn region_area(m: &Meshed, name: &str) -> f64 {
+    m.report
+        .regions
+        .surfaces
+        .iter()
+        .find(|s| s.name == name)
+        .map_or(0.0, |s| s.area)
+}
+
+#[test]
+fn shapes_under_scale_factors_below_f32_precision_are_meshed() {
+    let pi = std::f64::consts::PI;
+    let m = mesh(
+        "transform_below_f32_scale",
+        &fixture("transform-below-f32-scale.svg"),
+        &Params::DEFAULT,
+    );
+    println!("{:?}\n{:?}", m.report.regions.surfaces, m.report.warnings);
+    for (name, want) in [
+        ("normal", 900.0),
+        ("netidentity", pi * 400.0),
+        ("selfscaled", pi * 100.0),
+        ("aniso", pi * 100.0),
+    ] {
+        let got = region_area(&m, name);
+        assert!(
+            ((got - want) / want).abs() < 1e-6,
+            "{name}: {got} of {want}"
+        );
+    }
+    assert!(m.report.warnings.is_empty(), "{:?}", m.report.warnings);
+}
+
+#[test]
+fn a_drawing_wholly_under_scale_1e_8_is_meshed() {
+    let m = mesh(
+        "scale_1e-8_whole_drawing",
+        &fixture("scale-1e-8-whole-drawing.svg"),
+        &Params::DEFAULT,
+    );
+    let pi = std::f64::consts::PI;
+    // the square of side 2e-7 is painted over part of the circle of radius 3e-7
+    let (square, disk) = (4e-14, pi * 9e-14);
+    let got = region_area(&m, "r");
+    assert!(
+        ((got - square) / square).abs() < 1e-6,
+        "r: {got:e} of {square:e}"
+    );
+    let got = region_area(&m, "c");
+    assert!(got > disk - square && got < disk, "c: {got:e} of {disk:e}");
+}
+
+#[test]
+fn a_use_under_a_tiny_scale_is_named_and_the_same_use_in_a_group_is_meshed() {
+    let m = mesh(
+        "use_under_tiny_scale",
+        &fixture("use-under-tiny-scale.svg"),
+        &Params::DEFAULT,
+    );
+    let got = region_area(&m, "kept");
+    let want = std::f64::consts::PI;
+    assert!(((got - want) / want).abs() < 1e-6, "kept: {got} of {want}");
+    let said: Vec<&String> = m
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("not drawn") && w.contains("<use id='u'>"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", m.report.warnings);
+    assert!(said[0].contains("below 1.2e-7"), "{said:?}");
+}
+
+/// Names and the one warning of the lost regions of `m`.
+fn lost_warning(m: &Meshed) -> &str {
+    let said: Vec<&String> = m
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("no region in the mesh"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", m.report.warnings);
+    said[0]
+}
+
+#[test]
+fn shapes_thinned_by_a_skew_are_each_counted_and_named_with_the_rule() {
+    let m = mesh_regions(
+        "thin_under_skew",
+        &fixture("thin-under-skew.svg"),
+        &Params::DEFAULT,
+        &RegionOptions::DEFAULT,
+    );
+    assert_eq!(m.report.regions.lost_shapes, 3, "{:?}", m.report.warnings);
+    let w = lost_warning(&m);
+    for part in [
+        "3 painted shape(s) under skewX(89.9) on <g>",
+        "thinner than the feature envelope mu",
+        "the minimal edge length l_min",
+        "--mu-abs 0.008 --min-edge-length-abs 0.008",
+        ": c, r, p",
+    ] {
+        assert!(w.contains(part), "{part:?} not in {w}");
+    }
+}
+
+/// The flags the warning gives keep the three shapes.
+#[test]
+fn the_flags_the_skew_warning_gives_keep_the_shapes() {
+    let p = Params::DEFAULT
+        .with_mu(Length::Abs(0.008))
+        .with_l_min(Length::Abs(0.008));
+    let m = mesh("thin_under_skew_kept", &fixture("thin-under-skew.svg"), &p);
+    assert_eq!(m.report.regions.lost_shapes, 0, "{:?}", m.report.warnings);
+    for name in ["c", "r", "p"] {
+        assert!(
+            region_area(&m, name) > 0.0,
+            "{name}: {:?}",
+            m.report.regions.surfaces
+        );
+    }
+}
+
+#[test]
+fn shapes_thinned_by_an_anisotropic_scale_are_all_counted() {
+    let m = mesh_regions(
+        "thin_under_scale_1e6_1",
+        &fixture("thin-under-scale-1e6-1.svg"),
+        &Params::DEFAULT,
+        &RegionOptions::DEFAULT,
+    );
+    assert_eq!(m.report.regions.lost_shapes, 3, "{:?}", m.report.warnings);
+    let w = lost_warning(&m);
+    for part in [
+        "under scale(1e6 1) on <g>",
+        "--mu-abs 2 --min-edge-length-abs 2",
+        ": c, r, p",
+    ] {
+        assert!(w.contains(part), "{part:?} not in {w}");
+    }
 }

@@ -409,3 +409,41 @@ fn a_stroke_narrower_than_the_envelope_is_a_line_and_a_sliver_is_reported_lost()
         meshed.report.warnings
     );
 }
+
+#[test]
+fn the_decoration_warning_names_each_paint_its_opacity_and_the_threshold_that_meshes_it() {
+    // a group at 0.5 over fills at 0.5: effective 0.25, below the default 0.5
+    let body = r##"<rect id="opaque" x="0" y="0" width="50" height="50" fill="#000"/>
+        <g opacity="0.5">
+          <rect id="a" x="60" y="0" width="40" height="40" fill="#f00" fill-opacity="0.5"/>
+          <circle cx="150" cy="150" r="20" fill="#00f" fill-opacity="0.5"/>
+        </g>"##;
+    let d = load(body);
+    assert_eq!(d.paint.dropped_decoration, 2);
+    let said: Vec<&String> = d
+        .warnings
+        .iter()
+        .filter(|w| w.contains("decoration"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", d.warnings);
+    assert!(
+        said[0].starts_with(
+            "2 paint(s) (fills or strokes) below --min-opacity 0.5 dropped as decoration"
+        ) && said[0].contains("effective opacity 0.25")
+            && said[0].contains("--min-opacity 0.2 meshes them")
+            && said[0].contains("--keep-decoration keeps their outlines")
+            && said[0].ends_with(": a (0.25), shape-2 (0.25)"),
+        "{}",
+        said[0]
+    );
+    // the threshold the warning gives meshes them
+    let kept = load_with(body, &PaintOptions::DEFAULT.with_min_opacity(0.2));
+    assert_eq!(kept.paint.dropped_decoration, 0);
+    let names: Vec<String> = kept.shapes.iter().map(|s| s.name()).collect();
+    assert_eq!(names, ["opaque", "a", "shape-2"]);
+    assert!(
+        !kept.warnings.iter().any(|w| w.contains("decoration")),
+        "{:?}",
+        kept.warnings
+    );
+}

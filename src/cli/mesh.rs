@@ -104,7 +104,8 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
     }
     let result = triwild::run_file(input, &output, &opts);
     // The parser's own warnings: one line among the run's warnings (and in
-    // --stats) on success, none beside the error's one line.
+    // --stats) on success; on failure none beside the error's one line, but
+    // in it when the drawing had nothing to mesh.
     let parser = super::parser_log::folded(&super::parser_log::take());
     match result {
         Ok(mut report) => {
@@ -130,7 +131,13 @@ pub(crate) fn run(args: &MeshArgs, quiet: bool) -> ExitCode {
                 Error::Write(_) => &output,
                 _ => input,
             };
-            errln!("error: {}: {err}", file.display());
+            // nothing left to mesh: what the parser skipped may be why
+            match (&err, parser) {
+                (Error::NoGeometry(_), Some(parser)) => {
+                    errln!("error: {}: {err}; {parser}", file.display());
+                }
+                _ => errln!("error: {}: {err}", file.display()),
+            }
             exit_code(err.kind())
         }
     }

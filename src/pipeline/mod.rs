@@ -571,7 +571,13 @@ fn mesh_stages(
         )
     })?;
     if !lost.is_empty() {
-        warnings.push(lost_regions_warning(drawing, &lost, resolved.mu));
+        warnings.push(lost_regions_warning(
+            drawing,
+            &lost,
+            resolved.mu,
+            resolved.l_min,
+            resolved.eps_m,
+        ));
     }
     // The area check warns on cubic meshes: there a mesh that keeps the
     // outlines has the drawn areas to rounding (chords at lower orders and
@@ -670,15 +676,69 @@ fn mesh_edge_match(
 }
 
 /// The warning for shapes whose regions the mesh lost (see
-/// [`crate::regions::RegionReport::lost_shapes`]), naming the first few.
-fn lost_regions_warning(drawing: &Drawing, lost: &[crate::svg::ShapeId], mu: f64) -> String {
+/// [`crate::regions::RegionReport::lost_shapes`]), naming the first few. When
+/// every one is thinner (its mean width, [`crate::svg::Shape::mean_width`])
+/// than the feature envelope μ or the minimal edge length l_min, it says so,
+/// names the transform that thinned them if one did, and gives the values of
+/// `--mu-abs` and `--min-edge-length-abs` that keep them: a quarter of the
+/// narrowest mean width, rounded down to one digit, for each of the two that
+/// is larger; or, when that is below the numerical tolerance ε_m, that no
+/// flag keeps them.
+fn lost_regions_warning(
+    drawing: &Drawing,
+    lost: &[crate::svg::ShapeId],
+    mu: f64,
+    l_min: f64,
+    eps_m: f64,
+) -> String {
     const NAMED: usize = 5;
-    let names: Vec<String> = lost
-        .iter()
-        .take(NAMED)
-        .map(|s| drawing.shapes[s.index()].name())
-        .collect();
+    let shapes: Vec<&crate::svg::Shape> = lost.iter().map(|s| &drawing.shapes[s.index()]).collect();
+    let names: Vec<String> = shapes.iter().take(NAMED).map(|s| s.name()).collect();
     let more = if lost.len() > NAMED { ", ..." } else { "" };
+    let widths: Vec<f64> = shapes.iter().map(|s| s.mean_width()).collect();
+    let narrowest = widths.iter().copied().fold(f64::INFINITY, f64::min);
+    let widest = widths.iter().copied().fold(0.0, f64::max);
+    if narrowest > 0.0 && widest < mu.max(l_min) {
+        let under = shapes
+            .iter()
+            .find_map(|s| s.paint.stretched_by.as_deref())
+            .map_or_else(String::new, |t| format!(" under {t}"));
+        let value = narrowest / 4.0;
+        let shown = crate::svg::one_digit_below(value);
+        let mut limits = Vec::new();
+        let mut flags = Vec::new();
+        for (limit, name, flag) in [
+            (mu, "the feature envelope mu", "--mu-abs"),
+            (
+                l_min,
+                "the minimal edge length l_min",
+                "--min-edge-length-abs",
+            ),
+        ] {
+            if widest < limit {
+                limits.push(format!("{name} = {limit:.3e}"));
+            }
+            if value < limit {
+                flags.push(format!("{flag} {shown}"));
+            }
+        }
+        let remedy = if value < eps_m {
+            format!(
+                "thinner than the numerical tolerance eps_m = {eps_m:.3e} as well: no flag \
+                 keeps them beside the rest of the drawing"
+            )
+        } else {
+            format!("they are kept with {}", flags.join(" "))
+        };
+        return format!(
+            "{} painted shape(s){under} thinner than {} (mean width {narrowest:.2e} and up) \
+             have no region in the mesh: their outlines are not kept apart ({remedy}): \
+             {}{more}",
+            lost.len(),
+            limits.join(" and "),
+            names.join(", ")
+        );
+    }
     format!(
         "{} painted shape(s) show in the picture but have no region in the mesh: their \
          outlines did not become mesh edges (outlines closer together than the feature \

@@ -25,7 +25,9 @@ pub(crate) struct ClassifyOptions {
     /// region is missing (see [`lost_shapes`]; user units). The pipeline uses
     /// half the hairline width l_min: a stroke narrower than l_min stays a line,
     /// and a sliver that thin (a shape peeking out from under a near-copy of
-    /// itself) is no region anybody sees.
+    /// itself) is no region anybody sees. A shape that is itself thinner than
+    /// this beside its outline (a shape a transform thinned out) counts as
+    /// shown where it is topmost at a finer probe inside it (`shows_thin`).
     pub probe_step: f64,
     /// The run's time limit: once it has passed, the triangles left are not
     /// classified (the caller checks it and stops the run).
@@ -188,15 +190,20 @@ pub(crate) fn classify(
 const PROBES: usize = 8;
 /// The default probe step, in units of `eps_abs`.
 const PROBE_STEP: f64 = 1e3;
+/// Finer probes beside a thin shape's outline: the probe step divided by
+/// 10, 100, ... this many times (while the offset still moves the point).
+const THIN_LEVELS: i32 = 12;
 
 /// The filled shapes that own no triangle in `owner` although the picture
 /// shows them: a triangle's own clear sample was theirs (`sampled`, before the
 /// faces voted), or at a probe point [`ClassifyOptions::probe_step`] to either
 /// side of the middle of one of their segments the topmost shape painting it
-/// (clear of every outline) is the shape itself. A shape hidden under others
-/// everywhere is not lost; one visible only where neither a sample nor a probe
-/// falls goes unnoticed (a probe per segment, on at most [`PROBES`] segments;
-/// an open subpath's closing segment is not probed).
+/// (clear of every outline) is the shape itself, or the shape is thin there
+/// ([`shows_thin`]). A shape hidden under others everywhere is not lost, nor a
+/// sliver of a wide shape peeking out by less than the probe step from under
+/// another; one visible only where neither a sample nor a probe falls goes
+/// unnoticed (a probe per segment, on at most [`PROBES`] segments; an open
+/// subpath's closing segment is not probed).
 fn lost_shapes(
     drawing: &Drawing,
     painting: &Painting,
@@ -226,15 +233,48 @@ fn lost_shapes(
                 let Some((p, normal)) = middle_and_normal(segments[k * n / n.min(PROBES)]) else {
                     return false;
                 };
-                [p + normal * step, p - normal * step].into_iter().any(|q| {
-                    let (top, clear) = painting.owner_at(q, eps_abs);
-                    clear && top == Some(id)
+                [normal, -normal].into_iter().any(|side| {
+                    let (top, clear) = painting.owner_at(p + side * step, eps_abs);
+                    (clear && top == Some(id)) || shows_thin(painting, id, p, side, step, eps_abs)
                 })
             })
         })
         .collect();
     lost.sort_unstable();
     lost
+}
+
+/// Whether shape `id` is thinner than `step` beside outline point `p` on
+/// `side` (it does not paint the probe point `step` away) and shows there: at
+/// the first of the finer probes (`step` / 10, / 100, ... down to where the
+/// offset no longer moves the point) that it paints, it is the topmost shape
+/// (clear of the outlines when the probe is more than `eps_abs` away; closer,
+/// as the winding numbers at a tenth of the offset say).
+fn shows_thin(
+    painting: &Painting,
+    id: ShapeId,
+    p: Point,
+    side: kurbo::Vec2,
+    step: f64,
+    eps_abs: f64,
+) -> bool {
+    if painting.shape_paints(id, p + side * step, eps_abs) {
+        return false;
+    }
+    for k in 1..=THIN_LEVELS {
+        let offset = step * 10f64.powi(-k);
+        let q = p + side * offset;
+        if q == p {
+            return false;
+        }
+        let below = offset <= eps_abs;
+        let tolerance = if below { 0.1 * offset } else { eps_abs };
+        if painting.shape_paints(id, q, tolerance) {
+            let (top, clear) = painting.owner_at(q, tolerance);
+            return top == Some(id) && (clear || below);
+        }
+    }
+    false
 }
 
 /// The middle of a segment and its unit normal there, `None` where the

@@ -42,11 +42,12 @@
 //! sample disagrees with their face are counted in [`RegionReport`]
 //! (`relabelled`, `relabelled_area`): a large relabelled area points at a
 //! missing feature edge. A shape the picture shows (wider than half the
-//! hairline width l_min beside its outline, or under a triangle's own sample)
-//! that ends with no triangle at all has lost its region, typically a stroke
-//! or sliver narrower than the feature envelope μ, whose outlines the mesh does
-//! not keep apart: counted (`lost_shapes`) and named in a `--stats` warning,
-//! never dropped silently. The curved mesher makes the boundaries exact; then
+//! hairline width l_min beside its outline, or thinner than that there and
+//! topmost inside its own outline, or under a triangle's own sample) that ends
+//! with no triangle at all has lost its region, typically a stroke or sliver
+//! narrower than the feature envelope μ, or a shape a transform thinned out,
+//! whose outlines the mesh does not keep apart: counted (`lost_shapes`) and
+//! named in a `--stats` warning, never dropped silently. The curved mesher makes the boundaries exact; then
 //! the same rule gives exact areas.
 
 mod classify;

@@ -100,6 +100,19 @@ pub struct ShapePaint {
     /// stage keeps its pieces only where they bound what that clip lets paint).
     #[serde(skip)]
     pub outlined_clip: Option<std::sync::Arc<Clip>>,
+    /// The transform on the element's chain that stretches its outline most
+    /// unevenly, as the document writes it and where (`skewX(89.9) on <g
+    /// id='s'>`), when it stretches one direction more than
+    /// [`ShapePaint::UNEVEN`] times the other (a shape it thins out beyond what
+    /// the mesh resolves is named with it).
+    #[serde(skip)]
+    pub stretched_by: Option<String>,
+}
+
+impl ShapePaint {
+    /// The ratio of a transform's largest to smallest stretch from which
+    /// [`ShapePaint::stretched_by`] names it.
+    pub const UNEVEN: f64 = 100.0;
 }
 
 impl Default for ShapePaint {
@@ -114,6 +127,7 @@ impl Default for ShapePaint {
             joins_fill: false,
             clips: Vec::new(),
             outlined_clip: None,
+            stretched_by: None,
         }
     }
 }
@@ -161,6 +175,37 @@ pub(crate) fn collect_clips(c: &std::sync::Arc<Clip>, all: &mut Vec<std::sync::A
 }
 
 impl Shape {
+    /// The shape's mean width: twice its area over its perimeter (the width of
+    /// a long thin strip), from its outline sampled 16 times per segment; 0
+    /// for an outline without area.
+    pub(crate) fn mean_width(&self) -> f64 {
+        const SAMPLES: usize = 16;
+        let (mut area, mut length) = (0.0, 0.0);
+        for sp in &self.subpaths {
+            let mut points = vec![sp.start];
+            for seg in &sp.segments {
+                for k in 1..=SAMPLES {
+                    let t = k as f64 / SAMPLES as f64;
+                    points.push(match seg {
+                        Segment::Line(l) => kurbo::ParamCurve::eval(l, t),
+                        Segment::Cubic(c) => kurbo::ParamCurve::eval(c, t),
+                        Segment::Conic(c) => c.eval(t),
+                    });
+                }
+            }
+            points.push(sp.start);
+            for w in points.windows(2) {
+                area += w[0].x * w[1].y - w[1].x * w[0].y;
+                length += w[0].distance(w[1]);
+            }
+        }
+        if length > 0.0 {
+            area.abs() / length
+        } else {
+            0.0
+        }
+    }
+
     /// The name used for physical groups: the SVG id, else `shape-N` (N = element
     /// index); a stroke's area adds `-stroke` unless it joins its fill's region
     /// ([`ShapePaint::joins_fill`]).

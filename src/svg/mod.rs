@@ -16,6 +16,18 @@
 //!   data with `svgtypes`, arcs kept as arcs, basic shapes by SVG's rules), its
 //!   transform chain composed in f64 (`transform`s, `<use>` x/y, nested `<svg>` and
 //!   `<symbol>` viewBox mappings; lengths in absolute units converted exactly).
+//!   usvg drops an element whose own transform has a scale factor below f32's
+//!   epsilon (1.2e-7), content and all, although f64 carries it: on a `<g>` or
+//!   a plain shape drawn in place, the attribute is renamed in the text usvg
+//!   reads (`source.rs`), so usvg lays the content out, well conditioned, in
+//!   the element's own coordinates, and the true transform is composed in f64,
+//!   both in the reconstruction and onto usvg's own geometry below the element
+//!   (`viewport::Frame::with_omitted`). The trade-off: usvg never sees the
+//!   true transform, so what only usvg's geometry gives (markers, clip paths
+//!   and masks, glyphs, a path whose reconstruction fails) is right only where
+//!   that composition is exact; hence not on a `<use>`, `<text>`, nested
+//!   `<svg>`, an element drawn through a `<use>`, or a shape with its own clip
+//!   path, mask or markers: those are still dropped, and named in a warning.
 //!   Each reconstruction is checked against usvg's own f32 path (`reconstruct.rs`);
 //!   where it disagrees or needs context this reader lacks (lengths in %, em or
 //!   ex, CSS transforms, a transform on the root `<svg>`), the path keeps usvg's
@@ -83,6 +95,7 @@ pub(crate) use drawing::{
 };
 pub use paint::{PaintOptions, StrokeMode};
 
+pub(crate) use outline::one_digit_below;
 pub(crate) use reconstruct::Precision;
 
 use crate::budget::Limits;

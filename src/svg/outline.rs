@@ -73,14 +73,18 @@ struct Ctx {
     clips: Vec<Arc<Clip>>,
     /// A group on the chain has a filter.
     filtered: bool,
+    /// usvg's coordinates to output coordinates (with the transforms usvg
+    /// was kept from on the chain, [`Source::usvg_omits`]).
+    frame: Frame,
 }
 
 impl Ctx {
-    fn root() -> Ctx {
+    fn root(frame: Frame) -> Ctx {
         Ctx {
             opacity: 1.0,
             clips: Vec::new(),
             filtered: false,
+            frame,
         }
     }
 }
@@ -93,6 +97,9 @@ enum Item {
     /// A stroke to expand into its area, and what replaces it if it is too
     /// thin: its centre lines (`None` when the element's fill already carries them).
     Stroke(Box<PendingStroke>),
+    /// A fill or stroke below `--min-opacity`: how the warning names it, its
+    /// effective opacity, and its outline when decoration is kept.
+    Decoration(String, f32, Option<Shape>),
 }
 
 /// A stroke whose area is computed once the drawing's size is known.
@@ -153,7 +160,7 @@ pub(super) fn collect(
     let mut texts_with_outline: Vec<&str> = Vec::new();
     let mut instances: Vec<Instance<'_, '_>> = Vec::new();
     let mut stack: Vec<Step<'_>> = Vec::new();
-    let mut root = Ctx::root();
+    let mut root = Ctx::root(*frame);
     if !tree.root().filters().is_empty() {
         filters += 1;
         root.filtered = true;
@@ -173,7 +180,17 @@ pub(super) fn collect(
                 if !g.filters().is_empty() {
                     filters += 1;
                 }
-                let ctx = group_ctx(g, &ctx, frame)?;
+                let ctx = match source
+                    .usvg_omits(g.id())
+                    .and_then(|t| ctx.frame.with_omitted(g.abs_transform(), t))
+                {
+                    Some(frame) => Rc::new(Ctx {
+                        frame,
+                        ..(*ctx).clone()
+                    }),
+                    None => ctx,
+                };
+                let ctx = group_ctx(g, &ctx)?;
                 let inherited = if facts.use_ids.contains(g.id()) {
                     source.public(g.id()).or(inherited)
                 } else {
@@ -201,7 +218,11 @@ pub(super) fn collect(
             }
             Step::Visit(usvg::Node::Path(p), inherited, scope, ctx) => {
                 let id = source.public(p.id()).or(inherited);
-                let mut shape = convert_path(p, paths, id, frame)?;
+                let frame = source
+                    .usvg_omits(p.id())
+                    .and_then(|t| ctx.frame.with_omitted(p.abs_transform(), t))
+                    .unwrap_or(ctx.frame);
+                let mut shape = convert_path(p, paths, id, &frame)?;
                 paths += 1;
                 match exact_subpaths(p, scope, source, &mut instances, map, &shape.subpaths) {
                     Ok(subpaths) => {
@@ -212,6 +233,12 @@ pub(super) fn collect(
                     Err(None) => out.precision.glyphs += 1,
                     Err(Some(reason)) => *out.precision.fallback.entry(reason).or_default() += 1,
                 }
+                if !p.id().is_empty() {
+                    shape.paint.stretched_by = source
+                        .shapes_with_id(p.id())
+                        .first()
+                        .and_then(|&node| source.most_uneven(node));
+                }
                 let servers = [
                     document_server(p, source, "fill"),
                     document_server(p, source, "stroke"),
@@ -220,7 +247,7 @@ pub(super) fn collect(
                     p,
                     shape,
                     &ctx,
-                    frame,
+                    &frame,
                     opts,
                     &servers,
                     &mut items,
@@ -239,7 +266,7 @@ pub(super) fn collect(
                 if !flat.filters().is_empty() {
                     filters += 1;
                 }
-                let ctx = group_ctx(flat, &ctx, frame)?;
+                let ctx = group_ctx(flat, &ctx)?;
                 for child in flat.children().iter().rev() {
                     stack.push(Step::Visit(child, id, Scope::Text, ctx.clone()));
                 }
@@ -261,6 +288,10 @@ pub(super) fn collect(
         }
     }
     out.shapes = resolve_items(items, opts, &mut out.paint, &mut out.warnings)?;
+    out.warnings.extend(source.dropped_for_tiny_transforms());
+    if paths == 0 {
+        out.warnings.extend(source.all_under_references());
+    }
     add_clip_outlines(&mut out.shapes, paths);
     warn_missing_texts(facts, &texts_with_outline, &mut out.warnings);
     // usvg keeps an image node only for data it could decode (never, here)
@@ -392,7 +423,8 @@ fn holds_marker_instances(g: &usvg::Group) -> bool {
 }
 
 /// The context of a group's children: its opacity, clip path, mask and filters added.
-fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>, frame: &Frame) -> Result<Rc<Ctx>> {
+fn group_ctx(g: &usvg::Group, parent: &Rc<Ctx>) -> Result<Rc<Ctx>> {
+    let frame = &parent.frame;
     let plain = g.opacity().get() >= 1.0
         && g.clip_path().is_none()
         && g.mask().is_none()
@@ -551,6 +583,7 @@ fn paint_items(
     let base_paint = ShapePaint {
         filtered: ctx.filtered,
         clips: ctx.clips.clone(),
+        stretched_by: shape.paint.stretched_by.clone(),
         ..ShapePaint::default()
     };
     let centre = |shape: &Shape| Shape {
@@ -576,9 +609,11 @@ fn paint_items(
         Fate::Invisible => counts.dropped_invisible += 1,
         Fate::Decoration => {
             counts.dropped_decoration += 1;
-            if opts.keep_decoration {
-                fill_item = Some(Item::Shape(centre(&shape)));
-            }
+            fill_item = Some(Item::Decoration(
+                shape.name(),
+                fill_alpha.unwrap_or(0.0),
+                opts.keep_decoration.then(|| centre(&shape)),
+            ));
         }
         Fate::Painted => {
             count_painted(counts);
@@ -611,9 +646,12 @@ fn paint_items(
         }
         (Fate::Decoration, _) => {
             counts.dropped_decoration += 1;
-            if opts.keep_decoration && fill_item.is_none() {
-                stroke_item = Some(Item::Shape(centre(&shape)));
-            }
+            let outline_kept = matches!(fill_item, Some(Item::Decoration(_, _, Some(_))));
+            stroke_item = Some(Item::Decoration(
+                format!("{}-stroke", shape.name()),
+                stroke_alpha.unwrap_or(0.0),
+                (opts.keep_decoration && !outline_kept && !fill_is_region).then(|| centre(&shape)),
+            ));
         }
         (Fate::Painted, StrokeMode::Line) => {
             counts.strokes_as_lines += 1;
@@ -715,8 +753,9 @@ fn resolve_items(
     };
     for item in &items {
         match item {
-            Item::Shape(s) => add(s),
+            Item::Shape(s) | Item::Decoration(_, _, Some(s)) => add(s),
             Item::Stroke(p) => add(&p.area),
+            Item::Decoration(_, _, None) => {}
         }
     }
     let d = bbox.map_or(0.0, |b| b.width().hypot(b.height()));
@@ -728,9 +767,14 @@ fn resolve_items(
     let mut below_mu: Vec<String> = Vec::new();
     let mut narrowest = f64::INFINITY;
     let mut closed: Vec<String> = Vec::new();
+    let mut decoration: Vec<(String, f32)> = Vec::new();
     for item in items {
         let shape = match item {
             Item::Shape(s) => Some(s),
+            Item::Decoration(name, alpha, outline) => {
+                decoration.push((name, alpha));
+                outline
+            }
             Item::Stroke(p) => {
                 let PendingStroke {
                     mut area,
@@ -774,12 +818,31 @@ fn resolve_items(
             shapes.push(s);
         }
     }
-    if counts.dropped_decoration > 0 {
+    if !decoration.is_empty() {
+        let lowest = decoration.iter().map(|d| d.1).fold(f32::INFINITY, f32::min);
+        let highest = decoration.iter().map(|d| d.1).fold(0.0, f32::max);
+        let opacity = if highest - lowest < 0.005 {
+            format!("{lowest:.2}")
+        } else {
+            format!("{lowest:.2} to {highest:.2}")
+        };
+        let names: Vec<String> = decoration
+            .iter()
+            .map(|(name, alpha)| format!("{name} ({alpha:.2})"))
+            .collect();
+        let keep = if opts.keep_decoration {
+            "their outlines kept"
+        } else {
+            "--keep-decoration keeps their outlines"
+        };
         warnings.push(format!(
             "{} paint(s) (fills or strokes) below --min-opacity {} dropped as decoration, \
-             with no region (their effective opacity: the groups' opacities times the paint's; \
-             a lower --min-opacity meshes them, --keep-decoration keeps their outlines)",
-            counts.dropped_decoration, opts.min_opacity
+             with no region (effective opacity {opacity}: the groups' opacities times the \
+             paint's; --min-opacity {} meshes them, {keep}): {}",
+            decoration.len(),
+            opts.min_opacity,
+            one_digit_below(f64::from(lowest)),
+            listed(&names)
         ));
     }
     if !closed.is_empty() {
@@ -1138,6 +1201,21 @@ fn check_coordinates(shape: &Shape) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `x` (positive, finite) rounded down to one significant digit, as a flag's
+/// value is written (`0.008`, `3e-9`): a threshold at it lets `x` through.
+pub(crate) fn one_digit_below(x: f64) -> String {
+    let exp = x.log10().floor();
+    let unit = 10f64.powf(exp);
+    let digit = (x / unit).floor().clamp(1.0, 9.0);
+    let v = digit * unit;
+    if (1e-4..1e6).contains(&v) {
+        let decimals = usize::try_from(-(exp as i64)).unwrap_or(0);
+        format!("{v:.decimals$}")
+    } else {
+        format!("{digit}e{exp}")
+    }
 }
 
 /// A number as a message shows it: plain when moderate, else in scientific

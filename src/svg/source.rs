@@ -65,36 +65,109 @@ const MAX_EXPANDED: usize = 200_000;
 /// At most this many `<use>` levels are followed.
 const MAX_USE_DEPTH: usize = 64;
 
-/// `text` with an `id` attribute added to every shape element and `<use>` that
-/// has none, and the prefix of those private ids (chosen so that no id of the
-/// document starts with it). `None` when nothing needs one, or when a style
-/// sheet selects on `[id…]` (the ids could change its matches).
+/// The smallest scale factor usvg keeps: an element whose own `transform`,
+/// rounded to f32, maps a unit vector to a length at most this (f32's epsilon)
+/// is not rendered by usvg, with its content.
+const USVG_MIN_SCALE: f32 = f32::EPSILON;
+
+/// Whether usvg drops an element for its `transform` (`value` parsed as usvg
+/// parses it, rounded to f32, a row scale factor at most [`USVG_MIN_SCALE`]),
+/// although the transform is invertible in f64 and the element is drawn.
+fn tiny_for_usvg(value: &str) -> bool {
+    let Ok(t) = svgtypes::Transform::from_str(value) else {
+        return false;
+    };
+    let f64_invertible = [t.a, t.b, t.c, t.d, t.e, t.f].iter().all(|v| v.is_finite())
+        && (t.a * t.d - t.b * t.c).abs() >= f64::MIN_POSITIVE;
+    #[allow(
+        clippy::cast_possible_truncation,
+        reason = "usvg's own rounding of the transform to f32"
+    )]
+    let [a, b, c, d] = [t.a, t.b, t.c, t.d].map(|v| v as f32);
+    let (x_scale, y_scale) = ((a * a + c * c).sqrt(), (b * b + d * d).sqrt());
+    f64_invertible && (x_scale <= USVG_MIN_SCALE || y_scale <= USVG_MIN_SCALE)
+}
+
+/// The document's text as usvg is given it, and the prefix of the private
+/// names in it (chosen so that no id of the document starts with it).
+///
+/// - Every shape element and `<use>` without an `id` gets a private one.
+/// - A `<g>` or shape element drawn in place (not inside `<defs>`, a clip path,
+///   a mask, a marker, a pattern, a symbol or text, nor within an element a
+///   `<use>` refers to; when it is a shape, without a clip path, mask or
+///   markers of its own) whose `transform` has a scale factor below f32's precision,
+///   which usvg would drop with all its content, has that attribute renamed to
+///   `{prefix}transform` (and gets a private id if it has none): usvg then
+///   draws the content in the element's own coordinates, well conditioned,
+///   and [`Source`] reads the true transform in f64 from the renamed
+///   attribute. `outline.rs` composes the same transform onto usvg's geometry
+///   below the element ([`Source::usvg_omits`]), so its single-precision
+///   geometry (clips, strokes, glyphs, the check of the f64 reconstruction)
+///   is in the true coordinates too.
+///
+/// `None` when nothing needs a change, or when a style sheet selects on `[id…]`
+/// (the ids could change its matches); no transform is renamed when a style
+/// sheet selects on `[transform…]` or sets transforms.
 pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String, String)> {
     let ids: Vec<&str> = doc
         .descendants()
         .filter_map(|n| n.attribute("id"))
         .collect();
-    let style_selects_ids = doc
-        .descendants()
-        .filter(|n| n.tag_name().name() == "style")
-        .any(|n| n.text().is_some_and(|t| t.contains("[id")));
-    if style_selects_ids {
+    let style_sheet = |needle: &dyn Fn(&str) -> bool| {
+        doc.descendants()
+            .filter(|n| n.tag_name().name() == "style")
+            .any(|n| n.text().is_some_and(needle))
+    };
+    if style_sheet(&|t| t.contains("[id")) {
         return None;
     }
-    let prefix = (0u32..)
-        .map(|k| format!("triwild{k}-"))
-        .find(|p| !ids.iter().any(|id| id.starts_with(p.as_str())))?;
+    let may_rename = !style_sheet(&|t| t.contains("[transform") || declares_transform(t));
+    let prefix = (0u32..).map(|k| format!("triwild{k}-")).find(|p| {
+        !ids.iter().any(|id| id.starts_with(p.as_str()))
+            && !doc
+                .descendants()
+                .any(|n| n.attributes().any(|a| a.name().starts_with(p.as_str())))
+    })?;
+    let referenced = if may_rename {
+        use_targets(doc)
+    } else {
+        HashSet::new()
+    };
     let body_start = doc.root_element().range().start;
     let bytes = text.as_bytes();
-    let mut inserts: Vec<usize> = Vec::new();
+    // (position, replaced length, new text)
+    let mut edits: Vec<(usize, usize, String)> = Vec::new();
     let mut seen = HashSet::new();
+    let mut private = 0usize;
     for node in doc.descendants().filter(Node::is_element) {
         let name = node.tag_name();
         if !matches!(name.namespace(), None | Some(SVG_NS))
-            || !(SHAPES.contains(&name.name()) || name.name() == "use")
-            || node.attribute("id").is_some()
             || node.ancestors().any(|a| a.tag_name().name() == "text")
         {
+            continue;
+        }
+        let shape = SHAPES.contains(&name.name());
+        // the cheap test first: the rest reads ancestors and every id
+        let rename = may_rename
+            && (shape || name.name() == "g")
+            && node
+                .attributes()
+                .find(|a| a.name() == "transform" && a.namespace().is_none())
+                .is_some_and(|a| tiny_for_usvg(a.value()))
+            && drawn_in_place(node, &referenced)
+            && !(shape && ["clip-path", "mask"].iter().any(|p| has_property(node, p)))
+            && !(shape
+                && node.ancestors().any(|a| {
+                    ["marker", "marker-start", "marker-mid", "marker-end"]
+                        .iter()
+                        .any(|p| has_property(a, p))
+                }))
+            && !node.attribute("style").is_some_and(declares_transform)
+            && node
+                .attribute("id")
+                .is_none_or(|id| ids.iter().filter(|i| **i == id).count() == 1);
+        let wants_id = (shape || name.name() == "use" || rename) && node.attribute("id").is_none();
+        if !wants_id && !rename {
             continue;
         }
         // The start tag in the text: `<` then the (possibly prefixed) name. An
@@ -110,23 +183,84 @@ pub(super) fn with_private_ids(text: &str, doc: &Document<'_>) -> Option<(String
         let end = start + 1 + name_len;
         let qname = &text[start + 1..end];
         let local = qname.rsplit(':').next().unwrap_or(qname);
-        if local == name.name() && seen.insert(end) {
-            inserts.push(end);
+        if local != name.name() || !seen.insert(end) {
+            continue;
+        }
+        if rename {
+            let attr = node
+                .attributes()
+                .find(|a| a.name() == "transform" && a.namespace().is_none())
+                .expect("internal: the transform attribute exists");
+            let at = attr.range_qname();
+            if text.get(at.clone()) != Some("transform") {
+                continue;
+            }
+            edits.push((at.start, at.len(), format!("{prefix}transform")));
+        }
+        if wants_id {
+            edits.push((end, 0, format!(" id=\"{prefix}{private}\"")));
+            private += 1;
         }
     }
-    if inserts.is_empty() {
+    if edits.is_empty() {
         return None;
     }
-    inserts.sort_unstable();
-    let mut out = String::with_capacity(text.len() + inserts.len() * (prefix.len() + 12));
+    edits.sort_unstable_by_key(|e| e.0);
+    let mut out = String::with_capacity(text.len() + edits.len() * (prefix.len() + 12));
     let mut last = 0;
-    for (k, at) in inserts.into_iter().enumerate() {
+    for (at, len, new) in edits {
         out.push_str(&text[last..at]);
-        out.push_str(&format!(" id=\"{prefix}{k}\""));
-        last = at;
+        out.push_str(&new);
+        last = at + len;
     }
     out.push_str(&text[last..]);
     Some((out, prefix))
+}
+
+/// The elements some `<use>` refers to (by `href` or `xlink:href`).
+fn use_targets<'a, 'input>(doc: &'a Document<'input>) -> HashSet<Node<'a, 'input>> {
+    let by_id: HashMap<&str, Node<'a, 'input>> = doc
+        .descendants()
+        .filter_map(|n| Some((n.attribute("id")?, n)))
+        .rev()
+        .collect();
+    doc.descendants()
+        .filter(|n| n.tag_name().name() == "use")
+        .flat_map(|u| u.attributes().filter(|a| a.name() == "href"))
+        .filter_map(|a| svgtypes::IRI::from_str(a.value()).ok())
+        .filter_map(|iri| by_id.get(iri.0).copied())
+        .collect()
+}
+
+/// Whether `node` is drawn in its place only: no ancestor (or itself) is a
+/// container whose content is drawn by reference, or the target of a `<use>`.
+fn drawn_in_place(node: Node<'_, '_>, referenced: &HashSet<Node<'_, '_>>) -> bool {
+    node.ancestors().filter(Node::is_element).all(|a| {
+        !referenced.contains(&a)
+            && (a == node || !NOT_RENDERED.contains(&a.tag_name().name()))
+            && !matches!(a.tag_name().name(), "symbol" | "switch")
+    })
+}
+
+/// The value `node` itself gives `property`: the last declaration in its
+/// `style`, else its attribute.
+fn property_value<'a>(node: Node<'a, '_>, property: &str) -> Option<&'a str> {
+    let in_style = node.attribute("style").and_then(|style| {
+        style.split(';').rev().find_map(|d| {
+            let (k, v) = d.split_once(':')?;
+            (k.trim() == property).then(|| v.trim())
+        })
+    });
+    in_style.or_else(|| node.attribute(property).map(str::trim))
+}
+
+/// Whether `node` sets `property` (as an attribute or in its `style`).
+fn has_property(node: Node<'_, '_>, property: &str) -> bool {
+    node.has_attribute(property)
+        || node.attribute("style").is_some_and(|s| {
+            s.split(';')
+                .any(|d| d.split_once(':').is_some_and(|(k, _)| k.trim() == property))
+        })
 }
 
 /// A shape element as one instance: the element and the `<use>` elements it is
@@ -399,14 +533,165 @@ impl<'a, 'input> Source<'a, 'input> {
         Err(unexpected)
     }
 
+    /// The text of an element's `transform`: the attribute usvg was kept from
+    /// (see [`with_private_ids`]) if there is one, else `transform`.
+    fn transform_attribute(&self, e: Node<'a, 'input>) -> Option<&'a str> {
+        self.private_prefix
+            .as_deref()
+            .and_then(|p| {
+                e.attributes().find(|a| {
+                    a.namespace().is_none() && a.name().strip_prefix(p) == Some("transform")
+                })
+            })
+            .map_or_else(|| e.attribute("transform"), |a| Some(a.value()))
+    }
+
+    /// The transform usvg did not apply to the `<g>` or shape element with
+    /// this id (its own, about its `transform-origin`; see
+    /// [`with_private_ids`]); `None` for every other element.
+    pub(super) fn usvg_omits(&self, id: &str) -> Option<Affine> {
+        let prefix = self.private_prefix.as_deref()?;
+        let e = self
+            .elements_with_id(id, |n| n == "g" || SHAPES.contains(&n))
+            .into_iter()
+            .next()?;
+        e.attributes()
+            .any(|a| a.namespace().is_none() && a.name().strip_prefix(prefix) == Some("transform"))
+            .then(|| self.own_transform(e).ok())
+            .flatten()
+    }
+
+    /// The transform on `element`'s chain (its own and its ancestors') that
+    /// stretches most unevenly, as written and where (`skewX(89.9) on <g
+    /// id='s'>`; a private id is not shown), when its largest stretch is more
+    /// than [`ShapePaint::UNEVEN`](super::drawing::ShapePaint::UNEVEN) times its
+    /// smallest.
+    pub(super) fn most_uneven(&self, element: Node<'a, 'input>) -> Option<String> {
+        let mut best: Option<(f64, Node<'a, 'input>, &str)> = None;
+        for e in element.ancestors().filter(Node::is_element) {
+            let Some(text) = self.transform_attribute(e) else {
+                continue;
+            };
+            let Ok(t) = svgtypes::Transform::from_str(text) else {
+                continue;
+            };
+            // singular values: s1·s2 = |det|, s1² + s2² = the squares' sum
+            let det = (t.a * t.d - t.b * t.c).abs();
+            let sum = t.a * t.a + t.b * t.b + t.c * t.c + t.d * t.d;
+            let root = (sum * sum - 4.0 * det * det).max(0.0).sqrt();
+            let (s1, s2) = (
+                (0.5 * (sum + root)).sqrt(),
+                det / (0.5 * (sum + root)).sqrt(),
+            );
+            let ratio = if s2 > 0.0 { s1 / s2 } else { f64::INFINITY };
+            if ratio.is_finite()
+                && ratio > super::drawing::ShapePaint::UNEVEN
+                && best.is_none_or(|b| ratio > b.0)
+            {
+                best = Some((ratio, e, text));
+            }
+        }
+        best.map(|(_, e, text)| {
+            let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+            let mut shown: String = text.chars().take(40).collect();
+            if text.chars().count() > 40 {
+                shown.push('…');
+            }
+            let tag = e.tag_name().name();
+            match e.attribute("id").and_then(|id| self.public(id)) {
+                Some(id) => format!("{shown} on <{tag} id='{id}'>"),
+                None => format!("{shown} on <{tag}>"),
+            }
+        })
+    }
+
+    /// The elements drawn in place that usvg drops for a transform with a
+    /// scale factor below f32's precision and that [`with_private_ids`] did
+    /// not hand over (a `<use>`, `<text>`, nested `<svg>`, a shape with a
+    /// clip path, mask or markers, ...), as one warning; `None` for none.
+    pub(super) fn dropped_for_tiny_transforms(&self) -> Option<String> {
+        const NAMED: usize = 5;
+        let empty = HashSet::new();
+        let names: Vec<String> = self
+            .doc
+            .descendants()
+            .filter(|n| {
+                is_svg(*n)
+                    && n.parent_element().is_some()
+                    && n.attribute("transform").is_some_and(tiny_for_usvg)
+                    && drawn_in_place(*n, &empty)
+            })
+            .map(|n| {
+                let tag = n.tag_name().name();
+                match n.attribute("id").and_then(|id| self.public(id)) {
+                    Some(id) => format!("<{tag} id='{id}'>"),
+                    None => format!("<{tag}>"),
+                }
+            })
+            .collect();
+        let more = if names.len() > NAMED { ", ..." } else { "" };
+        (!names.is_empty()).then(|| {
+            format!(
+                "{} element(s) not drawn: a transform with a scale factor below {:.1e} (the SVG \
+                 parser's single precision) drops the element with its content, and triwild \
+                 carries such a transform itself only on a <g> or on a shape without clip \
+                 path, mask or markers (wrap the element in a <g> with that transform): {}{more}",
+                names.len(),
+                f64::from(USVG_MIN_SCALE),
+                names[..names.len().min(NAMED)].join(", ")
+            )
+        })
+    }
+
+    /// Why a drawing usvg found nothing in may be empty: when every shape
+    /// element drawn in place lies under a `clip-path` or `mask` (its own or
+    /// an ancestor's), the references, as one sentence; `None` otherwise.
+    pub(super) fn all_under_references(&self) -> Option<String> {
+        let empty = HashSet::new();
+        let mut refs: Vec<String> = Vec::new();
+        let mut shapes = 0usize;
+        for node in self.doc.descendants().filter(|n| is_svg(*n)) {
+            if !SHAPES.contains(&node.tag_name().name()) || !drawn_in_place(node, &empty) {
+                continue;
+            }
+            shapes += 1;
+            let mut found = false;
+            for a in node.ancestors().filter(Node::is_element) {
+                for (property, what) in [("clip-path", "clip path"), ("mask", "mask")] {
+                    let Some(value) = property_value(a, property) else {
+                        continue;
+                    };
+                    let Ok(link) = svgtypes::FuncIRI::from_str(value) else {
+                        continue;
+                    };
+                    found = true;
+                    let named = format!("{what} '{}'", link.0);
+                    if !refs.contains(&named) {
+                        refs.push(named);
+                    }
+                }
+            }
+            if !found {
+                return None;
+            }
+        }
+        (shapes > 0).then(|| {
+            format!(
+                "all {shapes} shape element(s) lie under {}, which leaves nothing painted \
+                 (an empty or invalid clip path or mask hides what it applies to)",
+                refs.join(", ")
+            )
+        })
+    }
+
     /// An element's own `transform` (about its `transform-origin`).
     fn own_transform(&self, e: Node<'a, 'input>) -> Result<Affine, Unsupported> {
         if self.css_transform || e.attribute("style").is_some_and(declares_transform) {
             return Err("a transform set by CSS");
         }
         // usvg ignores a transform it cannot parse (an invalid one hides the element)
-        let t = e
-            .attribute("transform")
+        let t = self
+            .transform_attribute(e)
             .and_then(|s| svgtypes::Transform::from_str(s).ok())
             .map_or(Affine::IDENTITY, |t| {
                 Affine::new([t.a, t.b, t.c, t.d, t.e, t.f])
@@ -663,6 +948,50 @@ mod tests {
         // a style sheet selecting on ids: no private ids
         let text = r#"<svg xmlns="http://www.w3.org/2000/svg"><style>[id] { fill: red }</style><rect/></svg>"#;
         assert!(with_private_ids(text, &doc(text)).is_none());
+    }
+
+    #[test]
+    fn transforms_usvg_drops_are_those_below_f32_precision_that_f64_inverts() {
+        assert!(tiny_for_usvg("scale(1e-7)"));
+        assert!(tiny_for_usvg("scale(1e-7 1)"));
+        assert!(tiny_for_usvg("matrix(0 1e-7 1e-7 0 0 0)"));
+        assert!(tiny_for_usvg("translate(5 5) scale(1e-9)"));
+        assert!(!tiny_for_usvg("scale(3e-7)"));
+        assert!(!tiny_for_usvg("skewX(89.9)"));
+        // singular in f64 too: not drawn by SVG's rules, nothing to carry
+        assert!(!tiny_for_usvg("scale(0)"));
+        assert!(!tiny_for_usvg("matrix(1 1 1 1 0 0)"));
+        assert!(!tiny_for_usvg("not a transform"));
+    }
+
+    #[test]
+    fn a_tiny_transform_is_renamed_on_groups_and_plain_shapes_drawn_in_place() {
+        let text = r##"<svg xmlns="http://www.w3.org/2000/svg"><g transform="scale(1e-8)"><rect width="1" height="1"/></g><circle id="c" r="1" transform="scale(1e-8)"/><circle id="m" r="1" transform="scale(1e-8)" clip-path="url(#k)"/><use id="u" href="#d" transform="scale(1e-8)"/><defs><g id="d" transform="scale(1e-8)"><rect width="1" height="1"/></g></defs><g transform="scale(2)"/></svg>"##;
+        let (marked, prefix) = with_private_ids(text, &doc(text)).expect("changes made");
+        assert_eq!(prefix, "triwild0-");
+        let d = doc(&marked);
+        let renamed: Vec<(&str, Option<&str>)> = d
+            .descendants()
+            .filter(|n| n.has_attribute("triwild0-transform"))
+            .map(|n| (n.tag_name().name(), n.attribute("id")))
+            .collect();
+        // the group (which gets an id) and the plain circle; not the clipped
+        // circle, the <use>, nor the group drawn only through it
+        assert_eq!(renamed, [("g", Some("triwild0-0")), ("circle", Some("c"))]);
+        let source = Source::new(&d, Some(prefix));
+        assert_eq!(
+            source.usvg_omits("c"),
+            Some(Affine::scale(1e-8)),
+            "the true transform, read from the renamed attribute"
+        );
+        assert_eq!(source.usvg_omits("m"), None);
+        assert_eq!(source.usvg_omits("d"), None);
+        let dropped = source.dropped_for_tiny_transforms().expect("a warning");
+        assert!(
+            dropped.starts_with("2 element(s) not drawn")
+                && dropped.ends_with("<circle id='m'>, <use id='u'>"),
+            "{dropped}"
+        );
     }
 
     #[test]

@@ -10,6 +10,7 @@
 
 use crate::units::Units;
 use crate::{Error, Result};
+use kurbo::Affine;
 use usvg::roxmltree;
 
 /// The root `viewBox` and `preserveAspectRatio` attributes, parsed as usvg parses them.
@@ -121,6 +122,10 @@ pub(super) struct Frame {
     undo: Option<[f64; 4]>,
     /// Multiplies every output coordinate (1 leaves them untouched).
     scale: f64,
+    /// Applied to usvg's absolute transforms first (in usvg's coordinates):
+    /// the transforms usvg was kept from below an element (see
+    /// [`Frame::with_omitted`]); `None` everywhere else.
+    omitted: Option<Affine>,
 }
 
 impl Frame {
@@ -158,15 +163,38 @@ impl Frame {
                 (m != [1.0, 1.0, 0.0, 0.0]).then_some(m)
             }
         };
-        Ok(Frame { undo, scale })
+        Ok(Frame {
+            undo,
+            scale,
+            omitted: None,
+        })
+    }
+
+    /// The frame below an element whose own transform `t` usvg did not apply
+    /// (its content in usvg's tree lies in the element's own coordinates):
+    /// `parent` is usvg's absolute transform of the element's parent, so the
+    /// content's true absolute transform is `parent · t · parent⁻¹` times
+    /// usvg's. `None` when `parent` cannot be inverted.
+    pub(super) fn with_omitted(&self, parent: usvg::Transform, t: Affine) -> Option<Frame> {
+        let p = affine(parent);
+        let det = p.determinant();
+        (det.is_finite() && det != 0.0).then(|| {
+            let fix = p * t * p.inverse();
+            Frame {
+                omitted: Some(self.omitted.map_or(fix, |o| o * fix)),
+                ..*self
+            }
+        })
     }
 
     /// The affine map `[sx, ky, kx, sy, tx, ty]` from a path's own coordinates to
     /// output coordinates before the y flip, given the path's absolute transform
     /// (usvg's order: `x' = sx·x + kx·y + tx`, `y' = ky·x + sy·y + ty`).
     pub(super) fn map(&self, abs: usvg::Transform) -> [f64; 6] {
-        let [mut sx, mut ky, mut kx, mut sy, mut tx, mut ty] =
-            [abs.sx, abs.ky, abs.kx, abs.sy, abs.tx, abs.ty].map(f64::from);
+        let [mut sx, mut ky, mut kx, mut sy, mut tx, mut ty] = match self.omitted {
+            None => [abs.sx, abs.ky, abs.kx, abs.sy, abs.tx, abs.ty].map(f64::from),
+            Some(o) => (o * affine(abs)).as_coeffs(),
+        };
         if let Some([vsx, vsy, vtx, vty]) = self.undo {
             // (x_px − vtx) / vsx, row by row: divisions, so that a factor equal
             // to the mapping's gives exactly 1
@@ -184,4 +212,9 @@ impl Frame {
             m.map(|v| v * self.scale)
         }
     }
+}
+
+/// A usvg transform as a kurbo affine map, in f64.
+fn affine(t: usvg::Transform) -> Affine {
+    Affine::new([t.sx, t.ky, t.kx, t.sy, t.tx, t.ty].map(f64::from))
 }

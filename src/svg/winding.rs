@@ -397,6 +397,8 @@ pub(crate) struct Painting {
     /// The layers by the cells of a grid their boxes meet, for drawings of
     /// many shapes (a query reads the layers near it, not all of them).
     index: Option<LayerGrid>,
+    /// Each shape's layer.
+    layer_of: std::collections::HashMap<ShapeId, usize>,
 }
 
 /// Fewer layers than this are scanned whole by [`Painting::owner_at`].
@@ -586,13 +588,26 @@ impl Painting {
         let index = (layers.len() > SCAN_LAYERS)
             .then(|| LayerGrid::new(&layers.iter().map(|l| l.3).collect::<Vec<_>>()))
             .flatten();
-        Painting { layers, index }
+        let layer_of = layers.iter().enumerate().map(|(k, l)| (l.1, k)).collect();
+        Painting {
+            layers,
+            index,
+            layer_of,
+        }
     }
 
     /// The shapes that own a region, topmost first (a stroke that joins its
     /// fill is not one: its area is the fill's region).
     pub(crate) fn shapes(&self) -> impl Iterator<Item = ShapeId> + '_ {
         self.layers.iter().filter(|l| l.0 == l.1).map(|l| l.0)
+    }
+
+    /// Whether shape `id`'s own fill paints `p` (see [`PaintTest::paints`]);
+    /// `false` for a shape that is not a layer.
+    pub(crate) fn shape_paints(&self, id: ShapeId, p: Point, eps_abs: f64) -> bool {
+        self.layer_of
+            .get(&id)
+            .is_some_and(|&k| self.layers[k].2.paints(p, eps_abs).0)
     }
 
     /// The topmost region covering `p` (a shape, or the fill a stroke joins),
