@@ -782,7 +782,10 @@ fn cut_pair(
         let (pb, nb) = b.controls(sb[0], sb[1]);
         let ba = hull_box(&pa[..na]).inflate(together, together);
         let bb = hull_box(&pb[..nb]).inflate(together, together);
-        if !ba.overlaps(bb) {
+        if !ba.overlaps(bb)
+            || fat_line_apart(&pa[..na], &pb[..nb], together)
+            || fat_line_apart(&pb[..nb], &pa[..na], together)
+        {
             continue;
         }
         let (p0, p1, q0, q1) = (pa[0], pa[na - 1], pb[0], pb[nb - 1]);
@@ -844,6 +847,32 @@ fn cut_pair(
         }
     }
     out
+}
+
+/// Whether the control points `b` lie all on one side of the band that
+/// holds `a` about its chord, by more than `margin`: then the pieces (each in
+/// the hull of its controls) do not meet (the fat line test of Bézier
+/// clipping).
+fn fat_line_apart(a: &[Point], b: &[Point], margin: f64) -> bool {
+    let (a0, a1) = (a[0], a[a.len() - 1]);
+    let d = a1 - a0;
+    let len = d.hypot();
+    if len <= 0.0 || len.is_nan() {
+        return false;
+    }
+    let n = Vec2::new(-d.y, d.x) / len;
+    let side = |p: &Point| n.dot(*p - a0);
+    let (alo, ahi) = a
+        .iter()
+        .map(side)
+        .fold((0.0f64, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (blo, bhi) = b
+        .iter()
+        .map(side)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    blo > ahi + margin || bhi < alo - margin
 }
 
 /// Whether the cones from `apex` spanned by the control points `a` and `b`
