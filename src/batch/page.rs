@@ -819,6 +819,33 @@ fn tables(h: &mut String, entries: &[Entry<'_>], top: usize) {
         "No mesh.",
         false,
     );
+    let area: Vec<&Entry<'_>> = entries
+        .iter()
+        .filter(|e| {
+            e.row
+                .stats
+                .as_ref()
+                .and_then(|s| s.get("warnings"))
+                .and_then(|w| w.as_array())
+                .is_some_and(|a| {
+                    a.iter()
+                        .filter_map(|w| w.as_str())
+                        .any(|w| w.contains(crate::regions::AREA_WARNING))
+                })
+        })
+        .collect();
+    table_rows(
+        h,
+        "area-check",
+        &format!(
+            "{} files whose regions {} (the warning in each file's section)",
+            area.len(),
+            crate::regions::AREA_WARNING
+        ),
+        &area,
+        "Every region has its drawn area.",
+        false,
+    );
     h.push_str("</section>\n<section id=\"failures\"><h2>Failures</h2>");
     let failed: Vec<&Entry<'_>> = entries
         .iter()
@@ -1218,5 +1245,31 @@ mod tests {
         assert!(page.contains("id=\"n-ok\">0<"));
         let (again, _) = render_page(&failed, &opts, dir.path());
         assert_eq!(page, again, "reproducible");
+    }
+
+    #[test]
+    fn the_files_whose_areas_differ_are_listed() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let opts = PageOptions::new(dir.path().to_path_buf());
+        let mut warned = row("warned.svg", None, "");
+        if let Some(w) = warned.stats.as_mut().and_then(|s| s.get_mut("warnings")) {
+            *w = serde_json::json!([format!(
+                "1 region(s) {} by more than --area-tolerance 1e-6",
+                crate::regions::AREA_WARNING
+            )]);
+        }
+        let (page, _) = render_page(&[row("quiet.svg", None, ""), warned], &opts, dir.path());
+        let table = page
+            .split("id=\"area-check\"")
+            .nth(1)
+            .and_then(|t| t.split("</div>").next())
+            .expect("the area table");
+        assert!(table.contains("1 files whose regions"), "{table}");
+        assert!(
+            table.contains("warned.svg") && !table.contains("quiet.svg"),
+            "{table}"
+        );
+        let (page, _) = render_page(&[row("quiet.svg", None, "")], &opts, dir.path());
+        assert!(page.contains("Every region has its drawn area."));
     }
 }

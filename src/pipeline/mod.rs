@@ -807,9 +807,9 @@ fn area_warning(
             .to_owned()
     };
     Some(format!(
-        "{} region(s) differ from the drawing by more than --area-tolerance {:e} (or \
-         1e-9*d^2): {}{more}; {cause}",
+        "{} region(s) {} by more than --area-tolerance {:e} (or 1e-9*d^2): {}{more}; {cause}",
         off.len(),
+        crate::regions::AREA_WARNING,
         params.area_tolerance,
         named.join(", ")
     ))

@@ -68,6 +68,10 @@ use crate::fem::FemMesh;
 use crate::svg::Drawing;
 use kurbo::Rect;
 
+/// The words every area-check warning carries (the batch page finds the
+/// files that warn by them).
+pub(crate) const AREA_WARNING: &str = "differ from the drawing";
+
 /// What the area check needs beyond the drawing: the meshed box (the
 /// background's extent) and the drawing's diagonal d.
 #[derive(Clone, Copy, Debug, PartialEq)]
