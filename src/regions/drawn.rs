@@ -43,7 +43,7 @@ use crate::svg::winding::Painting;
 use crate::svg::{Drawing, Segment, ShapeId, Subpath};
 use kurbo::{CubicBez, ParamCurve, ParamCurveArea, ParamCurveDeriv, Point, Rect, Vec2};
 use rayon::prelude::*;
-use rustc_hash::FxHashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::sync::Arc;
 
 /// Flatness (relative to d) at which two subdivided pieces are taken as their
@@ -313,16 +313,12 @@ pub(crate) fn drawn_areas(
     };
     let origin = bounds.center().to_vec2();
     let step = STEP_REL * d;
-    // Each piece's windows between cuts: the area term and the owners either side.
-    let terms: Vec<Vec<(f64, Option<Sides>)>> = pieces
-        .par_iter()
-        .zip(cuts.par_iter())
+    // Each piece's windows between cuts, with their area terms.
+    let windows: Vec<Window> = pieces
+        .iter()
+        .zip(&cuts)
         .enumerate()
-        .map(|(k, (piece, cut))| {
-            if k % 64 == 0 && deadline.expired() {
-                return Vec::new();
-            }
-            let curve = &curves[piece.curve as usize];
+        .flat_map(|(k, (piece, cut))| {
             let mut ts = Vec::with_capacity(cut.len() + 2);
             ts.push(piece.t[0]);
             ts.extend(
@@ -333,10 +329,48 @@ pub(crate) fn drawn_areas(
             ts.push(piece.t[1]);
             ts.sort_by(f64::total_cmp);
             ts.dedup();
-            ts.windows(2)
-                .map(|w| {
-                    let term = curve.area_term(w[0], w[1], origin);
-                    (term, sides(&near, k, w[0], w[1], painting, step))
+            let windows: Vec<Window> = ts
+                .windows(2)
+                .map(|w| Window {
+                    piece: k,
+                    t: [w[0], w[1]],
+                })
+                .collect();
+            windows
+        })
+        .collect();
+    let terms: Vec<f64> = windows
+        .par_iter()
+        .map(|w| curves[pieces[w.piece].curve as usize].area_term(w.t[0], w.t[1], origin))
+        .collect();
+    // The owners either side, sampled once per chain of windows joined end to
+    // end where nothing else comes near (see [`chains`]).
+    let chains = chains(&near, &windows);
+    let sampled: Vec<Vec<(usize, Option<Sides>)>> = chains
+        .par_iter()
+        .enumerate()
+        .map(|(c, chain)| {
+            if c % 64 == 0 && deadline.expired() {
+                return Vec::new();
+            }
+            // the longest window first: it allows the longest step
+            let mut order: Vec<usize> = (0..chain.len()).collect();
+            let chord = |i: usize| {
+                let w = &windows[chain[i].0];
+                let curve = &curves[pieces[w.piece].curve as usize];
+                (curve.eval(w.t[1]) - curve.eval(w.t[0])).hypot()
+            };
+            order.sort_by(|a, b| chord(*b).total_cmp(&chord(*a)));
+            let found = order.iter().find_map(|&i| {
+                let w = &windows[chain[i].0];
+                sides(&near, w.piece, w.t[0], w.t[1], painting, step)
+                    .map(|s| if chain[i].1 { (s.1, s.0, s.2) } else { s })
+            });
+            chain
+                .iter()
+                .map(|&(w, flipped)| {
+                    let s = found.map(|s| if flipped { (s.1, s.0, s.2) } else { s });
+                    (w, s)
                 })
                 .collect()
         })
@@ -344,10 +378,15 @@ pub(crate) fn drawn_areas(
     if deadline.expired() {
         return None;
     }
+    let mut window_sides: Vec<Option<Sides>> = vec![None; windows.len()];
+    for (w, s) in sampled.into_iter().flatten() {
+        window_sides[w] = s;
+    }
+    let terms = terms.into_iter().zip(window_sides);
     let mut by_shape = vec![Sum::default(); drawing.shapes.len()];
     let mut background = Sum::default();
     let mut unsure = 0.0;
-    for (term, sides) in terms.into_iter().flatten() {
+    for (term, sides) in terms {
         match sides {
             Some((left, right, together)) if left != right => {
                 let mut add = |owner: Option<ShapeId>, v: f64| match owner {
@@ -368,6 +407,103 @@ pub(crate) fn drawn_areas(
         overlaps,
         unsure,
     })
+}
+
+/// A stretch of a piece between two cuts: parameters `t` of the piece's curve.
+#[derive(Clone, Copy, Debug)]
+struct Window {
+    piece: usize,
+    t: [f64; 2],
+}
+
+/// The windows in chains: each chain is a list of windows (and whether each
+/// runs against the chain's direction) joined end to end at points where
+/// exactly two window ends meet, bit for bit, and no other piece comes within
+/// twice the run-together distance. Along such a chain no outline is crossed
+/// or touched (the windows end at every crossing and touch), so the owner
+/// either side is one: it is sampled once per chain.
+fn chains(near: &Near<'_>, windows: &[Window]) -> Vec<Vec<(usize, bool)>> {
+    /// A window and whether this is its end (or its start).
+    type End = (usize, bool);
+    let key = |p: Point| (p.x.to_bits(), p.y.to_bits());
+    // (window, at its end) for every window end that is an end of its piece
+    let mut ends: FxHashMap<(u64, u64), Vec<End>> = FxHashMap::default();
+    for (i, w) in windows.iter().enumerate() {
+        let piece = &near.pieces[w.piece];
+        let curve = &near.curves[piece.curve as usize];
+        if w.t[0] == piece.t[0] {
+            ends.entry(key(curve.eval(w.t[0])))
+                .or_default()
+                .push((i, false));
+        }
+        if w.t[1] == piece.t[1] {
+            ends.entry(key(curve.eval(w.t[1])))
+                .or_default()
+                .push((i, true));
+        }
+    }
+    // union-find with the parity of each window's direction to its root's
+    let mut parent: Vec<usize> = (0..windows.len()).collect();
+    let mut flip = vec![false; windows.len()];
+    fn find(parent: &mut [usize], flip: &mut [bool], i: usize) -> (usize, bool) {
+        let mut path = Vec::new();
+        let mut r = i;
+        while parent[r] != r {
+            path.push(r);
+            r = parent[r];
+        }
+        // compress: each node on the path points at the root with its parity
+        let mut acc = false;
+        for &n in path.iter().rev() {
+            acc ^= flip[n];
+            flip[n] = acc;
+            parent[n] = r;
+        }
+        (r, if i == r { false } else { flip[i] })
+    }
+    let joints: Vec<((u64, u64), [End; 2])> = ends
+        .into_iter()
+        .filter_map(|(k, v)| match v[..] {
+            [a, b] if a.0 != b.0 => Some((k, [a, b])),
+            _ => None,
+        })
+        .collect();
+    let clean: Vec<bool> = joints
+        .par_iter()
+        .map(|(k, [a, b])| {
+            let p = Point::new(f64::from_bits(k.0), f64::from_bits(k.1));
+            near.clear_of(
+                p,
+                [windows[a.0].piece, windows[b.0].piece],
+                2.0 * near.together,
+            )
+        })
+        .collect();
+    for ((_, [a, b]), clean) in joints.iter().zip(clean) {
+        if !clean {
+            continue;
+        }
+        let (ra, fa) = find(&mut parent, &mut flip, a.0);
+        let (rb, fb) = find(&mut parent, &mut flip, b.0);
+        if ra == rb {
+            continue;
+        }
+        // an end meeting a start keeps the direction; two ends or two starts flip it
+        let opposed = a.1 == b.1;
+        parent[rb] = ra;
+        flip[rb] = fa ^ fb ^ opposed;
+    }
+    let mut index: FxHashMap<usize, usize> = FxHashMap::default();
+    let mut out: Vec<Vec<(usize, bool)>> = Vec::new();
+    for i in 0..windows.len() {
+        let (r, f) = find(&mut parent, &mut flip, i);
+        let c = *index.entry(r).or_insert_with(|| {
+            out.push(Vec::new());
+            out.len() - 1
+        });
+        out[c].push((i, f));
+    }
+    out
 }
 
 /// Neumaier's compensated sum.
@@ -402,6 +538,27 @@ struct Near<'a> {
 }
 
 impl Near<'_> {
+    /// Whether no piece but the two `skip` comes within `r` of `p`.
+    fn clear_of(&self, p: Point, skip: [usize; 2], r: f64) -> bool {
+        let probe = Rect::new(p.x - r, p.y - r, p.x + r, p.y + r);
+        let (x0, y0, x1, y1) = self.grid.range(&probe);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                for &j in &self.grid.cells[y * self.grid.cols + x] {
+                    let j = j as usize;
+                    if skip.contains(&j) || !self.grid.boxes[j].inflate(r, r).contains(p) {
+                        continue;
+                    }
+                    let piece = &self.pieces[j];
+                    if self.curves[piece.curve as usize].distance(piece.t, p, self.tol) <= r {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
+    }
+
     /// Around `p`: how many pieces other than `own` pass within `tau` of it
     /// (coincident with `own` there), and the distance to the nearest of the
     /// others, or `r` if none is nearer.
