@@ -418,10 +418,13 @@ struct Window {
 
 /// The windows in chains: each chain is a list of windows (and whether each
 /// runs against the chain's direction) joined end to end at points where
-/// exactly two window ends meet, bit for bit, and no other piece comes within
-/// twice the run-together distance. Along such a chain no outline is crossed
-/// or touched (the windows end at every crossing and touch), so the owner
-/// either side is one: it is sampled once per chain.
+/// exactly two window ends meet, bit for bit, no other piece comes within
+/// twice the run-together distance, and neither window runs together with the
+/// other's piece at its middle (as where a subpath goes out and back along
+/// itself). Along such a chain no outline is crossed or touched (the windows
+/// end at every crossing and touch, and where pieces stop running together),
+/// and no window shares its stretch with another, so the owner either side is
+/// one: it is sampled once per chain.
 fn chains(near: &Near<'_>, windows: &[Window]) -> Vec<Vec<(usize, bool)>> {
     /// A window and whether this is its end (or its start).
     type End = (usize, bool);
@@ -472,11 +475,17 @@ fn chains(near: &Near<'_>, windows: &[Window]) -> Vec<Vec<(usize, bool)>> {
         .par_iter()
         .map(|(k, [a, b])| {
             let p = Point::new(f64::from_bits(k.0), f64::from_bits(k.1));
-            near.clear_of(
-                p,
-                [windows[a.0].piece, windows[b.0].piece],
-                2.0 * near.together,
-            )
+            let (wa, wb) = (&windows[a.0], &windows[b.0]);
+            let r = 2.0 * near.together;
+            // the two must not run together (a spike drawn out and back):
+            // there the sides are sampled as one stretch, window by window
+            let apart = |w: &Window, other: &Window| {
+                let curve = &near.curves[near.pieces[w.piece].curve as usize];
+                let m = curve.eval(0.5 * (w.t[0] + w.t[1]));
+                let o = &near.pieces[other.piece];
+                near.curves[o.curve as usize].distance(o.t, m, near.tol) > r
+            };
+            near.clear_of(p, [wa.piece, wb.piece], r) && apart(wa, wb) && apart(wb, wa)
         })
         .collect();
     for ((_, [a, b]), clean) in joints.iter().zip(clean) {
