@@ -1,4 +1,4 @@
-//! Secondary merge (issue 41): an open run of secondary sections that lies within μ
+//! Secondary merge: an open run of secondary sections that lies within μ
 //! of secondary segments of *other* runs already kept is dropped before the linear
 //! mesher sees it; the kept segments stand for it. It runs inside the secondary
 //! simplification (`separation::simplify`), before the collapse of close vertices,

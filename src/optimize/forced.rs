@@ -1,5 +1,5 @@
-//! Forced corners: where the drawing itself leaves no room for a good angle
-//! (issue 38). Decided from the input features (the primary curves and the
+//! Forced corners: where the drawing itself leaves no room for a good angle.
+//! Decided from the input features (the primary curves and the
 //! secondary polylines the mesh's edges are tagged with), the envelope ε and
 //! the sizes, never from the mesh's own angles. docs/forced-corners.svg draws
 //! both rules.

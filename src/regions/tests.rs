@@ -248,7 +248,7 @@ fn paint_order_not_document_order_decides() {
     assert_eq!(stat(&stats, "b").area, 12.0);
 }
 
-/// Issue 39: a fill at opacity 0.999 is alpha 255 as a byte: it names the
+/// A fill at opacity 0.999 is alpha 255 as a byte: it names the
 /// same region as the opaque fill (`fill-#5d432e`), not a second one
 /// (`fill-#5d432eff`); an opacity that rounds below 255 keeps its alpha.
 #[test]

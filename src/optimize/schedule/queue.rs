@@ -237,7 +237,7 @@ impl<P> ShortestFirst<P> {
 /// 120 µs on two threads, 108 µs with the second one kept awake; the ten
 /// slowest dev drawings plan some 100 000 windows at two threads). So after
 /// each window the other threads are handed a job that spins until the next
-/// window starts (or [`SPIN_FOR`] has passed, when they sleep as before). It
+/// window starts (or [`SPIN_FOR`] has passed, after which they sleep). It
 /// touches no data: the plans, and so the meshes, are the same.
 struct KeepAwake {
     /// Bumped when a window starts (and when the pass ends): the spinning

@@ -1,4 +1,4 @@
-//! The worst-element phase (issue 38): after the polish, the corners below α
+//! The worst-element phase: after the polish, the corners below α
 //! that the drawing does not force are repaired locally, the way
 //! TetWild and TriWild reach their energies when the passes stall: the targets
 //! around each bad triangle are halved (graded as in `update_sizing`), and the
@@ -11,10 +11,9 @@
 //! is bad too when the features meet at an input angle the envelope lets the
 //! mesh open (two secondary polylines at a tip, each edge free to turn by
 //! `asin(2ε / |e|)`): the region's smoothing moves their vertices within ε.
-//! (Until session 28 a corner between two feature edges, or in a sector of the
-//! mesh's feature edges narrower than α, counted as the drawing's; on the dev
-//! set that left 115 of 298 drawings below α unforced, the worst corner
-//! between two feature edges in 114 of them.)
+//! Deciding forced corners from the mesh's feature edges instead would excuse
+//! most corners below α, since the worst corner usually lies between two
+//! feature edges.
 //!
 //! The region's operations are the main passes' own (every invariant checked,
 //! collapses, swaps and moves never raise the local largest energy); only
