@@ -257,14 +257,11 @@ const THIN_REL: f64 = 1e-10;
 
 /// A segment that crosses more edges than this of the plain Delaunay
 /// triangulation is offered as a constraint; the exact BSP cuts the others.
-/// Constraining every segment made the meshes of ordinary drawings no
-/// smaller but their worst angles worse (40 dev drawings against the
-/// reference: minimum angle ratio median 1.49 -> 1.27, 13 drawings worse by
-/// 1-4 degrees): a constraint edge leaves the optimizer a long feature edge to
-/// split where the cut left vertices to move. Over the whole dev set (303
-/// drawings), a threshold of 8 still changed 130 meshes (unforced minimum
-/// angle below 5 degrees on 28 drawings, 17 before); 32 changes 17 (16 below
-/// 5 degrees). A hatch's lines cross hundreds.
+/// Constraining every segment makes the meshes of ordinary drawings no
+/// smaller but their worst angles worse: a constraint edge leaves the
+/// optimizer a long feature edge to split where the cut left vertices to move.
+/// A hatch's lines cross hundreds of edges, ordinary outlines few (the
+/// measurements in `docs/tuning.md`).
 const CONSTRAIN_FROM: usize = 32;
 
 /// Rebuilds after refusing the constraints of thin triangles, at most.
