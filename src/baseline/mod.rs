@@ -1,4 +1,4 @@
-//! The CDT baseline mesher (spade): the speed floor and comparison point of DESIGN
+//! The CDT baseline mesher (spade): the speed floor and comparison point of docs/design.md
 //! "Data flow" (`baseline`).
 //!
 //! Owns: flattening the feature soup to polylines within the feature envelope μ,

@@ -1,7 +1,7 @@
 //! The curving stage: a linear [`TriMesh`] whose primary feature edges carry
 //! their curve pieces becomes a [`CurvedMesh`] of quadratic or cubic Lagrange
 //! triangles, every one certified valid (thesis §4.4.2 "Splitting and Curving",
-//! "Curved Optimization"; DESIGN "Curved elements").
+//! "Curved Optimization"; docs/design.md "Curved elements").
 //!
 //! Steps of [`curve_mesh`] (each in its own module):
 //! 1. vertices still rational are rounded (an error if one cannot be; `repair`);

@@ -5,8 +5,8 @@
 //! which would otherwise weld the lines of a hatch into one another at shared
 //! vertices.
 //!
-//! Secondary features are approximated within the envelope anyway (DESIGN, invariant
-//! 2), and two of them closer than μ are exactly what the features stage does not keep
+//! Secondary features are approximated within the envelope anyway (docs/design.md
+//! "Invariants" 2), and two of them closer than μ are exactly what the features stage does not keep
 //! apart: a stroke narrower than μ is already meshed as its centre line, and the
 //! simplification already collapses vertices closer than μ. Without this step every
 //! line of a hatch or a stroked soup reaches the BSP, which must cut the mesh along all

@@ -1,4 +1,4 @@
-//! Feature preprocessing: the loader's feature soup → [`FeatureSet`] (DESIGN `features`,
+//! Feature preprocessing: the loader's feature soup → [`FeatureSet`] (docs/design.md "features",
 //! thesis §4.3.1 "Input preprocessing" and §4.4 "Feature processing for curved meshing").
 //!
 //! Conic pieces (arcs, circles, ellipses, rounded corners) stay exact: a section of a conic
@@ -573,7 +573,7 @@ pub(crate) struct FeatureTiming {
     pub total_ms: f64,
 }
 
-/// The preprocessed features: what the meshers consume (DESIGN `features`).
+/// The preprocessed features: what the meshers consume (docs/design.md "features").
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct FeatureSet {
     /// The absolute parameters it was built with.

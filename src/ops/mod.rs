@@ -25,7 +25,7 @@
 //! Guarantees: an applied operation leaves `TriMesh::check` clean and every
 //! invariant true on the faces it created (given they held before); a
 //! rejected one leaves the mesh equal (`PartialEq`) to before.
-//! DESIGN "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
+//! docs/design.md "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
 
 pub(crate) mod invariants;
 

@@ -3,7 +3,7 @@
 //!
 //! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild:
 //! features → exact BSP (`bsp`) → AMIPS optimization (`optimize`) → curving
-//! (`curve`); a vertex that stays rational is an error, never written (DESIGN
+//! (`curve`); a vertex that stays rational is an error, never written (docs/design.md
 //! "Exactness"). `--stop-after bsp` delivers the BSP mesh, `--linear` the
 //! optimized one, each as a [`LinearMesh`] (`linear`); the curved mesh is
 //! delivered as a [`CurvedMesh`]. Both become a [`FemMesh`] whose vertices are

@@ -1,6 +1,6 @@
 //! Mesh quality metrics: corner angles, the 2D conformal AMIPS energy, areas.
 //!
-//! Owns the numbers every mesher is judged by (the `--stats` report, DESIGN
+//! Owns the numbers every mesher is judged by (the `--stats` report, docs/design.md
 //! "Outputs a user can check"). Angles and energies are measured on the straight
 //! triangle spanned by each element's three corners, whatever the element order;
 //! the area and the Jacobian ratio are those of the elements as written (curved

@@ -1,4 +1,4 @@
-//! Regions: what the drawing fills becomes tagged FEM domains (DESIGN `regions`).
+//! Regions: what the drawing fills becomes tagged FEM domains (docs/design.md "regions").
 //!
 //! Owns the decision of which filled SVG shape each triangle belongs to, the
 //! physical surfaces made from it, and the dropping of regions (`--cut-outside`,
