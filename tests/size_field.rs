@@ -1,5 +1,6 @@
-//! The size field (issue 37), tried as an FEM user would (the TriWild mesher, and
-//! the CDT baseline in one test): a 100 × 100 plate with
+//! The size field (`--size*`; the global `-l` alone is `tests/edge_length.rs`), tried as
+//! an FEM user would (the TriWild mesher, and the CDT baseline in one test): a 100 × 100
+//! plate with
 //! a steel disk (r = 15) and a rubber ellipse (20 × 10 semi-axes), the background
 //! cut away, the global size 5 (absolute), and each field on top of it. Every
 //! mesh is written under `target/test-out/size_field/` for the independent checker.
@@ -601,13 +602,13 @@ fn a_square_without_interior_features_has_edges_of_l() {
     assert!((0.9..=1.1).contains(&e.median_ratio), "{e:?}");
 }
 
-/// A field finer than a mesh within the vertex budget can follow (issue 41:
-/// the memory budget holds whatever the options ask): h = 1e-3 on the
+/// A field finer than a mesh within the vertex budget can follow (the memory
+/// budget holds whatever the options ask): h = 1e-3 on the
 /// 100 × 100 plate (clamped to l_min, 0.014) asks for some 10^8 vertices. The
 /// field's background stops at twice the budget in leaves, the optimizer's
 /// splits at the budget (the outlines' resampling at this size alone gives
 /// more vertices than that), the mesh is valid and a warning says that it is
-/// coarser than asked. Before, the background alone took 11 GB past an 8 GB `--max-memory`.
+/// coarser than asked. Without the background's stop, it alone would take over 10 GB.
 /// The formula is written with an exponent, as gmsh users write it.
 #[test]
 fn a_field_finer_than_the_vertex_budget_is_followed_up_to_it_with_a_warning() {
