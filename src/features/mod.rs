@@ -912,8 +912,8 @@ impl FeatureSet {
             Some((out, trimmed))
         };
         // A block of pieces at a time, each block's pieces in parallel, so the
-        // sections are held twice only for a block (on 0298 of the fuzz
-        // findings, 2 500 tiles, all at once was 0.4 GB more at the peak).
+        // sections are held twice only for a block (all at once, a drawing of
+        // 2 500 tiles peaks some 0.4 GB higher).
         let mut sections = Vec::new();
         let mut window_start = Vec::new();
         for block in (0..flat.len()).step_by(RESAMPLE_BLOCK) {
