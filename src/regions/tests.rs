@@ -295,8 +295,8 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
 
     // Past the run's time limit the stage stops with a time-limit error
-    // naming it (a drawing whose winding queries are slow once took 11 s here
-    // under a 10 s limit and still wrote its mesh).
+    // naming it (a drawing whose winding queries are slow must not run 11 s here
+    // under a 10 s limit and still write its mesh).
     let passed = Deadline::after(Some(0.0));
     match tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5, None, passed) {
         Err(crate::Error::TimeLimit { stage, .. }) => assert_eq!(stage, crate::Stage::Regions),

@@ -27,11 +27,11 @@
 //! the curved stage makes (at most one curved edge per element) without
 //! smoothing: made here, the round repairs the corners it leaves.
 //!
-//! Why corners stayed below α before this phase (the 40 dev drawings, issue
-//! 38): the quality goal is met once the largest energy is below the stop
-//! energy (5), and a needle of 7.5° has energy 4.4; the sizing field is
-//! refined only around triangles above 0.9 times the stop energy; most such
-//! corners were at a vertex on one feature facing short edges of another
+//! Why the main passes leave corners below α: the quality goal is met once the
+//! largest energy is below the stop energy (5), and a needle of 7.5° has
+//! energy 4.4; the sizing field is refined only around triangles above 0.9
+//! times the stop energy; most such corners are at a vertex on one feature
+//! facing short edges of another
 //! (a fan from a vertex to a curve sampled within α, a strip between two close
 //! features) that only new vertices between the features resolve.
 
