@@ -136,7 +136,7 @@ fn a_region_size_fills_its_region_and_leaves_the_others() {
     };
     let (a, b) = (far(&plain.mesh), far(&steel.mesh));
     println!("plate triangles farther than 16 from the steel: {a} -> {b}");
-    // Issue 37 asks for no change there; measured: +50 % (the optimizer's
+    // Ideally nothing changes there; measured: +50 % (the optimizer's
     // passes run differently once part of the mesh is refined). Bounded here
     // so that it cannot grow unnoticed.
     assert!(b < 1.6 * a, "plate far from the steel: {a} -> {b}");
@@ -181,7 +181,7 @@ fn a_size_near_an_outline_holds_on_it_and_fades_to_the_ambient_size() {
     // field's midpoint before the BSP was seeded from the field, 1.343·h
     // (0.6726) since, the other outline edges within 4/3·h.
     assert!(longest <= 0.7, "an outline edge of {longest}");
-    // Issue 37: the ambient edges have the ambient size.
+    // The ambient edges have the ambient size.
     assert!((0.8..=1.25).contains(&median), "far median {median}");
 }
 
@@ -198,7 +198,7 @@ fn a_formula_and_a_box_are_followed_away_from_the_features() {
         .collect();
     let share = matched(&away, h);
     println!("expr: {:.3} of {} edges matched", share, away.len());
-    // Issue 37 asks for 0.8.
+    // The bound is 0.8.
     assert!(share >= 0.8, "expr: {share}");
 
     // A box over the rubber: h = 1 inside (y is up: the rubber is at y = -50).
@@ -580,7 +580,7 @@ fn a_stroke_is_sized_only_when_its_outlines_are_kept_apart() {
 
 #[test]
 fn a_square_without_interior_features_has_edges_of_l() {
-    // Issue 37: at `-l 0.05` the edges of an open square match l (within
+    // At `-l 0.05` the edges of an open square match l (within
     // [4/5, 4/3]) for at least 90 % of them.
     let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect width="100" height="100" fill="#48c"/></svg>"##;
     let drawing = triwild::load_bytes(svg.as_bytes()).expect("the square loads");
