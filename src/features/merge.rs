@@ -28,8 +28,8 @@
 //! outline stays whatever is near it, as does a run whose shared vertices no single
 //! kept run passes through: dropping part of a region's boundary would let the
 //! regions stage's faces (which take one label each) run into one another through
-//! the gap (measured: the first version, which dropped any covered segment, lost
-//! 37-92 % of the picture on five dev drawings).
+//! the gap (dropping any covered segment loses 37-92 % of the picture on some dev
+//! drawings).
 //!
 //! **The cover test** is conservative, like the envelope test
 //! (`ops::invariants::envelope`): a segment is covered only when a chain of points

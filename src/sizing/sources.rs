@@ -26,9 +26,8 @@ pub(crate) const STROKE_SIZE_PER_WIDTH: f64 = 6.0;
 /// The slope at which a thin stroke's size grows away from its outline, at
 /// least (the grading's own when that is steeper): a factor 2 per element, the
 /// wildmeshing-toolkit's ratio. The stroke's size is the drawing's need, not
-/// the user's: graded at 1.5 it refined a band of many elements around every
-/// stroke (a 30-drawing dev sample: 1.19x the triangles of the optimizer's old
-/// one-ring caps; at this slope 1.10x, at 2 1.09x with the same median angle).
+/// the user's: graded gently it would refine a band of many elements around
+/// every stroke (measurements in `docs/tuning.md`).
 pub(crate) const STROKE_SLOPE: f64 = 1.0;
 
 /// At most this many sample points of the feature size on one segment, and
