@@ -1,4 +1,4 @@
-//! Jacobian certification of curved cubic triangles (DESIGN "Curved elements"):
+//! Jacobian certification of curved cubic triangles (docs/design.md "Curved elements"):
 //! Bernstein coefficients alone, validity only, validity with a tight ratio, an
 //! element that needs subdivision, and a whole mesh check.
 #![allow(missing_docs, reason = "criterion macros generate undocumented items")]

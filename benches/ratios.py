@@ -8,7 +8,7 @@ Each CSV is what `../shared/bench/compare.py` writes; REF.csv must hold `ref` ro
 the reference meshed valid: the median per-drawing ratio of triangles ours / reference (what
 `judge.py` bounds), the ratio of the totals, the median per-drawing ratio of the minimum angles,
 and with `--base` the same triangle and time ratios against that run instead of the reference.
-Used for issue 38's triangle decomposition (benches/README, session 29).
+Used for the triangle ratio against the reference, one choice at a time (benches/README.md).
 """
 import argparse
 import csv

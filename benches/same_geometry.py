@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The reference comparison on the geometry triwild meshes.
 
-Since the paint model (issue 16), triwild meshes what a drawing paints: a
+With its paint model, triwild meshes what a drawing paints: a
 stroke is the area it covers (two outlines where the reference meshes one
 centre line), clipped shapes end at their clip, invisible shapes are gone. On
 such drawings `compare.py` compares two meshers on different inputs. This

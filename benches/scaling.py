@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Scaling of `triwild` in the input size (issue 20, point 3).
+"""Scaling of `triwild` in the input size.
 
 Generates SVG soups, runs the release binary on each with default flags and
 `--stats`, and prints wall time against input segments with the least-squares
@@ -22,8 +22,8 @@ l_m, so each stroke is its centre line, a feature without a region):
 - duplicates: one filled path (a cubic blob) repeated 3000 times, the same
   paint, plus 3000 copies of a stroked curve.
 
-Issue 41 (point 4) adds series whose strokes are meshed as areas (wide enough
-to be kept apart: the paint model's default), and the memory:
+Further series have strokes meshed as areas (wide enough to be kept apart:
+the paint model's default), and every row reports the memory:
 
 - hatch N: N parallel stroked lines across the box, spacing 900/N, width a
   quarter of the spacing;
@@ -34,8 +34,8 @@ to be kept apart: the paint model's default), and the memory:
 - shapes N (sizes from --shape-sizes): N filled circles with a stroke of
   another colour, on a square grid;
 - stroked-circles N (sizes from --shape-sizes): N unfilled circles at random
-  places, radius 1 to 8, stroke width 0.6 (issue 41's "5 000 stroked
-  circles": they overlap and cross, and each stroke is an area).
+  places, radius 1 to 8, stroke width 0.6 (the "5 000 stroked
+  circles" of benches/README.md: they overlap and cross, and each stroke is an area).
 
 Each row gives wall and CPU time, the stages' times, triangles, and the peak
 resident memory the run reports (`peak_memory_mb`); each series ends with the

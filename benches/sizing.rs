@@ -1,4 +1,4 @@
-//! The size field (issue 37): building it and looking it up, on the plate
+//! The size field: building it and looking it up, on the plate
 //! fixture with a `--size-near` field (graded cones from an outline) and on a
 //! bundled drawing whose thin stroke is a field of its own. `Tree::at` is what
 //! the optimizer's edge targets call for every edge of a non-uniform field.

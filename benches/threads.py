@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""`--threads 2` against `--threads 1` (issue 20, point 2), for one or more builds.
+"""`--threads 2` against `--threads 1`, for one or more builds.
 
 For each drawing, runs every build at one and two threads, REPS rounds
 interleaved (build A t1, A t2, build B t1, B t2, ... then again), keeps each
@@ -12,11 +12,11 @@ comparable. Python 3 standard library only.
     python3 benches/threads.py [--reps 5] [--svg-dir ../shared/data/svg-dev]
         [--files a.svg,b.svg | --largest 10] BIN [BIN ...]
 
-The default drawings are the three slowest of the dev set (issue 20's list).
+The default drawings are three of the slowest of the dev set.
 Prints a line per drawing: each build's best t1, t2 and t1/t2, then each
 build's median t1/t2 over the drawings and, per stage (`--stats` `times` of
 the best runs, summed over the drawings), t1, t2 and t1/t2, so the part that
-stays sequential is visible (issue 41, point 3).
+stays sequential is visible.
 """
 
 import argparse
@@ -73,8 +73,8 @@ def main():
         "--largest",
         type=int,
         metavar="N",
-        help="instead of --files: the N largest files of --svg-dir that mesh (issue 41's "
-        "\"ten largest dev drawings\"; a file the first build refuses, exit 2, is skipped "
+        help="instead of --files: the N largest files of --svg-dir that mesh (as "
+        "benches/README.md's \"ten largest dev drawings\"; a file the first build refuses, exit 2, is skipped "
         "and the next largest taken)",
     )
     args = ap.parse_args()

@@ -3,8 +3,8 @@
 //! check cooperatively: a wall-clock limit (`--time-limit`) and a memory limit
 //! (`--max-memory`, and the limits set from outside the process: an
 //! address-space rlimit, a cgroup's `memory.max`) on the process's memory as
-//! the kernel reports it (issues 17 and 41: a huge input fails with one clear
-//! line instead of exhausting memory or running for hours).
+//! the kernel reports it: a huge input fails with one clear line instead of
+//! exhausting memory or running for hours.
 //!
 //! The memory check reads `/proc/self/status` at most once every
 //! [`SAMPLE_INTERVAL`] (the loops ask far more often; a cached reading answers
@@ -328,7 +328,7 @@ impl Deadline {
 /// Drop `value` on a thread of its own (inline if no thread can be started).
 /// For the large structures a stage holds when it stops at its budget: the
 /// error goes out at once instead of after their teardown (5.3 s of frees
-/// after the deadline on a BSP of 4.3 million exact vertices, issue 41). The
+/// after the deadline on a BSP of 4.3 million exact vertices). The
 /// command line exits without waiting for that thread; an embedding process
 /// gets the memory back when it is done.
 pub(crate) fn dispose<T: Send + 'static>(value: T) {

@@ -148,7 +148,7 @@ impl LinearMesh {
     ///
     /// # Errors
     /// [`Error::Meshing`] in `stage` if some vertex still has a rational position
-    /// (DESIGN "Exactness": such a mesh is never written).
+    /// (docs/design.md "Exactness": such a mesh is never written).
     pub(crate) fn from_trimesh<I: IntoIterator<Item = (crate::svg::ShapeId, LineKind)>>(
         mesh: &TriMesh,
         stage: Stage,
@@ -177,7 +177,7 @@ impl LinearMesh {
 }
 
 /// The check every mesh delivered from a [`TriMesh`] passes first: no vertex
-/// still has a rational position (DESIGN "Exactness": such a mesh is never
+/// still has a rational position (docs/design.md "Exactness": such a mesh is never
 /// written).
 ///
 /// # Errors

@@ -1,4 +1,4 @@
-//! Meshing parameters (DESIGN "Coordinates and parameters").
+//! Meshing parameters (docs/design.md "Coordinates and parameters").
 //!
 //! Every length is given either relative to `d`, the diagonal of the input's
 //! bounding box, or in absolute output units ([`Params::units`] times
@@ -247,7 +247,7 @@ pub struct Params {
 }
 
 impl Params {
-    /// The defaults of [`defaults`] (DESIGN "Coordinates and parameters").
+    /// The defaults of [`defaults`] (docs/design.md "Coordinates and parameters").
     ///
     /// ```
     /// use triwild::{Length, Order, Params, defaults};

@@ -1,7 +1,7 @@
 //! The stages of the pipeline, by name: where meshing may stop (`--stop-after`)
 //! and where a meshing error happened (the error's `stage`).
 
-/// A stage of the meshing pipeline (DESIGN "Data flow").
+/// A stage of the meshing pipeline (docs/design.md "Data flow").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
@@ -22,7 +22,7 @@ pub enum Stage {
     /// The CDT baseline mesher (`--mesher cdt`).
     Baseline,
     /// Regions: each triangle classified by the fills (winding numbers on the
-    /// input curves) and tagged (DESIGN `regions`).
+    /// input curves) and tagged (docs/design.md "regions").
     Regions,
 }
 

@@ -230,7 +230,7 @@ fn failures_are_rows_and_the_rest_succeeds() {
         );
     }
 
-    // The report page lists every failure with its cause (issue 40).
+    // The report page lists every failure with its cause.
     let page = std::fs::read_to_string(out.join("report.html")).expect("report page");
     for (f, c) in [
         ("broken/empty.svg", "bad-input"),

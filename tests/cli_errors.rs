@@ -236,8 +236,8 @@ fn a_closed_stdout_is_no_panic() {
     assert!(mesh.ends_with("$EndElements\n"), "an incomplete mesh");
 }
 
-/// An input with `n` references to an entity of 25 000 segments (issue 17:
-/// path data multiplied by XML entities, never expanded by triwild's checks).
+/// An input with `n` references to an entity of 25 000 segments (path data
+/// multiplied by XML entities, never expanded by triwild's checks).
 fn entity_path(n: usize) -> Vec<u8> {
     let seg = "l1 1 l-1 -1 ".repeat(50);
     format!(
@@ -250,7 +250,7 @@ fn entity_path(n: usize) -> Vec<u8> {
     .into_bytes()
 }
 
-/// Resource budgets (issue 17): too large an input, or too long a run, is one
+/// Resource budgets: too large an input, or too long a run, is one
 /// line naming the flag to raise, exit 2 (or 3 for the time limit), no output.
 #[test]
 fn budgets_fail_with_one_line_naming_the_flag() {

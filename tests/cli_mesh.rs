@@ -74,7 +74,7 @@ fn bundled_drawings_mesh_in_every_format_and_read_back_alike() {
                 "{stem} {name}"
             );
             // 2.2 writes each line element of each physical curve; 4.1 writes
-            // an edge on several physical curves once (issue 39)
+            // an edge on several physical curves once
             let feature_edges = stats["output"]["feature_edges"].as_u64().unwrap();
             if name.starts_with("v22") {
                 assert_eq!(report.lines as u64, feature_edges, "{stem} {name}");
@@ -465,7 +465,7 @@ fn the_mesh_is_the_same_for_every_thread_count() {
 #[test]
 fn a_path_painted_many_times_meshes_as_one_and_the_stats_count_the_copies() {
     // 200 copies of one filled blob, the topmost red; a rect between the first
-    // two stays (issue 20: duplicates merge at load).
+    // two stays (duplicates merge at load).
     let out = support::out_dir("cli_duplicates");
     let blob = "M30 30C40 20 60 20 70 30C80 40 80 60 70 70C60 80 40 80 30 70Z";
     let mut body = format!(r##"<path fill="#0000ff" d="{blob}"/><rect width="40" height="40"/>"##);

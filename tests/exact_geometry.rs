@@ -1,4 +1,4 @@
-//! Geometry exact to the document's numbers (issue 14, points 2 and 3), through the
+//! Geometry exact to the document's numbers, through the
 //! public API: conics (`<circle>`, `<ellipse>`, rounded `<rect>`, arc commands) stay
 //! exact curves from the text to the output, in f64, so every node of a curved
 //! boundary (corners and high-order nodes) lies on the true curve to 1e-9·d (d the

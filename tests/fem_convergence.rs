@@ -1,11 +1,11 @@
-//! Finite-element convergence on the library's meshes (issue 14): P1 on order-1, P2 on
+//! Finite-element convergence on the library's meshes: P1 on order-1, P2 on
 //! order-2 and P3 on order-3 meshes must reach the optimal L2 rates (k + 0.6 at least),
 //! P2 on the cubic meshes must be as good as on the quadratic ones, and the cubic
 //! meshes' area must be the drawing's. Two domains: a blob bounded by four cubic Bézier
 //! arcs (which the cubic meshes represent exactly), and a plain SVG `<circle>` (an
 //! exact conic, which no polynomial element represents: the order-k boundary
 //! interpolates it, and the rates must still be optimal). The circle is also meshed
-//! graded by a size field (issue 37: h from l/3 to l across the disk, `--size-expr`),
+//! graded by a size field (h from l/3 to l across the disk, `--size-expr`),
 //! where the rates must be optimal too.
 //!
 //! The problem is `−Δu = f` with the manufactured solution
@@ -295,7 +295,7 @@ fn a_circle_converges_at_optimal_rates() {
 
 #[test]
 fn a_circle_graded_by_a_size_field_converges_at_optimal_rates() {
-    // Issue 37: a mesh graded by `--size-expr` keeps the optimal rates. h = l (1 + x)/3
+    // A mesh graded by `--size-expr` keeps the optimal rates. h = l (1 + x)/3
     // (output units: the disk spans x in [0, 2]) goes from l/3 on the left to l on the
     // right, a fixed grading at every level, so the levels are a refinement family.
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;

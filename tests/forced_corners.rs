@@ -1,4 +1,4 @@
-//! Forced corners and small regions in `--stats` (issue 38): a corner the
+//! Forced corners and small regions in `--stats`: a corner the
 //! drawing forces (a thin wedge between two features) is told apart and left
 //! out of the unforced minimum angle; a drawing without sharp features has no
 //! forced corner; a tiny shape shows as a small region. Meshes are written under

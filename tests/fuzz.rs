@@ -1,4 +1,4 @@
-//! A structure-aware fuzz harness over the loader and the whole pipeline (issue 17).
+//! A structure-aware fuzz harness over the loader and the whole pipeline.
 //!
 //! Cases are SVG documents drawn from a small grammar (proptest strategies: root
 //! attributes, a tree of g/use/defs/symbol/svg/path/rect/circle/ellipse/line/
@@ -25,7 +25,7 @@
 //! `TRIWILD_FUZZ_JOBS`, `TRIWILD_FUZZ_MSHCHECK`, `TRIWILD_FUZZ_FAILURES`,
 //! `TRIWILD_FUZZ_MAX_MEMORY`.
 //!
-//! With `--max-memory` (issue 41) a case also fails when the child's peak
+//! With `--max-memory` a case also fails when the child's peak
 //! resident memory (its `VmHWM`, polled while it runs) passes the budget by
 //! more than [`MEMORY_MARGIN_MB`].
 #![allow(

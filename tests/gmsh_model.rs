@@ -1,4 +1,4 @@
-//! The gmsh model a solver gets (issue 15), read back with the repository's own
+//! The gmsh model a solver gets, read back with the repository's own
 //! reader (`triwild::read_msh_file`). On a square (`id=box`) holding a
 //! `<circle id=inclusion>` crossed by an open stroked curve, with and without
 //! `--cut-outside`, and on a `<circle>` at `-l 0.2 --cut-outside`, written by
@@ -136,7 +136,7 @@ fn check_model(m: &MshMesh, what: &str) {
         assert!(m.entities.is_empty(), "{what}: 2.2 has no $Entities");
         return;
     }
-    // No two line elements join the same two nodes (issue 39): an edge on
+    // No two line elements join the same two nodes: an edge on
     // several physical curves is one element in one entity they all list.
     let mut edges = HashSet::new();
     for b in &m.line_blocks {

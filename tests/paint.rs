@@ -1,4 +1,4 @@
-//! SVG's paint model (issue 16, "what you see is what you mesh"): invisible
+//! SVG's paint model: invisible
 //! shapes, decoration, strokes as areas, clip paths and masks, each checked by
 //! the regions it gives and their exact areas.
 
@@ -346,7 +346,7 @@ fn a_stroke_narrower_than_the_envelope_is_a_line_and_a_sliver_is_reported_lost()
     // A 0.1-unit stroke (above the hairline width l_min = 1e-4·d = 0.025) in a
     // drawing whose feature envelope μ = 1e-3·d is 0.25: its two outlines would
     // be closer than μ, which the mesh does not keep apart, so it is its centre
-    // line (issue 39), counted and named in a warning. A filled sliver as thin
+    // line, counted and named in a warning. A filled sliver as thin
     // has no such way out: no triangle is its own, the picture shows it, so
     // the report says so: one lost shape, and a warning naming it. The stroked
     // square beside it is not lost; neither is a shape hidden under another

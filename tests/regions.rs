@@ -281,7 +281,7 @@ fn evenodd_and_nonzero_stars_have_their_areas() {
         // The input points are exact (f64 from the document's text), but the
         // star's edges cross and come within μ of each other near the crossings,
         // where they are secondary features, kept only inside the ε-envelope
-        // (DESIGN invariant 2): the meshed area is close, not exact (the
+        // (docs/design.md "Invariants" 2): the meshed area is close, not exact (the
         // envelope allows ~1e-3 here: ε = 2e-3·d along the secondary stretches
         // near the ten crossings). Measured: 1.9e-5 relative (nonzero) with the
         // f64 loader and a plain Delaunay seed; 1.5e-4 with the constrained

@@ -1,4 +1,4 @@
-//! Regions on real drawings (issue 7, "Done when"): on a CI sample (the bundled
+//! Regions on real drawings: on a CI sample (the bundled
 //! `data/svg` drawings plus a few small dev-set files) and, ignored, on the whole
 //! dev set (`../shared/data/svg-dev` or `TRIWILD_DEVSET`):
 //! - every region area of the report sums to the area of the meshed box (1e-9

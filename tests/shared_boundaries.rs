@@ -1,4 +1,4 @@
-//! Outlines that two shapes share are one exact feature (issue 39, part 2).
+//! Outlines that two shapes share are one exact feature.
 //!
 //! Three rectangles with edges in common (a and b side by side, c drawn over the
 //! lower part of a): the coincident and collinear-overlapping edges become one

@@ -1,4 +1,4 @@
-//! Signals (issue 17): SIGINT / SIGTERM at any moment leave no temporary
+//! Signals: SIGINT / SIGTERM at any moment leave no temporary
 //! output and exit 130 / 143; a batch child whose batch is killed (even with
 //! SIGKILL) stops without writing; an interrupted batch reports the files it
 //! was meshing. The test hooks (`test-hooks` feature) hold the process at a

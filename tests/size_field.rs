@@ -1,5 +1,6 @@
-//! The size field (issue 37), tried as an FEM user would (the TriWild mesher, and
-//! the CDT baseline in one test): a 100 × 100 plate with
+//! The size field (`--size*`; the global `-l` alone is `tests/edge_length.rs`), tried as
+//! an FEM user would (the TriWild mesher, and the CDT baseline in one test): a 100 × 100
+//! plate with
 //! a steel disk (r = 15) and a rubber ellipse (20 × 10 semi-axes), the background
 //! cut away, the global size 5 (absolute), and each field on top of it. Every
 //! mesh is written under `target/test-out/size_field/` for the independent checker.
@@ -135,7 +136,7 @@ fn a_region_size_fills_its_region_and_leaves_the_others() {
     };
     let (a, b) = (far(&plain.mesh), far(&steel.mesh));
     println!("plate triangles farther than 16 from the steel: {a} -> {b}");
-    // Issue 37 asks for no change there; measured: +50 % (the optimizer's
+    // Ideally nothing changes there; measured: +50 % (the optimizer's
     // passes run differently once part of the mesh is refined). Bounded here
     // so that it cannot grow unnoticed.
     assert!(b < 1.6 * a, "plate far from the steel: {a} -> {b}");
@@ -180,7 +181,7 @@ fn a_size_near_an_outline_holds_on_it_and_fades_to_the_ambient_size() {
     // field's midpoint before the BSP was seeded from the field, 1.343·h
     // (0.6726) since, the other outline edges within 4/3·h.
     assert!(longest <= 0.7, "an outline edge of {longest}");
-    // Issue 37: the ambient edges have the ambient size.
+    // The ambient edges have the ambient size.
     assert!((0.8..=1.25).contains(&median), "far median {median}");
 }
 
@@ -197,7 +198,7 @@ fn a_formula_and_a_box_are_followed_away_from_the_features() {
         .collect();
     let share = matched(&away, h);
     println!("expr: {:.3} of {} edges matched", share, away.len());
-    // Issue 37 asks for 0.8.
+    // The bound is 0.8.
     assert!(share >= 0.8, "expr: {share}");
 
     // A box over the rubber: h = 1 inside (y is up: the rubber is at y = -50).
@@ -579,7 +580,7 @@ fn a_stroke_is_sized_only_when_its_outlines_are_kept_apart() {
 
 #[test]
 fn a_square_without_interior_features_has_edges_of_l() {
-    // Issue 37: at `-l 0.05` the edges of an open square match l (within
+    // At `-l 0.05` the edges of an open square match l (within
     // [4/5, 4/3]) for at least 90 % of them.
     let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect width="100" height="100" fill="#48c"/></svg>"##;
     let drawing = triwild::load_bytes(svg.as_bytes()).expect("the square loads");
@@ -601,13 +602,13 @@ fn a_square_without_interior_features_has_edges_of_l() {
     assert!((0.9..=1.1).contains(&e.median_ratio), "{e:?}");
 }
 
-/// A field finer than a mesh within the vertex budget can follow (issue 41:
-/// the memory budget holds whatever the options ask): h = 1e-3 on the
+/// A field finer than a mesh within the vertex budget can follow (the memory
+/// budget holds whatever the options ask): h = 1e-3 on the
 /// 100 × 100 plate (clamped to l_min, 0.014) asks for some 10^8 vertices. The
 /// field's background stops at twice the budget in leaves, the optimizer's
 /// splits at the budget (the outlines' resampling at this size alone gives
 /// more vertices than that), the mesh is valid and a warning says that it is
-/// coarser than asked. Before, the background alone took 11 GB past an 8 GB `--max-memory`.
+/// coarser than asked. Without the background's stop, it alone would take over 10 GB.
 /// The formula is written with an exponent, as gmsh users write it.
 #[test]
 fn a_field_finer_than_the_vertex_budget_is_followed_up_to_it_with_a_warning() {

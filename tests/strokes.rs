@@ -1,4 +1,4 @@
-//! Thin strokes exact and cheap (issue 39, parts 3 and 4): a stroke's outlines
+//! Thin strokes exact and cheap: a stroke's outlines
 //! are its exact offsets where they can be (circles, arcs and lines joined
 //! smoothly), curved at order 3; a stroke of its fill's paint joins the fill's
 //! region, a stroke of another colour stays its own. Meshes go to
@@ -166,7 +166,7 @@ fn a_stroke_narrower_than_mu_is_its_centre_line() {
 #[test]
 fn a_dash_pattern_with_gaps_below_mu_is_stroked_whole() {
     // μ = 1e-3·d, d ≈ 85: gaps of 0.05 would leave the dashes closer than μ
-    // (issue 41: a spiral of 80 000 such dashes took minutes); gaps of 3 do not
+    // (a spiral of 80 000 such dashes took minutes); gaps of 3 do not
     let d = load(&circle("#000000", 4.0, r#"stroke-dasharray="0.02 0.05""#));
     assert_eq!(d.paint.dashes_closed, 1);
     assert!(

@@ -1,4 +1,4 @@
-//! Output units (issue 14, point 4), through the public API: a drawing's
+//! Output units, through the public API: a drawing's
 //! coordinates are its own numbers (the user units of the root `viewBox`) unless
 //! `Units::Px` asks for CSS px, and `scale` multiplies them. Meshed areas are
 //! measured on the straight triangles of the optimized linear mesh of the filled

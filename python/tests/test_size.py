@@ -1,4 +1,4 @@
-"""The size field from Python (issue 37): the size flags as dicts and lists,
+"""The size field from Python: the size flags as dicts and lists,
 and ``size_fn``, a function of numpy arrays called back in batches while
 meshing. The drawing is the size-field fixture of the Rust tests: a 100 x 100
 plate with a ``steel`` disk and a ``rubber`` ellipse (y is up: the drawing's

@@ -1,4 +1,4 @@
-//! The CDT baseline mesher (spade): the speed floor and comparison point of DESIGN
+//! The CDT baseline mesher (spade): the speed floor and comparison point of docs/design.md
 //! "Data flow" (`baseline`).
 //!
 //! Owns: flattening the feature soup to polylines within the feature envelope μ,
@@ -6,8 +6,8 @@
 //! padded box whose constraints are those polylines (crossings split), refined to a
 //! minimum angle ([`Params::cdt_min_angle_deg`]) and to the size field within the
 //! vertex budget [`Params::max_vertices`]. Spade's refinement takes one area bound for
-//! the whole mesh (that of h's largest value, l): a uniform field is that bound alone,
-//! as before the field existed. The smaller sizes of a graded field are reached in
+//! the whole mesh (that of h's largest value, l): a uniform field needs that bound
+//! alone. The smaller sizes of a graded field are reached in
 //! rounds ([`refine_to_size`]): every triangle with an edge longer than 4/3·h at the
 //! edge's midpoint (the optimizer's split bound) gets a point, its circumcentre or one
 //! that splits that edge, then spade refines to the angle again.

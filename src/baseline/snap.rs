@@ -11,7 +11,7 @@
 //! `HOT_RADIUS · δ` of the interior of a piece it is not an end of (all decided
 //! exactly in integer grid coordinates). So spade can insert every piece with its
 //! non-splitting constraint API and creates no vertex of its own there, which is
-//! what made the near-duplicate vertices and slivers (DESIGN "Data flow",
+//! what made the near-duplicate vertices and slivers (docs/design.md "Data flow",
 //! `baseline`; thesis ch. 4 uses exact rationals instead). Pieces still offending
 //! after [`MAX_ROUNDS`] rounds are dropped and counted.
 

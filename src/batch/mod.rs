@@ -1,6 +1,6 @@
 //! Batch meshing of whole collections (`triwild batch`): discovery, one
 //! isolated child process per file, a report row per file, resume, shards
-//! and the closing summary. DESIGN "Outputs a user can check" (batch report);
+//! and the closing summary. docs/design.md "Outputs a user can check" (batch report);
 //! STYLE "Errors and logging" (one bad SVG never stops a batch).
 //!
 //! Each file is meshed by a child process of the triwild binary itself

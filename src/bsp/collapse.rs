@@ -10,7 +10,7 @@
 //! carry the same features), which becomes the edge `w – u`; the link
 //! condition holds (no fold-over of the topology); and every triangle that
 //! moves to `u` stays exactly counter-clockwise. Thesis §2.3.2 (edge
-//! collapse), DESIGN "Exactness".
+//! collapse), docs/design.md "Exactness".
 
 use crate::exact::Orientation;
 use crate::mesh::{FaceId, FeatureOn, TriMesh, VertexId};

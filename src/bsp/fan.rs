@@ -362,7 +362,8 @@ pub(super) fn round_candidates(p: kurbo::Point, exact: [bool; 2]) -> Vec<kurbo::
 }
 
 /// The faces of each rational vertex, in face order, in one array (one list
-/// per vertex slot was 716 000 allocations on 0335, and as many frees).
+/// per vertex slot would be an allocation and a free per slot: hundreds of
+/// thousands on a large BSP).
 struct Stars {
     /// Where each vertex slot's faces start in `faces`; one entry more.
     start: Vec<usize>,

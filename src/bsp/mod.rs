@@ -26,7 +26,7 @@
 //! that can be neither rounded nor collapsed keep their rational position.
 //!
 //! Thesis §2.3.1 (BSP construction), §2.3.4 (hybrid kernel), §4.4.1 (linear
-//! meshing); DESIGN "Data flow" (bsp) and "Exactness".
+//! meshing); docs/design.md "Data flow" (bsp) and "Exactness".
 
 mod collapse;
 mod cut;

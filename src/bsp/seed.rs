@@ -8,8 +8,9 @@
 //! cut each of them into cells the optimizer then had to collapse; those
 //! segments are constraints now, unless spade refuses them (they cross a
 //! constraint already in: crossings the feature stage left to the exact
-//! kernel), and then they are cut as before (1 000 parallel strokes: 99 365
-//! cells before, 20 847 now; the end mesh 86 k → 27 k triangles, 24.2 → 4.5 s).
+//! kernel), and then the exact BSP cuts them (on 1 000 parallel strokes the
+//! constraints take the cells from 99 365 to 20 847, the end mesh from 86 k to
+//! 27 k triangles and 24.2 s to 4.5 s).
 //! A panic inside spade falls back to the plain Delaunay triangulation, which
 //! the cut makes conform all the same.
 
@@ -255,15 +256,12 @@ pub(super) fn seed(input: &BspInput, bbox: Rect) -> Result<Seed> {
 const THIN_REL: f64 = 1e-10;
 
 /// A segment that crosses more edges than this of the plain Delaunay
-/// triangulation is offered as a constraint; the others are cut as before.
-/// Constraining every segment made the meshes of ordinary drawings no
-/// smaller but their worst angles worse (40 dev drawings against the
-/// reference: minimum angle ratio median 1.49 -> 1.27, 13 drawings worse by
-/// 1-4 degrees): a constraint edge leaves the optimizer a long feature edge to
-/// split where the cut left vertices to move. Over the whole dev set (303
-/// drawings), a threshold of 8 still changed 130 meshes (unforced minimum
-/// angle below 5 degrees on 28 drawings, 17 before); 32 changes 17 (16 below
-/// 5 degrees). A hatch's lines cross hundreds.
+/// triangulation is offered as a constraint; the exact BSP cuts the others.
+/// Constraining every segment makes the meshes of ordinary drawings no
+/// smaller but their worst angles worse: a constraint edge leaves the
+/// optimizer a long feature edge to split where the cut left vertices to move.
+/// A hatch's lines cross hundreds of edges, ordinary outlines few (the
+/// measurements in `docs/tuning.md`).
 const CONSTRAIN_FROM: usize = 32;
 
 /// Rebuilds after refusing the constraints of thin triangles, at most.

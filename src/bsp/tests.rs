@@ -480,7 +480,7 @@ fn constrained_seed_cuts_only_what_crosses() {
     );
     assert!(stats.cut_triangles > 0 && stats.rational_before_rounding > 0);
     // Short segments that cross a few Delaunay edges stay out of the seed
-    // (cut as before): a crossing pair.
+    // (the exact BSP cuts them): a crossing pair.
     let stats = run_both(&BspInput {
         segments: vec![
             seg(p(0.0, 0.0), p(3.0, 1.0), 0),
@@ -519,8 +519,8 @@ fn constrained_seed_makes_no_thin_triangle() {
     run_both(&input);
 }
 
-/// The tagging and the rounding check the deadline as they go (issue 41: a
-/// BSP of millions of crossings spent 77 s in them after the cut's last
+/// The tagging and the rounding check the deadline as they go (a BSP of
+/// millions of crossings can spend over a minute in them after the cut's last
 /// check): with a passed deadline each stops with the time-limit error of the
 /// BSP stage, and without one the rounding moves every vertex it moved before.
 #[test]

@@ -219,7 +219,7 @@ enum StageArg {
     Optimize,
 }
 
-/// Meshing parameters (DESIGN "Coordinates and parameters").
+/// Meshing parameters (docs/design.md "Coordinates and parameters").
 #[derive(Args, Debug, Clone)]
 pub(crate) struct ParamArgs {
     /// Units of the output coordinates and of every -abs length: the drawing's

@@ -21,7 +21,6 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 /// Accuracy of the distance statistics ([`edge_distance`]) relative to `d`.
-/// Introduced in ac447f1.
 const DISTANCE_ACCURACY_REL: f64 = 1e-14;
 
 /// Number the nodes (the vertices as every mesh delivered from a `TriMesh`

@@ -1,7 +1,7 @@
 //! The curving stage: a linear [`TriMesh`] whose primary feature edges carry
 //! their curve pieces becomes a [`CurvedMesh`] of quadratic or cubic Lagrange
 //! triangles, every one certified valid (thesis §4.4.2 "Splitting and Curving",
-//! "Curved Optimization"; DESIGN "Curved elements").
+//! "Curved Optimization"; docs/design.md "Curved elements").
 //!
 //! Steps of [`curve_mesh`] (each in its own module):
 //! 1. vertices still rational are rounded (an error if one cannot be; `repair`);
@@ -108,15 +108,15 @@ pub(crate) struct CurveOptions<'a> {
 }
 
 /// Default [`CurveOptions::max_splits`]: a budget that only a runaway repair
-/// reaches. Empirical, introduced in ac447f1.
+/// reaches. Empirical (`docs/tuning.md`).
 const DEFAULT_MAX_SPLITS: usize = 10_000;
-/// Default [`CurveOptions::repair_rounds`]. Empirical, introduced in ac447f1.
+/// Default [`CurveOptions::repair_rounds`]. Empirical (`docs/tuning.md`).
 const DEFAULT_REPAIR_ROUNDS: usize = 8;
-/// Default [`CurveOptions::fit_iterations`]. Empirical, introduced in ac447f1.
+/// Default [`CurveOptions::fit_iterations`]. Empirical (`docs/tuning.md`).
 const DEFAULT_FIT_ITERATIONS: usize = 80;
 /// Default [`CurveOptions::fit_min_ratio`]: the fit keeps a certified Jacobian
 /// ratio of at least 1 % rather than creep to a degenerate element.
-/// Empirical, introduced in 7b6b441.
+/// Empirical (`docs/tuning.md`).
 const DEFAULT_FIT_MIN_RATIO: f64 = 0.01;
 
 impl<'a> CurveOptions<'a> {
@@ -419,7 +419,7 @@ mod tests {
     fn uneven_cubic_speed_keeps_the_jacobian_ratio() {
         // A nearly straight edge on a cubic whose first control point sits next to
         // its start: at the parameter thirds the edge's nodes bunch toward that end
-        // and the element is certified, but with a ratio far below 0.1 (issue 38);
+        // and the element is certified, but with a ratio far below 0.1;
         // at equal arc length it is nearly straight.
         let c = CubicBez::new((0.0, 0.0), (0.002, 0.0002), (0.41, 0.03), (1.0, 0.0));
         let corners = [

@@ -1,5 +1,5 @@
 //! Certification of a whole mesh: every triangle's Jacobian bound, the Jacobian
-//! ratio, the exact area (DESIGN "Outputs a user can check"; what `triwild check`
+//! ratio, the exact area (docs/design.md "Outputs a user can check"; what `triwild check`
 //! reports).
 //!
 //! Orientation: the mesh's orientation is the majority sign of its corner

@@ -11,28 +11,28 @@ use crate::mesh::{EdgeKey, FaceId, TriMesh};
 use kurbo::{Point, Vec2};
 
 /// Bisection steps of the largest certified blend toward the curve (the
-/// blend then within 2^-30 of the largest). Introduced in ac447f1.
+/// blend then within 2^-30 of the largest).
 const BLEND_BISECTIONS: usize = 30;
 /// The pattern search's first step is at least this fraction of the edge
-/// length `h`. Empirical, introduced in ac447f1.
+/// length `h`. Empirical (`docs/tuning.md`).
 const FIT_FIRST_STEP_REL: f64 = 1e-3;
 /// The pattern search stops once the nodes are within this fraction of `h`
-/// of the curve (in the root of the summed squares). Introduced in ac447f1.
+/// of the curve (in the root of the summed squares).
 const FIT_CONVERGED_REL: f64 = 1e-12;
 /// A pattern-search node moves toward the curve by the step, or by its
 /// distance to the curve when smaller, but by at least this fraction of the
-/// step. Introduced in ac447f1.
+/// step.
 const FIT_MIN_MOVE: f64 = 0.5;
 /// The pattern search's step shrinks by this factor after a round without
-/// improvement. Introduced in ac447f1.
+/// improvement.
 const FIT_STEP_SHRINK: f64 = 0.5;
-/// ... and stops below this fraction of `h`. Introduced in ac447f1.
+/// ... and stops below this fraction of `h`.
 const FIT_LAST_STEP_REL: f64 = 1e-9;
 /// A fit must bring the nodes closer to the curve than the straight edge by
 /// more than this fraction (of the squared distance), else the edge stays
-/// straight. Introduced in ac447f1.
+/// straight.
 const FIT_MIN_GAIN: f64 = 1e-12;
-/// Samples of a Lagrange edge in [`edge_distance`]. Introduced in ac447f1.
+/// Samples of a Lagrange edge in [`edge_distance`].
 const SAMPLES: usize = 16;
 
 /// How a failing curved edge ended.

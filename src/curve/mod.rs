@@ -1,5 +1,5 @@
 //! The curving stage: the optimized linear mesh turned into certified curved
-//! Lagrange elements (thesis §4.4.2-4.4.3, DESIGN "Curved elements"). The
+//! Lagrange elements (thesis §4.4.2-4.4.3, docs/design.md "Curved elements"). The
 //! geometry of one element (nodes, Bézier nets, Jacobian certification, energies)
 //! is in [`crate::element`]; this module drives it over a mesh.
 //!

@@ -47,13 +47,12 @@ use crate::sizing::SizeField;
 /// "collapse an edge if its length is smaller than 4ℓ/5".
 const COLLAPSE_BELOW: f64 = 4.0 / 5.0;
 /// The stage stops after a pass that lowered the largest curved energy by less
-/// than this (and the mean by less than [`STALL_MEAN`]). Empirical,
-/// introduced in cecb629.
+/// than this (and the mean by less than [`STALL_MEAN`]). Empirical
+/// (`docs/tuning.md`).
 const STALL_MAX: f64 = 1e-2;
 /// See [`STALL_MAX`].
 const STALL_MEAN: f64 = 1e-3;
-/// Seed of the curved stage's smoothing order: "curve!" in ASCII. Introduced
-/// in cecb629.
+/// Seed of the curved stage's smoothing order: "curve!" in ASCII.
 const SEED: u64 = 0x0063_7572_7665_6421;
 
 /// Parameters of the curved optimization, in user units.

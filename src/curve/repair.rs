@@ -15,11 +15,10 @@ use crate::ops::invariants::curved::curved_tag;
 use crate::ops::{self, Context, Outcome};
 
 /// Passes of [`split_multi_primary`]: each pass halves the offending
-/// configurations, so a few suffice. Empirical, introduced in ac447f1.
+/// configurations, so a few suffice. Empirical (`docs/tuning.md`).
 const MULTI_PRIMARY_PASSES: usize = 16;
 /// A curved edge is split for repair only if it is at least this multiple of
 /// [`CurveOptions::l_min_abs`] long (its halves stay about `l_min` or longer).
-/// Introduced in ac447f1.
 const SPLIT_MIN_MULTIPLE: f64 = 2.0;
 
 /// Round every rational vertex (the output has `f64` vertices only).

@@ -1,5 +1,5 @@
 //! Certified bounds of the Jacobian determinant of Lagrange triangles (thesis
-//! §4.4.2 "validity", DESIGN "Curved elements").
+//! §4.4.2 "validity", docs/design.md "Curved elements").
 //!
 //! For an order-`p` triangle the map `x(ξ, η)` is a degree-`p` Bézier triangle; its
 //! partial derivatives are degree-`p − 1` Bézier triangles whose control points are

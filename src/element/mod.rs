@@ -1,5 +1,5 @@
 //! Leaf geometry of triangle elements: what one element is, independent of any
-//! mesh (thesis §2.3.2, §4.4.2-4.4.3; DESIGN "Curved elements").
+//! mesh (thesis §2.3.2, §4.4.2-4.4.3; docs/design.md "Curved elements").
 //!
 //! Nothing here knows a mesh, a feature or a stage; everything above (the local
 //! operations and their invariants, the optimization schedule, the curving stage,

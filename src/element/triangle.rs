@@ -1,7 +1,7 @@
 //! One Lagrange triangle of the curved mesh: its nodes from its corners and
 //! the curve pieces of its edges, its certification, and its curved AMIPS
 //! energy (thesis §4.4.2 "Splitting and Curving", "Curved Optimization",
-//! §4.4.3 "Curved AMIPS"; DESIGN "Curved elements").
+//! §4.4.3 "Curved AMIPS"; docs/design.md "Curved elements").
 //!
 //! The same functions serve the curving stage (`build`) and the curved-mode
 //! invariant of the local operations (`ops::invariants::curved`), so an

@@ -45,8 +45,8 @@ pub(crate) fn line_intersection(a: &PointQ, b: &PointQ, c: &PointQ, d: &PointQ) 
 /// scaling all eight by the smallest such power the formula needs integer
 /// products and one exact division per coordinate. The rational version
 /// reduces every one of its dozen intermediate results by a gcd; the BSP
-/// cuts with lines through input points only, 685 000 crossings on 0335.
-/// The same point (rationals are kept reduced).
+/// cuts with lines through input points only (hundreds of thousands of
+/// crossings on a large input). The same point (rationals are kept reduced).
 pub(crate) fn line_intersection_f64(a: Point, b: Point, c: Point, d: Point) -> Option<PointQ> {
     let (parts, scale) = scaled_parts([a.x, a.y, b.x, b.y, c.x, c.y, d.x, d.y]);
     if let Some(words) = in_words(&parts, scale) {
@@ -111,8 +111,8 @@ fn in_words(parts: &[(i64, i32); 8], scale: i32) -> Option<[i64; 8]> {
 /// ([`in_words`]): differences below 2^63, the two determinants below 2^127
 /// in `i128`; only the coordinates' numerators (190 bits) and the
 /// denominator are GMP integers. The general version's dozen GMP
-/// temporaries, each an allocation, were most of its time: the BSP computes
-/// 685 000 crossings on 0335. The same point.
+/// temporaries, each an allocation, are most of its time, and the BSP may
+/// compute hundreds of thousands of crossings. The same point.
 fn line_intersection_words(words: [i64; 8], scale: i32) -> Option<PointQ> {
     let [ax, ay, bx, by, cx, cy, dx, dy] = words;
     // |a|, |b| < 2^62: no difference overflows.

@@ -16,7 +16,7 @@
 //! exact rationals; [`PointQ::to_f64`] rounds to the nearest `f64` and says
 //! whether the rounding was exact.
 //!
-//! DESIGN "Exactness"; thesis §2.3.1 (operations closed under rationals) and
+//! docs/design.md "Exactness"; thesis §2.3.1 (operations closed under rationals) and
 //! §2.3.4 (hybrid kernel).
 #![allow(
     clippy::disallowed_types,

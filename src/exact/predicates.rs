@@ -101,9 +101,9 @@ fn orient2d_enclosures(
 /// `a.x.den · a.y.den · b.x.den · b.y.den · c.x.den · c.y.den` is `l - r`
 /// with `l = num(b.x, a.x) · num(c.y, a.y) · b.y.den · c.x.den` and
 /// `r = num(b.y, a.y) · num(c.x, a.x) · b.x.den · c.y.den`.
-/// Rational arithmetic reduced every intermediate by a gcd: on 0335 (the
-/// BSP's tagging tests every vertex exactly on its segment, where the filter
-/// cannot decide) those gcds were most of the predicate's time.
+/// Rational arithmetic would reduce every intermediate by a gcd, most of the
+/// predicate's time where it is called most: the BSP's tagging tests every
+/// vertex exactly on its segment, where the filter cannot decide.
 pub fn orient2d_q_exact(a: &PointQ, b: &PointQ, c: &PointQ) -> Orientation {
     // num(p, q) = p.num · q.den - q.num · p.den
     fn num(p: &Rational, q: &Rational) -> Integer {

@@ -114,8 +114,8 @@ fn enclose(r: &Rational) -> Interval {
 /// and rounds away exactly when it lies beyond their midpoint, a dyadic
 /// `S · 2^(e - 1)`: one comparison of integers, `num · 2^(1 - e)` against
 /// `S · den` (shifting whichever side needs it). (Subtracting both
-/// neighbours as rationals, as this did, reduced each difference by a gcd:
-/// 4 % of 0335's time, rounding the BSP's 685 000 exact crossings.)
+/// neighbours as rationals would reduce each difference by a gcd, a few per
+/// cent of a large run's time when the BSP rounds its exact crossings.)
 fn nearest_f64(r: &Rational) -> (f64, bool) {
     let t = r.to_f64();
     if *r == t {

@@ -1,5 +1,5 @@
 //! Exact continuations: consecutive pieces of one subpath that are pieces of one curve
-//! become one input curve before anything else looks at them (issue 14, point 5).
+//! become one input curve before anything else looks at them.
 //!
 //! A drawing often cuts one curve into many pieces: a disk drawn as 64 arcs, a circle's
 //! four quarters, a straight side with redundant points on it. Every piece is a parent

@@ -7,10 +7,10 @@
 //! all get the same end point (the mean of the two curves' points, which agree
 //! to rounding), so the μ-separation test sees a shared corner and keeps them
 //! primary when they are otherwise separated. Shallower crossings, tangencies
-//! and overlaps are left alone: the separation test demotes them as before.
+//! and overlaps are left alone: the separation test demotes them where they lie within μ.
 //!
 //! Candidates come from a grid over the pieces' boxes: a curve's control box,
-//! a straight piece's run of boxes about one grid cell long each (issue 41: the
+//! a straight piece's run of boxes about one grid cell long each (the
 //! boxes of long parallel lines of a hatch all overlap one another, their runs
 //! of small boxes only their neighbours'), so the pairs tried grow with the
 //! pairs that come near each other, not with all pairs. Two straight pieces
@@ -398,8 +398,8 @@ pub(super) fn find(
     // [`MAX_PER_PIECE`] splits is full, the filter drops every crossing of a
     // full piece, and a full piece stays full: so the search skips the pieces
     // full when its block starts, which changes no split, only the work and
-    // the memory (issue 41: a 20 000-line cross-hatch found 19 million
-    // crossings, 1.2 GB twice over, to keep 160 000). Past the deadline the
+    // the memory (a 20 000-line cross-hatch finds some 19 million crossings
+    // to keep 160 000). Past the deadline the
     // pieces left find nothing.
     let mut kept: Vec<Found> = Vec::new();
     // The points kept on each piece.

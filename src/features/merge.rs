@@ -1,12 +1,12 @@
-//! Secondary merge (issue 41): an open run of secondary sections that lies within μ
+//! Secondary merge: an open run of secondary sections that lies within μ
 //! of secondary segments of *other* runs already kept is dropped before the linear
 //! mesher sees it; the kept segments stand for it. It runs inside the secondary
 //! simplification (`separation::simplify`), before the collapse of close vertices,
 //! which would otherwise weld the lines of a hatch into one another at shared
 //! vertices.
 //!
-//! Secondary features are approximated within the envelope anyway (DESIGN, invariant
-//! 2), and two of them closer than μ are exactly what the features stage does not keep
+//! Secondary features are approximated within the envelope anyway (docs/design.md
+//! "Invariants" 2), and two of them closer than μ are exactly what the features stage does not keep
 //! apart: a stroke narrower than μ is already meshed as its centre line, and the
 //! simplification already collapses vertices closer than μ. Without this step every
 //! line of a hatch or a stroked soup reaches the BSP, which must cut the mesh along all
@@ -28,8 +28,8 @@
 //! outline stays whatever is near it, as does a run whose shared vertices no single
 //! kept run passes through: dropping part of a region's boundary would let the
 //! regions stage's faces (which take one label each) run into one another through
-//! the gap (measured: the first version, which dropped any covered segment, lost
-//! 37-92 % of the picture on five dev drawings).
+//! the gap (dropping any covered segment loses 37-92 % of the picture on some dev
+//! drawings).
 //!
 //! **The cover test** is conservative, like the envelope test
 //! (`ops::invariants::envelope`): a segment is covered only when a chain of points

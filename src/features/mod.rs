@@ -1,4 +1,4 @@
-//! Feature preprocessing: the loader's feature soup → [`FeatureSet`] (DESIGN `features`,
+//! Feature preprocessing: the loader's feature soup → [`FeatureSet`] (docs/design.md "features",
 //! thesis §4.3.1 "Input preprocessing" and §4.4 "Feature processing for curved meshing").
 //!
 //! Conic pieces (arcs, circles, ellipses, rounded corners) stay exact: a section of a conic
@@ -12,7 +12,7 @@
 //!
 //! 0. `continuation`: consecutive pieces of one subpath that are pieces of one curve
 //!    (collinear segments, arcs of one ellipse up to 90°) join into one curve, so their
-//!    joints are no fixed vertices (issue 14); then `snap`: curve ends (and points)
+//!    joints are no fixed vertices; then `snap`: curve ends (and points)
 //!    closer than l_m meet at one point; curves that collapse with it go (the drawing
 //!    moves by at most l_m).
 //! 1. `classify`: degenerate curves (control points within ε_m of their mean) become
@@ -311,21 +311,10 @@ impl Parent {
 /// and with it the element's `det J` along that edge, varies as the cubic's: a near
 /// straight edge whose nodes bunch toward one end (tangential fractions 0.12 and 0.46
 /// instead of 1/3 and 2/3) gave cubic elements of certified Jacobian ratio 0.006 on
-/// straight-looking triangles (issue 38). Below one half, the arc-length nodes give the
-/// edge a nearly even speed; above it, the parameter thirds keep the piece exact.
-/// Measured on the 40-drawing dev sample (session 25; smallest / median per-drawing
-/// ratio at orders 2 and 3, and the median per-drawing largest distance of an order-3
-/// edge from its curve, relative to `d`):
-///
-/// | threshold | order 2 | order 3 | order-3 distance |
-/// |---|---|---|---|
-/// | 0 (thirds only) | 0.028 / 0.40 | 0.0055 / 0.36 | 7e-14 |
-/// | 0.25 | 0.17 / 0.41 | 0.25 / 0.40 | 1e-11 |
-/// | **0.5** | 0.25 / 0.46 | 0.25 / 0.44 | 2e-7 |
-/// | 0.8 | 0.44 / 0.56 | 0.41 / 0.59 | 1e-5 |
-///
-/// (with the inflection-aware turn of invariant 3 in all but the first row). One half
-/// keeps most order-3 edges exact and every ratio of the sample above 0.25.
+/// straight-looking triangles. Below one half, the arc-length nodes give the edge a
+/// nearly even speed; above it, the parameter thirds keep the piece exact. One half keeps
+/// most order-3 edges exact and the certified ratios above 0.25 on the dev sample
+/// (measurements in `docs/tuning.md`).
 pub(crate) const CUBIC_EVEN_SPEED: f64 = 0.5;
 
 /// The parameter of the node at fraction `s` of the cubic `c`'s piece on `[t[0], t[1]]`
@@ -584,7 +573,7 @@ pub(crate) struct FeatureTiming {
     pub total_ms: f64,
 }
 
-/// The preprocessed features: what the meshers consume (DESIGN `features`).
+/// The preprocessed features: what the meshers consume (docs/design.md "features").
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct FeatureSet {
     /// The absolute parameters it was built with.
@@ -923,8 +912,8 @@ impl FeatureSet {
             Some((out, trimmed))
         };
         // A block of pieces at a time, each block's pieces in parallel, so the
-        // sections are held twice only for a block (on 0298 of the fuzz
-        // findings, 2 500 tiles, all at once was 0.4 GB more at the peak).
+        // sections are held twice only for a block (all at once, a drawing of
+        // 2 500 tiles peaks some 0.4 GB higher).
         let mut sections = Vec::new();
         let mut window_start = Vec::new();
         for block in (0..flat.len()).step_by(RESAMPLE_BLOCK) {

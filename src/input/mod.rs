@@ -1,4 +1,4 @@
-//! Reading meshes back: the gmsh MSH reader behind `triwild check` (DESIGN
+//! Reading meshes back: the gmsh MSH reader behind `triwild check` (docs/design.md
 //! "Outputs a user can check").
 //!
 //! Owns parsing of files this library did not necessarily write. Guarantees: any

@@ -12,7 +12,7 @@
 //! edges, T-junctions, dangling tags). Topology navigation (`topology.rs`)
 //! never reads a coordinate; `geometry.rs` holds the `f64` measurements
 //! (distances, corner angles) the stages share. [`Transaction`] journals changes and rolls them
-//! back on drop, for the optimizer's local operations. DESIGN "Invariants" 1 and "Exactness".
+//! back on drop, for the optimizer's local operations. docs/design.md "Invariants" 1 and "Exactness".
 
 mod check;
 mod geometry;

@@ -15,7 +15,7 @@ pub(crate) struct VertexTag {
     pub feature_point: bool,
     /// An endpoint of an input feature segment.
     pub segment_endpoint: bool,
-    /// An endpoint of a primary feature section (never moves, DESIGN invariant 4).
+    /// An endpoint of a primary feature section (never moves, docs/design.md "Invariants" 4).
     pub section_endpoint: bool,
 }
 

@@ -25,7 +25,7 @@
 //! Guarantees: an applied operation leaves `TriMesh::check` clean and every
 //! invariant true on the faces it created (given they held before); a
 //! rejected one leaves the mesh equal (`PartialEq`) to before.
-//! DESIGN "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
+//! docs/design.md "Invariants" 1-5; thesis §2.3.2, §2.3.4, §4.4.1.
 
 pub(crate) mod invariants;
 
@@ -195,10 +195,10 @@ pub(crate) struct CurvedRule {
     /// The corner rule's floor: an operation may not make the largest straight
     /// (corner) AMIPS energy of the faces it creates larger than both that of
     /// the faces it replaces and this. The curved energy alone lets a collapse
-    /// trade a badly curved element for a straight sliver: on four butterflies
-    /// of the dev set, curved AMIPS 540 became 94 while the worst angle fell
-    /// from the linear mesh's 8.2° to 0.92°; with the rule it stays 8.0° (the
-    /// curved maximum ends at 222). By induction the curved stage never makes
+    /// trade a badly curved element for a straight sliver (on some dev drawings
+    /// it takes the worst angle from the linear mesh's 8.2° to 0.92° to bring
+    /// the curved maximum from 540 to 94; with the rule the angle stays 8.0°
+    /// and the curved maximum ends at 222). By induction the curved stage never makes
     /// the mesh's worst corner energy exceed max(its value before, the floor).
     /// [`CurvedRule::new`]: the linear stop energy.
     pub corner_floor: f64,

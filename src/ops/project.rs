@@ -1,4 +1,4 @@
-//! Vertex projection (thesis §4.4.1 "Vertex Projection", DESIGN invariant 5):
+//! Vertex projection (thesis §4.4.1 "Vertex Projection", docs/design.md "Invariants" 5):
 //! a primary vertex that the BSP (or a fallback split) left near but off its
 //! curve moves toward its curve point `c(t)`, as far as the other invariants
 //! allow: all the way if possible, else the largest of a few fractions of the

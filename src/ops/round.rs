@@ -1,5 +1,5 @@
 //! Vertex rounding: a rational vertex moves to its nearest `f64` point when no
-//! invariant breaks (thesis §2.3.4 "Hybrid Kernel"; DESIGN "Exactness").
+//! invariant breaks (thesis §2.3.4 "Hybrid Kernel"; docs/design.md "Exactness").
 
 use super::invariants::{self, Check, on_curve};
 use super::{Context, LocalChange, Outcome, Reject};

@@ -1,5 +1,5 @@
-//! Forced corners: where the drawing itself leaves no room for a good angle
-//! (issue 38). Decided from the input features (the primary curves and the
+//! Forced corners: where the drawing itself leaves no room for a good angle.
+//! Decided from the input features (the primary curves and the
 //! secondary polylines the mesh's edges are tagged with), the envelope ε and
 //! the sizes, never from the mesh's own angles. docs/forced-corners.svg draws
 //! both rules.
@@ -32,11 +32,11 @@
 //! apart, and every triangle there can be well shaped. The optimizer's size
 //! floor does not stop it: splits follow the size field, but the BSP's cuts,
 //! smoothing along a curve and the ends of sections make shorter edges wherever
-//! the features need them. (An earlier rule marked the corners under `p` forced
-//! when δ < tan(α)·h_min/2 for the size floor h_min; on a whisker ending
-//! 0.01 from a square's edge in a 100-unit drawing, with `--mu 1e-5` so that
-//! both stay primary, the mesh put two vertices 0.08 apart under it and the
-//! corners the rule called forced were 13.6° and 14.6°.)
+//! the features need them. (A rule marking the corners under `p` forced when
+//! δ < tan(α)·h_min/2, for the size floor h_min, would be wrong: on a whisker
+//! ending 0.01 from a square's edge in a 100-unit drawing, with `--mu 1e-5` so
+//! that both stay primary, the mesh puts two vertices 0.08 apart under it and
+//! the corners such a rule calls forced are 13.6° and 14.6°.)
 //!
 //! An element is forced when one of its corners is. The mesh is read to
 //! locate things (which sector a corner lies in, which input segment a mesh

@@ -4,7 +4,7 @@
 //! [`crate::element::energy`]. The curved mesh optimization (`curve::optimize`,
 //! a layer up) drives the same collapse, swap and smoothing passes with a
 //! uniform target. Its tuning constants, with their provenance, head
-//! `schedule/mod.rs`. Thesis §2.3.2, §4.4.1; DESIGN "Data flow" (optimize).
+//! `schedule/mod.rs`. Thesis §2.3.2, §4.4.1; docs/design.md "Data flow" (optimize).
 
 pub(crate) mod forced;
 pub(crate) mod schedule;

@@ -222,7 +222,7 @@ fn open_space_min_angle(mesh: &TriMesh) -> f64 {
     min
 }
 
-/// Issue 38: a fan of 7.5° needles from a free vertex ([`fan_mesh`]) meets
+/// A fan of 7.5° needles from a free vertex ([`fan_mesh`]) meets
 /// the stop energy, so the main passes stop at once and the polish cannot
 /// open a fan by moving its centre; the worst-element phase refines around
 /// it until no corner at a vertex away from the features is below α, and the

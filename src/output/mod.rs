@@ -1,5 +1,5 @@
 //! Output: gmsh .msh writers (4.1 and 2.2, ASCII and binary) and the SVG preview
-//! (DESIGN "Data flow", last stage; "Curved elements" for the node order).
+//! (docs/design.md "Data flow", last stage; "Curved elements" for the node order).
 //!
 //! Owns the file formats. Guarantees:
 //! - every file is written to a temporary file in the target directory and renamed,

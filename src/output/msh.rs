@@ -415,8 +415,8 @@ impl Layout {
         // another surface or nothing, signed by which side it is on.
         // Every triangle side by its edge, then in triangle order (3 t + e):
         // an edge's sides are one run, in the order the triangles come.
-        // (Sorted once: a map of small vectors took the most of the
-        // writer's time on organ.)
+        // (Sorted once: a map of small vectors would take most of the
+        // writer's time on a large mesh.)
         let side = |order: u32| {
             let (t, e) = ((order / 3) as usize, (order % 3) as usize);
             let c = mesh.triangle(t);

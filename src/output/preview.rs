@@ -11,7 +11,7 @@
 //! diverging scale (blue below 4/5, neutral within [4/5, 4/3], the band the
 //! optimizer aims for, red above 4/3), with a legend to the right.
 //!
-//! [`PreviewMarks`] adds the element-quality marks of `--preview` (issue 38):
+//! [`PreviewMarks`] adds the element-quality marks of `--preview`:
 //! an orange dot in each forced corner (a little inside the triangle, so the
 //! two corners of a wedge's vertex are told apart) and a blue ring around the
 //! worst unforced element.

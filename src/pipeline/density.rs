@@ -19,9 +19,9 @@
 //! crossing every μ/2 the sections between them are far shorter than the
 //! envelope: all secondary, moved within ε, the arrangement's millions of
 //! exact vertices collapsed again by the optimizer. 2 000 random stroked lines
-//! in a square (issue 41's 0335: 451 000 crossings, 1.2 per μ) mesh in about a
-//! minute; 5 000 (0292: 2.8 million, 3.1 per μ) took past ten minutes and
-//! 2.5 GB before it was refused here. The crossings are counted on the
+//! in a square (451 000 crossings, 1.2 per μ) mesh in about a minute; 5 000
+//! (2.8 million, 3.1 per μ) take past ten minutes and 2.5 GB, so they are
+//! refused here (`docs/tuning.md`). The crossings are counted on the
 //! outlines' chords (a curve's control polygon) in a grid, each where it lies,
 //! and the count stops at the budget.
 
@@ -29,10 +29,9 @@ use crate::error::{Error, Result};
 use crate::svg::{Drawing, FeatureGeom};
 use kurbo::Point;
 
-/// Most outline depth within μ (see the module doc) a drawing may have. Of the
-/// fuzz findings of issue 41, the stroked soups, dashes and cross-hatches lie at 1
-/// to 29; refused: hatches of 25 000 and 20 000 lines 0.04 and 0.02 apart (μ ≈ 1.1)
-/// at 37 and 53, and the stroked 100k zigzag.
+/// Most outline depth within μ (see the module doc) a drawing may have: the
+/// fuzz corpus's stroked soups, dashes and cross-hatches pass, dense
+/// hatches are refused (`docs/tuning.md`).
 pub(super) const MAX_DEPTH: f64 = 32.0;
 
 /// Most crossings per μ of outline (see the module doc): one every μ/2.

@@ -3,7 +3,7 @@
 //!
 //! Meshers ([`Params::mesher`]): the CDT baseline (`baseline`), or TriWild:
 //! features → exact BSP (`bsp`) → AMIPS optimization (`optimize`) → curving
-//! (`curve`); a vertex that stays rational is an error, never written (DESIGN
+//! (`curve`); a vertex that stays rational is an error, never written (docs/design.md
 //! "Exactness"). `--stop-after bsp` delivers the BSP mesh, `--linear` the
 //! optimized one, each as a [`LinearMesh`] (`linear`); the curved mesh is
 //! delivered as a [`CurvedMesh`]. Both become a [`FemMesh`] whose vertices are
@@ -966,6 +966,10 @@ pub(crate) fn optimize_stage(
     Ok((mesh, fs, ctx, stats))
 }
 
+/// The BSP stage's mesh: the conforming segments and points of `fs` (with
+/// free seed vertices where `field` asks for a finer mesh than the features
+/// give) triangulated exactly in the drawing's padded box ([`bsp::build`]);
+/// refused first when the segments cross too densely ([`density`]).
 #[expect(
     clippy::too_many_arguments,
     reason = "the BSP stage's inputs (the features, their chains, the field) and the run's \
@@ -1019,9 +1023,8 @@ fn check_trimesh(mesh: &TriMesh, stage: Stage) -> Result<()> {
 /// The curved stage's corner rule ([`crate::ops::CurvedRule::corner_floor`]):
 /// the linear stop energy, or the energy below which no corner is under α
 /// if that is lower, so the curved passes never make a straight corner below
-/// α where the linear stage left none (issue 38: on the dev drawings the
-/// curved stage took the worst unforced angle from 10° to 5.2° with the stop
-/// energy, whose triangles may have corners of 7°).
+/// α where the linear stage left none (the stop energy alone admits triangles
+/// with corners near 7°, below the default α of 10°).
 fn corner_floor(params: &Params, resolved: &Resolved) -> f64 {
     params
         .stop_energy
@@ -1155,7 +1158,7 @@ mod snap;
 mod tests;
 
 /// The warning for unforced elements whose certified Jacobian ratio is below
-/// [`crate::quality::RATIO_FLOOR`] (issue 38), `None` when there is none: how
+/// [`crate::quality::RATIO_FLOOR`], `None` when there is none: how
 /// many, the worst and where. The curving stage repairs only elements that it
 /// cannot certify, then fits those it still cannot (to a ratio of at least
 /// 0.01), so such an element is a fitted one or a valid one bent too far for
@@ -1206,7 +1209,7 @@ fn vertex_budget_warning(max_vertices: u32) -> String {
 }
 
 /// The warning for corners below α that the worst-element phase left where
-/// the drawing leaves room (issue 38): how many, and why it stopped.
+/// the drawing leaves room: how many, and why it stopped.
 fn bad_corners_warning(
     n: usize,
     alpha: f64,

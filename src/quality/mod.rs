@@ -1,6 +1,6 @@
 //! Mesh quality metrics: corner angles, the 2D conformal AMIPS energy, areas.
 //!
-//! Owns the numbers every mesher is judged by (the `--stats` report, DESIGN
+//! Owns the numbers every mesher is judged by (the `--stats` report, docs/design.md
 //! "Outputs a user can check"). Angles and energies are measured on the straight
 //! triangle spanned by each element's three corners, whatever the element order;
 //! the area and the Jacobian ratio are those of the elements as written (curved
@@ -40,7 +40,7 @@ pub struct Quality {
     /// `triwild check`'s `min_detj_ratio` of the written file.
     pub min_jacobian_ratio: f64,
     /// The same numbers left to the optimizer: over the corners and elements
-    /// the drawing does not force (issue 38; the TriWild mesher only, `None`
+    /// the drawing does not force (the TriWild mesher only, `None`
     /// for the CDT baseline). See [`Unforced`].
     pub unforced: Option<Unforced>,
 }
@@ -61,7 +61,7 @@ pub struct Unforced {
     /// Unforced corners below α.
     pub below_alpha: usize,
     /// Unforced elements whose certified Jacobian ratio is below 0.1 (curved
-    /// elements bent or parametrized too unevenly for their size; issue 38).
+    /// elements bent or parametrized too unevenly for their size).
     pub below_ratio_floor: usize,
     /// Forced corners.
     pub forced_corners: usize,
@@ -79,8 +79,8 @@ pub struct Unforced {
 }
 
 /// The smallest certified Jacobian ratio an unforced element should have
-/// ([`Unforced::below_ratio_floor`]; issue 38's acceptance: 0.1 at orders 2 and
-/// 3, where a solver's conditioning still holds).
+/// ([`Unforced::below_ratio_floor`]: 0.1 at orders 2 and 3, where a solver's
+/// conditioning still holds).
 pub(crate) const RATIO_FLOOR: f64 = 0.1;
 
 /// Where the worst unforced element is and how bad.
@@ -421,8 +421,8 @@ mod tests {
     #[test]
     fn curved_elements_count_with_their_exact_area_and_ratio() {
         // A quadratic triangle whose edge 0→1 bulges down to (0.5, -0.25): the
-        // parabola adds 2/3 · 1 · 0.25 to the straight area 1/2 (issue 15:
-        // `--stats` reported the straight-sided area).
+        // parabola adds 2/3 · 1 · 0.25 to the straight area 1/2 (not the
+        // straight-sided area).
         let mesh = FemMesh {
             order: Some(Order::Quadratic),
             nodes: vec![
@@ -456,7 +456,7 @@ mod tests {
         straight.nodes[3] = Point::new(0.5, 0.0);
         assert_eq!(Quality::of(&straight).min_jacobian_ratio, 1.0);
         // The mid-edge node slid toward a corner: still straight and valid, but
-        // det J along the edge runs from 0.08 to 1.92 of its mean (issue 38).
+        // det J along the edge runs from 0.08 to 1.92 of its mean.
         let mut slid = straight.clone();
         slid.nodes[3] = Point::new(0.27, 0.0);
         let u = Quality::of_classified(&slid, &[], 10.0)

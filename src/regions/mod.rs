@@ -1,4 +1,4 @@
-//! Regions: what the drawing fills becomes tagged FEM domains (DESIGN `regions`, issue 7).
+//! Regions: what the drawing fills becomes tagged FEM domains (docs/design.md "regions").
 //!
 //! Owns the decision of which filled SVG shape each triangle belongs to, the
 //! physical surfaces made from it, and the dropping of regions (`--cut-outside`,
@@ -107,7 +107,7 @@ pub struct RegionReport {
     pub small: SmallRegions,
 }
 
-/// The physical surfaces of a few triangles at most (issue 38): how many, and
+/// The physical surfaces of a few triangles at most: how many, and
 /// the smallest ones by area.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SmallRegions {

@@ -1,4 +1,4 @@
-//! Directions of line elements (issue 15): every physical curve's line
+//! Directions of line elements: every physical curve's line
 //! elements run one way, so a normal taken from an element's direction is the
 //! same side of the curve all along it, and the domain's boundary is a physical
 //! curve of its own.

@@ -248,7 +248,7 @@ fn paint_order_not_document_order_decides() {
     assert_eq!(stat(&stats, "b").area, 12.0);
 }
 
-/// Issue 39: a fill at opacity 0.999 is alpha 255 as a byte: it names the
+/// A fill at opacity 0.999 is alpha 255 as a byte: it names the
 /// same region as the opaque fill (`fill-#5d432e`), not a second one
 /// (`fill-#5d432eff`); an opacity that rounds below 255 keeps its alpha.
 #[test]
@@ -295,8 +295,8 @@ fn colour_mode_merges_equal_fills_and_none_mode_is_one_domain() {
     assert_eq!(stat(&stats, "fill-#ff0000").area, 28.0);
 
     // Past the run's time limit the stage stops with a time-limit error
-    // naming it (a drawing whose winding queries are slow once took 11 s here
-    // under a 10 s limit and still wrote its mesh).
+    // naming it (a drawing whose winding queries are slow must not run 11 s here
+    // under a 10 s limit and still write its mesh).
     let passed = Deadline::after(Some(0.0));
     match tag(&d, &mesh, &RegionOptions::DEFAULT, 1e-9, 1e-5, None, passed) {
         Err(crate::Error::TimeLimit { stage, .. }) => assert_eq!(stage, crate::Stage::Regions),

@@ -4,7 +4,7 @@
 //! never from the mesh being optimized: the global edge length `l` (the largest
 //! size), the user's fields ([`crate::SizeSpec`]: per region, near outlines,
 //! boxes, a formula, a background mesh, a function), the sizes the drawing
-//! itself asks for (thin strokes meshed as areas: twice their width on their
+//! itself asks for (thin strokes meshed as areas: `STROKE_SIZE_PER_WIDTH` times their width on their
 //! outlines, growing by a factor 2 per element; the automatic local feature size: narrow gaps, thin parts and
 //! tight curves), combined by minimum, clamped to `[l_min, l]` and graded so
 //! that h grows by at most the grading `G` from one element to the next (a

@@ -19,7 +19,7 @@
 //! left out: the BSP would cut a sliver between them, and the features'
 //! vertices already set the size there. A field the vertex budget cannot
 //! follow (capped, or more seeds than half the budget) gets none: the
-//! optimizer's split passes stop at the budget as before.
+//! optimizer's split passes alone refine toward it, and stop at the budget.
 
 use super::SizeField;
 use crate::features::grid::Grid;
@@ -27,7 +27,7 @@ use kurbo::{Line, Point, Rect};
 
 /// Leaves whose smallest corner value is below this fraction of `l` get a
 /// seed. Where the field is near `l` the features' vertices and the usual
-/// split passes make the mesh as before.
+/// split passes make the mesh.
 pub(crate) const SEED_BELOW: f64 = 0.5;
 
 /// The area per vertex of a mesh of equilateral triangles of side 1 (each

@@ -19,25 +19,15 @@ pub(super) const BACKGROUND: &str = "background";
 /// optimizer's [4/5, 4/3] band), so one layer of staggered triangles fills
 /// the strip with angles of about atan(2w / 6w) = 18° (10–14° where the
 /// staggering breaks, at joins and ends), where the global size would make
-/// needles. Issue 39 measured it on the dev set's 138 stroked drawings
-/// (triangles of the default over `--strokes line`, median; the default's
-/// median unforced minimum angle; summed time):
-///
-/// | per width | triangles | angle | time |
-/// |---|---|---|---|
-/// | 2 | 3.15x | 10.6° | 240 s |
-/// | 6 | 1.59x | 9.3° | 86 s |
-///
-/// and on a third of them 4: 2.02x, 9.4°; 8: 1.46x but 7.2°, with 40 of 46
-/// drawings below 10° (the strip's triangles then set the minimum angle).
+/// needles. Smaller values cost triangles and time, larger ones the minimum
+/// angle (measurements in `docs/tuning.md`).
 pub(crate) const STROKE_SIZE_PER_WIDTH: f64 = 6.0;
 
 /// The slope at which a thin stroke's size grows away from its outline, at
 /// least (the grading's own when that is steeper): a factor 2 per element, the
 /// wildmeshing-toolkit's ratio. The stroke's size is the drawing's need, not
-/// the user's: graded at 1.5 it refined a band of many elements around every
-/// stroke (a 30-drawing dev sample: 1.19x the triangles of the optimizer's old
-/// one-ring caps; at this slope 1.10x, at 2 1.09x with the same median angle).
+/// the user's: graded gently it would refine a band of many elements around
+/// every stroke (measurements in `docs/tuning.md`).
 pub(crate) const STROKE_SLOPE: f64 = 1.0;
 
 /// At most this many sample points of the feature size on one segment, and

@@ -24,7 +24,7 @@ fn field_of(drawing: &Drawing, r: &Resolved, spec: &SizeSpec) -> SizeField {
     .expect("the field builds")
 }
 
-/// A thin stroke's size goes to its own outline only (issue 37): the edge of
+/// A thin stroke's size goes to its own outline only: the edge of
 /// another shape running 0.75 from the stroke is resampled at the size it had
 /// without the stroke (`l`), not at the field there (the stroke's size grown
 /// by 0.75), while the stroke's own outline is cut at its own size. The

@@ -91,7 +91,7 @@ pub struct ShapePaint {
     /// through the same clips): the stroke's area joins the fill's region (the
     /// fill's name, [`Shape::name`]), and the outlines between the two (the
     /// fill's outline under the stroke, the stroke's inner outline) bound
-    /// nothing, so no band is meshed (issue 39, part 4).
+    /// nothing, so no band is meshed.
     pub joins_fill: bool,
     /// Clip regions the shape is painted through (all of them at once).
     #[serde(skip)]
@@ -417,7 +417,7 @@ pub struct PaintCounts {
     /// Of the strokes meshed as areas, dashed ones whose every gap is
     /// shorter than μ: stroked whole (the dashes on either side of a gap
     /// would lie closer than the feature envelope, which does not keep them
-    /// apart; a dashed spiral of 80 000 such dashes took minutes, issue 41).
+    /// apart, and a dashed spiral of 80 000 such dashes would take minutes).
     pub dashes_closed: usize,
     /// Of the strokes meshed as areas, the closed subpaths whose outlines are
     /// the exact offsets (concentric conics, parallel lines); the others are

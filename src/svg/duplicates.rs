@@ -1,4 +1,4 @@
-//! Whole shapes painted again on top of themselves (issue 20: a path duplicated
+//! Whole shapes painted again on top of themselves (a path duplicated
 //! thousands of times): the lower copies are merged into the topmost one.
 //!
 //! A shape is a *duplicate* of a shape painted above it when both have the same

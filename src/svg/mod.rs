@@ -1,4 +1,4 @@
-//! SVG input: usvg tree → [`Drawing`] (DESIGN "Data flow", `svg`; thesis §4.3.1 input).
+//! SVG input: usvg tree → [`Drawing`] (docs/design.md "svg"; thesis §4.3.1 input).
 //!
 //! Owns everything between the bytes of an SVG file and the f64 geometry the
 //! meshers consume. Normalises once at the input boundary:

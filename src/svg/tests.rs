@@ -315,7 +315,7 @@ fn text_becomes_outlines_when_a_font_exists() {
     }
 }
 
-/// Issue 39: text whose family is missing falls back, for the characters its
+/// Text whose family is missing falls back, for the characters its
 /// font lacks, to a face of the requested weight and style (usvg's default
 /// fallback took the first face with the character: Arabic in regular text came
 /// out DejaVu Sans Bold). Here the requested family is missing, the default
@@ -397,8 +397,8 @@ fn clip_paths_and_masks_limit_the_shape_and_their_outlines_are_features() {
     assert_eq!(outlines, ["clip-c", "mask-m", "mask-m"]);
 }
 
-/// Issue 39's smallest case: a rectangle with `marker="none"` beside a group
-/// lost the group's path (usvg's group was taken for the rectangle's markers).
+/// A rectangle with `marker="none"` beside a group keeps the group's path (usvg's
+/// group must not be taken for the rectangle's markers).
 #[test]
 fn marker_none_beside_a_group_keeps_both_shapes() {
     let doc = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect fill="#85d8f6" marker="none" width="40" height="60" x="6" y="37"/><g><path fill="#9fc510" d="M6 71h40v26H6z"/></g></svg>"##;
@@ -1019,7 +1019,7 @@ fn audit(parsed: &load::Parsed<'_, '_>, out: &outline::Outlines) -> Vec<String> 
     problems
 }
 
-/// The loader audit over the dev corpus (issue 39): every fill and stroke
+/// The loader audit over the dev corpus: every fill and stroke
 /// usvg paints in every drawing is a shape or counted under a named reason
 /// (see [`audit`]). Fails on any that is neither, naming the file and the
 /// path. About 3 s in the test profile; skipped where the corpus is absent.
@@ -1329,7 +1329,7 @@ fn coordinates_are_checked_after_units_and_scale() {
     let e = load_bytes_with(doc.as_bytes(), Units::User, 1e4).unwrap_err();
     assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
     // a viewport mapping that underflows f32 cannot be undone: a clear error in
-    // user units, px as before
+    // user units, and in px too
     let tiny = doc.replace(r#"viewBox="0 0 1e12 1e12""#, r#"viewBox="0 0 3e38 3e38""#);
     let tiny = tiny.replace(
         r#"width="1e12" height="1e12""#,
@@ -1339,7 +1339,7 @@ fn coordinates_are_checked_after_units_and_scale() {
     let e = load_bytes_with(tiny.as_bytes(), Units::User, 1.0).unwrap_err();
     assert!(e.to_string().contains("root viewBox"), "{e}");
     assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
-    // in px the drawing collapses to a point, as before
+    // in px the drawing collapses to a point
     let px = load_in(&tiny, Units::Px, 1.0);
     assert_eq!(px.bbox.area(), 0.0);
 }

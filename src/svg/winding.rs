@@ -535,10 +535,10 @@ impl LayerGrid {
 /// Whether `shape`'s fill covers no area: every subpath lies on one line,
 /// control points included (a curve stays in their convex hull), so its
 /// winding number is zero everywhere off that line. A `<line>` element, filled
-/// black by default, is one; it paints nothing a renderer shows, yet as a
-/// layer it was tested at every query point its box holds, and a point on it
-/// got a best-effort winding number. (0335, 2 000 random `<line>`s: the
-/// regions stage took 3.8 s at one thread for a mesh that is all background.)
+/// black by default, is one; it paints nothing a renderer shows, and as a
+/// layer it would be tested at every query point its box holds (a drawing of
+/// 2 000 random `<line>`s would spend seconds in the regions stage for a mesh
+/// that is all background).
 fn paints_nothing(shape: &Shape) -> bool {
     shape.subpaths.iter().all(|sp| {
         let mut points = std::iter::once(sp.start).chain(sp.segments.iter().flat_map(|seg| {

@@ -1,4 +1,4 @@
-//! An independent checker of the FeatureSet invariants (DESIGN `features`), shared by the
+//! An independent checker of the FeatureSet invariants (docs/design.md "features"), shared by the
 //! unit tests of `src/features` and `src/pipeline/tests/features_devset.rs`. It shares no code with the
 //! module under test: its own Bézier evaluation, distances and dense sampling. The including
 //! module provides `FeatureSet`, `Parent`, `Point`, `Vec2` and `Rect` in scope.

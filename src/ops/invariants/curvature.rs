@@ -1,5 +1,5 @@
 //! Invariant 3: the curve piece of a primary edge turns less than α
-//! (DESIGN "Invariants" 3, Theorem 4.4).
+//! (docs/design.md "Invariants" 3, Theorem 4.4).
 //!
 //! A section has constant-sign curvature (the feature stage splits at
 //! inflections), so the turn of a piece is the angle between the end tangents

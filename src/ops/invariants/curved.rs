@@ -1,5 +1,5 @@
 //! The curved mode of the invariants (thesis §4.4.2 "Curved Optimization";
-//! DESIGN "Curved elements"): once the linear mesh is curved, the local
+//! docs/design.md "Curved elements"): once the linear mesh is curved, the local
 //! operations keep every element they touch a valid curved element instead of
 //! keeping each primary edge's turn below α.
 //!

@@ -1,5 +1,5 @@
 //! Invariant 2: every secondary edge stays within ε of the input secondary
-//! polyline it is tagged with (DESIGN "Invariants" 2; thesis §2.3.4
+//! polyline it is tagged with (docs/design.md "Invariants" 2; thesis §2.3.4
 //! "Envelope Test", in 1D).
 //!
 //! The test is conservative: an edge is accepted only when a chain of points

@@ -1,4 +1,4 @@
-//! Invariant 1: no triangle is inverted or degenerate (DESIGN "Invariants" 1).
+//! Invariant 1: no triangle is inverted or degenerate (docs/design.md "Invariants" 1).
 //!
 //! Decided exactly by `TriMesh::orientation`: the float filter of
 //! `exact::orient2d` for `f64` vertices, rationals where a vertex is rational.

@@ -1,4 +1,4 @@
-//! The invariants every local operation keeps (DESIGN "Invariants" 1-5), each
+//! The invariants every local operation keeps (docs/design.md "Invariants" 1-5), each
 //! run on the faces an operation created and the edges at the vertices it
 //! changed, cheapest first.
 //!

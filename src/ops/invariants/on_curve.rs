@@ -1,6 +1,6 @@
 //! Invariants 4 and 5: a vertex on a primary section lies on its curve at its
 //! tracked parameter, and one the BSP left off the curve never moves away
-//! from it (DESIGN "Invariants" 4, 5; thesis §4.4.1 "Vertex Projection").
+//! from it (docs/design.md "Invariants" 4, 5; thesis §4.4.1 "Vertex Projection").
 //!
 //! A vertex's parameter is read from the primary tags of its edges; all tags
 //! of one section must agree on it.

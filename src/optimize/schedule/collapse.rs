@@ -359,8 +359,8 @@ impl Schedule<'_> {
             }
         };
         let first = direction(k.lo, k.hi);
-        // (on 0335 a fifth of the plans: each collapse applied had planned
-        // the other direction too, and most collapses go the first way)
+        // (planning both directions of every edge would waste up to a fifth
+        // of the plans: most collapses go the first way)
         if let CollapseDirection::Plan(planned) = &first
             && matches!(planned.1, Some(Ok(())))
         {

@@ -28,7 +28,7 @@
 //! and swaps lift the worst triangles while that still pays. From the
 //! coarsening on, smoothing and swaps stretch no edge past `2 l`.
 //!
-//! Last, the worst-element phase (`repair.rs`, issue 38) repairs the corners
+//! Last, the worst-element phase (`repair.rs`) repairs the corners
 //! below α that the feature edges leave room for: targets halved around them,
 //! the passes run on that region only, round after round (a round that makes
 //! the worst such corner worse is rolled back and run with energy-bounded
@@ -95,22 +95,19 @@ const FIELD_SPLIT_PASSES: usize = 12;
 /// Edges shorter than this fraction of their target are collapsed in a pass
 /// (the collapse may not make an edge longer than [`SPLIT_ABOVE`] of its
 /// target, so splits never undo it). The thesis (§2.3.2) collapses below 4/5;
-/// 1 measured better on the dev set (8f4bc8a: min-angle ratio 0.94 -> 1.02).
+/// 1 measured better on the dev set; see `docs/tuning.md`.
 const COLLAPSE_FACTOR: f64 = 1.0;
 /// Edges shorter than this multiple of `l` are collapsed by the final
 /// coarsening: every edge (the energy rule and [`COARSEN_STRETCH`] decide).
-/// Introduced in 8f4bc8a ("final coarsening over every edge").
 const COARSEN_FACTOR: f64 = f64::INFINITY;
 /// The final coarsening may create edges up to this multiple of `l` (no split
-/// pass follows it to undo them). Introduced in 8f4bc8a ("new edges up to 2l").
+/// pass follows it to undo them).
 const COARSEN_STRETCH: f64 = 2.0;
 /// Where the field is at `l` (open space, away from every size source) the
 /// final coarsening keeps new edges within the split bound: `l` then means the
-/// edge length there (a square at `-l 0.05`: 353 triangles with edges up to
-/// 2 l, median edge 1.28 l, match 0.59; within 4/3: 695 triangles, match 0.80;
-/// after the equalisation 580, match 0.93). On a 20-drawing dev sample this
-/// costs 1.01x the triangles: most are near features, where the field is below
-/// `l` and the coarsening still stretches edges to [`COARSEN_STRETCH`].
+/// edge length there. It costs few triangles: most are near features, where
+/// the field is below `l` and the coarsening still stretches edges to
+/// [`COARSEN_STRETCH`]. Measurements in `docs/tuning.md`.
 const OPEN_STRETCH: f64 = SPLIT_ABOVE;
 /// Rounds of the equalisation (relaxation, collapse below
 /// [`EQUALIZE_COLLAPSE`], swaps) after the coarsening; it stops earlier once a
@@ -122,50 +119,46 @@ const EQUALIZE_COLLAPSE: f64 = 0.8;
 /// The equalisation's collapses may create edges up to this multiple of their
 /// target; the relaxation that follows shortens them again. With the split
 /// bound 4/3 instead, a half-edge collapse in a mesh of edges near 1 is
-/// refused (its new edges reach 1 + 0.8): a square kept 14 % of its edges
-/// below 4/5 (match 0.85); with 1.5, 3 % (0.93); with 1.7, match 0.89.
+/// refused (its new edges reach 1 + 0.8). Measurements in `docs/tuning.md`.
 const EQUALIZE_STRETCH: f64 = 1.5;
 /// The final coarsening may always make triangles up to this energy (1 for
 /// equilateral), even in a mesh whose worst triangle is better (the stop energy
 /// still caps it). With the mesh's own worst energy as the only bound, a mesh
-/// of near-equilateral triangles coarsened by 21 % at one `l` and by 58 % at
-/// half of it (worst 1.38 vs 1.78): a `<circle>` gave 223, 1415 and 3107
-/// triangles at `-l 0.05, 0.025, 0.0125`; with 2, 219, 788 and 3125 (issue 14).
-/// Our value: 1.5 left the jump, 2 and 2.5 measured alike on the disk.
+/// of near-equilateral triangles coarsens far more at one `l` than at half of
+/// it, so the triangle count jumps with `l`. Measurements in `docs/tuning.md`.
 const COARSEN_ENERGY: f64 = 2.0;
 /// After this many passes in a row whose splits the collapses undid (see
 /// `driver`), the stop rule no longer asks for the stretch against the field.
 const UNDONE_PASSES: usize = 3;
 /// At most this many min-max polishing passes (min-max smoothing and swaps).
-/// Empirical, introduced in 8f4bc8a.
+/// Empirical (`docs/tuning.md`).
 const MINMAX_PASSES: usize = 10;
 /// The min-max polish stops once a pass lowers the largest energy by less
-/// than this fraction of it. Empirical, introduced in 8f4bc8a.
+/// than this fraction of it. Empirical (`docs/tuning.md`).
 const MINMAX_MIN_GAIN: f64 = 1e-3;
 /// At most this many polishing passes (swaps and smoothing) end the schedule.
-/// Empirical, introduced in 8ea5c2c.
+/// Empirical (`docs/tuning.md`).
 const POLISH_PASSES: usize = 6;
 /// The polish stops once a pass lowers the mean energy by less than this
-/// fraction of it. Empirical, introduced in 8ea5c2c.
+/// fraction of it. Empirical (`docs/tuning.md`).
 const POLISH_MIN_GAIN: f64 = 1e-4;
 /// The sizing field is refined after a pass that lowered the largest energy by
 /// less than this (and the mean by less than [`SIZING_STALL_MEAN`]). The
 /// TriWild reference (`optimization.cpp`, `refine`) uses 5e-1 with its energy
 /// (2 for an equilateral triangle); halved for ours (1 for equilateral), as
-/// [`crate::Params::stop_energy`] halves the thesis's 10. Introduced in 020a590.
+/// [`crate::Params::stop_energy`] halves the thesis's 10.
 const SIZING_STALL_MAX: f64 = 0.25;
 /// See [`SIZING_STALL_MAX`]: the reference's 5e-2 for the mean energy, halved.
 const SIZING_STALL_MEAN: f64 = 0.025;
 /// Once the sizing field has hit its floor, this many passes in a row without
 /// gain stop the schedule (TriWild reference, `optimization.cpp`, `refine`:
-/// `it > 10` and the last 10 passes). Introduced in 020a590.
+/// `it > 10` and the last 10 passes).
 const STALL_PASSES: usize = 10;
 /// A pass "without gain" lowers neither the largest nor the mean energy by
-/// more than this (the TriWild reference's 1e-4). Introduced in 020a590.
+/// more than this (the TriWild reference's 1e-4).
 const STALL_TOLERANCE: f64 = 1e-4;
 /// The quality goal also needs every edge shorter than this multiple of `l`
-/// (smoothing may stretch a few edges past [`SPLIT_ABOVE`]). Introduced in
-/// 3ff3cbe.
+/// (smoothing may stretch a few edges past [`SPLIT_ABOVE`]).
 const STOP_STRETCH: f64 = 2.0;
 /// A triangle refines the sizing field when its energy exceeds the largest
 /// energy divided by this (and [`SIZING_STOP_FRACTION`] of the stop energy).
@@ -191,17 +184,17 @@ const SIZING_RELAX: f64 = 1.5;
 /// the bad vertex's target).
 const SIZING_RADIUS: f64 = 1.8;
 /// Rounds of a collapse pass (refused collapses retried once their
-/// neighbourhood changed). Empirical, introduced in 3ff3cbe.
+/// neighbourhood changed). Empirical (`docs/tuning.md`).
 const COLLAPSE_ROUNDS: usize = 4;
 /// Pops of one collapse round: this many per queued edge, plus
-/// [`COLLAPSE_BUDGET_EXTRA`] (edges made short are queued again). Empirical,
-/// introduced in 020a590.
+/// [`COLLAPSE_BUDGET_EXTRA`] (edges made short are queued again). Empirical
+/// (`docs/tuning.md`).
 const COLLAPSE_BUDGET_PER_EDGE: usize = 4;
 /// See [`COLLAPSE_BUDGET_PER_EDGE`].
 const COLLAPSE_BUDGET_EXTRA: usize = 16;
 /// A swap must lower the larger energy of its two triangles by more than this
-/// fraction, so equal configurations never flip back and forth. Empirical,
-/// introduced in 020a590.
+/// fraction, so equal configurations never flip back and forth. Empirical
+/// (`docs/tuning.md`).
 const SWAP_MIN_GAIN: f64 = 1e-9;
 /// With more than one worker thread, the collapse and smoothing passes plan
 /// this many upcoming operations at a time in parallel (see
@@ -216,28 +209,26 @@ const SUMMARY_STEP: usize = 16;
 const SUMMARY_TOP: usize = 1024;
 
 /// The fewest edges queued again worth staging to plan in parallel: two (a
-/// lone edge is planned when popped). Staging from 16 left 9 % of organ's
-/// pops planned one by one on the pipeline's thread; from 2, the three
-/// slowest drawings' two-thread times fell 2-5 % (session 15).
+/// lone edge is planned when popped); staging from larger batches left more
+/// pops planned one by one on the pipeline's thread. Measurements in
+/// `docs/tuning.md`.
 const STAGE_MIN: usize = 2;
 /// A staged batch smaller than this is planned on the pipeline's thread, at
-/// once: handing out a few plans costs about what making them does (organ
-/// stages some 29 thousand batches of two to four edges, emoji_u1f98e 4
-/// thousand, besides 14 and 9 thousand single edges).
+/// once: handing out a few plans costs about what making them does (see
+/// `docs/tuning.md`).
 const STAGE_PAR_MIN: usize = 8;
 /// The envelope stages for vertices left rational (after §2.3.4's, which
 /// sample denser and then widen ε): ε multiplied by each of these in turn,
-/// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, introduced
-/// in 020a590.
+/// with [`ENVELOPE_SPACING`] of the sampling spacing. Our values, empirical
+/// (`docs/tuning.md`).
 const ENVELOPE_EPS: [f64; 3] = [1.0, 1.5, 2.0];
 /// See [`ENVELOPE_EPS`]: the sampling spacing of every stage, as a fraction
 /// of the original one.
 const ENVELOPE_SPACING: f64 = 0.5;
-/// Smoothing and rounding rounds in one envelope stage. Empirical, introduced
-/// in 020a590.
+/// Smoothing and rounding rounds in one envelope stage. Empirical
+/// (`docs/tuning.md`).
 const ENVELOPE_ROUNDS: usize = 3;
 /// Seed of the linear schedule's smoothing order: "triwild" in ASCII.
-/// Introduced in 3ff3cbe.
 const SEED: u64 = 0x0074_7269_7769_6c64;
 
 /// A deterministic permutation generator (SplitMix64).

@@ -35,8 +35,8 @@ pub(super) struct ShortestFirst<P = ()> {
     /// the top level, then one block of each level below and of `sorted`.
     summary: Vec<Vec<(u64, EdgeKey)>>,
     /// A 4-ary heap: the same pops as a binary one (the order of the keys
-    /// decides them), with half its levels. On 0335 the binary heap's pops
-    /// missed the cache at most levels (4.7 % of the run).
+    /// decides them), with half its levels, so a pop misses the cache at
+    /// fewer levels (a binary heap's pops were some 5 % of a large run).
     pub(super) again: QuaternaryHeap<std::cmp::Reverse<(u64, EdgeKey)>>,
     /// Edges taken from `again` in order, each with its plan made ahead.
     staged: VecDeque<(u64, EdgeKey, Option<P>)>,
@@ -124,13 +124,12 @@ impl<P> ShortestFirst<P> {
     }
 
     /// Whether `key` is in `sorted[next..]`. A binary search of all of
-    /// `sorted` (over a megabyte on organ) missed the cache at most of its
-    /// steps, on the pipeline's thread, for every edge queued again: 3-4 % of
-    /// that thread's time on renault. Below the head nothing is ahead (most
-    /// of the edges queued again that are not duplicates); otherwise the
-    /// summaries' searches, top level first, narrow `key`'s place down to a
-    /// block of each level below (one search of a single summary, two
-    /// megabytes on 0335's 2.1 million edges, was 5 % of that run).
+    /// `sorted` (megabytes on a large drawing) misses the cache at most of its
+    /// steps, on the pipeline's thread, for every edge queued again. Below
+    /// the head nothing is ahead (most of the edges queued again that are not
+    /// duplicates); otherwise the summaries' searches, top level first,
+    /// narrow `key`'s place down to a block of each level below, so each
+    /// search stays within a few cache lines.
     fn is_ahead(&self, key: (u64, EdgeKey)) -> bool {
         match self.sorted.get(self.next) {
             Some(&head) if head <= key => {}
@@ -164,9 +163,9 @@ impl<P> ShortestFirst<P> {
     /// Whether the next edge comes from `again`: the moment to
     /// [`Self::stage`] a batch (before what is staged already: a collapse
     /// queues the short edges at its vertex, shorter than the staged ones
-    /// more often than not; waiting until the staged batch ran out left
-    /// organ's and the emoji's edges queued again planned one by one, 260-300
-    /// thousand of them, on the pipeline's thread).
+    /// more often than not; waiting until the staged batch ran out would leave
+    /// hundreds of thousands of edges queued again on a large drawing to be
+    /// planned one by one on the pipeline's thread).
     pub(super) fn next_is_unstaged(&self) -> bool {
         self.smallest() == Some(2)
     }
@@ -190,8 +189,8 @@ impl<P> ShortestFirst<P> {
     /// Queue `key` again, unless it is still ahead in `sorted`: that copy
     /// comes first (on a tie `sorted` wins) and the copy queued again would
     /// come right after it, with nothing changed in between, only to be
-    /// skipped. Half the edges queued again after a collapse are such
-    /// duplicates (organ 62 %, the emoji 45 %): the round's positions do
+    /// skipped. About half the edges queued again after a collapse are such
+    /// duplicates: the round's positions do
     /// not change, so an edge of u's ring kept its length and its key.
     pub(super) fn push_again(&mut self, key: (u64, EdgeKey)) {
         if !self.is_ahead(key) {
@@ -237,7 +236,7 @@ impl<P> ShortestFirst<P> {
 /// 120 µs on two threads, 108 µs with the second one kept awake; the ten
 /// slowest dev drawings plan some 100 000 windows at two threads). So after
 /// each window the other threads are handed a job that spins until the next
-/// window starts (or [`SPIN_FOR`] has passed, when they sleep as before). It
+/// window starts (or [`SPIN_FOR`] has passed, after which they sleep). It
 /// touches no data: the plans, and so the meshes, are the same.
 struct KeepAwake {
     /// Bumped when a window starts (and when the pass ends): the spinning
@@ -361,7 +360,7 @@ impl<T: Send> PlanAhead<T> {
         }
         if n >= self.from + self.plans.len() {
             let end = (n + PLAN_AHEAD).min(items.len());
-            // Into the same buffer: organ plans some twelve thousand windows.
+            // Into the same buffer: a large drawing plans thousands of windows.
             let mut plans = std::mem::take(&mut self.plans);
             plans.clear();
             self.window(|| plans.par_extend(items[n..end].par_iter().map(plan)));

@@ -1,4 +1,4 @@
-//! The worst-element phase (issue 38): after the polish, the corners below α
+//! The worst-element phase: after the polish, the corners below α
 //! that the drawing does not force are repaired locally, the way
 //! TetWild and TriWild reach their energies when the passes stall: the targets
 //! around each bad triangle are halved (graded as in `update_sizing`), and the
@@ -11,10 +11,9 @@
 //! is bad too when the features meet at an input angle the envelope lets the
 //! mesh open (two secondary polylines at a tip, each edge free to turn by
 //! `asin(2ε / |e|)`): the region's smoothing moves their vertices within ε.
-//! (Until session 28 a corner between two feature edges, or in a sector of the
-//! mesh's feature edges narrower than α, counted as the drawing's; on the dev
-//! set that left 115 of 298 drawings below α unforced, the worst corner
-//! between two feature edges in 114 of them.)
+//! Deciding forced corners from the mesh's feature edges instead would excuse
+//! most corners below α, since the worst corner usually lies between two
+//! feature edges.
 //!
 //! The region's operations are the main passes' own (every invariant checked,
 //! collapses, swaps and moves never raise the local largest energy); only
@@ -28,11 +27,11 @@
 //! the curved stage makes (at most one curved edge per element) without
 //! smoothing: made here, the round repairs the corners it leaves.
 //!
-//! Why corners stayed below α before this phase (the 40 dev drawings, issue
-//! 38): the quality goal is met once the largest energy is below the stop
-//! energy (5), and a needle of 7.5° has energy 4.4; the sizing field is
-//! refined only around triangles above 0.9 times the stop energy; most such
-//! corners were at a vertex on one feature facing short edges of another
+//! Why the main passes leave corners below α: the quality goal is met once the
+//! largest energy is below the stop energy (5), and a needle of 7.5° has
+//! energy 4.4; the sizing field is refined only around triangles above 0.9
+//! times the stop energy; most such corners are at a vertex on one feature
+//! facing short edges of another
 //! (a fan from a vertex to a curve sampled within α, a strip between two close
 //! features) that only new vertices between the features resolve.
 
@@ -57,9 +56,9 @@ const REGION_CHUNK: usize = 256;
 
 /// The worst-element phase's region: a flag per vertex slot, and its
 /// vertices listed once each (in the order they joined). The passes' edges
-/// come from the list: a scan of the flags went over every vertex slot the
-/// mesh ever had (on 0335 716 000 slots for 100 000 live vertices and a
-/// region of a few thousand), 1.1 s of its worst-element phase.
+/// come from the list: a scan of the flags would go over every vertex slot the
+/// mesh ever had (on a large drawing several times the live vertices, for a
+/// region of a few thousand).
 #[derive(Default)]
 pub(super) struct Region {
     flags: Vec<bool>,

@@ -75,7 +75,7 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
         if let Err(e) = find_chain(line, &name, tol, &pos, &by_pos, &adj, &line_names) {
             // A secondary feature is kept within its ε-envelope, not exactly: the
             // clean-up of degenerate rounded triangles may move its vertices
-            // (issue 17), so its ends need only a node of its curve within ε.
+            // so its ends need only a node of its curve within ε.
             let within_envelope = matches!(tag, SegmentTag::Secondary { .. })
                 && [line.p0, line.p1].iter().all(|p| {
                     line_names.iter().any(|(&(a, b), names)| {
@@ -350,13 +350,10 @@ fn rejected_by_gmsh(nodes: &[Point], triangles: &[[Point; 3]]) -> (usize, usize)
     (degenerate, nodes.len() - cells.len())
 }
 
-/// Issue 17: rounded to f64, the exact BSP mesh of this drawing has degenerate
+/// Rounded to f64, the exact BSP mesh of this drawing has degenerate
 /// triangles and coinciding vertices; the delivered `--stop-after bsp` mesh
-/// has neither (they are collapsed, swapped or smoothed away). (The first
-/// fixture, a noto-emoji whose two rounded squares share edges, stopped
-/// producing them once coincident outlines became one feature, issue 39; this
-/// one, resvg's `M L M Z` path (a thick stroke over its own zero-area fill),
-/// was found by scanning the dev set's raw BSP meshes.)
+/// has neither (they are collapsed, swapped or smoothed away). The drawing is
+/// resvg's `M L M Z` path: a thick stroke over its own zero-area fill.
 #[test]
 fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
     let f =

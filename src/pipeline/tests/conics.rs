@@ -1,4 +1,4 @@
-//! Exact conics through the whole pipeline (issue 14, point 3): a hand-built
+//! Exact conics through the whole pipeline: a hand-built
 //! [`Drawing`] holding a unit disk (four quarter-circle conics, w = √2/2) and a
 //! rotated ellipse (four conic pieces from [`Conic::ellipse_arc`]) is meshed by
 //! [`crate::mesh_drawing_with`] at orders 1, 2 and 3 and several `-l`. Every

@@ -1,4 +1,4 @@
-//! The curving stage (issue 6) through the library API: a linear TriWild mesh
+//! The curving stage through the library API: a linear TriWild mesh
 //! (the BSP mesh of `pipeline::bsp_stage`, optimized by `optimize::optimize` unless
 //! the parameters stop after the BSP) is curved to order 3 and 2, every element is certified by
 //! `curve::certify_fem` and by the independent checker of `tests/support`, and

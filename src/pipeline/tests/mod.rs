@@ -22,7 +22,7 @@ mod curving;
 mod features_devset;
 mod optimize_pipeline;
 
-/// Issue 38: an unforced element below the Jacobian ratio floor is reported in a
+/// An unforced element below the Jacobian ratio floor is reported in a
 /// warning (how many, the worst and where); none below it, no warning.
 #[test]
 fn low_ratio_warning_names_the_count_and_the_worst() {

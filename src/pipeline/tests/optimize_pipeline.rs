@@ -1,4 +1,4 @@
-//! The optimized linear mesh (issue 5 acceptance), checked independently of the
+//! The optimized linear mesh, checked independently of the
 //! optimizer's own bookkeeping:
 //! - the mesh is valid (`TriMesh::check`), every vertex is an `f64` point;
 //! - every vertex of a primary feature edge lies within 1e-9·d of its section's

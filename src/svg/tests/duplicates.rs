@@ -1,4 +1,4 @@
-//! Whole paths painted again on themselves merge at load (issue 20).
+//! Whole paths painted again on themselves merge at load.
 
 use super::*;
 

@@ -1,5 +1,4 @@
-//! f64 geometry from the document's text (issue 14, points 2 and 3 at the
-//! loader): exact conics, exact transforms, agreement with usvg, fallbacks.
+//! f64 geometry from the document's text at the loader: exact conics, exact transforms, agreement with usvg, fallbacks.
 
 use super::*;
 use crate::svg::drawing::Conic;
@@ -83,9 +82,8 @@ fn a_unit_circle_far_from_the_origin_is_exact() {
     assert!(err < 1e-15, "{err:e}");
 }
 
-/// Issue 14's measurement: the radial error of the loaded circle's points at
-/// (1e6, 1e6), before (usvg's f32 cubics, its absolute transform applied in f64,
-/// as the loader did) and after (the conics).
+/// The radial error of the loaded circle's points at (1e6, 1e6): usvg's f32
+/// cubics (its absolute transform applied in f64) against the loader's conics.
 #[test]
 #[allow(clippy::print_stderr, reason = "the measurement is the test's report")]
 fn circle_at_a_million_radial_error_before_and_after() {

@@ -1,5 +1,5 @@
-//! The element size follows `-l` (issue 14, point 5): refining `-l` refines the mesh
-//! steadily, also on coarse settings.
+//! The global edge length `-l`: refining `-l` refines the mesh steadily, also on coarse
+//! settings. (The graded size field, `--size*`, is `tests/size_field.rs`.)
 //!
 //! A `<circle>` and a disk drawn as 64 arcs are meshed (background cut away) at several
 //! `-l`; at every step the element count must strictly grow, by a factor between 2 and 6
@@ -8,8 +8,8 @@
 //! twice: as 64 cubic arcs (`C`; their joints must stay mesh vertices: two different
 //! cubics are not one exact curve) and as 64 SVG arcs (`A`, which the loader keeps as
 //! exact conic pieces), whose joints are not corners: the features stage joins them
-//! into four exact quarters, so the coarse meshes are not pinned to a 64-gon. Every mesh is written under `target/test-out/sizing/` and
-//! checked by the independent checker. `cargo test --test sizing -- --nocapture`
+//! into four exact quarters, so the coarse meshes are not pinned to a 64-gon. Every mesh is written under `target/test-out/edge_length/` and
+//! checked by the independent checker. `cargo test --test edge_length -- --nocapture`
 //! prints the table.
 #![allow(
     clippy::print_stdout,
@@ -117,7 +117,7 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: Order) -> Row {
 }
 
 fn out_dir() -> std::path::PathBuf {
-    support::out_dir("sizing")
+    support::out_dir("edge_length")
 }
 
 /// Below this `-l` (relative) a level is "fine": `l` is below the boundary edges that
