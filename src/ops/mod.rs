@@ -259,6 +259,10 @@ pub(crate) struct Context {
     pub max_new_edge: f64,
     /// The curved mode of the invariants (`None`: the linear stage).
     pub curved: Option<CurvedRule>,
+    /// The mesh boundary is fixed: no edge on it is split (a periodic cell's
+    /// sides keep the vertices the BSP gave them, partners of the opposite
+    /// side's; the vertices themselves are tagged fixed).
+    pub fixed_boundary: bool,
 }
 
 impl Context {
@@ -293,6 +297,7 @@ impl Context {
             sections,
             envelope: Envelope::new(&polylines, eps_abs, sample_abs),
             alpha: features.params.alpha,
+            fixed_boundary: false,
             on_curve_abs: 1e-9 * features.params.d,
             energy: EnergyRule::NoWorseMax,
             energy_floor: 0.0,

@@ -22,6 +22,7 @@ use crate::optimize::forced::ForcedCorners;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MeshFormat, MshOptions};
 use crate::params::{Length, Mesher, Params, Resolved, Stage};
+use crate::periodic::{Cell, PeriodicReport};
 use crate::quality::Quality;
 use crate::regions::select::RegionMode;
 use crate::regions::{RegionOptions, RegionReport};
@@ -221,6 +222,9 @@ pub struct Report {
     pub sizing: Option<SizingReport>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
+    /// The periodic match (`--periodic`): node pairs, unpaired nodes, the
+    /// largest mismatch as written; `None` for a mesh that is not periodic.
+    pub periodic: Option<PeriodicReport>,
     /// The process's peak resident memory in MiB when the report was made
     /// (`run_file`: after the mesh was written), `None` where the system does
     /// not report it (`VmHWM` of `/proc/self/status`).
@@ -422,6 +426,22 @@ fn mesh_stages(
     deadline: Deadline,
 ) -> Result<(Meshed, SizeField, Vec<u8>)> {
     let mut times = Times::default();
+    let cell = match &params.periodic {
+        Some(p) => {
+            if regions.cut_outside {
+                return Err(Error::InvalidParams(
+                    "--cut-outside has no meaning with --periodic: the mesh covers the cell".into(),
+                ));
+            }
+            Some(Cell::of(drawing, p)?)
+        }
+        None => None,
+    };
+    let tiled = match &cell {
+        Some(c) => Some(times.time("periodic", || c.tile(drawing))?),
+        None => None,
+    };
+    let drawing = tiled.as_ref().unwrap_or(drawing);
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
     let mut bsp = None;
@@ -481,6 +501,7 @@ fn mesh_stages(
             )?;
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
+            ctx.fixed_boundary = cell.is_some();
             if params.stop_after == Some(Stage::Bsp) {
                 // Exact, but rounded to f64 a few triangles may be degenerate.
                 times.time("snap", || {
@@ -570,6 +591,16 @@ fn mesh_stages(
             deadline,
         )
     })?;
+    let mut mesh = mesh;
+    let periodic_report = cell.map(|c| times.time("periodic", || c.finish(&mut mesh)));
+    if let Some(r) = &periodic_report {
+        if r.unpaired > 0 || r.max_mismatch > 0.0 {
+            warnings.push(format!(
+                "--periodic: {} side node(s) without a partner, largest mismatch {:e}",
+                r.unpaired, r.max_mismatch
+            ));
+        }
+    }
     if !lost.is_empty() {
         warnings.push(lost_regions_warning(
             drawing,
@@ -622,6 +653,7 @@ fn mesh_stages(
         curve,
         sizing,
         warnings,
+        periodic: periodic_report,
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
     Ok((Meshed { mesh, report }, field, mask))
@@ -815,9 +847,13 @@ fn area_warning(
     ))
 }
 
-/// The box the TriWild meshers cover: the drawing's bounding box padded by
-/// `padding` (at least a few ulps of the coordinates, so it stays strictly larger).
+/// The box the TriWild meshers cover: a periodic tile's cell exactly, else
+/// the drawing's bounding box padded by `padding` (at least a few ulps of the
+/// coordinates, so it stays strictly larger).
 fn padded_box(drawing: &Drawing, padding: f64) -> Rect {
+    if let Some(cell) = drawing.cell {
+        return cell;
+    }
     let b = drawing.bbox;
     let magnitude = [b.x0, b.y0, b.x1, b.y1]
         .into_iter()
@@ -984,6 +1020,20 @@ fn bsp_trimesh(
     let mut input = bsp_input(fs, chains);
     density::check_crossings(input.segments.iter().map(|s| [s.a, s.b]), resolved.mu)?;
     let bbox = padded_box(drawing, resolved.padding);
+    let cell = Cell::of_tile(drawing, params);
+    if let Some(cell) = &cell {
+        // the cell's sides: every feature end on a side, its partner, the gaps
+        // resampled once for both partner sides
+        let ends: Vec<kurbo::Point> = input
+            .segments
+            .iter()
+            .flat_map(|s| [s.a, s.b])
+            .chain(input.points.iter().copied())
+            .chain(input.section_endpoints.iter().copied())
+            .collect();
+        let sides = cell.side_points(&ends, field);
+        input.points.extend(sides);
+    }
     let opts = BspOptions::DEFAULT.with_deadline(deadline);
     let (mesh, stats) = times.time("bsp", || {
         // Free vertices where the size field asks for a finer mesh than the
@@ -997,6 +1047,10 @@ fn bsp_trimesh(
             field.seed_points(bbox, &lines, &input.points, params.max_vertices as usize);
         bsp::build(&input, bbox, &opts)
     })?;
+    let mut mesh = mesh;
+    if cell.is_some() {
+        Cell::fix_sides(&mut mesh);
+    }
     check_deadline(&deadline, Stage::Bsp)?;
     if params.paranoid {
         times.time("check", || check_trimesh(&mesh, Stage::Bsp))?;
