@@ -107,12 +107,14 @@ impl Cell {
         })
     }
 
-    /// The drawing as the pattern's tile in this cell (see `tile.rs`).
+    /// The drawing as the pattern's tile in this cell (see `tile.rs`); a
+    /// feature end within `snap` of a side is moved onto it, a piece within
+    /// `snap` along a side is the side.
     ///
     /// # Errors
     /// [`Error::NoGeometry`] when nothing of the drawing reaches the cell.
-    pub(crate) fn tile(&self, drawing: &Drawing) -> Result<Drawing> {
-        let tiled = tile::Tiler::new(self).tile(drawing, self.rect);
+    pub(crate) fn tile(&self, drawing: &Drawing, snap: f64) -> Result<Drawing> {
+        let tiled = tile::Tiler::new(self, snap).tile(drawing, self.rect);
         if tiled.features.is_empty() {
             return Err(Error::NoGeometry(
                 " (nothing of the drawing lies in the periodic cell)".into(),
@@ -121,13 +123,29 @@ impl Cell {
         Ok(tiled)
     }
 
-    /// The points the BSP puts on the cell's sides, beside the ends of
-    /// `segments` (the features' chords): see the module doc. Corners are not
+    /// The points the BSP puts on the cell's sides, beside `ends` (the
+    /// features' vertices): see the module doc. A gap between two side
+    /// points is halved while it is longer than the size field there or
+    /// than 1.2 times its distance from the nearest of `segments` (the
+    /// features' chords; the triangles between a feature and a side it runs
+    /// close to stay near equilateral), down to `l_min`. Corners are not
     /// listed (the box has them).
-    pub(crate) fn side_points(&self, ends: &[Point], field: &SizeField) -> Vec<Point> {
+    pub(crate) fn side_points(
+        &self,
+        ends: &[Point],
+        segments: &[kurbo::Line],
+        field: &SizeField,
+        l_min: f64,
+    ) -> Vec<Point> {
         let r = self.rect;
         let mut out = Vec::new();
-        // (fixed coordinate of the side pair, the coordinate along, the range)
+        let gap_to = |p: Point| {
+            segments
+                .iter()
+                .map(|l| kurbo::ParamCurveNearest::nearest(l, p, 0.0).distance_sq)
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        };
         for axis in 0..2 {
             // axis 0: the left and right sides (x fixed, y along)
             let (lo, hi, a0, a1, periodic) = if axis == 0 {
@@ -160,35 +178,40 @@ impl Cell {
                 let both: Vec<f64> = sets.iter().flatten().copied().collect();
                 sets = [both.clone(), both];
             }
+            let mut first: Option<Vec<f64>> = None;
             for (k, side) in [lo, hi].into_iter().enumerate() {
+                if let (true, Some(all)) = (periodic, &first) {
+                    // the partner side: the same coordinates along, bit for bit
+                    out.extend(all.iter().filter(|&&v| v > a0 && v < a1).map(|&v| at(side, v)));
+                    continue;
+                }
                 let mut vs = std::mem::take(&mut sets[k]);
                 vs.sort_by(f64::total_cmp);
                 vs.dedup();
+                // the sides a gap's length answers to: its own, and its partner
+                let sides: &[f64] = if periodic { &[lo, hi] } else { &[side] };
+                let target = |v: f64| {
+                    sides
+                        .iter()
+                        .map(|&s| {
+                            let q = at(s, v);
+                            field.at(q).min(1.2 * gap_to(q))
+                        })
+                        .fold(f64::INFINITY, f64::min)
+                        .max(l_min)
+                };
                 let mut all = vs.clone();
-                for w in vs.windows(2) {
-                    let (a, b) = (w[0], w[1]);
-                    let mid = 0.5 * (a + b);
-                    // the smaller size of the two partner sides
-                    let mut h = field.at(at(side, mid));
-                    if periodic {
-                        h = h.min(field.at(at(if k == 0 { hi } else { lo }, mid)));
-                    }
-                    let n = ((b - a) / h).ceil();
-                    if n > 1.0 && n.is_finite() {
-                        #[allow(
-                            clippy::cast_possible_truncation,
-                            clippy::cast_sign_loss,
-                            reason = "a positive count bounded by the side over the field's floor"
-                        )]
-                        let n = n.min(1e6) as usize;
-                        all.extend((1..n).map(|i| a + (b - a) * (i as f64 / n as f64)));
+                let mut stack: Vec<(f64, f64)> = vs.windows(2).map(|w| (w[0], w[1])).collect();
+                while let Some((a, b)) = stack.pop() {
+                    let m = 0.5 * (a + b);
+                    if b - a > target(m) && m > a && m < b && out.len() + all.len() < 1_000_000 {
+                        all.push(m);
+                        stack.push((a, m));
+                        stack.push((m, b));
                     }
                 }
-                for v in all {
-                    if v > a0 && v < a1 {
-                        out.push(at(side, v));
-                    }
-                }
+                out.extend(all.iter().filter(|&&v| v > a0 && v < a1).map(|&v| at(side, v)));
+                first = Some(all);
             }
         }
         // the ends are BSP vertices already

@@ -174,12 +174,15 @@ struct Crossing {
 /// The tiling of a drawing into `cell`.
 pub(super) struct Tiler {
     axes: [AxisCell; 2],
-    /// Snap distance onto the cell's sides (user units).
+    /// Snap distance onto the cell's sides (user units): a feature end this
+    /// close to a side is on it, a piece that lies this close along a side is
+    /// the side (the drawing meant its edge to be the cell's: left apart, the
+    /// two would make a sliver of that width along the fixed side).
     snap: f64,
 }
 
 impl Tiler {
-    pub(super) fn new(cell: &Cell) -> Tiler {
+    pub(super) fn new(cell: &Cell, snap: f64) -> Tiler {
         let r = cell.rect;
         Tiler {
             axes: [
@@ -194,7 +197,7 @@ impl Tiler {
                     periodic: cell.y,
                 },
             ],
-            snap: 1e-12 * r.width().hypot(r.height()),
+            snap,
         }
     }
 
@@ -202,11 +205,48 @@ impl Tiler {
         if axis == 0 { p.x } else { p.y }
     }
 
-    /// The crossings of `curve` with the lattice lines, by parameter.
+    /// The crossings of `curve` with the lattice lines, by parameter. Where
+    /// the curve turns back within the snap distance of a line (touching
+    /// it, or crossing it twice that close), it touches the line once at its
+    /// extremum instead.
     fn crossings(&self, curve: &Curve) -> Vec<Crossing> {
         let mut ts = vec![0.0, 1.0];
-        ts.extend(curve.extrema(0));
-        ts.extend(curve.extrema(1));
+        let mut touches: Vec<Crossing> = Vec::new();
+        for axis in 0..2 {
+            let ax = self.axes[axis];
+            for te in curve.extrema(axis) {
+                ts.push(te);
+                let p = curve.eval(te);
+                let v = Self::coord(p, axis);
+                let k = if ax.periodic {
+                    #[allow(
+                        clippy::cast_possible_truncation,
+                        reason = "coordinates are at most 1e15 and the cell is not degenerate"
+                    )]
+                    let k = ((v - ax.lo) / ax.period()).round() as i64;
+                    k
+                } else if (v - ax.lo).abs() < (v - ax.hi).abs() {
+                    0
+                } else {
+                    1
+                };
+                let line = ax.line(k);
+                if (v - line).abs() <= self.snap && te > T_EPS && te < 1.0 - T_EPS {
+                    let mut q = p;
+                    if axis == 0 {
+                        q.x = line;
+                    } else {
+                        q.y = line;
+                    }
+                    touches.push(Crossing {
+                        t: te,
+                        p: q,
+                        axis,
+                        line: k,
+                    });
+                }
+            }
+        }
         ts.sort_by(f64::total_cmp);
         ts.dedup();
         let mut out = Vec::new();
@@ -219,6 +259,13 @@ impl Tiler {
                 let (lo, hi) = (ka.min(kb), ka.max(kb));
                 // the lines between the two cells: k in (lo, hi]
                 for k in (lo + 1)..=hi {
+                    // a touch at an end of this monotone interval stands for it
+                    if touches
+                        .iter()
+                        .any(|c| c.axis == axis && c.line == k && (c.t == ta || c.t == tb))
+                    {
+                        continue;
+                    }
                     let value = ax.line(k);
                     let f = |t: f64| Self::coord(curve.eval(t), axis) - value;
                     let (mut a, mut b) = (ta, tb);
@@ -256,6 +303,7 @@ impl Tiler {
                 }
             }
         }
+        out.extend(touches);
         out.sort_by(|a, b| a.t.total_cmp(&b.t));
         out
     }
@@ -355,7 +403,7 @@ impl Tiler {
             let ax = self.axes[axis];
             [ax.lo, ax.hi]
                 .iter()
-                .any(|&s| points.iter().all(|&p| Self::coord(p, axis) == s))
+                .any(|&s| points.iter().all(|&p| (Self::coord(p, axis) - s).abs() <= self.snap))
         })
     }
 

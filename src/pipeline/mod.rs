@@ -438,7 +438,11 @@ fn mesh_stages(
         None => None,
     };
     let tiled = match &cell {
-        Some(c) => Some(times.time("periodic", || c.tile(drawing))?),
+        // features within l_min of a side are on it (d: the cell's diagonal)
+        Some(c) => {
+            let snap = params.l_min.resolve(c.rect.width().hypot(c.rect.height()));
+            Some(times.time("periodic", || c.tile(drawing, snap))?)
+        }
         None => None,
     };
     let drawing = tiled.as_ref().unwrap_or(drawing);
@@ -584,7 +588,9 @@ fn mesh_stages(
             regions,
             resolved.eps_m,
             resolved.l_min,
-            Some(crate::regions::AreaCheck {
+            // (a periodic tile's shapes are their whole translated copies:
+            // the drawn areas would count what lies outside the cell)
+            drawing.cell.is_none().then(|| crate::regions::AreaCheck {
                 bounds: padded_box(drawing, resolved.padding),
                 d: resolved.d,
             }),
@@ -1031,7 +1037,12 @@ fn bsp_trimesh(
             .chain(input.points.iter().copied())
             .chain(input.section_endpoints.iter().copied())
             .collect();
-        let sides = cell.side_points(&ends, field);
+        let chords: Vec<kurbo::Line> = input
+            .segments
+            .iter()
+            .map(|s| kurbo::Line::new(s.a, s.b))
+            .collect();
+        let sides = cell.side_points(&ends, &chords, field, resolved.l_min);
         input.points.extend(sides);
     }
     let opts = BspOptions::DEFAULT.with_deadline(deadline);

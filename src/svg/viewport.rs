@@ -58,7 +58,8 @@ impl RootViewBox {
                 (sx * x + tx, sy * y + ty, sx * (x + w) + tx, sy * (y + h) + ty)
             }
         };
-        kurbo::Rect::new(x0 * scale, -y1 * scale, x1 * scale, -y0 * scale)
+        // (+ 0.0: a side at y = 0 is 0, not -0)
+        kurbo::Rect::new(x0 * scale + 0.0, -y1 * scale + 0.0, x1 * scale + 0.0, -y0 * scale + 0.0)
     }
 
     /// The viewBox → viewport mapping for a viewport of `size` px, as

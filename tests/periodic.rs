@@ -1,0 +1,242 @@
+//! Periodic cells (`--periodic`): a disk of radius 0.3 in a unit cell, at the
+//! centre, at a corner (four quarters) and on a side (two halves), is one
+//! region of area π·0.09 at order 3; every node on a periodic side has a
+//! partner on the opposite side at the same coordinate along it, bit for bit,
+//! and the file's `$Periodic` section (read back here with its own parser)
+//! says so. The meshes go to `target/test-out/periodic/` (CI's mshcheck
+//! validates them).
+
+mod support;
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+use std::process::Command;
+use triwild::{MshOptions, MshVersion, Params, Periodic, PeriodicAxes, RegionOptions};
+
+fn disk(cx: f64, cy: f64) -> String {
+    format!(
+        r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1 1" width="100" height="100"><circle id="fibre" cx="{cx}" cy="{cy}" r="0.3" fill="#000"/></svg>"##
+    )
+}
+
+/// A `$Periodic` link of MSH 4.1 as written: entity, master, affine map, pairs.
+struct Link {
+    dim: i32,
+    affine: Vec<f64>,
+    pairs: Vec<(u64, u64)>,
+}
+
+/// The `$Periodic` section of an ASCII MSH 4.1 file.
+fn periodic_section(text: &str) -> Vec<Link> {
+    let start = text.find("$Periodic\n").expect("a $Periodic section") + "$Periodic\n".len();
+    let end = text.find("$EndPeriodic").expect("$EndPeriodic");
+    let mut tok = text[start..end].split_whitespace();
+    let mut next = || tok.next().expect("a token of $Periodic");
+    let n: usize = next().parse().unwrap();
+    (0..n)
+        .map(|_| {
+            let dim: i32 = next().parse().unwrap();
+            let _tag: i32 = next().parse().unwrap();
+            let _master: i32 = next().parse().unwrap();
+            let na: usize = next().parse().unwrap();
+            let affine: Vec<f64> = (0..na).map(|_| next().parse().unwrap()).collect();
+            let np: usize = next().parse().unwrap();
+            let pairs = (0..np)
+                .map(|_| (next().parse().unwrap(), next().parse().unwrap()))
+                .collect();
+            Link { dim, affine, pairs }
+        })
+        .collect()
+}
+
+/// Check a periodic unit-cell mesh file: valid (the independent checker),
+/// every side node paired, each pair the master translated by the period bit
+/// for bit. Returns the number of node pairs of curves.
+fn check_file(path: &Path, axes: PeriodicAxes) -> usize {
+    support::check_msh(path).assert_valid(&path.display().to_string());
+    let msh = support::read_msh(path).expect("the file reads back");
+    let text = std::fs::read_to_string(path).unwrap();
+    let links = periodic_section(&text);
+    let at: HashMap<u64, [f64; 3]> = msh.nodes.iter().copied().collect();
+    let mut slaves: [HashSet<u64>; 2] = Default::default();
+    let mut curve_pairs = 0;
+    for l in &links {
+        assert_eq!(l.affine.len(), 16);
+        let (tx, ty) = (l.affine[3], l.affine[7]);
+        for &(s, m) in &l.pairs {
+            let (ps, pm) = (at[&s], at[&m]);
+            assert_eq!(
+                [ps[0], ps[1]],
+                [pm[0] + tx, pm[1] + ty],
+                "node {s} is not node {m} translated by ({tx}, {ty})"
+            );
+            if l.dim == 1 {
+                curve_pairs += 1;
+                if tx != 0.0 {
+                    slaves[0].insert(s);
+                }
+                if ty != 0.0 {
+                    slaves[1].insert(s);
+                }
+            }
+        }
+    }
+    // every node on the right (top) side is a slave of a curve link; the
+    // sides hold as many nodes as their partners
+    let on = |f: &dyn Fn(&[f64; 3]) -> bool| -> HashSet<u64> {
+        msh.nodes
+            .iter()
+            .filter(|(_, p)| f(p))
+            .map(|(t, _)| *t)
+            .collect()
+    };
+    let sides = [
+        (
+            axes != PeriodicAxes::Y,
+            on(&|p| p[0] == 1.0),
+            on(&|p| p[0] == 0.0),
+        ),
+        (
+            axes != PeriodicAxes::X,
+            on(&|p| p[1] == 0.0),
+            on(&|p| p[1] == -1.0),
+        ),
+    ];
+    for (axis, (periodic, slave_side, master_side)) in sides.iter().enumerate() {
+        if !periodic {
+            assert!(slaves[axis].is_empty());
+            continue;
+        }
+        assert_eq!(slave_side, &slaves[axis], "axis {axis}: unpaired side nodes");
+        assert_eq!(slave_side.len(), master_side.len(), "axis {axis}");
+    }
+    curve_pairs
+}
+
+fn mesh_cell(name: &str, svg: &str, axes: PeriodicAxes, version: MshVersion) -> triwild::Meshed {
+    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let params = Params::DEFAULT.with_periodic(Some(Periodic::new(axes)));
+    let meshed = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
+        .expect("the cell meshes");
+    let path = support::out_dir("periodic").join(format!("{name}.msh"));
+    let opts = MshOptions {
+        version,
+        ..MshOptions::DEFAULT
+    };
+    triwild::write_msh(&meshed.mesh, &path, opts).expect("write the mesh");
+    meshed
+}
+
+#[test]
+fn a_disk_anywhere_in_the_cell_is_one_region_of_its_area_and_the_sides_match() {
+    let want = std::f64::consts::PI * 0.09;
+    for (name, cx, cy, crossings) in [
+        ("centre", 0.5, 0.5, 0),
+        ("corner", 0.0, 0.0, 8),
+        ("side", 0.0, 0.5, 4),
+    ] {
+        let m = mesh_cell(name, &disk(cx, cy), PeriodicAxes::Xy, MshVersion::V41);
+        let fibres: Vec<_> = m
+            .report
+            .regions
+            .surfaces
+            .iter()
+            .filter(|s| s.name != "background")
+            .collect();
+        assert_eq!(fibres.len(), 1, "{name}: {:?}", m.report.regions.surfaces);
+        let got = fibres[0].area;
+        assert!(
+            ((got - want) / want).abs() < 1e-9,
+            "{name}: fibre area {got}, not {want}"
+        );
+        let p = m.report.periodic.as_ref().expect("a periodic report");
+        assert!(p.pairs > 8, "{name}: {p:?}");
+        assert_eq!((p.unpaired, p.max_mismatch), (0, 0.0), "{name}: {p:?}");
+        let pairs = &m.mesh.periodic.as_ref().expect("the mesh's pairs").pairs;
+        assert_eq!(pairs.len(), p.pairs);
+        // the fibre's outline meets the sides at partner nodes
+        let outline: HashSet<u32> = (0..m.mesh.line_count())
+            .filter(|&l| m.mesh.curves[m.mesh.line_group[l] as usize] == "fibre-curve")
+            .flat_map(|l| m.mesh.line(l)[..2].to_vec())
+            .collect();
+        let cell_sides = |q: kurbo::Point| q.x == 0.0 || q.x == 1.0 || q.y == 0.0 || q.y == -1.0;
+        let on_sides = outline
+            .iter()
+            .filter(|&&v| cell_sides(m.mesh.nodes[v as usize]))
+            .count();
+        assert_eq!(on_sides, crossings, "{name}: the outline's ends on the sides");
+        for name in ["left", "right", "bottom", "top"] {
+            assert!(m.mesh.curves.iter().any(|c| c == name), "no curve {name}");
+        }
+        let path = support::out_dir("periodic").join(format!("{name}.msh"));
+        assert!(check_file(&path, PeriodicAxes::Xy) > 0);
+    }
+}
+
+#[test]
+fn one_axis_pairs_only_its_sides_and_2_2_writes_the_section() {
+    let m = mesh_cell("side_x", &disk(0.0, 0.5), PeriodicAxes::X, MshVersion::V41);
+    let p = m.report.periodic.as_ref().expect("a periodic report");
+    assert_eq!((p.unpaired, p.max_mismatch), (0, 0.0), "{p:?}");
+    assert!(m.mesh.periodic.as_ref().unwrap().pairs.iter().all(|p| p.axis == 0));
+    check_file(
+        &support::out_dir("periodic").join("side_x.msh"),
+        PeriodicAxes::X,
+    );
+    // the disk through the bottom side is cut there, not wrapped
+    let m = mesh_cell("bottom_x", &disk(0.5, 1.0), PeriodicAxes::X, MshVersion::V41);
+    let fibre = m.report.regions.surfaces.iter().find(|s| s.name == "fibre").unwrap();
+    let half = std::f64::consts::PI * 0.09 / 2.0;
+    assert!(((fibre.area - half) / half).abs() < 1e-9, "{}", fibre.area);
+
+    mesh_cell("corner_22", &disk(0.0, 0.0), PeriodicAxes::Xy, MshVersion::V22);
+    let path = support::out_dir("periodic").join("corner_22.msh");
+    support::check_msh(&path).assert_valid("corner_22");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let section = &text[text.find("$Periodic\n").expect("2.2 $Periodic")..];
+    assert!(section.lines().nth(3).unwrap().starts_with("Affine 1.0 0.0 0.0 1.0"));
+}
+
+#[test]
+fn bad_periodic_input_is_one_line_and_exit_2() {
+    let dir = support::out_dir("periodic-errors");
+    let no_view_box = dir.join("no_viewbox.svg");
+    std::fs::write(
+        &no_view_box,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10"><rect x="1" y="1" width="3" height="3"/></svg>"#,
+    )
+    .unwrap();
+    let cell = dir.join("cell.svg");
+    std::fs::write(&cell, disk(0.5, 0.5)).unwrap();
+    let cases: [(&Path, &[&str], &str); 5] = [
+        (&no_view_box, &["--periodic"], "viewbox"),
+        (&cell, &["--periodic", "--cell", "0,0,0,1"], "cell"),
+        (&cell, &["--periodic", "--cell=0,1,1,0"], "cell"),
+        (&cell, &["--periodic", "--mesher", "cdt"], "cdt"),
+        (&cell, &["--periodic", "--cut-outside"], "cut-outside"),
+    ];
+    for (input, flags, word) in cases {
+        let out = dir.join("out.msh");
+        let run = Command::new(env!("CARGO_BIN_EXE_triwild"))
+            .arg(input)
+            .arg("-o")
+            .arg(&out)
+            .args(flags)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{flags:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{flags:?}: {err}");
+        assert!(err.to_lowercase().contains(word), "{flags:?}: {err}");
+        assert!(!out.exists(), "{flags:?} wrote a mesh");
+    }
+    // --cell meshes a drawing without a viewBox
+    let run = Command::new(env!("CARGO_BIN_EXE_triwild"))
+        .arg(&no_view_box)
+        .arg("-o")
+        .arg(dir.join("cell.msh"))
+        .args(["--periodic=x", "--cell=0,-5,5,0"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+}
