@@ -56,8 +56,8 @@ mod ops;
 mod optimize;
 mod output;
 mod params;
-mod pipeline;
 mod periodic;
+mod pipeline;
 mod quality;
 mod regions;
 mod sizing;
@@ -96,11 +96,11 @@ pub use params::{
     BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, Periodic, PeriodicAxes, RegionSize,
     SizeFn, SizeFnSignature, SizeSpec, defaults,
 };
+pub use periodic::PeriodicReport;
 pub use pipeline::{
     FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,
     mesh_drawing_with, mesh_svg, run_file,
 };
-pub use periodic::PeriodicReport;
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use sizing::{EdgeMatch, HISTOGRAM_BOUNDS, SizingReport};
 pub use stage::Stage;

@@ -107,7 +107,10 @@ fn check_file(path: &Path, axes: PeriodicAxes) -> usize {
             assert!(slaves[axis].is_empty());
             continue;
         }
-        assert_eq!(slave_side, &slaves[axis], "axis {axis}: unpaired side nodes");
+        assert_eq!(
+            slave_side, &slaves[axis],
+            "axis {axis}: unpaired side nodes"
+        );
         assert_eq!(slave_side.len(), master_side.len(), "axis {axis}");
     }
     curve_pairs
@@ -156,7 +159,7 @@ fn a_disk_anywhere_in_the_cell_is_one_region_of_its_area_and_the_sides_match() {
         assert_eq!(pairs.len(), p.pairs);
         // the fibre's outline meets the sides at partner nodes
         let outline: HashSet<u32> = (0..m.mesh.line_count())
-            .filter(|&l| m.mesh.curves[m.mesh.line_group[l] as usize] == "fibre-curve")
+            .filter(|&l| m.mesh.curves[m.mesh.line_group[l] as usize] == "fibre")
             .flat_map(|l| m.mesh.line(l)[..2].to_vec())
             .collect();
         let cell_sides = |q: kurbo::Point| q.x == 0.0 || q.x == 1.0 || q.y == 0.0 || q.y == -1.0;
@@ -164,7 +167,10 @@ fn a_disk_anywhere_in_the_cell_is_one_region_of_its_area_and_the_sides_match() {
             .iter()
             .filter(|&&v| cell_sides(m.mesh.nodes[v as usize]))
             .count();
-        assert_eq!(on_sides, crossings, "{name}: the outline's ends on the sides");
+        assert_eq!(
+            on_sides, crossings,
+            "{name}: the outline's ends on the sides"
+        );
         for name in ["left", "right", "bottom", "top"] {
             assert!(m.mesh.curves.iter().any(|c| c == name), "no curve {name}");
         }
@@ -178,23 +184,53 @@ fn one_axis_pairs_only_its_sides_and_2_2_writes_the_section() {
     let m = mesh_cell("side_x", &disk(0.0, 0.5), PeriodicAxes::X, MshVersion::V41);
     let p = m.report.periodic.as_ref().expect("a periodic report");
     assert_eq!((p.unpaired, p.max_mismatch), (0, 0.0), "{p:?}");
-    assert!(m.mesh.periodic.as_ref().unwrap().pairs.iter().all(|p| p.axis == 0));
+    assert!(
+        m.mesh
+            .periodic
+            .as_ref()
+            .unwrap()
+            .pairs
+            .iter()
+            .all(|p| p.axis == 0)
+    );
     check_file(
         &support::out_dir("periodic").join("side_x.msh"),
         PeriodicAxes::X,
     );
     // the disk through the bottom side is cut there, not wrapped
-    let m = mesh_cell("bottom_x", &disk(0.5, 1.0), PeriodicAxes::X, MshVersion::V41);
-    let fibre = m.report.regions.surfaces.iter().find(|s| s.name == "fibre").unwrap();
+    let m = mesh_cell(
+        "bottom_x",
+        &disk(0.5, 1.0),
+        PeriodicAxes::X,
+        MshVersion::V41,
+    );
+    let fibre = m
+        .report
+        .regions
+        .surfaces
+        .iter()
+        .find(|s| s.name == "fibre")
+        .unwrap();
     let half = std::f64::consts::PI * 0.09 / 2.0;
     assert!(((fibre.area - half) / half).abs() < 1e-9, "{}", fibre.area);
 
-    mesh_cell("corner_22", &disk(0.0, 0.0), PeriodicAxes::Xy, MshVersion::V22);
+    mesh_cell(
+        "corner_22",
+        &disk(0.0, 0.0),
+        PeriodicAxes::Xy,
+        MshVersion::V22,
+    );
     let path = support::out_dir("periodic").join("corner_22.msh");
     support::check_msh(&path).assert_valid("corner_22");
     let text = std::fs::read_to_string(&path).unwrap();
     let section = &text[text.find("$Periodic\n").expect("2.2 $Periodic")..];
-    assert!(section.lines().nth(3).unwrap().starts_with("Affine 1.0 0.0 0.0 1.0"));
+    assert!(
+        section
+            .lines()
+            .nth(3)
+            .unwrap()
+            .starts_with("Affine 1.0 0.0 0.0 1.0")
+    );
 }
 
 #[test]
@@ -238,5 +274,9 @@ fn bad_periodic_input_is_one_line_and_exit_2() {
         .args(["--periodic=x", "--cell=0,-5,5,0"])
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
 }

@@ -942,8 +942,7 @@ fn periodic_links(mesh: &FemMesh, layout: &Layout, points: bool) -> Vec<Periodic
             entity_of_edge.insert(edge_key(line[0], line[1]), e.tag);
         }
     }
-    for axis in 0..2 {
-        let map = &master[axis];
+    for (axis, map) in master.iter().enumerate() {
         if map.is_empty() {
             continue;
         }
@@ -1019,7 +1018,12 @@ fn affine(t: [f64; 2]) -> [f64; 16] {
 }
 
 /// `$Periodic` of MSH 4.1 (nothing for a mesh that is not periodic).
-fn periodic_v41<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout, binary: bool) -> io::Result<()> {
+fn periodic_v41<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    layout: &Layout,
+    binary: bool,
+) -> io::Result<()> {
     let links = periodic_links(mesh, layout, true);
     if mesh.periodic.is_none() {
         return Ok(());
@@ -1056,7 +1060,12 @@ fn periodic_v41<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout, binary: bo
 
 /// `$Periodic` of MSH 2.2 (curves only: 2.2 has no point entities without
 /// point elements; each curve's list holds its end nodes too).
-fn periodic_v22<W: Write>(w: &mut W, mesh: &FemMesh, layout: &Layout, binary: bool) -> io::Result<()> {
+fn periodic_v22<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    layout: &Layout,
+    binary: bool,
+) -> io::Result<()> {
     if mesh.periodic.is_none() {
         return Ok(());
     }

@@ -182,7 +182,11 @@ impl Cell {
             for (k, side) in [lo, hi].into_iter().enumerate() {
                 if let (true, Some(all)) = (periodic, &first) {
                     // the partner side: the same coordinates along, bit for bit
-                    out.extend(all.iter().filter(|&&v| v > a0 && v < a1).map(|&v| at(side, v)));
+                    out.extend(
+                        all.iter()
+                            .filter(|&&v| v > a0 && v < a1)
+                            .map(|&v| at(side, v)),
+                    );
                     continue;
                 }
                 let mut vs = std::mem::take(&mut sets[k]);
@@ -210,7 +214,11 @@ impl Cell {
                         stack.push((m, b));
                     }
                 }
-                out.extend(all.iter().filter(|&&v| v > a0 && v < a1).map(|&v| at(side, v)));
+                out.extend(
+                    all.iter()
+                        .filter(|&&v| v > a0 && v < a1)
+                        .map(|&v| at(side, v)),
+                );
                 first = Some(all);
             }
         }
@@ -314,9 +322,7 @@ impl Cell {
             let mut j = 0usize;
             for &s in &slaves {
                 let vs = along(mesh.nodes[s as usize]);
-                while j + 1 < masters.len()
-                    && along(mesh.nodes[masters[j + 1] as usize]) <= vs
-                {
+                while j + 1 < masters.len() && along(mesh.nodes[masters[j + 1] as usize]) <= vs {
                     j += 1;
                 }
                 // the nearest master along the side

@@ -319,7 +319,11 @@ impl Tiler {
         if let Some(c) = crossing {
             // the side the crossing lies on, seen from this piece's cell
             let ax = self.axes[c.axis];
-            let side = if c.line == cells[c.axis] { ax.lo } else { ax.hi };
+            let side = if c.line == cells[c.axis] {
+                ax.lo
+            } else {
+                ax.hi
+            };
             if c.axis == 0 {
                 q.x = side;
             } else {
@@ -401,9 +405,11 @@ impl Tiler {
         };
         (0..2).any(|axis| {
             let ax = self.axes[axis];
-            [ax.lo, ax.hi]
-                .iter()
-                .any(|&s| points.iter().all(|&p| (Self::coord(p, axis) - s).abs() <= self.snap))
+            [ax.lo, ax.hi].iter().any(|&s| {
+                points
+                    .iter()
+                    .all(|&p| (Self::coord(p, axis) - s).abs() <= self.snap)
+            })
         })
     }
 
@@ -426,8 +432,17 @@ impl Tiler {
                     bbox.x1 + self.axes[0].shift(i),
                     bbox.y1 + self.axes[1].shift(j),
                 );
-                let c = Rect::new(self.axes[0].lo, self.axes[1].lo, self.axes[0].hi, self.axes[1].hi);
-                if shifted.x1 >= c.x0 && shifted.x0 <= c.x1 && shifted.y1 >= c.y0 && shifted.y0 <= c.y1 {
+                let c = Rect::new(
+                    self.axes[0].lo,
+                    self.axes[1].lo,
+                    self.axes[0].hi,
+                    self.axes[1].hi,
+                );
+                if shifted.x1 >= c.x0
+                    && shifted.x0 <= c.x1
+                    && shifted.y1 >= c.y0
+                    && shifted.y0 <= c.y1
+                {
                     out.push([i, j]);
                 }
             }
@@ -484,7 +499,9 @@ impl Tiler {
                     .get(s)
                     .and_then(|c| c.iter().position(|&k| k == [m, n]));
                 let subpath = match copy {
-                    Some(c) => (c as u32).saturating_mul(n_sub).saturating_add(f.source.subpath),
+                    Some(c) => (c as u32)
+                        .saturating_mul(n_sub)
+                        .saturating_add(f.source.subpath),
                     None => f.source.subpath,
                 };
                 features.push(Feature {

@@ -55,11 +55,21 @@ impl RootViewBox {
             Units::Px => {
                 let (sx, sy, tx, ty) = self.mapping(size);
                 let [sx, sy, tx, ty] = [sx, sy, tx, ty].map(f64::from);
-                (sx * x + tx, sy * y + ty, sx * (x + w) + tx, sy * (y + h) + ty)
+                (
+                    sx * x + tx,
+                    sy * y + ty,
+                    sx * (x + w) + tx,
+                    sy * (y + h) + ty,
+                )
             }
         };
         // (+ 0.0: a side at y = 0 is 0, not -0)
-        kurbo::Rect::new(x0 * scale + 0.0, -y1 * scale + 0.0, x1 * scale + 0.0, -y0 * scale + 0.0)
+        kurbo::Rect::new(
+            x0 * scale + 0.0,
+            -y1 * scale + 0.0,
+            x1 * scale + 0.0,
+            -y0 * scale + 0.0,
+        )
     }
 
     /// The viewBox → viewport mapping for a viewport of `size` px, as
