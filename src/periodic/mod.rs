@@ -127,8 +127,9 @@ impl Cell {
     /// features' vertices): see the module doc. A gap between two side
     /// points is halved while it is longer than the size field there or
     /// than 1.2 times its distance from the nearest of `segments` (the
-    /// features' chords; the triangles between a feature and a side it runs
-    /// close to stay near equilateral), down to `l_min`. Corners are not
+    /// features' chords) that does not end on the side (the triangles
+    /// between a feature and a side it runs close to stay near
+    /// equilateral), down to `l_min`. Corners are not
     /// listed (the box has them).
     pub(crate) fn side_points(
         &self,
@@ -139,9 +140,13 @@ impl Cell {
     ) -> Vec<Point> {
         let r = self.rect;
         let mut out = Vec::new();
-        let gap_to = |p: Point| {
+        // the distance from a side point to the chords that do not end on
+        // that side (a chord ending on it meets it: its triangles there are
+        // shaped by the crossing, not by a gap)
+        let gap_to = |p: Point, on_side: &dyn Fn(Point) -> bool| {
             segments
                 .iter()
+                .filter(|l| !on_side(l.p0) && !on_side(l.p1))
                 .map(|l| kurbo::ParamCurveNearest::nearest(l, p, 0.0).distance_sq)
                 .fold(f64::INFINITY, f64::min)
                 .sqrt()
@@ -199,7 +204,8 @@ impl Cell {
                         .iter()
                         .map(|&s| {
                             let q = at(s, v);
-                            field.at(q).min(1.2 * gap_to(q))
+                            let on = |p: Point| across(&p) == s;
+                            field.at(q).min(1.2 * gap_to(q, &on))
                         })
                         .fold(f64::INFINITY, f64::min)
                         .max(l_min)
