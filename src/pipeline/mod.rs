@@ -259,6 +259,8 @@ pub struct Meshed {
 #[derive(Clone, Debug)]
 pub struct FeatureAnalysis {
     set: FeatureSet,
+    /// The periodic tile analysed instead of the drawing (`params.periodic`).
+    tile: Option<Drawing>,
 }
 
 impl FeatureAnalysis {
@@ -270,6 +272,8 @@ impl FeatureAnalysis {
     /// [`crate::ErrorKind::BadInput`] for a size field naming no region, a
     /// formula that does not parse, a background mesh that cannot be read.
     pub fn new(drawing: &Drawing, params: &Params) -> Result<FeatureAnalysis> {
+        let tile = periodic_tile(drawing, params)?.map(|(_, t)| t);
+        let drawing = tile.as_ref().unwrap_or(drawing);
         with_threads(params.threads, || {
             let resolved = params.resolve(drawing.diagonal());
             density::check(drawing, resolved.mu)?;
@@ -282,8 +286,10 @@ impl FeatureAnalysis {
                     &|p, source, cut| field.for_curve(p, source.shape, cut),
                     section_budget(params),
                 ),
+                tile: None,
             })
         })
+        .map(|a| FeatureAnalysis { tile, ..a })
     }
 
     /// The feature set as JSON (docs/features-json.md describes the format).
@@ -291,9 +297,10 @@ impl FeatureAnalysis {
         crate::features::to_json(&self.set)
     }
 
-    /// An SVG picture of the features over `drawing` (the drawing analysed).
+    /// An SVG picture of the features over `drawing` (the drawing analysed;
+    /// with `--periodic`, its tile in the cell).
     pub fn svg(&self, drawing: &Drawing) -> String {
-        crate::features::to_svg(&self.set, drawing)
+        crate::features::to_svg(&self.set, self.tile.as_ref().unwrap_or(drawing))
     }
 
     /// The counts of the analysis (input curves, primary sections, secondary
@@ -426,24 +433,18 @@ fn mesh_stages(
     deadline: Deadline,
 ) -> Result<(Meshed, SizeField, Vec<u8>)> {
     let mut times = Times::default();
-    let cell = match &params.periodic {
-        Some(p) => {
-            if regions.cut_outside {
-                return Err(Error::InvalidParams(
-                    "--cut-outside has no meaning with --periodic: the mesh covers the cell".into(),
-                ));
-            }
-            Some(Cell::of(drawing, p)?)
-        }
+    if params.periodic.is_some() && regions.cut_outside {
+        return Err(Error::InvalidParams(
+            "--cut-outside has no meaning with --periodic: the mesh covers the cell".into(),
+        ));
+    }
+    let periodic = match params.periodic {
+        Some(_) => times.time("periodic", || periodic_tile(drawing, params))?,
         None => None,
     };
-    let tiled = match &cell {
-        // features within l_min of a side are on it (d: the cell's diagonal)
-        Some(c) => {
-            let snap = params.l_min.resolve(c.rect.width().hypot(c.rect.height()));
-            Some(times.time("periodic", || c.tile(drawing, snap))?)
-        }
-        None => None,
+    let (cell, tiled) = match periodic {
+        Some((c, t)) => (Some(c), Some(t)),
+        None => (None, None),
     };
     let drawing = tiled.as_ref().unwrap_or(drawing);
     let resolved = params.resolve(drawing.diagonal());
@@ -851,6 +852,20 @@ fn area_warning(
         params.area_tolerance,
         named.join(", ")
     ))
+}
+
+/// The periodic cell of `params` and the drawing's tile in it (`None`
+/// without `--periodic`); a feature within l_min of a side is on it (l_min
+/// relative to the cell's diagonal, the tile's d).
+fn periodic_tile(drawing: &Drawing, params: &Params) -> Result<Option<(Cell, Drawing)>> {
+    let Some(p) = &params.periodic else {
+        return Ok(None);
+    };
+    let cell = Cell::of(drawing, p)?;
+    let snap = params
+        .l_min
+        .resolve(cell.rect.width().hypot(cell.rect.height()));
+    Ok(Some((cell, cell.tile(drawing, snap)?)))
 }
 
 /// The box the TriWild meshers cover: a periodic tile's cell exactly, else
