@@ -97,3 +97,30 @@ def test_laminate_gives_the_harmonic_and_arithmetic_means(tmp_path):
         K, _, _ = ph.homogenize(str(path), {"background": 1.0, "stiff": 10.0}, pairs="file")
         assert abs(K[0, 0] - 20 / 11) < 1e-8 * 20 / 11
         assert abs(K[1, 1] - 5.5) < 1e-8 * 5.5
+
+
+def test_disks_match_a_gmsh_periodic_mesh_of_the_cell(tmp_path):
+    pytest.importorskip("gmsh")
+    pytest.importorskip("meshio")
+    pytest.importorskip("scipy")
+    sys.path.insert(0, str(REPO / "docs" / "solvers"))
+    import periodic_homogenization as ph
+
+    r = math.sqrt(0.3 / math.pi)
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1 1">'
+        f'<circle id="fibre" cx="0" cy="0" r="{r!r}" fill="#000"/></svg>'
+    )
+    cond = {"background": 1.0, "fibre": 10.0}
+    m = triwild.mesh(svg, periodic="xy", order=3, edge_length=0.025)
+    ours = tmp_path / "ours.msh"
+    m.write(ours)
+    K, _, _ = ph.homogenize(str(ours), cond)
+    Kf, _, _ = ph.homogenize(str(ours), cond, pairs="file")
+    assert abs(Kf[0, 0] - K[0, 0]) < 1e-12
+    theirs = tmp_path / "gmsh.msh"
+    ph.gmsh_disk_cell(str(theirs), r, 0.025, 3)
+    G, _, _ = ph.homogenize(str(theirs), cond)
+    # isotropic, and the same value
+    assert abs(K[0, 0] - K[1, 1]) < 1e-6 and abs(K[0, 1]) < 1e-6
+    assert abs(K[0, 0] - G[0, 0]) < 1e-4 * G[0, 0]
