@@ -280,3 +280,122 @@ fn bad_periodic_input_is_one_line_and_exit_2() {
         String::from_utf8_lossy(&run.stderr)
     );
 }
+
+/// The area inside a closed path of cubic Béziers (output coordinates, y
+/// up): Green's theorem, ∮ x dy by 8-point Gauss–Legendre per segment
+/// (exact for the degree-5 integrand).
+fn cubic_path_area(segments: &[[(f64, f64); 4]]) -> f64 {
+    let (g, w) = (
+        [
+            -0.960_289_856_497_536_3,
+            -0.796_666_477_413_626_7,
+            -0.525_532_409_916_329,
+            -0.183_434_642_495_649_8,
+            0.183_434_642_495_649_8,
+            0.525_532_409_916_329,
+            0.796_666_477_413_626_7,
+            0.960_289_856_497_536_3,
+        ],
+        [
+            0.101_228_536_290_376_26,
+            0.222_381_034_453_374_47,
+            0.313_706_645_877_887_3,
+            0.362_683_783_378_362,
+            0.362_683_783_378_362,
+            0.313_706_645_877_887_3,
+            0.222_381_034_453_374_47,
+            0.101_228_536_290_376_26,
+        ],
+    );
+    let mut area = 0.0;
+    for c in segments {
+        for k in 0..8 {
+            let t = 0.5 * (g[k] + 1.0);
+            let s = 1.0 - t;
+            let b = [s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t];
+            let d = [
+                -3.0 * s * s,
+                3.0 * s * s - 6.0 * s * t,
+                6.0 * s * t - 3.0 * t * t,
+                3.0 * t * t,
+            ];
+            let x: f64 = (0..4).map(|i| b[i] * c[i].0).sum();
+            let dy: f64 = (0..4).map(|i| d[i] * c[i].1).sum();
+            area += 0.5 * w[k] * x * dy;
+        }
+    }
+    area
+}
+
+#[test]
+fn a_cubic_blob_through_a_corner_and_a_tangent_disk_keep_their_areas() {
+    // a blob of four cubics around the corner (1, 1) of the SVG cell (output
+    // (1, -1)): its four pieces are one region of the blob's area
+    let pts: [[(f64, f64); 4]; 4] = [
+        [(0.75, 1.0), (0.75, 0.8), (0.9, 0.72), (1.05, 0.78)],
+        [(1.05, 0.78), (1.2, 0.84), (1.3, 0.95), (1.25, 1.1)],
+        [(1.25, 1.1), (1.2, 1.25), (1.0, 1.3), (0.9, 1.22)],
+        [(0.9, 1.22), (0.8, 1.14), (0.75, 1.2), (0.75, 1.0)],
+    ];
+    let mut d = format!("M {} {}", pts[0][0].0, pts[0][0].1);
+    for c in &pts {
+        d += &format!(
+            " C {} {} {} {} {} {}",
+            c[1].0, c[1].1, c[2].0, c[2].1, c[3].0, c[3].1
+        );
+    }
+    let svg = format!(
+        r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1 1"><path id="blob" d="{d} Z" fill="#000"/></svg>"##
+    );
+    // in output coordinates (y up) the path runs the other way round
+    let flipped: Vec<[(f64, f64); 4]> = pts.iter().map(|c| c.map(|(x, y)| (x, -y))).collect();
+    let want = cubic_path_area(&flipped).abs();
+    let m = mesh_cell("blob", &svg, PeriodicAxes::Xy, MshVersion::V41);
+    let got = m
+        .report
+        .regions
+        .surfaces
+        .iter()
+        .find(|s| s.name == "blob")
+        .unwrap()
+        .area;
+    assert!(
+        ((got - want) / want).abs() < 1e-9,
+        "blob area {got}, not {want}"
+    );
+    let p = m.report.periodic.as_ref().unwrap();
+    assert_eq!((p.unpaired, p.max_mismatch), (0, 0.0), "{p:?}");
+    check_file(
+        &support::out_dir("periodic").join("blob.msh"),
+        PeriodicAxes::Xy,
+    );
+
+    // a disk touching the left side: it meets the side at one node, and its
+    // partner on the right side is a node too
+    let m = mesh_cell(
+        "tangent",
+        &disk(0.3, 0.5),
+        PeriodicAxes::Xy,
+        MshVersion::V41,
+    );
+    let fibre = m
+        .report
+        .regions
+        .surfaces
+        .iter()
+        .find(|s| s.name == "fibre")
+        .unwrap();
+    let want = std::f64::consts::PI * 0.09;
+    assert!(((fibre.area - want) / want).abs() < 1e-9, "{}", fibre.area);
+    let touch = m
+        .mesh
+        .nodes
+        .iter()
+        .filter(|q| (q.x == 0.0 || q.x == 1.0) && q.y == -0.5)
+        .count();
+    assert_eq!(touch, 2, "the touching point and its partner");
+    check_file(
+        &support::out_dir("periodic").join("tangent.msh"),
+        PeriodicAxes::Xy,
+    );
+}
