@@ -21,6 +21,8 @@
 //! place and slide a primary vertex only along its own curve; feature edges
 //! are never swapped. Mesh boundary vertices stay put; a boundary vertex may be
 //! collapsed along the boundary only where the boundary is exactly straight.
+//! With [`Context::fixed_boundary`] (a periodic cell, whose side vertices are
+//! also tagged as box corners) no boundary edge is split either.
 //!
 //! Guarantees: an applied operation leaves `TriMesh::check` clean and every
 //! invariant true on the faces it created (given they held before); a
