@@ -399,3 +399,136 @@ fn a_cubic_blob_through_a_corner_and_a_tangent_disk_keep_their_areas() {
         PeriodicAxes::Xy,
     );
 }
+
+/// The effective conductivity tensor of a periodic linear mesh: the cell
+/// problem ∫ k (∇χ_j + e_j)·∇v = 0 for periodic χ_j, v, solved with P1
+/// elements (a node on the right or top side is its partner's unknown) by
+/// conjugate gradients; K_ij = ∫ k (e_i + ∇χ_i)·(e_j + ∇χ_j) / |Y|.
+fn homogenize_p1(mesh: &triwild::FemMesh, k_of: &dyn Fn(&str) -> f64) -> [[f64; 2]; 2] {
+    let n = mesh.nodes.len();
+    let pairs = &mesh.periodic.as_ref().expect("a periodic mesh").pairs;
+    let mut master: Vec<usize> = (0..n).collect();
+    for p in pairs {
+        master[p.node as usize] = p.master as usize;
+    }
+    let root = |mut v: usize| {
+        while master[v] != v {
+            v = master[v];
+        }
+        v
+    };
+    let dof: Vec<usize> = (0..n).map(root).collect();
+    // element gradients and weights
+    let mut elems = Vec::new();
+    let mut rows: Vec<HashMap<usize, f64>> = vec![HashMap::new(); n];
+    let mut area = 0.0;
+    for t in 0..mesh.triangle_count() {
+        let c = mesh.triangle(t);
+        let [a, b, d] = [0, 1, 2].map(|i| mesh.nodes[c[i] as usize]);
+        let det = (b.x - a.x) * (d.y - a.y) - (d.x - a.x) * (b.y - a.y);
+        let g = [
+            [(b.y - d.y) / det, (d.x - b.x) / det],
+            [(d.y - a.y) / det, (a.x - d.x) / det],
+            [(a.y - b.y) / det, (b.x - a.x) / det],
+        ];
+        let w = k_of(&mesh.surfaces[mesh.triangle_group[t] as usize]) * 0.5 * det;
+        area += 0.5 * det;
+        let ids = [0, 1, 2].map(|i| dof[c[i] as usize]);
+        for i in 0..3 {
+            for j in 0..3 {
+                *rows[ids[i]].entry(ids[j]).or_default() +=
+                    w * (g[i][0] * g[j][0] + g[i][1] * g[j][1]);
+            }
+        }
+        elems.push((ids, g, w));
+    }
+    let fixed = dof[0];
+    let apply = |x: &[f64]| -> Vec<f64> {
+        let mut y = vec![0.0; n];
+        for (i, row) in rows.iter().enumerate() {
+            if i != fixed {
+                y[i] = row
+                    .iter()
+                    .filter(|(j, _)| **j != fixed)
+                    .map(|(j, v)| v * x[*j])
+                    .sum();
+            }
+        }
+        y
+    };
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut chi = [vec![0.0; n], vec![0.0; n]];
+    for (axis, x) in chi.iter_mut().enumerate() {
+        let mut b = vec![0.0; n];
+        for (ids, g, w) in &elems {
+            for i in 0..3 {
+                b[ids[i]] -= w * g[i][axis];
+            }
+        }
+        b[fixed] = 0.0;
+        let mut r = b.clone();
+        let mut p = r.clone();
+        let mut rr = dot(&r, &r);
+        let stop = 1e-28 * rr.max(1e-300);
+        for _ in 0..10 * n {
+            if rr <= stop {
+                break;
+            }
+            let ap = apply(&p);
+            let alpha = rr / dot(&p, &ap);
+            for i in 0..n {
+                x[i] += alpha * p[i];
+                r[i] -= alpha * ap[i];
+            }
+            let next = dot(&r, &r);
+            for i in 0..n {
+                p[i] = r[i] + next / rr * p[i];
+            }
+            rr = next;
+        }
+    }
+    let mut k = [[0.0; 2]; 2];
+    for (ids, g, w) in &elems {
+        let grad = |x: &[f64], axis: usize| {
+            let mut v = [0.0, 0.0];
+            for i in 0..3 {
+                v[0] += x[ids[i]] * g[i][0];
+                v[1] += x[ids[i]] * g[i][1];
+            }
+            v[axis] += 1.0;
+            v
+        };
+        let (gx, gy) = (grad(&chi[0], 0), grad(&chi[1], 1));
+        let gs = [gx, gy];
+        for i in 0..2 {
+            for j in 0..2 {
+                k[i][j] += w * (gs[i][0] * gs[j][0] + gs[i][1] * gs[j][1]) / area;
+            }
+        }
+    }
+    k
+}
+
+#[test]
+fn a_laminate_has_the_harmonic_and_arithmetic_means() {
+    let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1 1"><rect id="stiff" x="0.25" y="0" width="0.5" height="1" fill="#000"/></svg>"##;
+    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let params = Params::DEFAULT
+        .with_order(triwild::Order::Linear)
+        .with_periodic(Some(Periodic::new(PeriodicAxes::Xy)));
+    let m = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
+        .expect("the cell meshes");
+    let k = homogenize_p1(&m.mesh, &|name| if name == "stiff" { 10.0 } else { 1.0 });
+    let (harmonic, arithmetic) = (20.0 / 11.0, 5.5);
+    assert!((k[0][0] - harmonic).abs() < 1e-8 * harmonic, "{k:?}");
+    assert!((k[1][1] - arithmetic).abs() < 1e-8 * arithmetic, "{k:?}");
+    assert!(k[0][1].abs() < 1e-8, "{k:?}");
+    // without the pairs (each side on its own), the cell problem is another
+    // one: the means are not what it gives
+    let mut open = m.mesh.clone();
+    if let Some(p) = &mut open.periodic {
+        p.pairs.clear();
+    }
+    let k_open = homogenize_p1(&open, &|name| if name == "stiff" { 10.0 } else { 1.0 });
+    assert!((k_open[0][0] - harmonic).abs() > 1e-3, "{k_open:?}");
+}
