@@ -71,15 +71,28 @@ def test_gmsh_reads_every_pair(tmp_path):
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(path))
-        pairs = set()
-        for dim in (0, 1):
-            for _, tag in gmsh.model.getEntities(dim):
-                master, nodes, mnodes, affine = gmsh.model.mesh.getPeriodicNodes(dim, tag)
-                if master != tag:
-                    pairs |= {(int(a) - 1, int(b) - 1) for a, b in zip(nodes, mnodes) if a != b}
+
+        def periodic_pairs():
+            pairs = set()
+            for dim in (0, 1):
+                for _, tag in gmsh.model.getEntities(dim):
+                    master, nodes, mnodes, affine = gmsh.model.mesh.getPeriodicNodes(dim, tag)
+                    if master != tag:
+                        pairs |= {(int(a) - 1, int(b) - 1) for a, b in zip(nodes, mnodes) if a != b}
+            return pairs
+
+        pairs = periodic_pairs()
         # gmsh's pairs are ours (theirs add the corners' links to the bottom-left corner)
         ours = {tuple(p) for p in m.periodic_pairs.tolist()}
         assert ours <= pairs
+        # refine() keeps them (as for gmsh's own periodic mesh of order 1): as
+        # many pairs (gmsh renumbers the nodes), each node its master translated
+        gmsh.model.mesh.refine()
+        after = periodic_pairs()
+        assert len(after) == len(pairs)
+        for a, b in after:
+            pa, pb = gmsh.model.mesh.getNode(a + 1)[0], gmsh.model.mesh.getNode(b + 1)[0]
+            assert (pa[0] - pb[0], pa[1] - pb[1]) in {(1.0, 0.0), (0.0, 1.0), (1.0, 1.0)}
     finally:
         gmsh.finalize()
 
