@@ -56,6 +56,37 @@ pub struct FemMesh {
     pub line_kind: Vec<LineKind>,
     /// Physical curve names (each becomes a gmsh physical group of dimension 1).
     pub curves: Vec<String>,
+    /// The periodic match of a periodic cell's mesh (`--periodic`), else `None`.
+    pub periodic: Option<Periodicity>,
+}
+
+/// The periodic match of a mesh that covers a cell: node pairs across
+/// opposite sides (gmsh's `$Periodic`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Periodicity {
+    /// The cell `[x0, y0, x1, y1]`.
+    pub cell: [f64; 4],
+    /// Left and right sides match (period `x1 - x0` along x).
+    pub x: bool,
+    /// Bottom and top sides match (period `y1 - y0` along y).
+    pub y: bool,
+    /// Every node of the right side with its partner on the left (axis 0), and
+    /// every node of the top side with its partner on the bottom (axis 1):
+    /// the same coordinate along the side, bit for bit. A corner of the cell
+    /// is in a pair for each axis it is a slave of.
+    pub pairs: Vec<PeriodicPair>,
+}
+
+/// One node pair of a [`Periodicity`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PeriodicPair {
+    /// The node on the right (top) side, an index into [`FemMesh::nodes`].
+    pub node: u32,
+    /// Its partner on the left (bottom) side: `node` is `master` translated by
+    /// the period.
+    pub master: u32,
+    /// 0: the period along x; 1: along y.
+    pub axis: u8,
 }
 
 impl FemMesh {
@@ -289,6 +320,7 @@ impl FemMesh {
             line_group,
             line_kind,
             curves,
+            periodic: None,
         }
     }
 

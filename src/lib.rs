@@ -56,6 +56,7 @@ mod ops;
 mod optimize;
 mod output;
 mod params;
+mod periodic;
 mod pipeline;
 mod quality;
 mod regions;
@@ -83,7 +84,7 @@ use cli::exit_code;
 pub use curve::certify::{FileCheck, MeshCheck, certify_fem, certify_mesh, check_msh};
 pub use element::{CertifyOptions, Order};
 pub use error::{Error, ErrorKind, Result};
-pub use fem::{BOUNDARY, FeatureEdge, FemMesh, LineKind, LinearMesh};
+pub use fem::{BOUNDARY, FeatureEdge, FemMesh, LineKind, LinearMesh, PeriodicPair, Periodicity};
 pub use input::msh::{
     LineBlock, MshEntity, MshFormat, MshMesh, NodeData, TriangleBlock, read_msh, read_msh_file,
 };
@@ -92,9 +93,10 @@ pub use output::{
     write_msh_to, write_preview, write_preview_coloured, write_vtu, write_vtu_to,
 };
 pub use params::{
-    BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, RegionSize, SizeFn, SizeFnSignature,
-    SizeSpec, defaults,
+    BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, Periodic, PeriodicAxes, RegionSize,
+    SizeFn, SizeFnSignature, SizeSpec, defaults,
 };
+pub use periodic::PeriodicReport;
 pub use pipeline::{
     FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,
     mesh_drawing_with, mesh_svg, run_file,

@@ -244,6 +244,59 @@ pub struct Params {
     /// 1e-9·d², if larger) is named in a warning. Default
     /// [`defaults::AREA_TOLERANCE`].
     pub area_tolerance: f64,
+    /// A periodic cell: the drawing is the tile of a pattern, meshed on the
+    /// cell with matching opposite sides and gmsh's `$Periodic` section.
+    /// Default `None` (the padded box of the drawing).
+    pub periodic: Option<Periodic>,
+}
+
+/// Which directions of a [`Periodic`] cell repeat.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PeriodicAxes {
+    /// Left and right sides match (period along x).
+    X,
+    /// Bottom and top sides match (period along y).
+    Y,
+    /// Both.
+    Xy,
+}
+
+impl PeriodicAxes {
+    /// Whether the period runs along x.
+    pub fn x(self) -> bool {
+        matches!(self, PeriodicAxes::X | PeriodicAxes::Xy)
+    }
+    /// Whether the period runs along y.
+    pub fn y(self) -> bool {
+        matches!(self, PeriodicAxes::Y | PeriodicAxes::Xy)
+    }
+}
+
+/// A periodic cell (`--periodic`, `--cell`): the mesh covers the cell exactly,
+/// the drawing translated by the periods and clipped to the cell is meshed
+/// (what lies outside re-enters from the opposite side), and every node on a
+/// periodic side has a partner on the opposite side at the same position after
+/// the translation.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Periodic {
+    /// The repeating directions.
+    pub axes: PeriodicAxes,
+    /// The cell `[x0, y0, x1, y1]` in output coordinates (y up); `None`: the
+    /// root `viewBox` (an error for a drawing without one).
+    pub cell: Option<[f64; 4]>,
+}
+
+impl Periodic {
+    /// A cell repeating along `axes`, the root `viewBox` by default.
+    pub const fn new(axes: PeriodicAxes) -> Periodic {
+        Periodic { axes, cell: None }
+    }
+    /// The cell `[x0, y0, x1, y1]` in output coordinates.
+    pub const fn with_cell(mut self, cell: [f64; 4]) -> Periodic {
+        self.cell = Some(cell);
+        self
+    }
 }
 
 impl Params {
@@ -287,6 +340,7 @@ impl Params {
         threads: defaults::THREADS,
         size: SizeSpec::DEFAULT,
         area_tolerance: defaults::AREA_TOLERANCE,
+        periodic: None,
     };
 
     /// Set the feature envelope μ.
@@ -417,6 +471,12 @@ impl Params {
         Deadline::after(self.time_limit).with_memory_mb(self.max_memory_mb)
     }
 
+    /// Mesh a periodic cell (see [`Periodic`]).
+    pub fn with_periodic(mut self, periodic: Option<Periodic>) -> Self {
+        self.periodic = periodic;
+        self
+    }
+
     /// Turn the paranoid validator on or off.
     pub fn with_paranoid(mut self, paranoid: bool) -> Self {
         self.paranoid = paranoid;
@@ -510,6 +570,22 @@ impl Params {
             }
         }
         self.size.validate()?;
+        if let Some(p) = self.periodic {
+            if self.mesher != Mesher::TriWild {
+                return Err(Error::InvalidParams(
+                    "--periodic needs --mesher triwild (the cdt baseline meshes a padded box)"
+                        .into(),
+                ));
+            }
+            if let Some([x0, y0, x1, y1]) = p.cell {
+                let finite = [x0, y0, x1, y1].iter().all(|v| v.is_finite());
+                if !(finite && x1 > x0 && y1 > y0) {
+                    return Err(Error::InvalidParams(format!(
+                        "--cell {x0},{y0},{x1},{y1}: a cell needs X0 < X1 and Y0 < Y1, all finite"
+                    )));
+                }
+            }
+        }
         if self.stop_after.is_some() && self.mesher != Mesher::TriWild {
             return Err(Error::InvalidParams(
                 "--stop-after and --linear need --mesher triwild".into(),

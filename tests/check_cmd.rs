@@ -48,6 +48,7 @@ fn mesh(order: Order, nodes: Vec<Point>, triangles: Vec<u32>, lines: Vec<u32>) -
         line_group: vec![0; nl],
         line_kind: vec![LineKind::Primary; nl],
         curves: vec!["rim".into()],
+        periodic: None,
     }
 }
 

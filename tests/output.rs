@@ -64,6 +64,7 @@ fn linear_square() -> FemMesh {
             LineKind::Constraint,
         ],
         curves: vec!["bottom".into(), "unused curve".into(), "middle".into()],
+        periodic: None,
     }
 }
 
@@ -146,6 +147,7 @@ fn bent_square(order: Order) -> FemMesh {
         line_group: vec![0, 1],
         line_kind: vec![LineKind::Primary, LineKind::Secondary],
         curves: vec!["bottom".into(), "right".into()],
+        periodic: None,
     }
 }
 

@@ -220,6 +220,18 @@ impl MeshData {
             PyBytes::new(py, &le_bytes(&a.line_entity, i32::to_le_bytes)),
         )?;
         d.set_item("line_names", a.line_names.clone())?;
+        // (node, partner) of a periodic cell's sides, node indices of `points`
+        let pairs = self.mesh.periodic.as_ref().map_or(&[][..], |p| &p.pairs[..]);
+        let flat: Vec<i64> = pairs
+            .iter()
+            .flat_map(|p| [i64::from(p.node), i64::from(p.master)])
+            .collect();
+        d.set_item(
+            "periodic_pairs",
+            PyBytes::new(py, &le_bytes(&flat, i64::to_le_bytes)),
+        )?;
+        let axis: Vec<u8> = pairs.iter().map(|p| p.axis).collect();
+        d.set_item("periodic_axis", PyBytes::new(py, &axis))?;
         d.set_item("order", self.mesh.order() as u8)?;
         d.set_item("triangle_nodes", self.mesh.order().triangle_nodes())?;
         d.set_item("line_nodes", self.mesh.order().line_nodes())?;

@@ -77,6 +77,12 @@ class Mesh:
             ``line_names`` (physical curve tag - 1).
         line_names: the physical curve names (``boundary`` first, ...).
         stats: the command line's ``--stats`` dictionary for this run.
+        periodic_pairs: ``(P, 2)`` int64 node index pairs ``(node, partner)``
+            of a periodic cell (``periodic="xy"``): ``points[node]`` is
+            ``points[partner]`` translated by the period, bit for bit; empty
+            for a mesh that is not periodic.
+        periodic_axis: ``(P,)`` int8, each pair's period: 0 along x (right
+            side to left), 1 along y (top to bottom).
     """
 
     points: np.ndarray
@@ -88,6 +94,8 @@ class Mesh:
     line_tags: np.ndarray
     line_names: List[str]
     stats: Dict[str, Any]
+    periodic_pairs: np.ndarray
+    periodic_axis: np.ndarray
 
     def __init__(self, data: "_triwild.MeshData") -> None:
         a = data.arrays()
@@ -103,6 +111,8 @@ class Mesh:
         self.line_names = list(a["line_names"])
         self.order = int(a["order"])
         self.stats = json.loads(data.stats)
+        self.periodic_pairs = np.frombuffer(a["periodic_pairs"], dtype="<i8").reshape(-1, 2).astype(np.int64)
+        self.periodic_axis = np.frombuffer(a["periodic_axis"], dtype=np.uint8).astype(np.int8)
 
     def __repr__(self) -> str:
         return (
@@ -267,6 +277,8 @@ def _flags(kwargs: Dict[str, Any]) -> List[str]:
             for point in value:
                 x, y = point
                 out.append(f"--hole={_flag_value(x)},{_flag_value(y)}")
+        elif name == "cell":
+            out.append("--cell=" + ",".join(_flag_value(v) for v in value))
         elif name in ("size", "size-near", "size-box"):
             out.extend(_size_flags(name, value))
         else:

@@ -54,6 +54,8 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
         warnings: Vec::new(),
         precision: Default::default(),
         paint: Default::default(),
+        view_box: None,
+        cell: None,
     }
 }
 

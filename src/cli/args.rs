@@ -370,6 +370,40 @@ pub(crate) struct ParamArgs {
     /// to the next (at least 1).
     #[arg(long, default_value_t = defaults::GRADING, value_name = "G")]
     grading: f64,
+    /// A periodic cell: the drawing is a pattern's tile, what lies outside the
+    /// cell re-enters from the opposite side, the mesh covers the cell exactly
+    /// and opposite sides match node for node (gmsh `$Periodic`; physical
+    /// curves left, right, bottom, top). The cell is the root viewBox or --cell.
+    #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "xy", value_name = "AXES")]
+    periodic: Option<PeriodicArg>,
+    /// The periodic cell in output coordinates (y up), instead of the root viewBox.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_cell,
+          allow_hyphen_values = true, requires = "periodic")]
+    cell: Option<[f64; 4]>,
+}
+
+/// The repeating directions of `--periodic`.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum PeriodicArg {
+    /// Left and right sides match.
+    X,
+    /// Bottom and top sides match.
+    Y,
+    /// Both.
+    Xy,
+}
+
+fn parse_cell(s: &str) -> Result<[f64; 4], String> {
+    let bad = || format!("expected X0,Y0,X1,Y1 (four numbers), got `{s}`");
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    let [x0, y0, x1, y1] = v[..] else {
+        return Err(bad());
+    };
+    Ok([x0, y0, x1, y1])
 }
 
 /// A switch.
@@ -512,6 +546,17 @@ impl ParamArgs {
             .with_time_limit(self.time_limit.is_finite().then_some(self.time_limit))
             .with_threads(self.threads)
             .with_size(self.size_spec())
+            .with_periodic(self.periodic.map(|axes| {
+                let p = triwild::Periodic::new(match axes {
+                    PeriodicArg::X => triwild::PeriodicAxes::X,
+                    PeriodicArg::Y => triwild::PeriodicAxes::Y,
+                    PeriodicArg::Xy => triwild::PeriodicAxes::Xy,
+                });
+                match self.cell {
+                    Some(c) => p.with_cell(c),
+                    None => p,
+                }
+            }))
     }
 
     /// The size fields these flags ask for: their lengths take the edge

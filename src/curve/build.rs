@@ -336,6 +336,7 @@ mod tests {
             energy_floor: 0.0,
             max_new_edge: f64::INFINITY,
             curved: None,
+            fixed_boundary: false,
         }
     }
 

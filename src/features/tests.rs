@@ -43,6 +43,8 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
         warnings: Vec::new(),
         precision: Default::default(),
         paint: Default::default(),
+        view_box: None,
+        cell: None,
     }
 }
 

@@ -301,8 +301,8 @@ impl TriMesh {
         self.vdata(v).tag
     }
 
-    /// Replace the vertex tag (tests only: the pipeline tags a vertex when it adds it).
-    #[cfg(test)]
+    /// Replace the vertex tag (the pipeline tags a vertex when it adds it; a
+    /// periodic cell's sides are fixed after the BSP, and tests set tags).
     pub(crate) fn set_vertex_tag(&mut self, v: VertexId, tag: VertexTag) {
         self.vdata_mut(v).tag = tag;
     }

@@ -21,6 +21,8 @@
 //! place and slide a primary vertex only along its own curve; feature edges
 //! are never swapped. Mesh boundary vertices stay put; a boundary vertex may be
 //! collapsed along the boundary only where the boundary is exactly straight.
+//! With [`Context::fixed_boundary`] (a periodic cell, whose side vertices are
+//! also tagged as box corners) no boundary edge is split either.
 //!
 //! Guarantees: an applied operation leaves `TriMesh::check` clean and every
 //! invariant true on the faces it created (given they held before); a
@@ -259,6 +261,10 @@ pub(crate) struct Context {
     pub max_new_edge: f64,
     /// The curved mode of the invariants (`None`: the linear stage).
     pub curved: Option<CurvedRule>,
+    /// The mesh boundary is fixed: no edge on it is split (a periodic cell's
+    /// sides keep the vertices the BSP gave them, partners of the opposite
+    /// side's; the vertices themselves are tagged fixed).
+    pub fixed_boundary: bool,
 }
 
 impl Context {
@@ -293,6 +299,7 @@ impl Context {
             sections,
             envelope: Envelope::new(&polylines, eps_abs, sample_abs),
             alpha: features.params.alpha,
+            fixed_boundary: false,
             on_curve_abs: 1e-9 * features.params.d,
             energy: EnergyRule::NoWorseMax,
             energy_floor: 0.0,

@@ -86,6 +86,9 @@ impl SplitPlan {
             candidates.push(Candidate::ExactMidpoint(f64::INFINITY));
         } else {
             let boundary = faces.len() == 1;
+            if boundary && ctx.fixed_boundary {
+                return Err(Reject::Boundary);
+            }
             let straight = mesh.exact(a).is_none()
                 && mesh.exact(b).is_none()
                 && crate::exact::orient2d(pa, pb, linear) == Orientation::Collinear;

@@ -158,6 +158,7 @@ fn delaunay_mesh_on(seed: u64, energy: EnergyRule, parent: Parent) -> (TriMesh, 
         energy_floor: 0.0,
         max_new_edge: f64::INFINITY,
         curved: None,
+        fixed_boundary: false,
     };
     (mesh, ctx)
 }
@@ -213,6 +214,7 @@ pub(crate) fn bsp_mesh(seed: u64, energy: EnergyRule) -> (TriMesh, Context) {
         energy_floor: 0.0,
         max_new_edge: f64::INFINITY,
         curved: None,
+        fixed_boundary: false,
     };
     (mesh, ctx)
 }
@@ -624,6 +626,7 @@ fn straight_context(polylines: &[Vec<Point>]) -> Context {
         energy_floor: 0.0,
         max_new_edge: f64::INFINITY,
         curved: None,
+        fixed_boundary: false,
     }
 }
 

@@ -192,6 +192,7 @@ fn fan_mesh() -> (TriMesh, Context) {
         energy_floor: 0.0,
         max_new_edge: f64::INFINITY,
         curved: None,
+        fixed_boundary: false,
     };
     (mesh, ctx)
 }

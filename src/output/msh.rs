@@ -315,7 +315,20 @@ impl Layout {
         // Curves: the distinct edges by the curves on them, cut at the corners
         // into pieces.
         let edges = distinct_edges(mesh, shared);
-        let corners = corner_nodes(mesh, &edges);
+        let mut corners = corner_nodes(mesh, &edges);
+        if let Some(p) = &mesh.periodic {
+            // a corner on one side is one on its partner side too, so the
+            // sides are cut into partner pieces (twice: a cell corner's
+            // partners chain through both axes)
+            for _ in 0..2 {
+                for pair in &p.pairs {
+                    if corners.contains(&pair.node) || corners.contains(&pair.master) {
+                        corners.insert(pair.node);
+                        corners.insert(pair.master);
+                    }
+                }
+            }
+        }
         let mut point_of: HashMap<u32, i32> = HashMap::default();
         let mut loop_points: Vec<u32> = Vec::new();
         let mut pieces: Vec<(Vec<u32>, Vec<u32>)> = Vec::new();
@@ -893,7 +906,183 @@ pub(crate) fn write_v41<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
         }
     }
     o.end_data()?;
-    w.write_all(b"$EndElements\n")
+    w.write_all(b"$EndElements\n")?;
+    periodic_v41(w, mesh, &layout, binary)
+}
+
+/// One entry of `$Periodic`: an entity, its master, the translation from
+/// the master to it, and node pairs (node, master node).
+struct PeriodicLink {
+    dim: i32,
+    tag: i32,
+    master: i32,
+    translation: [f64; 2],
+    nodes: Vec<(u32, u32)>,
+}
+
+/// The `$Periodic` links of a periodic mesh: each curve entity of the right
+/// (top) side with the left (bottom) entity its nodes' partners span, and
+/// (`points`) each point entity on those sides with the point its partners
+/// lead to (the four corners: one class, the bottom-left corner their master).
+fn periodic_links(mesh: &FemMesh, layout: &Layout, points: bool) -> Vec<PeriodicLink> {
+    let Some(p) = &mesh.periodic else {
+        return Vec::new();
+    };
+    let mut master: [HashMap<u32, u32>; 2] = Default::default();
+    for pair in &p.pairs {
+        master[pair.axis as usize].insert(pair.node, pair.master);
+    }
+    let period = [p.cell[2] - p.cell[0], p.cell[3] - p.cell[1]];
+    let mut links = Vec::new();
+    // master curve entities by the corner nodes of their elements
+    let mut entity_of_edge: HashMap<(u32, u32), i32> = HashMap::default();
+    for e in layout.entities.iter().filter(|e| e.dim == 1) {
+        for &l in &e.elems {
+            let line = mesh.line(l as usize);
+            entity_of_edge.insert(edge_key(line[0], line[1]), e.tag);
+        }
+    }
+    for (axis, map) in master.iter().enumerate() {
+        if map.is_empty() {
+            continue;
+        }
+        let translation = if axis == 0 {
+            [period[0], 0.0]
+        } else {
+            [0.0, period[1]]
+        };
+        for e in layout.entities.iter().filter(|e| e.dim == 1) {
+            let nodes: Vec<u32> = {
+                let mut v: Vec<u32> = e
+                    .elems
+                    .iter()
+                    .flat_map(|&l| mesh.line(l as usize).iter().copied())
+                    .collect();
+                v.sort_unstable();
+                v.dedup();
+                v
+            };
+            if nodes.is_empty() || !nodes.iter().all(|n| map.contains_key(n)) {
+                continue;
+            }
+            let first = mesh.line(e.elems[0] as usize);
+            let Some(&m) = entity_of_edge.get(&edge_key(map[&first[0]], map[&first[1]])) else {
+                continue;
+            };
+            links.push(PeriodicLink {
+                dim: 1,
+                tag: e.tag,
+                master: m,
+                translation,
+                nodes: nodes.iter().map(|&n| (n, map[&n])).collect(),
+            });
+        }
+    }
+    if points {
+        let point_of: HashMap<u32, i32> = layout.points.iter().map(|&(t, v)| (v, t)).collect();
+        for &(tag, v) in &layout.points {
+            let (mut m, mut t) = (v, [0.0, 0.0]);
+            for _ in 0..4 {
+                if let Some(&n) = master[0].get(&m) {
+                    m = n;
+                    t[0] += period[0];
+                } else if let Some(&n) = master[1].get(&m) {
+                    m = n;
+                    t[1] += period[1];
+                } else {
+                    break;
+                }
+            }
+            if m == v {
+                continue;
+            }
+            if let Some(&mt) = point_of.get(&m) {
+                links.push(PeriodicLink {
+                    dim: 0,
+                    tag,
+                    master: mt,
+                    translation: t,
+                    nodes: vec![(v, m)],
+                });
+            }
+        }
+    }
+    links
+}
+
+/// gmsh's affine map of a translation: a 4×4 matrix, row by row.
+fn affine(t: [f64; 2]) -> [f64; 16] {
+    [
+        1.0, 0.0, 0.0, t[0], 0.0, 1.0, 0.0, t[1], 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ]
+}
+
+/// `$Periodic` of MSH 4.1 (nothing for a mesh that is not periodic).
+fn periodic_v41<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    layout: &Layout,
+    binary: bool,
+) -> io::Result<()> {
+    let links = periodic_links(mesh, layout, true);
+    if mesh.periodic.is_none() {
+        return Ok(());
+    }
+    w.write_all(b"$Periodic\n")?;
+    let mut o = Out {
+        w: &mut *w,
+        binary,
+        sep: false,
+    };
+    o.size(links.len() as u64)?;
+    o.eol()?;
+    for l in &links {
+        o.int(l.dim)?;
+        o.int(l.tag)?;
+        o.int(l.master)?;
+        o.eol()?;
+        o.size(16)?;
+        for v in affine(l.translation) {
+            o.float(v)?;
+        }
+        o.eol()?;
+        o.size(l.nodes.len() as u64)?;
+        o.eol()?;
+        for &(n, m) in &l.nodes {
+            o.size(u64::from(n) + 1)?;
+            o.size(u64::from(m) + 1)?;
+            o.eol()?;
+        }
+    }
+    o.end_data()?;
+    w.write_all(b"$EndPeriodic\n")
+}
+
+/// `$Periodic` of MSH 2.2 (curves only: 2.2 has no point entities without
+/// point elements; each curve's list holds its end nodes too).
+fn periodic_v22<W: Write>(
+    w: &mut W,
+    mesh: &FemMesh,
+    layout: &Layout,
+    binary: bool,
+) -> io::Result<()> {
+    if mesh.periodic.is_none() {
+        return Ok(());
+    }
+    let links = periodic_links(mesh, layout, false);
+    // gmsh reads this section as text in either encoding
+    let _ = binary;
+    writeln!(w, "$Periodic\n{}", links.len())?;
+    for l in &links {
+        writeln!(w, "{} {} {}", l.dim, l.tag, l.master)?;
+        let a = affine(l.translation).map(|v| format!("{v:?}"));
+        writeln!(w, "Affine {}", a.join(" "))?;
+        writeln!(w, "{}", l.nodes.len())?;
+        for &(n, m) in &l.nodes {
+            writeln!(w, "{} {}", n + 1, m + 1)?;
+        }
+    }
+    w.write_all(b"$EndPeriodic\n")
 }
 
 /// Write MSH 2.2.
@@ -951,7 +1140,8 @@ pub(crate) fn write_v22<W: Write>(w: &mut W, mesh: &FemMesh, binary: bool) -> io
         }
     }
     o.end_data()?;
-    w.write_all(b"$EndElements\n")
+    w.write_all(b"$EndElements\n")?;
+    periodic_v22(w, mesh, &layout, binary)
 }
 
 #[cfg(test)]
@@ -976,6 +1166,7 @@ mod tests {
             line_group: vec![0],
             line_kind: vec![crate::fem::LineKind::Primary],
             curves: vec!["bottom".into()],
+            periodic: None,
         }
     }
 
@@ -1022,6 +1213,7 @@ mod tests {
                 Primary, Primary, Primary, Primary, Boundary, Boundary, Boundary, Boundary, Primary,
             ],
             curves: vec!["outline".into(), "boundary".into(), "boundary".into()],
+            periodic: None,
         }
     }
 
@@ -1254,6 +1446,7 @@ mod tests {
             line_group: vec![0],
             line_kind: vec![crate::fem::LineKind::Primary],
             curves: vec!["c".into()],
+            periodic: None,
         }
     }
 

@@ -568,6 +568,7 @@ mod tests {
             line_group: vec![0, 0],
             line_kind: vec![LineKind::Primary, LineKind::Secondary],
             curves: vec!["c".into()],
+            periodic: None,
         };
         let mut buf = Vec::new();
         write_svg(&mut buf, &mesh, &[], None, &PreviewMarks::default()).expect("write");
@@ -646,6 +647,7 @@ mod tests {
             line_group: vec![],
             line_kind: vec![],
             curves: vec![],
+            periodic: None,
         };
         // h = 1 on the left half, 0.25 on the right: one neutral, one red triangle
         let h = |p: Point| if p.x < 0.5 { 1.0 } else { 0.25 };

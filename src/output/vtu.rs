@@ -188,6 +188,7 @@ mod tests {
             line_group: vec![0],
             line_kind: vec![crate::LineKind::Boundary],
             curves: vec!["boundary".into()],
+            periodic: None,
         };
         let mut out = Vec::new();
         write_vtu(&mut out, &mesh).unwrap();

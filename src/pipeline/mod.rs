@@ -22,6 +22,7 @@ use crate::optimize::forced::ForcedCorners;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
 use crate::output::{self, MeshFormat, MshOptions};
 use crate::params::{Length, Mesher, Params, Resolved, Stage};
+use crate::periodic::{Cell, PeriodicReport};
 use crate::quality::Quality;
 use crate::regions::select::RegionMode;
 use crate::regions::{RegionOptions, RegionReport};
@@ -221,6 +222,9 @@ pub struct Report {
     pub sizing: Option<SizingReport>,
     /// Warnings about the input.
     pub warnings: Vec<String>,
+    /// The periodic match (`--periodic`): node pairs, unpaired nodes, the
+    /// largest mismatch as written; `None` for a mesh that is not periodic.
+    pub periodic: Option<PeriodicReport>,
     /// The process's peak resident memory in MiB when the report was made
     /// (`run_file`: after the mesh was written), `None` where the system does
     /// not report it (`VmHWM` of `/proc/self/status`).
@@ -255,6 +259,8 @@ pub struct Meshed {
 #[derive(Clone, Debug)]
 pub struct FeatureAnalysis {
     set: FeatureSet,
+    /// The periodic tile analysed instead of the drawing (`params.periodic`).
+    tile: Option<Drawing>,
 }
 
 impl FeatureAnalysis {
@@ -266,6 +272,8 @@ impl FeatureAnalysis {
     /// [`crate::ErrorKind::BadInput`] for a size field naming no region, a
     /// formula that does not parse, a background mesh that cannot be read.
     pub fn new(drawing: &Drawing, params: &Params) -> Result<FeatureAnalysis> {
+        let tile = periodic_tile(drawing, params)?.map(|(_, t)| t);
+        let drawing = tile.as_ref().unwrap_or(drawing);
         with_threads(params.threads, || {
             let resolved = params.resolve(drawing.diagonal());
             density::check(drawing, resolved.mu)?;
@@ -278,8 +286,10 @@ impl FeatureAnalysis {
                     &|p, source, cut| field.for_curve(p, source.shape, cut),
                     section_budget(params),
                 ),
+                tile: None,
             })
         })
+        .map(|a| FeatureAnalysis { tile, ..a })
     }
 
     /// The feature set as JSON (docs/features-json.md describes the format).
@@ -287,9 +297,10 @@ impl FeatureAnalysis {
         crate::features::to_json(&self.set)
     }
 
-    /// An SVG picture of the features over `drawing` (the drawing analysed).
+    /// An SVG picture of the features over `drawing` (the drawing analysed;
+    /// with `--periodic`, its tile in the cell).
     pub fn svg(&self, drawing: &Drawing) -> String {
-        crate::features::to_svg(&self.set, drawing)
+        crate::features::to_svg(&self.set, self.tile.as_ref().unwrap_or(drawing))
     }
 
     /// The counts of the analysis (input curves, primary sections, secondary
@@ -422,6 +433,20 @@ fn mesh_stages(
     deadline: Deadline,
 ) -> Result<(Meshed, SizeField, Vec<u8>)> {
     let mut times = Times::default();
+    if params.periodic.is_some() && regions.cut_outside {
+        return Err(Error::InvalidParams(
+            "--cut-outside has no meaning with --periodic: the mesh covers the cell".into(),
+        ));
+    }
+    let periodic = match params.periodic {
+        Some(_) => times.time("periodic", || periodic_tile(drawing, params))?,
+        None => None,
+    };
+    let (cell, tiled) = match periodic {
+        Some((c, t)) => (Some(c), Some(t)),
+        None => (None, None),
+    };
+    let drawing = tiled.as_ref().unwrap_or(drawing);
     let resolved = params.resolve(drawing.diagonal());
     let mut features = None;
     let mut bsp = None;
@@ -481,6 +506,7 @@ fn mesh_stages(
             )?;
             bsp = Some(stats);
             let mut ctx = Context::from_chains(&fs, &chains, resolved.eps, resolved.eps);
+            ctx.fixed_boundary = cell.is_some();
             if params.stop_after == Some(Stage::Bsp) {
                 // Exact, but rounded to f64 a few triangles may be degenerate.
                 times.time("snap", || {
@@ -563,13 +589,25 @@ fn mesh_stages(
             regions,
             resolved.eps_m,
             resolved.l_min,
-            Some(crate::regions::AreaCheck {
+            // (a periodic tile's shapes are their whole translated copies:
+            // the drawn areas would count what lies outside the cell)
+            drawing.cell.is_none().then(|| crate::regions::AreaCheck {
                 bounds: padded_box(drawing, resolved.padding),
                 d: resolved.d,
             }),
             deadline,
         )
     })?;
+    let mut mesh = mesh;
+    let periodic_report = cell.map(|c| times.time("periodic", || c.finish(&mut mesh)));
+    if let Some(r) = &periodic_report {
+        if r.unpaired > 0 || r.max_mismatch > 0.0 {
+            warnings.push(format!(
+                "--periodic: {} side node(s) without a partner, largest mismatch {:e}",
+                r.unpaired, r.max_mismatch
+            ));
+        }
+    }
     if !lost.is_empty() {
         warnings.push(lost_regions_warning(
             drawing,
@@ -622,6 +660,7 @@ fn mesh_stages(
         curve,
         sizing,
         warnings,
+        periodic: periodic_report,
         peak_memory_mb: crate::budget::peak_memory_mb(),
     };
     Ok((Meshed { mesh, report }, field, mask))
@@ -815,9 +854,27 @@ fn area_warning(
     ))
 }
 
-/// The box the TriWild meshers cover: the drawing's bounding box padded by
-/// `padding` (at least a few ulps of the coordinates, so it stays strictly larger).
+/// The periodic cell of `params` and the drawing's tile in it (`None`
+/// without `--periodic`); a feature within l_min of a side is on it (l_min
+/// relative to the cell's diagonal, the tile's d).
+fn periodic_tile(drawing: &Drawing, params: &Params) -> Result<Option<(Cell, Drawing)>> {
+    let Some(p) = &params.periodic else {
+        return Ok(None);
+    };
+    let cell = Cell::of(drawing, p)?;
+    let snap = params
+        .l_min
+        .resolve(cell.rect.width().hypot(cell.rect.height()));
+    Ok(Some((cell, cell.tile(drawing, snap)?)))
+}
+
+/// The box the TriWild meshers cover: a periodic tile's cell exactly, else
+/// the drawing's bounding box padded by `padding` (at least a few ulps of the
+/// coordinates, so it stays strictly larger).
 fn padded_box(drawing: &Drawing, padding: f64) -> Rect {
+    if let Some(cell) = drawing.cell {
+        return cell;
+    }
     let b = drawing.bbox;
     let magnitude = [b.x0, b.y0, b.x1, b.y1]
         .into_iter()
@@ -988,6 +1045,25 @@ fn bsp_trimesh(
     let mut input = bsp_input(fs, chains);
     density::check_crossings(input.segments.iter().map(|s| [s.a, s.b]), resolved.mu)?;
     let bbox = padded_box(drawing, resolved.padding);
+    let cell = Cell::of_tile(drawing, params);
+    if let Some(cell) = &cell {
+        // the cell's sides: every feature end on a side, its partner, the gaps
+        // resampled once for both partner sides
+        let ends: Vec<kurbo::Point> = input
+            .segments
+            .iter()
+            .flat_map(|s| [s.a, s.b])
+            .chain(input.points.iter().copied())
+            .chain(input.section_endpoints.iter().copied())
+            .collect();
+        let chords: Vec<kurbo::Line> = input
+            .segments
+            .iter()
+            .map(|s| kurbo::Line::new(s.a, s.b))
+            .collect();
+        let sides = cell.side_points(&ends, &chords, field, resolved.l_min);
+        input.points.extend(sides);
+    }
     let opts = BspOptions::DEFAULT.with_deadline(deadline);
     let (mesh, stats) = times.time("bsp", || {
         // Free vertices where the size field asks for a finer mesh than the
@@ -1001,6 +1077,10 @@ fn bsp_trimesh(
             field.seed_points(bbox, &lines, &input.points, params.max_vertices as usize);
         bsp::build(&input, bbox, &opts)
     })?;
+    let mut mesh = mesh;
+    if cell.is_some() {
+        Cell::fix_sides(&mut mesh);
+    }
     check_deadline(&deadline, Stage::Bsp)?;
     if params.paranoid {
         times.time("check", || check_trimesh(&mesh, Stage::Bsp))?;

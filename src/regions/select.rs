@@ -349,6 +349,7 @@ pub(crate) fn apply(
         line_group: Vec::with_capacity(kept_lines.len()),
         line_kind: Vec::with_capacity(kept_lines.len()),
         curves,
+        periodic: None,
     };
     let mut stats: Vec<RegionStat> = out
         .surfaces

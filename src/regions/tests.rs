@@ -91,6 +91,8 @@ pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
         warnings: vec![],
         precision: Default::default(),
         paint: Default::default(),
+        view_box: None,
+        cell: None,
     }
 }
 

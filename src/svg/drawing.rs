@@ -395,6 +395,13 @@ pub struct Drawing {
     /// What the paint model did: strokes meshed as areas, clipped shapes, shapes
     /// dropped as invisible or decoration.
     pub paint: PaintCounts,
+    /// The root `viewBox` in output coordinates (y up), when the document has a
+    /// valid one (`--periodic`'s cell by default); `None` for a drawing built in code.
+    pub view_box: Option<Rect>,
+    /// When the drawing is a periodic cell's tile (every feature translated by
+    /// the periods into the cell, each shape the union of its translated
+    /// copies): the cell, which is then its extent.
+    pub cell: Option<Rect>,
 }
 
 /// What the loader did with SVG's paint model (`--stats`: no region is lost or
@@ -507,6 +514,9 @@ impl Drawing {
     /// The tight bounding box of the drawing's curves (cubics and conics at
     /// their extrema, not their control points); inside [`Self::bbox`].
     pub fn extent(&self) -> Rect {
+        if let Some(cell) = self.cell {
+            return cell;
+        }
         let mut out: Option<Rect> = None;
         for f in &self.features {
             let r = match f.geom {

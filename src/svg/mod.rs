@@ -297,11 +297,15 @@ pub(crate) fn load_limited(
 ) -> Result<(Drawing, Precision)> {
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
-    let outlines = load::parse(data, limits, |parsed| {
+    let (outlines, view_box) = load::parse(data, limits, |parsed| {
         let frame =
             viewport::Frame::new(units, scale, parsed.facts.root_view_box, parsed.tree.size())?;
+        let view_box = parsed
+            .facts
+            .root_view_box
+            .map(|vb| vb.output_rect(units, scale, parsed.tree.size()));
         let map = reconstruct::OutputMap::new(&parsed.source, units, scale);
-        outline::collect(parsed, &frame, map, paint)
+        outline::collect(parsed, &frame, map, paint).map(|o| (o, view_box))
     })
     .map_err(|e| blame_scale(e, scale))?;
     let tol = duplicates::DUPLICATE_TOL_REL * soup::diagonal(&outlines.shapes);
@@ -309,6 +313,7 @@ pub(crate) fn load_limited(
     let mut drawing = soup::assemble(shapes, outlines.warnings)?;
     drawing.paint = outlines.paint;
     drawing.paint.duplicates_merged = merged;
+    drawing.view_box = view_box;
     // A stroke whose fill a copy on top replaced is its own region again.
     for i in 0..drawing.shapes.len() {
         let id = ShapeId(u32::try_from(i).expect("internal: shape count fits u32"));

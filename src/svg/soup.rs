@@ -59,6 +59,8 @@ pub(super) fn assemble(shapes: Vec<Shape>, warnings: Vec<String>) -> Result<Draw
         warnings,
         precision: PathPrecision::default(),
         paint: PaintCounts::default(),
+        view_box: None,
+        cell: None,
     })
 }
 

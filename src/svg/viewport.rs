@@ -20,6 +20,8 @@ pub(super) struct RootViewBox {
     rect: usvg::NonZeroRect,
     /// `preserveAspectRatio` (default `xMidYMid meet`).
     aspect: svgtypes::AspectRatio,
+    /// The `viewBox` `[x, y, w, h]` as the document writes it, in f64.
+    exact: [f64; 4],
 }
 
 impl RootViewBox {
@@ -37,7 +39,37 @@ impl RootViewBox {
             .attribute("preserveAspectRatio")
             .and_then(|s| s.parse().ok())
             .unwrap_or_default();
-        Some(RootViewBox { rect, aspect })
+        Some(RootViewBox {
+            rect,
+            aspect,
+            exact: [vb.x, vb.y, vb.w, vb.h],
+        })
+    }
+
+    /// The `viewBox` rectangle in output coordinates (y up): in user units its
+    /// own numbers times `scale`, in px its image under the viewport mapping.
+    pub(super) fn output_rect(&self, units: Units, scale: f64, size: usvg::Size) -> kurbo::Rect {
+        let [x, y, w, h] = self.exact;
+        let (x0, y0, x1, y1) = match units {
+            Units::User => (x, y, x + w, y + h),
+            Units::Px => {
+                let (sx, sy, tx, ty) = self.mapping(size);
+                let [sx, sy, tx, ty] = [sx, sy, tx, ty].map(f64::from);
+                (
+                    sx * x + tx,
+                    sy * y + ty,
+                    sx * (x + w) + tx,
+                    sy * (y + h) + ty,
+                )
+            }
+        };
+        // (+ 0.0: a side at y = 0 is 0, not -0)
+        kurbo::Rect::new(
+            x0 * scale + 0.0,
+            -y1 * scale + 0.0,
+            x1 * scale + 0.0,
+            -y0 * scale + 0.0,
+        )
     }
 
     /// The viewBox → viewport mapping for a viewport of `size` px, as

@@ -113,6 +113,8 @@ pub(super) fn drawing_of(shapes: Vec<Shape>) -> Drawing {
         warnings: Vec::new(),
         precision: Default::default(),
         paint: Default::default(),
+        view_box: None,
+        cell: None,
     }
 }
 
