@@ -371,7 +371,10 @@ fn a_cubic_blob_through_a_corner_and_a_tangent_disk_keep_their_areas() {
     );
 
     // a disk touching the left side: it meets the side at one node, and its
-    // partner on the right side is a node too
+    // partner on the right side is a node too. Its outline beside the side is
+    // meshed within ε, not exact (kept exact, the cusp of background between
+    // it and the fixed side left elements of 3° with a Jacobian ratio near
+    // 0), and a warning says so
     let m = mesh_cell(
         "tangent",
         &disk(0.3, 0.5),
@@ -386,7 +389,22 @@ fn a_cubic_blob_through_a_corner_and_a_tangent_disk_keep_their_areas() {
         .find(|s| s.name == "fibre")
         .unwrap();
     let want = std::f64::consts::PI * 0.09;
-    assert!(((fibre.area - want) / want).abs() < 1e-9, "{}", fibre.area);
+    assert!(((fibre.area - want) / want).abs() < 1e-3, "{}", fibre.area);
+    assert!(
+        m.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("within mu") && w.contains("cell's sides")),
+        "{:?}",
+        m.report.warnings
+    );
+    assert!(
+        m.report
+            .quality
+            .unforced
+            .as_ref()
+            .is_some_and(|q| q.min_angle_deg >= 10.0)
+    );
     let touch = m
         .mesh
         .nodes

@@ -539,6 +539,9 @@ pub struct FeatureCounts {
     /// Primary sections shorter than μ sharing no end point with another primary
     /// section, demoted (a lone sliver-maker between secondary features).
     pub short_isolated: usize,
+    /// Primary sections within μ of a periodic cell's side, demoted (they do
+    /// not cross it at an angle of at least 4α).
+    pub near_cell_sides: usize,
     /// Primary sections demoted after the secondary simplification moved a neighbour.
     pub demoted_after_simplify: usize,
     /// Secondary vertices moved by the simplification.
@@ -956,6 +959,15 @@ impl FeatureSet {
         let source = |s: &Section| drawing.features[s.feature as usize].source;
         counts.short_isolated =
             separation::demote_short_isolated(&sections, &mut primary, params.mu);
+        if let Some(cell) = drawing.cell {
+            counts.near_cell_sides = separation::demote_near_sides(
+                &sections,
+                &mut primary,
+                cell,
+                params.mu,
+                params.alpha,
+            );
+        }
         // 4b. Runs of secondary sections cut finer than a secondary section
         // needs (a thin stroke's own outline where it is not kept apart) are cut
         // again at their secondary size.

@@ -289,6 +289,60 @@ fn separate_run(
     }
 }
 
+/// A periodic cell's sides are no features, but the mesh's boundary: a primary
+/// section within `mu` of one would keep its exact curve beside a fixed side
+/// vertex, and the cusp of background between them makes slivers whatever the
+/// side's sampling. Demote every primary section whose control polygon comes
+/// within `mu` of a side of `cell`, unless it ends on that side and leaves it
+/// at an angle θ of at least 4α (a crossing), its controls farther than
+/// 1.01·μ / sin θ from the end (the corner itself) staying `mu` away; as the
+/// μ-separation treats a section beside a drawn rectangle. Returns how many.
+pub(super) fn demote_near_sides(
+    sections: &[Section],
+    primary: &mut [bool],
+    cell: Rect,
+    mu: f64,
+    alpha: f64,
+) -> usize {
+    let mut demoted = 0;
+    for (s, flag) in sections.iter().zip(primary.iter_mut()) {
+        if !*flag {
+            continue;
+        }
+        let q = ctrl_points(&s.ctrl);
+        // each side: (coordinate across, axis: 0 for x = const, 1 for y = const)
+        let near = [(cell.x0, 0), (cell.x1, 0), (cell.y0, 1), (cell.y1, 1)]
+            .into_iter()
+            .any(|(side, axis)| {
+                let across = |p: Point| if axis == 0 { p.x } else { p.y };
+                let gap = |p: Point| (across(p) - side).abs();
+                if q.iter().all(|p| gap(*p) >= mu) {
+                    return false;
+                }
+                // an end on the side: the chord's angle with it decides
+                let end = [q[0], q[3]].into_iter().find(|p| across(*p) == side);
+                let Some(e) = end else { return true };
+                let other = if e == q[0] { q[3] } else { q[0] };
+                let chord = other - e;
+                let len = chord.hypot();
+                if len == 0.0 {
+                    return true;
+                }
+                let sin = gap(other) / len;
+                if sin < (4.0 * alpha).min(std::f64::consts::FRAC_PI_2).sin() {
+                    return true;
+                }
+                let corner = CORNER_RADIUS * mu / sin;
+                q.iter().any(|p| (*p - e).hypot() > corner && gap(*p) < mu)
+            });
+        if near {
+            *flag = false;
+            demoted += 1;
+        }
+    }
+    demoted
+}
+
 /// Demote every primary section whose control polygon is shorter than `mu` and that
 /// shares no end point with another primary section; returns how many.
 pub(super) fn demote_short_isolated(sections: &[Section], primary: &mut [bool], mu: f64) -> usize {

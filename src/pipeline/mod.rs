@@ -500,6 +500,18 @@ fn mesh_stages(
             });
             check_deadline(&deadline, Stage::Features)?;
             features = Some(fs.counts);
+            if fs.counts.near_cell_sides > 0 {
+                warnings.push(format!(
+                    "--periodic: {} outline piece(s) within mu = {:.3e} of the cell's sides \
+                     (a shape touching or grazing a side) meshed within eps = {:.3e}, not \
+                     exact, so the elements between them and the side keep their shape; \
+                     --mu-abs {:.3e} keeps more of them exact",
+                    fs.counts.near_cell_sides,
+                    resolved.mu,
+                    resolved.eps,
+                    0.25 * resolved.mu,
+                ));
+            }
             let chains = fs.primary_chains();
             let (mut mesh, stats) = bsp_trimesh(
                 drawing, &fs, &chains, params, &resolved, deadline, &mut times, field,
