@@ -221,7 +221,11 @@ impl MeshData {
         )?;
         d.set_item("line_names", a.line_names.clone())?;
         // (node, partner) of a periodic cell's sides, node indices of `points`
-        let pairs = self.mesh.periodic.as_ref().map_or(&[][..], |p| &p.pairs[..]);
+        let pairs = self
+            .mesh
+            .periodic
+            .as_ref()
+            .map_or(&[][..], |p| &p.pairs[..]);
         let flat: Vec<i64> = pairs
             .iter()
             .flat_map(|p| [i64::from(p.node), i64::from(p.master)])
