@@ -27,7 +27,8 @@ fn bench(c: &mut Criterion) {
         .sample_size(10)
         .measurement_time(Duration::from_secs(20));
     for (size, file) in DRAWINGS {
-        let Ok(drawing) = triwild::load_file(&dev.join(file)) else {
+        let Ok(drawing) = triwild::load_file(&dev.join(file), &triwild::LoadOptions::DEFAULT)
+        else {
             println!("{file}: not available, skipped");
             continue;
         };
@@ -43,13 +44,21 @@ fn bench(c: &mut Criterion) {
             ("curved", &curved),
             ("cdt", &cdt),
         ] {
-            let once = triwild::mesh_drawing(&drawing, params).expect("meshes");
+            let once = triwild::mesh_drawing(&drawing, params, &triwild::RegionOptions::DEFAULT)
+                .expect("meshes");
             println!(
                 "{size} {file} {name}: {} triangles, stage seconds {:?}",
                 once.report.output.triangles, once.report.times
             );
             group.bench_function(format!("{name}/{size}"), |b| {
-                b.iter(|| triwild::mesh_drawing(black_box(&drawing), params).expect("meshes"))
+                b.iter(|| {
+                    triwild::mesh_drawing(
+                        black_box(&drawing),
+                        params,
+                        &triwild::RegionOptions::DEFAULT,
+                    )
+                    .expect("meshes")
+                })
             });
         }
     }

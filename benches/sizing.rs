@@ -22,11 +22,19 @@ fn points(n: usize, w: f64, h: f64) -> Vec<Point> {
 }
 
 fn bench(c: &mut Criterion) {
-    let plate = triwild::load_bytes(include_bytes!("../tests/fixtures/plate.svg")).expect("plate");
+    let plate = triwild::load_bytes(
+        include_bytes!("../tests/fixtures/plate.svg"),
+        &triwild::LoadOptions::DEFAULT,
+    )
+    .expect("plate");
     let near = Params::DEFAULT
         .with_l(Length::Abs(5.0))
         .with_size(SizeSpec::DEFAULT.with_near("steel", Length::Abs(0.5), Some(Length::Abs(10.0))));
-    let star = triwild::load_file(std::path::Path::new("data/svg/star-evenodd.svg")).expect("star");
+    let star = triwild::load_file(
+        std::path::Path::new("data/svg/star-evenodd.svg"),
+        &triwild::LoadOptions::DEFAULT,
+    )
+    .expect("star");
     let plain = Params::DEFAULT;
     c.bench_function("size field build (plate, --size-near steel=0.5:10)", |b| {
         b.iter(|| SizeFieldProbe::build(black_box(&plate), &near).expect("field"))

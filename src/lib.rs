@@ -15,14 +15,16 @@
 //! Mesh a drawing held in memory and get the gmsh file's bytes:
 //!
 //! ```
-//! use triwild::{Length, MshOptions, Order, Params};
+//! use triwild::{Length, LoadOptions, MshOptions, Order, Params, RegionOptions};
 //!
 //! let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="100" height="100">
 //!     <rect id="plate" x="10" y="10" width="80" height="80" fill="grey"/>
 //!     <circle id="hole" cx="50" cy="50" r="20" fill="white"/>
 //! </svg>"#;
 //! let params = Params::DEFAULT.with_l(Length::Rel(0.1));
-//! let meshed = triwild::mesh_svg(svg.as_bytes(), &params)?;
+//! // the parameters' units, scale, budgets and hairline width
+//! let drawing = triwild::load_bytes(svg.as_bytes(), &LoadOptions::from_params(&params)?)?;
+//! let meshed = triwild::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT)?;
 //! assert_eq!(meshed.mesh.order(), Order::Cubic); // curved 10-node triangles by default
 //! assert!(meshed.mesh.surfaces.iter().any(|s| s == "hole"));
 //! let mut msh = Vec::new();
@@ -89,18 +91,15 @@ pub use input::msh::{
     LineBlock, MshEntity, MshFormat, MshMesh, NodeData, TriangleBlock, read_msh, read_msh_file,
 };
 pub use output::{
-    MeshFormat, MshOptions, MshVersion, check_writable, remove_temporaries, write_file, write_msh,
-    write_msh_to, write_preview, write_preview_coloured, write_vtu, write_vtu_to,
+    MeshFormat, MshOptions, MshVersion, PreviewOptions, check_writable, remove_temporaries,
+    write_file, write_msh, write_msh_to, write_preview, write_vtu, write_vtu_to,
 };
 pub use params::{
     BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, Periodic, PeriodicAxes, RegionSize,
     SizeFn, SizeFnSignature, SizeSpec, defaults,
 };
 pub use periodic::PeriodicReport;
-pub use pipeline::{
-    FeatureAnalysis, Meshed, Report, RunOptions, load_bytes_params, load_file_params, mesh_drawing,
-    mesh_drawing_with, mesh_svg, run_file,
-};
+pub use pipeline::{FeatureAnalysis, Meshed, Report, RunOptions, mesh_drawing, run_file};
 pub use regions::select::{RegionMode, RegionOptions, RegionStat};
 pub use sizing::{EdgeMatch, HISTOGRAM_BOUNDS, SizingReport};
 pub use stage::Stage;
@@ -108,10 +107,7 @@ pub use svg::drawing::{
     Clip, ClipPart, Conic, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, PaintCounts,
     PathPrecision, Segment, Shape, ShapeId, ShapeKind, ShapePaint, Subpath,
 };
-pub use svg::{
-    PaintOptions, StrokeMode, load_bytes, load_bytes_painted, load_bytes_with, load_file,
-    load_file_painted, load_file_with,
-};
+pub use svg::{LoadOptions, PaintOptions, StrokeMode, load_bytes, load_file};
 pub use units::Units;
 
 /// Not part of the API (hidden, no stability promise): the internals that the

@@ -207,7 +207,7 @@ pub struct Params {
     pub order: Order,
     /// Units of the output coordinates (and of every absolute length): the
     /// user units of the root `viewBox` or CSS px. Default [`defaults::UNITS`].
-    /// Applied when an SVG is loaded (`mesh_svg`, `run_file`, `load_bytes_with`):
+    /// Applied when an SVG is loaded with `LoadOptions::from_params` (`run_file`):
     /// an already loaded `Drawing` is in the units it was loaded in.
     pub units: Units,
     /// Multiplies every output coordinate (e.g. 0.001 for a drawing in mm and a

@@ -17,8 +17,10 @@ use triwild::{MshOptions, Params};
 #[test]
 fn curving_never_makes_needles_on_a_flag_of_albania() {
     let svg = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/quality/albania.svg");
-    let drawing = triwild::load_file(&svg).expect("the flag loads");
-    let meshed = triwild::mesh_drawing(&drawing, &Params::DEFAULT).expect("the flag meshes");
+    let drawing = triwild::load_file(&svg, &triwild::LoadOptions::DEFAULT).expect("the flag loads");
+    let meshed =
+        triwild::mesh_drawing(&drawing, &Params::DEFAULT, &triwild::RegionOptions::DEFAULT)
+            .expect("the flag meshes");
     let path = support::out_dir("curving_quality").join("albania.msh");
     triwild::write_msh(&meshed.mesh, &path, MshOptions::DEFAULT).expect("write the mesh");
     support::check_msh(&path).assert_valid("albania");
@@ -59,9 +61,11 @@ fn the_curved_stage_keeps_the_linear_meshs_corners_on_a_butterfly() {
         return;
     };
     let svg = dir.join("gcompris/advanced_colors__resource__amber_butterfly.svg");
-    let drawing = triwild::load_file(&svg).expect("the butterfly loads");
+    let drawing =
+        triwild::load_file(&svg, &triwild::LoadOptions::DEFAULT).expect("the butterfly loads");
     let params = Params::DEFAULT;
-    let meshed = triwild::mesh_drawing(&drawing, &params).expect("the butterfly meshes");
+    let meshed = triwild::mesh_drawing(&drawing, &params, &triwild::RegionOptions::DEFAULT)
+        .expect("the butterfly meshes");
     let path = support::out_dir("curving_quality_corners").join("butterfly.msh");
     triwild::write_msh(&meshed.mesh, &path, MshOptions::DEFAULT).expect("write the mesh");
     support::check_msh(&path).assert_valid("butterfly");

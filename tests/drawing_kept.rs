@@ -16,7 +16,7 @@
 mod support;
 
 use kurbo::Point;
-use triwild::{Length, Meshed, MshOptions, Order, PaintOptions, Params, RegionOptions, SizeSpec};
+use triwild::{Length, LoadOptions, Meshed, MshOptions, Order, Params, RegionOptions, SizeSpec};
 
 /// The L-shaped domain (−1, 1)² less [0, 1) × (−1, 0] of FEM benchmarks, one
 /// path of six straight segments (y flipped: the drawing's y = 1 is −1).
@@ -39,9 +39,9 @@ fn mesh(name: &str, svg: &str, p: &Params) -> Meshed {
 
 fn mesh_regions(name: &str, svg: &str, p: &Params, regions: &RegionOptions) -> Meshed {
     // loaded as the command line loads it: strokes narrower than this μ are lines
-    let drawing = triwild::load_bytes_params(svg.as_bytes(), p, &PaintOptions::DEFAULT)
-        .expect("the drawing loads");
-    let m = triwild::mesh_drawing_with(&drawing, p, regions).expect("the drawing meshes");
+    let opts = LoadOptions::from_params(p).expect("valid parameters");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &opts).expect("the drawing loads");
+    let m = triwild::mesh_drawing(&drawing, p, regions).expect("the drawing meshes");
     let path = support::out_dir("drawing_kept").join(format!("{name}.msh"));
     triwild::write_msh(&m.mesh, &path, MshOptions::DEFAULT).expect("written");
     m

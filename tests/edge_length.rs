@@ -84,7 +84,7 @@ fn mesh(name: &str, drawing: &Drawing, level: f64, order: Order) -> Row {
     let regions = RegionOptions::DEFAULT
         .with_mode(RegionMode::Shape)
         .with_cut_outside(true);
-    let meshed = triwild::mesh_drawing_with(drawing, &params, &regions).expect("the disk meshes");
+    let meshed = triwild::mesh_drawing(drawing, &params, &regions).expect("the disk meshes");
     let m: FemMesh = meshed.mesh;
     let path = out_dir().join(format!("{name}_o{}_l{level}.msh", order as u8));
     triwild::write_msh(&m, &path, MshOptions::DEFAULT).expect("write the mesh");
@@ -189,7 +189,8 @@ fn assert_follows(name: &str, drawing: &Drawing, levels: &[f64], order: Order) -
 
 #[test]
 fn circle_refines_steadily_with_l() {
-    let drawing = triwild::load_bytes(CIRCLE.as_bytes()).expect("the circle loads");
+    let drawing = triwild::load_bytes(CIRCLE.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the circle loads");
     assert_follows("circle", &drawing, &[0.2, 0.1, 0.05, 0.025], Order::Cubic);
     assert_follows("circle", &drawing, &[0.1, 0.05, 0.025], Order::Linear);
 }
@@ -197,7 +198,8 @@ fn circle_refines_steadily_with_l() {
 #[test]
 fn disk_of_64_cubic_arcs_refines_steadily_with_l() {
     // 64 cubics: every joint a mesh vertex (64 boundary edges at least).
-    let drawing = triwild::load_bytes(cubics_svg().as_bytes()).expect("the disk loads");
+    let drawing = triwild::load_bytes(cubics_svg().as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the disk loads");
     assert!(
         drawing
             .features
@@ -211,7 +213,8 @@ fn disk_of_64_cubic_arcs_refines_steadily_with_l() {
 #[test]
 fn disk_of_64_exact_arcs_is_not_pinned_to_a_64_gon() {
     // 64 SVG arcs: 64 exact conic pieces, joined where they continue one circle.
-    let drawing = triwild::load_bytes(arcs_svg().as_bytes()).expect("the disk loads");
+    let drawing = triwild::load_bytes(arcs_svg().as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the disk loads");
     let conics = drawing
         .features
         .iter()

@@ -11,9 +11,10 @@ use triwild::{FemMesh, Length, MshOptions, Order, Params, RegionOptions};
 
 /// Mesh `svg` at order `order`, write it, and return the mesh and the drawing's diagonal.
 fn mesh(name: &str, svg: &str, order: Order, l: f64) -> (FemMesh, f64) {
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the drawing loads");
     let params = Params::DEFAULT.with_l(Length::Rel(l)).with_order(order);
-    let meshed = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
+    let meshed = triwild::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT)
         .expect("the drawing meshes");
     let path = support::out_dir("exact").join(format!("{name}_o{}.msh", order as u8));
     triwild::write_msh(&meshed.mesh, &path, MshOptions::DEFAULT).expect("write the mesh");
@@ -108,7 +109,7 @@ fn the_drawing_says_how_its_paths_were_read() {
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10">
         <circle cx="5" cy="5" r="4"/><path d="M 1 1 L 9 1 L 5 4 Z"/>
         <rect x="1" y="6" width="3" height="3" rx="1"/></svg>"#;
-    let d = triwild::load_bytes(svg.as_bytes()).expect("loads");
+    let d = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT).expect("loads");
     assert_eq!(
         d.precision,
         triwild::PathPrecision {
@@ -117,8 +118,12 @@ fn the_drawing_says_how_its_paths_were_read() {
         }
     );
     // the same numbers in --stats
-    let meshed =
-        triwild::mesh_drawing(&d, &Params::DEFAULT.with_order(Order::Linear)).expect("meshes");
+    let meshed = triwild::mesh_drawing(
+        &d,
+        &Params::DEFAULT.with_order(Order::Linear),
+        &RegionOptions::DEFAULT,
+    )
+    .expect("meshes");
     let stats = serde_json::to_value(&meshed.report).expect("stats");
     assert_eq!(stats["input"]["f64_paths"], 3);
     assert_eq!(stats["input"]["single_precision_paths"], 0);

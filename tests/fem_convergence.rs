@@ -111,8 +111,7 @@ fn mesh(
     let regions = RegionOptions::DEFAULT
         .with_mode(RegionMode::Shape)
         .with_cut_outside(true);
-    let meshed =
-        triwild::mesh_drawing_with(drawing, &params, &regions).expect("the drawing meshes");
+    let meshed = triwild::mesh_drawing(drawing, &params, &regions).expect("the drawing meshes");
     let mesh = meshed.mesh;
     assert_eq!(mesh.order() as u8, order);
     let path = out_dir().join(format!("{name}_o{order}_l{level}.msh"));
@@ -278,7 +277,8 @@ fn study(
 
 #[test]
 fn isoparametric_fem_converges_at_optimal_rates() {
-    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
+    let drawing = triwild::load_bytes(blob_svg().as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the blob loads");
     let failed = study("blob", &drawing, &uniform, blob_area(), 1e-12);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
@@ -288,7 +288,8 @@ fn a_circle_converges_at_optimal_rates() {
     // A plain `<circle>`: an exact conic from the document to the mesh, so refinement
     // is never stopped by the geometry (as four cubics it stalled at L2 ≈ 3e-5).
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the disk loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the disk loads");
     let failed = study("circle", &drawing, &uniform, std::f64::consts::PI, 1e-10);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
@@ -299,7 +300,8 @@ fn a_circle_graded_by_a_size_field_converges_at_optimal_rates() {
     // (output units: the disk spans x in [0, 2]) goes from l/3 on the left to l on the
     // right, a fixed grading at every level, so the levels are a refinement family.
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 2 2"><circle id="disk" cx="1" cy="1" r="1" fill="black"/></svg>"#;
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the disk loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the disk loads");
     let d = drawing.diagonal();
     let graded = |level: f64| SizeSpec::DEFAULT.with_expr(format!("{}*(1 + x)/3", level * d));
     let failed = study(
@@ -316,7 +318,8 @@ fn a_circle_graded_by_a_size_field_converges_at_optimal_rates() {
 fn linear_functions_are_reproduced_on_curved_meshes() {
     // The isoparametric space holds every linear function of x, y: a check of the
     // solver and of the meshes' node order together.
-    let drawing = triwild::load_bytes(blob_svg().as_bytes()).expect("the blob loads");
+    let drawing = triwild::load_bytes(blob_svg().as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the blob loads");
     let linear = Problem {
         u: &|x, y| 0.3 + 2.0 * x - 1.5 * y,
         grad: &|_, _| [2.0, -1.5],

@@ -369,7 +369,8 @@ fn failed_writes_leave_an_existing_file_untouched() {
         assert!(matches!(err, Error::Write(_)), "{err:?}");
         assert_eq!(std::fs::read(&target).expect("read"), b"previous result");
     }
-    let err = triwild::write_preview(&bad, &target).expect_err("preview");
+    let err = triwild::write_preview(&bad, &target, &triwild::PreviewOptions::DEFAULT)
+        .expect_err("preview");
     assert!(matches!(err, Error::Write(_)), "{err:?}");
     // A directory in the way: the rename fails, the temporary file is removed.
     let blocked = dir.join("blocked.msh");
@@ -391,7 +392,7 @@ fn preview_draws_curved_edges_and_feature_kinds() {
     let dir = out_dir("output-preview");
     let mesh = bent_square(Order::Cubic);
     let path = dir.join("cubic.svg");
-    triwild::write_preview(&mesh, &path).expect("preview");
+    triwild::write_preview(&mesh, &path, &triwild::PreviewOptions::DEFAULT).expect("preview");
     let svg = std::fs::read_to_string(&path).expect("read");
     assert!(svg.starts_with("<svg"));
     assert!(svg.trim_end().ends_with("</svg>"));
@@ -399,9 +400,18 @@ fn preview_draws_curved_edges_and_feature_kinds() {
     let grey = svg.lines().find(|l| l.contains("#808080")).expect("mesh");
     assert_eq!(grey.matches('C').count(), 5, "{grey}");
     assert!(svg.contains("#d62728") && svg.contains("#2ca02c"));
-    triwild::write_preview(&linear_square(), &dir.join("linear.svg")).expect("preview");
-    triwild::write_preview(&bent_square(Order::Quadratic), &dir.join("quadratic.svg"))
-        .expect("preview");
+    triwild::write_preview(
+        &linear_square(),
+        &dir.join("linear.svg"),
+        &triwild::PreviewOptions::DEFAULT,
+    )
+    .expect("preview");
+    triwild::write_preview(
+        &bent_square(Order::Quadratic),
+        &dir.join("quadratic.svg"),
+        &triwild::PreviewOptions::DEFAULT,
+    )
+    .expect("preview");
 }
 
 #[test]

@@ -4,12 +4,12 @@
 
 use std::f64::consts::PI;
 use triwild::{Drawing, Params, RegionMode, RegionOptions, RegionStat};
-use triwild::{PaintOptions, StrokeMode, Units, load_bytes_painted, mesh_drawing_with};
+use triwild::{LoadOptions, PaintOptions, StrokeMode, load_bytes, mesh_drawing};
 
 fn load_with(body: &str, paint: &PaintOptions) -> Drawing {
     let doc =
         format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="200">{body}</svg>"#);
-    load_bytes_painted(doc.as_bytes(), Units::User, 1.0, paint).expect("test SVG loads")
+    load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT.with_paint(*paint)).expect("test SVG loads")
 }
 
 fn load(body: &str) -> Drawing {
@@ -19,7 +19,7 @@ fn load(body: &str) -> Drawing {
 /// The regions (name, area) of the default TriWild mesh, background left out.
 fn regions_of(d: &Drawing, mode: RegionMode) -> Vec<RegionStat> {
     let opts = RegionOptions::DEFAULT.with_mode(mode);
-    let meshed = mesh_drawing_with(d, &Params::DEFAULT, &opts).expect("meshing succeeds");
+    let meshed = mesh_drawing(d, &Params::DEFAULT, &opts).expect("meshing succeeds");
     meshed
         .report
         .regions
@@ -269,7 +269,7 @@ fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
                      stroke-width="5"/>"##;
     let d = load(body);
     let meshed =
-        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
     let trimmed = meshed.report.features.map(|f| f.trimmed_pieces);
     assert!(trimmed.unwrap_or(0) >= 6, "trimmed pieces: {trimmed:?}");
     let stray = lines_inside_one_region(&meshed.mesh);
@@ -293,7 +293,7 @@ fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
         <circle id="disk" cx="100" cy="100" r="50" fill="#0c0" clip-path="url(#c)"/>"##;
     let d = load(body);
     let meshed =
-        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
     let stray = lines_inside_one_region(&meshed.mesh);
     assert!(stray.is_empty(), "lines inside one region: {stray:?}");
     let r = regions_of(&d, RegionMode::Shape);
@@ -313,10 +313,10 @@ fn a_snapped_stroke_outline_still_bounds_its_stroke() {
     // centre line times its width plus the two half-disk caps.
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/svg/folder-emoji.svg");
     let doc = std::fs::read(&path).expect("bundled drawing");
-    let d = load_bytes_painted(&doc, Units::User, 1.0, &PaintOptions::DEFAULT).expect("loads");
+    let d = load_bytes(&doc, &LoadOptions::DEFAULT).expect("loads");
     assert_eq!(d.paint.strokes_as_areas, 1);
     let opts = RegionOptions::DEFAULT.with_mode(RegionMode::Colour);
-    let meshed = mesh_drawing_with(&d, &Params::DEFAULT, &opts).expect("meshing succeeds");
+    let meshed = mesh_drawing(&d, &Params::DEFAULT, &opts).expect("meshing succeeds");
     let regions = &meshed.report.regions;
     assert!(
         regions.relabelled_area < 1.0,
@@ -371,7 +371,7 @@ fn a_stroke_narrower_than_the_envelope_is_a_line_and_a_sliver_is_reported_lost()
         d.warnings
     );
     let meshed =
-        mesh_drawing_with(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
     let report = &meshed.report;
     assert_eq!(report.regions.lost_shapes, 1, "{:?}", report.warnings);
     let warned: Vec<&String> = report
@@ -401,7 +401,7 @@ fn a_stroke_narrower_than_the_envelope_is_a_line_and_a_sliver_is_reported_lost()
                       stroke-width="3"/>"##,
     );
     let meshed =
-        mesh_drawing_with(&r, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+        mesh_drawing(&r, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
     assert_eq!(meshed.report.regions.lost_shapes, 0);
     assert!(
         meshed.report.warnings.is_empty(),

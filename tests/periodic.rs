@@ -117,10 +117,11 @@ fn check_file(path: &Path, axes: PeriodicAxes) -> usize {
 }
 
 fn mesh_cell(name: &str, svg: &str, axes: PeriodicAxes, version: MshVersion) -> triwild::Meshed {
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the drawing loads");
     let params = Params::DEFAULT.with_periodic(Some(Periodic::new(axes)));
-    let meshed = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
-        .expect("the cell meshes");
+    let meshed =
+        triwild::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT).expect("the cell meshes");
     let path = support::out_dir("periodic").join(format!("{name}.msh"));
     let opts = MshOptions {
         version,
@@ -530,12 +531,13 @@ fn homogenize_p1(mesh: &triwild::FemMesh, k_of: &dyn Fn(&str) -> f64) -> [[f64; 
 #[test]
 fn a_laminate_has_the_harmonic_and_arithmetic_means() {
     let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1 1"><rect id="stiff" x="0.25" y="0" width="0.5" height="1" fill="#000"/></svg>"##;
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the drawing loads");
     let params = Params::DEFAULT
         .with_order(triwild::Order::Linear)
         .with_periodic(Some(Periodic::new(PeriodicAxes::Xy)));
-    let m = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
-        .expect("the cell meshes");
+    let m =
+        triwild::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT).expect("the cell meshes");
     let k = homogenize_p1(&m.mesh, &|name| if name == "stiff" { 10.0 } else { 1.0 });
     let (harmonic, arithmetic) = (20.0 / 11.0, 5.5);
     assert!((k[0][0] - harmonic).abs() < 1e-8 * harmonic, "{k:?}");

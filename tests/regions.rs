@@ -5,7 +5,7 @@
 use kurbo::{BezPath, ParamCurveArea, Point};
 use triwild::FemMesh;
 use triwild::{Drawing, Segment};
-use triwild::{Meshed, mesh_drawing_with};
+use triwild::{Meshed, mesh_drawing};
 use triwild::{MshOptions, MshVersion, Params};
 use triwild::{RegionMode, RegionOptions, RegionStat};
 
@@ -15,8 +15,9 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 fn mesh(svg: &str, opts: &RegionOptions) -> (Drawing, Meshed) {
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("test SVG loads");
-    let meshed = mesh_drawing_with(&drawing, &Params::DEFAULT, opts).expect("meshing succeeds");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("test SVG loads");
+    let meshed = mesh_drawing(&drawing, &Params::DEFAULT, opts).expect("meshing succeeds");
     (drawing, meshed)
 }
 

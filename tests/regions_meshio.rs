@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use triwild::Params;
 use triwild::{FemMesh, LineKind};
-use triwild::{Meshed, mesh_drawing};
+use triwild::{Meshed, RegionOptions, mesh_drawing};
 use triwild::{MshOptions, MshVersion};
 
 mod support;
@@ -372,12 +372,12 @@ fn run(files: &[PathBuf], out: Option<&Path>) -> Tally {
     let start = Instant::now();
     for f in files {
         let name = f.display().to_string();
-        let Ok(drawing) = triwild::load_file(f) else {
+        let Ok(drawing) = triwild::load_file(f, &triwild::LoadOptions::DEFAULT) else {
             t.unloadable.push(name);
             continue;
         };
         let t0 = Instant::now();
-        let m = match mesh_drawing(&drawing, &Params::DEFAULT) {
+        let m = match mesh_drawing(&drawing, &Params::DEFAULT, &RegionOptions::DEFAULT) {
             Ok(m) => m,
             Err(e) => {
                 println!("{name}: meshing failed: {e}");

@@ -19,9 +19,10 @@ const RECTS: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100
 </svg>"##;
 
 fn mesh(name: &str, svg: &str, order: Order, l: f64) -> (Meshed, f64) {
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the drawing loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the drawing loads");
     let params = Params::DEFAULT.with_l(Length::Rel(l)).with_order(order);
-    let meshed = triwild::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
+    let meshed = triwild::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT)
         .expect("the drawing meshes");
     let path = support::out_dir("shared").join(format!("{name}_l{l}_o{}.msh", order as u8));
     triwild::write_msh(&meshed.mesh, &path, MshOptions::DEFAULT).expect("write the mesh");

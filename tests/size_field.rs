@@ -31,9 +31,10 @@ fn params(spec: SizeSpec) -> Params {
 }
 
 fn mesh(name: &str, p: &Params) -> Meshed {
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).expect("the plate loads");
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the plate loads");
     let regions = RegionOptions::DEFAULT.with_cut_outside(true);
-    let m = triwild::mesh_drawing_with(&drawing, p, &regions).expect("the plate meshes");
+    let m = triwild::mesh_drawing(&drawing, p, &regions).expect("the plate meshes");
     let path = support::out_dir("size_field").join(format!("{name}.msh"));
     triwild::write_msh(&m.mesh, &path, MshOptions::DEFAULT).expect("written");
     m
@@ -362,8 +363,8 @@ fn a_background_mesh_gives_the_mesh_of_the_same_formula() {
 
     // Not covering the drawing: one clear error naming a point.
     std::fs::write(&path, background(0.0, -50.0, 50.0, 0.0, 4, |_, _| 1.0)).unwrap();
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
-    let err = triwild::mesh_drawing_with(
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT).unwrap();
+    let err = triwild::mesh_drawing(
         &drawing,
         &params(SizeSpec::DEFAULT.with_background(&path)),
         &RegionOptions::DEFAULT,
@@ -382,11 +383,11 @@ fn every_field_gives_the_same_bytes_on_one_and_two_threads() {
         SizeSpec::DEFAULT.with_expr("1 + 0.04*x"),
         SizeSpec::DEFAULT.with_feature_size(true),
     ];
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT).unwrap();
     for (k, spec) in specs.into_iter().enumerate() {
         let bytes = |threads: usize| {
             let p = params(spec.clone()).with_threads(threads);
-            let m = triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).unwrap();
+            let m = triwild::mesh_drawing(&drawing, &p, &RegionOptions::DEFAULT).unwrap();
             let mut out = Vec::new();
             triwild::write_msh_to(&m.mesh, &mut out, MshOptions::DEFAULT).unwrap();
             out
@@ -397,7 +398,7 @@ fn every_field_gives_the_same_bytes_on_one_and_two_threads() {
 
 #[test]
 fn a_size_function_gives_the_mesh_of_its_formula_in_batches() {
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT).unwrap();
     let batches = std::sync::Arc::new(std::sync::Mutex::new(Vec::<usize>::new()));
     let seen = std::sync::Arc::clone(&batches);
     let f = SizeFn::new(move |xs: &[f64], ys: &[f64]| {
@@ -407,7 +408,7 @@ fn a_size_function_gives_the_mesh_of_its_formula_in_batches() {
     });
     let bytes = |spec: SizeSpec, threads: usize| {
         let p = params(spec).with_threads(threads);
-        let m = triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).unwrap();
+        let m = triwild::mesh_drawing(&drawing, &p, &RegionOptions::DEFAULT).unwrap();
         let mut out = Vec::new();
         triwild::write_msh_to(&m.mesh, &mut out, MshOptions::DEFAULT).unwrap();
         out
@@ -429,10 +430,10 @@ fn a_size_function_gives_the_mesh_of_its_formula_in_batches() {
 
 #[test]
 fn a_failing_size_function_is_one_clear_error_naming_the_point() {
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT).unwrap();
     let run = |f: SizeFn| {
         let p = params(SizeSpec::DEFAULT.with_function(f));
-        triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT)
+        triwild::mesh_drawing(&drawing, &p, &RegionOptions::DEFAULT)
             .map(|_| ())
             .unwrap_err()
     };
@@ -471,9 +472,9 @@ fn a_failing_size_function_is_one_clear_error_naming_the_point() {
 
 #[test]
 fn bad_size_fields_are_one_clear_error() {
-    let drawing = triwild::load_bytes(PLATE.as_bytes()).unwrap();
+    let drawing = triwild::load_bytes(PLATE.as_bytes(), &triwild::LoadOptions::DEFAULT).unwrap();
     let run = |spec: SizeSpec| {
-        triwild::mesh_drawing_with(&drawing, &params(spec), &RegionOptions::DEFAULT)
+        triwild::mesh_drawing(&drawing, &params(spec), &RegionOptions::DEFAULT)
             .map(|_| ())
             .unwrap_err()
     };
@@ -520,13 +521,16 @@ fn d_does_not_depend_on_rotation() {
             r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="-200 -200 400 400"><circle cx="10" cy="20" r="60" transform="{t}" fill="black"/></svg>"#
         )
     };
-    let d0 = triwild::load_bytes(circle("").as_bytes())
+    let d0 = triwild::load_bytes(circle("").as_bytes(), &triwild::LoadOptions::DEFAULT)
         .unwrap()
         .diagonal();
     for deg in [30.0, 45.0, 71.3] {
-        let d = triwild::load_bytes(circle(&format!("rotate({deg})")).as_bytes())
-            .unwrap()
-            .diagonal();
+        let d = triwild::load_bytes(
+            circle(&format!("rotate({deg})")).as_bytes(),
+            &triwild::LoadOptions::DEFAULT,
+        )
+        .unwrap()
+        .diagonal();
         assert!((d - d0).abs() < 1e-9 * d0, "rotated by {deg}: {d} vs {d0}");
     }
     assert!((d0 - 120.0 * 2f64.sqrt()).abs() < 1e-9 * d0, "{d0}");
@@ -544,9 +548,10 @@ fn a_stroke_is_sized_only_when_its_outlines_are_kept_apart() {
         )
     };
     let run = |w: f64| {
-        let drawing = triwild::load_bytes(svg(w).as_bytes()).expect("loads");
+        let drawing =
+            triwild::load_bytes(svg(w).as_bytes(), &triwild::LoadOptions::DEFAULT).expect("loads");
         let p = Params::DEFAULT.with_order(Order::Linear);
-        triwild::mesh_drawing_with(&drawing, &p, &RegionOptions::DEFAULT).expect("meshes")
+        triwild::mesh_drawing(&drawing, &p, &RegionOptions::DEFAULT).expect("meshes")
     };
     // mu is 1e-3 of the diagonal (0.14 here) by default.
     let (thin, wide) = (run(0.05), run(0.8));
@@ -583,9 +588,11 @@ fn a_square_without_interior_features_has_edges_of_l() {
     // At `-l 0.05` the edges of an open square match l (within
     // [4/5, 4/3]) for at least 90 % of them.
     let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect width="100" height="100" fill="#48c"/></svg>"##;
-    let drawing = triwild::load_bytes(svg.as_bytes()).expect("the square loads");
+    let drawing = triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT)
+        .expect("the square loads");
     let p = Params::DEFAULT.with_l(Length::Rel(0.05));
-    let m = triwild::mesh_drawing(&drawing, &p).expect("the square meshes");
+    let m =
+        triwild::mesh_drawing(&drawing, &p, &RegionOptions::DEFAULT).expect("the square meshes");
     let path = support::out_dir("size_field").join("square.msh");
     triwild::write_msh(&m.mesh, &path, MshOptions::DEFAULT).expect("written");
     let e = m

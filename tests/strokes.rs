@@ -9,8 +9,8 @@ mod support;
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 use triwild::{
-    Drawing, FemMesh, MshOptions, MshVersion, Order, PaintOptions, Params, RegionMode,
-    RegionOptions, Units, load_bytes_painted, mesh_drawing_with,
+    Drawing, FemMesh, LoadOptions, MshOptions, MshVersion, Order, Params, RegionMode,
+    RegionOptions, load_bytes, mesh_drawing,
 };
 
 const R: f64 = 30.0;
@@ -23,14 +23,13 @@ fn circle(stroke: &str, width: f64, extra: &str) -> String {
 }
 
 fn load(svg: &str) -> Drawing {
-    load_bytes_painted(svg.as_bytes(), Units::User, 1.0, &PaintOptions::DEFAULT)
-        .expect("test SVG loads")
+    load_bytes(svg.as_bytes(), &LoadOptions::DEFAULT).expect("test SVG loads")
 }
 
 fn mesh(d: &Drawing, order: Order, mode: RegionMode, name: &str) -> triwild::Meshed {
     let params = Params::DEFAULT.with_order(order);
     let opts = RegionOptions::DEFAULT.with_mode(mode);
-    let meshed = mesh_drawing_with(d, &params, &opts).expect("meshing succeeds");
+    let meshed = mesh_drawing(d, &params, &opts).expect("meshing succeeds");
     write_checked(&meshed.mesh, name);
     meshed
 }

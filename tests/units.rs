@@ -4,7 +4,7 @@
 //! measured on the straight triangles of the optimized linear mesh of the filled
 //! shapes (`cut_outside`), which covers the shapes exactly.
 
-use triwild::{FemMesh, Params, RegionOptions, Stage, Units};
+use triwild::{FemMesh, LoadOptions, Params, RegionOptions, Stage, Units};
 
 /// An A4 Inkscape page drawn in millimetres, with a 100 × 50 mm rectangle.
 const A4_MM: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" width="210mm" height="297mm"
@@ -31,9 +31,11 @@ fn linear(units: Units, scale: f64) -> Params {
 
 /// The meshed area of the filled shapes of `svg`, and the mesh.
 fn meshed(svg: &str, params: &Params) -> (f64, FemMesh) {
-    let drawing = triwild::load_bytes_with(svg.as_bytes(), params.units, params.scale)
-        .expect("test drawing loads");
-    let meshed = triwild::mesh_drawing_with(
+    let opts = LoadOptions::DEFAULT
+        .with_units(params.units)
+        .with_scale(params.scale);
+    let drawing = triwild::load_bytes(svg.as_bytes(), &opts).expect("test drawing loads");
+    let meshed = triwild::mesh_drawing(
         &drawing,
         params,
         &RegionOptions::DEFAULT.with_cut_outside(true),
@@ -125,9 +127,13 @@ fn without_a_viewbox_nothing_changes() {
 }
 
 #[test]
-fn mesh_svg_loads_in_the_params_units() {
-    let user = triwild::mesh_svg(A4_MM.as_bytes(), &linear(Units::User, 1.0)).unwrap();
-    let px = triwild::mesh_svg(A4_MM.as_bytes(), &linear(Units::Px, 1.0)).unwrap();
+fn load_options_from_params_load_in_the_params_units() {
+    let mesh_svg = |svg: &[u8], params: &Params| {
+        let drawing = triwild::load_bytes(svg, &LoadOptions::from_params(params)?)?;
+        triwild::mesh_drawing(&drawing, params, &RegionOptions::DEFAULT)
+    };
+    let user = mesh_svg(A4_MM.as_bytes(), &linear(Units::User, 1.0)).unwrap();
+    let px = mesh_svg(A4_MM.as_bytes(), &linear(Units::Px, 1.0)).unwrap();
     // the report's d is the drawing's diagonal: 100 × 50 mm
     assert_rel(user.report.params.d, 50.0 * 5f64.sqrt(), 1e-12, "d");
     assert_rel(
@@ -139,6 +145,6 @@ fn mesh_svg_loads_in_the_params_units() {
     assert_eq!(user.report.params.units, Units::User);
     assert_eq!(px.report.params.units, Units::Px);
     // a bad scale is a parameter error, before anything is loaded
-    let e = triwild::mesh_svg(b"not even svg", &linear(Units::User, 0.0)).unwrap_err();
+    let e = mesh_svg(b"not even svg", &linear(Units::User, 0.0)).unwrap_err();
     assert!(matches!(e, triwild::Error::InvalidParams(_)), "{e}");
 }

@@ -98,7 +98,7 @@ fn disk() -> triwild::Drawing {
         <rect id="plate" width="4" height="2" fill="grey"/>
         <circle id="disk" cx="1" cy="1" r="0.6" fill="red"/>
         <path id="crack" d="M 2.4 0.5 C 3 0.5 3 1.5 3.6 1.5" stroke="black" fill="none"/></svg>"#;
-    triwild::load_bytes(svg.as_bytes()).expect("the drawing loads")
+    triwild::load_bytes(svg.as_bytes(), &triwild::LoadOptions::DEFAULT).expect("the drawing loads")
 }
 
 #[test]
@@ -114,7 +114,7 @@ fn a_vtu_holds_the_mesh_as_lagrange_cells_with_its_tags_and_area() {
         let regions = RegionOptions::DEFAULT
             .with_mode(RegionMode::Shape)
             .with_cut_outside(cut);
-        let meshed = triwild::mesh_drawing_with(&disk(), &params, &regions).expect("it meshes");
+        let meshed = triwild::mesh_drawing(&disk(), &params, &regions).expect("it meshes");
         let mesh = &meshed.mesh;
         let path = dir.join(format!("disk_o{}_cut{cut}.vtu", order as u8));
         triwild::write_vtu(mesh, &path).expect("the vtu is written");

@@ -370,15 +370,17 @@ fn mesh(
                 let size = params.size.clone().with_background_mesh(m);
                 params = params.with_size(size);
             }
-            params.validate().map_err(|e| Failure::Lib(e, None))?;
+            let opts = triwild::LoadOptions::from_params(&params)
+                .map_err(|e| Failure::Lib(e, None))?
+                .with_paint(paint);
             let drawing = match (&path, &data) {
-                (Some(p), _) => triwild::load_file_params(p, &params, &paint),
-                (None, Some(d)) => triwild::load_bytes_params(d, &params, &paint),
+                (Some(p), _) => triwild::load_file(p, &opts),
+                (None, Some(d)) => triwild::load_bytes(d, &opts),
                 (None, None) => return Err(Failure::Flag("no SVG given".to_owned())),
             }
             .map_err(|e| Failure::Lib(e, path.clone()))?;
             let t_load = t0.elapsed().as_secs_f64();
-            let mut meshed = triwild::mesh_drawing_with(&drawing, &params, &regions)
+            let mut meshed = triwild::mesh_drawing(&drawing, &params, &regions)
                 .map_err(|e| Failure::Lib(e, path.clone()))?;
             let arrays = Arrays::of(&meshed.mesh)?;
             meshed.report.times.insert("load", t_load);

@@ -37,10 +37,12 @@ pub(crate) fn run(args: &FeaturesArgs, quiet: bool) -> ExitCode {
         errln!("error: {}: {err}", path.display());
         exit_code(err.kind())
     };
-    if let Err(e) = params.validate() {
-        return fail(input, e);
-    }
-    let drawing = match triwild::load_file_params(input, &params, &triwild::PaintOptions::DEFAULT) {
+    // validates the parameters before anything is read
+    let opts = match triwild::LoadOptions::from_params(&params) {
+        Ok(o) => o,
+        Err(e) => return fail(input, e),
+    };
+    let drawing = match triwild::load_file(input, &opts) {
         Ok(d) => d,
         Err(e) => return fail(input, e),
     };

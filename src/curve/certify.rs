@@ -182,10 +182,13 @@ fn is_curved(order: Order, p: &[Point], tol: f64) -> bool {
 /// Certify every triangle of a [`crate::FemMesh`] (what `triwild check` reports).
 ///
 /// ```
-/// use triwild::{CertifyOptions, Length, Params, certify_fem, mesh_svg};
+/// use triwild::{CertifyOptions, Length, LoadOptions, Params, RegionOptions};
+/// use triwild::{certify_fem, load_bytes, mesh_drawing};
 /// let svg = br#"<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10">
 ///     <circle cx="5" cy="5" r="4"/></svg>"#;
-/// let meshed = mesh_svg(svg, &Params::DEFAULT.with_l(Length::Rel(0.2)))?;
+/// let params = Params::DEFAULT.with_l(Length::Rel(0.2));
+/// let drawing = load_bytes(svg, &LoadOptions::from_params(&params)?)?;
+/// let meshed = mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT)?;
 /// let check = certify_fem(&meshed.mesh, &CertifyOptions::DEFAULT);
 /// assert!(check.is_valid());
 /// assert_eq!(check.certified, check.triangles);

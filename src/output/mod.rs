@@ -155,62 +155,85 @@ fn write_format(
     }
 }
 
-/// Write an SVG preview of `mesh` at `path` (atomically): grey triangle outlines
-/// (curved edges drawn as the Bézier curves they are), feature lines coloured by
-/// [`crate::fem::LineKind`] (primary red, secondary green, constraint blue,
-/// boundary black), y
-/// flipped back so it looks like the input.
-///
-/// # Errors
-/// As [`write_msh`].
-pub fn write_preview(mesh: &FemMesh, path: &Path) -> Result<()> {
-    write_preview_coloured(mesh, &[], path)
+/// How [`write_preview`] draws a mesh: triangle outlines only
+/// ([`PreviewOptions::DEFAULT`]), or filled with the colour of their physical
+/// surface.
+#[derive(Clone, Copy)]
+#[non_exhaustive]
+pub struct PreviewOptions<'a> {
+    /// `colours[s]`, a CSS colour (`#rrggbb`, `#rrggbbaa`), fills the
+    /// triangles of physical surface `s` (a missing entry or `None` leaves
+    /// them unfilled), so the picture can be compared with the drawing at a
+    /// glance (the `colour` of each region in `--stats`). Default empty.
+    pub colours: &'a [Option<String>],
+    /// Marks drawn over the mesh (`--preview`: forced corners, the worst
+    /// unforced element). Default none.
+    pub(crate) marks: Option<&'a PreviewMarks>,
+    /// The size field h: each triangle filled by how its size matches it
+    /// (`--preview-size`), instead of by colour. Default none.
+    pub(crate) size: Option<&'a dyn Fn(kurbo::Point) -> f64>,
 }
 
-/// [`write_preview`] with each triangle filled with its physical surface's
-/// colour: `colours[s]` is a CSS colour (`#rrggbb`, `#rrggbbaa`) for surface `s`
-/// (a missing entry or `None` leaves it unfilled), so the picture can be
-/// compared with the drawing at a glance (the `colour` of each region in `--stats`).
-///
-/// # Errors
-/// As [`write_msh`].
-pub fn write_preview_coloured(
-    mesh: &FemMesh,
-    colours: &[Option<String>],
-    path: &Path,
-) -> Result<()> {
-    write_preview_marked(mesh, colours, &PreviewMarks::default(), path)
+impl<'a> PreviewOptions<'a> {
+    /// Triangle outlines and feature lines, no fill, no marks.
+    pub const DEFAULT: PreviewOptions<'a> = PreviewOptions {
+        colours: &[],
+        marks: None,
+        size: None,
+    };
+
+    /// Fill each physical surface's triangles with its colour (see
+    /// [`PreviewOptions::colours`]).
+    pub fn with_colours(mut self, colours: &'a [Option<String>]) -> Self {
+        self.colours = colours;
+        self
+    }
+
+    /// Draw `marks` over the mesh.
+    pub(crate) fn with_marks(mut self, marks: &'a PreviewMarks) -> Self {
+        self.marks = Some(marks);
+        self
+    }
+
+    /// Fill each triangle by how its size matches the size field `h`: its
+    /// mean edge length over h at its centroid, blue below 4/5, neutral
+    /// within [4/5, 4/3], red above, with a legend.
+    pub(crate) fn with_size_field(mut self, h: &'a dyn Fn(kurbo::Point) -> f64) -> Self {
+        self.size = Some(h);
+        self
+    }
 }
 
-/// [`write_preview_coloured`] with `marks` drawn over it (`--preview`:
-/// forced corners, the worst unforced element).
+impl Default for PreviewOptions<'_> {
+    fn default() -> Self {
+        PreviewOptions::DEFAULT
+    }
+}
+
+impl std::fmt::Debug for PreviewOptions<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PreviewOptions")
+            .field("colours", &self.colours)
+            .field("marks", &self.marks)
+            .field("size", &self.size.map(|_| "h(x)"))
+            .finish()
+    }
+}
+
+/// Write an SVG preview of `mesh` at `path` (atomically), drawn as `opts`
+/// says: grey triangle outlines (curved edges drawn as the Bézier curves
+/// they are), feature lines coloured by [`crate::fem::LineKind`] (primary
+/// red, secondary green, constraint blue, boundary black), y flipped back so
+/// it looks like the input.
 ///
 /// # Errors
 /// As [`write_msh`].
-pub(crate) fn write_preview_marked(
-    mesh: &FemMesh,
-    colours: &[Option<String>],
-    marks: &PreviewMarks,
-    path: &Path,
-) -> Result<()> {
+pub fn write_preview(mesh: &FemMesh, path: &Path, opts: &PreviewOptions<'_>) -> Result<()> {
     msh::validate(mesh).map_err(Error::Write)?;
-    atomic::write_atomic(path, |w| preview::write_svg(w, mesh, colours, None, marks))
-}
-
-/// [`write_preview`] with each triangle filled by how its size matches the
-/// size field `h` (`--preview-size`): its mean edge length over h at its
-/// centroid, blue below 4/5, neutral within [4/5, 4/3], red above, with a legend.
-///
-/// # Errors
-/// As [`write_msh`].
-pub(crate) fn write_preview_sized(
-    mesh: &FemMesh,
-    h: &dyn Fn(kurbo::Point) -> f64,
-    path: &Path,
-) -> Result<()> {
-    msh::validate(mesh).map_err(Error::Write)?;
+    let no_marks = PreviewMarks::default();
+    let marks = opts.marks.unwrap_or(&no_marks);
     atomic::write_atomic(path, |w| {
-        preview::write_svg(w, mesh, &[], Some(h), &PreviewMarks::default())
+        preview::write_svg(w, mesh, opts.colours, opts.size, marks)
     })
 }
 

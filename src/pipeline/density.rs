@@ -239,7 +239,8 @@ mod tests {
             ));
         }
         svg.push_str("</svg>");
-        crate::svg::load_bytes(svg.as_bytes()).expect("a drawing")
+        crate::svg::load_bytes(svg.as_bytes(), &crate::svg::LoadOptions::DEFAULT)
+            .expect("a drawing")
     }
 
     fn mu(d: &Drawing) -> f64 {

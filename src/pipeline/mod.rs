@@ -20,19 +20,22 @@ use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::forced::ForcedCorners;
 use crate::optimize::{OptimizeOptions, OptimizeStats};
-use crate::output::{self, MeshFormat, MshOptions};
-use crate::params::{Length, Mesher, Params, Resolved, Stage};
+use crate::output::{self, MeshFormat, MshOptions, PreviewOptions};
+use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::periodic::{Cell, PeriodicReport};
 use crate::quality::Quality;
 use crate::regions::select::RegionMode;
 use crate::regions::{RegionOptions, RegionReport};
 use crate::sizing::{FieldInput, SizeField, SizingReport};
-use crate::svg::{self, Drawing, FeatureGeom, PaintOptions};
+use crate::svg::{self, Drawing, FeatureGeom, LoadOptions, PaintOptions};
 use crate::{Error, Result};
 use kurbo::Rect;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod api;
+pub use api::mesh_drawing;
 
 /// Options of one run beyond the meshing parameters.
 #[derive(Clone, Debug)]
@@ -315,83 +318,7 @@ impl FeatureAnalysis {
     }
 }
 
-/// Load an SVG document from memory in `params`' units and scale
-/// ([`crate::load_bytes_with`]) and mesh it with the default regions
-/// ([`mesh_drawing`]).
-///
-/// # Errors
-/// Invalid parameters; [`crate::ErrorKind::BadInput`] for a document that is not
-/// a drawing (as [`crate::load_bytes_with`]), then as [`mesh_drawing`].
-pub fn mesh_svg(svg: &[u8], params: &Params) -> Result<Meshed> {
-    params.validate()?;
-    let deadline = params.deadline();
-    let drawing = load_bytes_params(svg, params, &PaintOptions::DEFAULT)?;
-    mesh_within(&drawing, params, &RegionOptions::DEFAULT, deadline)
-}
-
-/// Load an SVG file in `params`' units and scale within its input budgets
-/// ([`Params::max_segments`], [`Params::max_shapes`], [`Params::max_memory_mb`]),
-/// its paint model read as `paint` says (strokes narrower than `params.l_min`
-/// stay lines): what [`run_file`], `triwild features` and the Python package load.
-///
-/// # Errors
-/// As [`crate::load_file_with`], and [`Error::TooLarge`] past a budget.
-pub fn load_file_params(path: &Path, params: &Params, paint: &PaintOptions) -> Result<Drawing> {
-    params.validate()?;
-    let paint = hairlines_below_l_min(params, paint);
-    svg::load_file_limited(path, params.units, params.scale, &paint, &params.limits())
-}
-
-/// [`load_file_params`] for an SVG document in memory.
-///
-/// # Errors
-/// As [`crate::load_bytes_with`], and [`Error::TooLarge`] past a budget.
-pub fn load_bytes_params(data: &[u8], params: &Params, paint: &PaintOptions) -> Result<Drawing> {
-    params.validate()?;
-    let paint = hairlines_below_l_min(params, paint);
-    svg::load_limited(data, params.units, params.scale, &paint, &params.limits())
-        .map(|(drawing, _)| drawing)
-}
-
-/// `paint` with strokes narrower than `params.l_min` (hairlines) or than
-/// `params.mu` (outlines the features stage would not keep apart) kept as lines.
-fn hairlines_below_l_min(params: &Params, paint: &PaintOptions) -> PaintOptions {
-    let paint = match params.mu {
-        Length::Rel(r) => paint.with_mu(r, true),
-        Length::Abs(a) => paint.with_mu(a, false),
-    };
-    match params.l_min {
-        Length::Rel(r) => paint.with_min_stroke_width(r, true),
-        Length::Abs(a) => paint.with_min_stroke_width(a, false),
-    }
-}
-
-/// Mesh an already loaded drawing, with the default regions (one surface per
-/// filled shape, plus `background`). The drawing is in the units it was loaded
-/// in: `params.units` and `params.scale` only say so in the report.
-///
-/// # Errors
-/// Invalid parameters or a failed meshing stage.
-pub fn mesh_drawing(drawing: &Drawing, params: &Params) -> Result<Meshed> {
-    mesh_drawing_with(drawing, params, &RegionOptions::DEFAULT)
-}
-
-/// Mesh an already loaded drawing and tag (or drop) its regions. The drawing is
-/// in the units it was loaded in (see [`mesh_drawing`]).
-///
-/// # Errors
-/// Invalid parameters, a failed meshing stage, or region options that select
-/// nothing or name regions that do not exist.
-pub fn mesh_drawing_with(
-    drawing: &Drawing,
-    params: &Params,
-    regions: &RegionOptions,
-) -> Result<Meshed> {
-    params.validate()?;
-    mesh_within(drawing, params, regions, params.deadline())
-}
-
-/// [`mesh_drawing_with`] with the run's deadline, checked between stages and
+/// [`mesh_drawing`] with the run's deadline, checked between stages and
 /// in the BSP's, the optimizer's and the curved optimization's loops.
 fn mesh_within(
     drawing: &Drawing,
@@ -1199,7 +1126,10 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
     let deadline = opts.params.deadline();
     let t = Instant::now();
     let params = &opts.params;
-    let drawing = load_file_params(input, params, &opts.paint)?;
+    let drawing = svg::load_file(
+        input,
+        &LoadOptions::from_params(params)?.with_paint(opts.paint),
+    )?;
     let t_load = t.elapsed().as_secs_f64();
     // Meshing and writing on one pool: the writer formats in parallel too,
     // on no more threads than the mesher was given.
@@ -1212,7 +1142,11 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
             MeshFormat::Vtu => output::write_vtu(&mesh, output)?,
         }
         if let Some(p) = opts.preview.as_ref().filter(|_| opts.preview_size) {
-            output::write_preview_sized(&mesh, &|x| field.at(x), p)?;
+            output::write_preview(
+                &mesh,
+                p,
+                &PreviewOptions::DEFAULT.with_size_field(&|x| field.at(x)),
+            )?;
         } else if let Some(p) = &opts.preview {
             let colours: Vec<Option<String>> = report
                 .regions
@@ -1231,7 +1165,13 @@ pub fn run_file(input: &Path, output: &Path, opts: &RunOptions) -> Result<Report
                     .and_then(|u| u.worst)
                     .map(|w| w.element),
             };
-            output::write_preview_marked(&mesh, &colours, &marks, p)?;
+            output::write_preview(
+                &mesh,
+                p,
+                &PreviewOptions::DEFAULT
+                    .with_colours(&colours)
+                    .with_marks(&marks),
+            )?;
         }
         Ok((report, t.elapsed().as_secs_f64()))
     });

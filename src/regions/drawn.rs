@@ -1295,7 +1295,8 @@ mod tests {
     use std::f64::consts::PI;
 
     fn areas(svg: &str) -> (Drawing, DrawnAreas) {
-        let drawing = crate::svg::load_bytes(svg.as_bytes()).expect("load");
+        let drawing = crate::svg::load_bytes(svg.as_bytes(), &crate::svg::LoadOptions::DEFAULT)
+            .expect("load");
         let painting = Painting::new(&drawing);
         let bounds = drawing.bbox.inflate(1.0, 1.0);
         let d = drawing.diagonal();

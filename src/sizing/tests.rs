@@ -34,7 +34,7 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
         <path d="M 10 39.1 H 90" stroke="#000" stroke-width="0.3" fill="none"/></svg>"##;
-    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     let field = default_field(&drawing, &r);
     assert_eq!(field.report().fields, ["strokes"]);
@@ -112,7 +112,7 @@ fn without_strokes_the_curves_read_the_field() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
         <path d="M 10 38.5 H 90" stroke="#000" stroke-width="0.01" fill="none"/></svg>"##;
-    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     let field = default_field(&drawing, &r);
     assert!(field.is_uniform());
@@ -133,7 +133,7 @@ fn beside_a_stroke_the_curves_read_the_users_field() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
         <path d="M 10 38.5 H 90" stroke="#000" stroke-width="0.25" fill="none"/></svg>"##;
-    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     // A box of size 3 over everything, a box of size 1.5 far from the stroke.
     let spec = SizeSpec::default()
@@ -182,7 +182,7 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
         <rect x="10" y="40" width="80" height="20" fill="#58a"/>
         <path d="M 10 40 H 90" stroke="#000" stroke-width="0.1" fill="none"/></svg>"##;
-    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     assert!(
         0.1 >= r.mu && 0.05 < r.mu,
@@ -233,7 +233,7 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
 fn seeds_follow_the_field_where_it_is_fine_and_keep_off_the_features() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="-200 -200 400 400">
         <rect x="-150" y="-20" width="300" height="40" fill="#58a"/></svg>"##;
-    let drawing = crate::svg::load_bytes(svg).expect("loads");
+    let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     let spec = SizeSpec::DEFAULT.with_expr("0.5 + 0.1*(x + 200)");
     let field = field_of(&drawing, &r, &spec);

@@ -81,6 +81,7 @@ pub(crate) mod drawing;
 mod duplicates;
 mod geometry;
 mod load;
+mod options;
 mod outline;
 mod paint;
 mod reconstruct;
@@ -93,47 +94,25 @@ pub(crate) use drawing::{
     Clip, Drawing, Feature, FeatureGeom, FeatureSource, FillRule, Segment, Shape, ShapeId,
     ShapeKind, Subpath,
 };
+pub(crate) use options::HairlineRule;
+pub use options::LoadOptions;
 pub use paint::{PaintOptions, StrokeMode};
 
 pub(crate) use outline::one_digit_below;
 pub(crate) use reconstruct::Precision;
 
-use crate::budget::Limits;
-use crate::units::Units;
 use crate::{Error, Result};
 use std::path::Path;
 
-/// Load and normalise an SVG file, in the user units of its root `viewBox`
-/// (as [`load_file_with`] with [`Units::User`] and scale 1).
-///
-/// # Errors
-/// As [`load_file_with`].
-pub fn load_file(path: &Path) -> Result<Drawing> {
-    load_file_with(path, Units::User, 1.0)
-}
-
-/// Load and normalise an SVG file, its coordinates in `units` multiplied by `scale`.
+/// Load and normalise an SVG file as `opts` says (units, scale, paint
+/// model, budgets).
 ///
 /// # Errors
 /// [`Error::Read`] if the file cannot be read (the message names the cause),
-/// [`Error::IsDirectory`] for a directory, otherwise as [`load_bytes_with`].
-pub fn load_file_with(path: &Path, units: Units, scale: f64) -> Result<Drawing> {
-    load_file_painted(path, units, scale, &PaintOptions::DEFAULT)
-}
-
-/// [`load_file_with`], SVG's paint model read as `paint` says (strokes,
-/// opacity thresholds).
-///
-/// # Errors
-/// As [`load_file_with`].
-pub fn load_file_painted(
-    path: &Path,
-    units: Units,
-    scale: f64,
-    paint: &PaintOptions,
-) -> Result<Drawing> {
+/// [`Error::IsDirectory`] for a directory, otherwise as [`load_bytes`].
+pub fn load_file(path: &Path, opts: &LoadOptions) -> Result<Drawing> {
     let data = read_input(path)?;
-    load_bytes_painted(&data, units, scale, paint)
+    load_bytes(&data, opts)
 }
 
 /// The bytes of the input file at `path`.
@@ -153,47 +132,65 @@ fn read_input(path: &Path) -> Result<Vec<u8>> {
 }
 
 /// Load and normalise an SVG document from its bytes (UTF-8, or UTF-16 with a
-/// BOM), in the user units of its root `viewBox` (as [`load_bytes_with`] with
-/// [`Units::User`] and scale 1).
+/// BOM) as `opts` says: its coordinates in [`LoadOptions::units`] multiplied
+/// by [`LoadOptions::scale`], SVG's paint model read as
+/// [`LoadOptions::paint`] says (what the renderer does not paint is not
+/// loaded: hidden, `display: none`, zero opacity along the group chain, zero
+/// fill or stroke opacity; paint below [`PaintOptions::min_opacity`] is
+/// decoration, no region; strokes become the areas they paint, see
+/// [`StrokeMode`]; shapes under a clip path or mask carry it, see
+/// [`Shape::paint`], and the clip's outline is feature geometry), within the
+/// input budgets of options made by [`LoadOptions::from_params`].
 ///
 /// ```
-/// use triwild::{ErrorKind, load_bytes};
+/// use triwild::{ErrorKind, LoadOptions, load_bytes};
 /// let d = load_bytes(br#"<svg xmlns="http://www.w3.org/2000/svg">
-///     <rect x="0" y="0" width="4" height="2"/></svg>"#)?;
+///     <rect x="0" y="0" width="4" height="2"/></svg>"#, &LoadOptions::DEFAULT)?;
 /// assert_eq!(d.shapes.len(), 1);
 /// assert_eq!(d.diagonal(), 20f64.sqrt());
 /// // Not a drawing: one clear error, never a panic.
-/// let e = load_bytes(b"<html><body>hello</body></html>").unwrap_err();
+/// let e = load_bytes(b"<html><body>hello</body></html>", &LoadOptions::DEFAULT).unwrap_err();
 /// assert_eq!(e.kind(), ErrorKind::BadInput);
 /// # Ok::<(), triwild::Error>(())
 /// ```
 ///
-/// # Errors
-/// As [`load_bytes_with`].
-pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
-    load_bytes_with(data, Units::User, 1.0)
-}
-
-/// Load and normalise an SVG document from its bytes, its coordinates in
-/// `units` multiplied by `scale`.
+/// Units and scale:
 ///
 /// ```
-/// use triwild::{Units, load_bytes_with};
+/// use triwild::{LoadOptions, Units, load_bytes};
 /// // an A4 page drawn in millimetres (Inkscape's default)
 /// let doc = br#"<svg xmlns="http://www.w3.org/2000/svg" width="210mm" height="297mm"
 ///     viewBox="0 0 210 297"><rect x="10" y="20" width="100" height="50"/></svg>"#;
-/// let mm = load_bytes_with(doc, Units::User, 1.0)?;
+/// let mm = load_bytes(doc, &LoadOptions::DEFAULT)?;
 /// assert_eq!((mm.bbox.x0, mm.bbox.y1), (10.0, -20.0)); // the document's numbers, y up
 /// assert_eq!(mm.bbox.width(), 100.0);
-/// let px = load_bytes_with(doc, Units::Px, 1.0)?; // CSS px: 96 per inch
+/// let px = load_bytes(doc, &LoadOptions::DEFAULT.with_units(Units::Px))?; // CSS px: 96 per inch
 /// assert!((px.bbox.width() - 100.0 * 96.0 / 25.4).abs() < 1e-4);
-/// let metres = load_bytes_with(doc, Units::User, 1e-3)?;
+/// let metres = load_bytes(doc, &LoadOptions::DEFAULT.with_scale(1e-3))?;
 /// assert!((metres.bbox.width() - 0.1).abs() < 1e-15);
 /// # Ok::<(), triwild::Error>(())
 /// ```
 ///
+/// The paint model:
+///
+/// ```
+/// use triwild::{LoadOptions, PaintOptions, StrokeMode, load_bytes};
+/// let doc = br##"<svg xmlns="http://www.w3.org/2000/svg">
+///     <rect x="0" y="0" width="10" height="10" fill="none" stroke="#000" stroke-width="2"/>
+///     <rect x="20" y="0" width="10" height="10" fill="#f00" visibility="hidden"/></svg>"##;
+/// let area = load_bytes(doc, &LoadOptions::DEFAULT)?;
+/// assert_eq!(area.shapes.len(), 1);
+/// assert_eq!(area.shapes[0].name(), "shape-0-stroke");
+/// assert_eq!(area.paint.strokes_as_areas, 1);
+/// assert_eq!(area.paint.dropped_invisible, 1);
+/// let line = PaintOptions::DEFAULT.with_strokes(StrokeMode::Line);
+/// let line = load_bytes(doc, &LoadOptions::DEFAULT.with_paint(line))?;
+/// assert!(!line.shapes[0].filled); // the centre line: a feature, no region
+/// # Ok::<(), triwild::Error>(())
+/// ```
+///
 /// # Errors
-/// - [`Error::InvalidParams`]: `scale` is not finite and positive;
+/// - [`Error::InvalidParams`]: the scale is not finite and positive;
 /// - [`Error::EmptyFile`]: no bytes, or only whitespace;
 /// - [`Error::NotSvg`]: binary data (PNG, gzip/.svgz, ...), broken XML, an HTML
 ///   page, a root element other than `<svg>`, or input beyond usvg's safety
@@ -202,73 +199,10 @@ pub fn load_bytes(data: &[u8]) -> Result<Drawing> {
 /// - [`Error::BadCoordinate`]: a coordinate that is not finite or exceeds
 ///   [`Drawing::MAX_COORD`] after transforms (the units and the scale
 ///   included), a drawing too small for its distance from the origin, or (in
-///   user units) a root `viewBox` whose mapping to the viewport cannot be undone.
-pub fn load_bytes_with(data: &[u8], units: Units, scale: f64) -> Result<Drawing> {
-    load_bytes_painted(data, units, scale, &PaintOptions::DEFAULT)
-}
-
-/// [`load_bytes_with`], SVG's paint model read as `paint` says: what the
-/// renderer does not paint is not loaded (hidden, `display: none`, zero
-/// opacity along the group chain, zero fill or stroke opacity); paint below
-/// [`PaintOptions::min_opacity`] is decoration (no region); strokes become
-/// the areas they paint ([`StrokeMode`]); shapes under a clip path or mask
-/// carry it ([`Shape::paint`]) and the clip's outline is feature geometry.
-///
-/// ```
-/// use triwild::{PaintOptions, StrokeMode, Units, load_bytes_painted};
-/// let doc = br##"<svg xmlns="http://www.w3.org/2000/svg">
-///     <rect x="0" y="0" width="10" height="10" fill="none" stroke="#000" stroke-width="2"/>
-///     <rect x="20" y="0" width="10" height="10" fill="#f00" visibility="hidden"/></svg>"##;
-/// let area = load_bytes_painted(doc, Units::User, 1.0, &PaintOptions::DEFAULT)?;
-/// assert_eq!(area.shapes.len(), 1);
-/// assert_eq!(area.shapes[0].name(), "shape-0-stroke");
-/// assert_eq!(area.paint.strokes_as_areas, 1);
-/// assert_eq!(area.paint.dropped_invisible, 1);
-/// let line = PaintOptions::DEFAULT.with_strokes(StrokeMode::Line);
-/// let line = load_bytes_painted(doc, Units::User, 1.0, &line)?;
-/// assert!(!line.shapes[0].filled); // the centre line: a feature, no region
-/// # Ok::<(), triwild::Error>(())
-/// ```
-///
-/// # Errors
-/// As [`load_bytes_with`].
-pub fn load_bytes_painted(
-    data: &[u8],
-    units: Units,
-    scale: f64,
-    paint: &PaintOptions,
-) -> Result<Drawing> {
-    load_limited(data, units, scale, paint, &Limits::NONE).map(|(drawing, _)| drawing)
-}
-
-/// [`load_bytes_with`], and how the paths came out (f64 from the document's
-/// text, or usvg's single precision and why).
-///
-/// # Errors
-/// As [`load_bytes_with`].
-#[cfg(test)]
-pub(crate) fn load_with_precision(
-    data: &[u8],
-    units: Units,
-    scale: f64,
-) -> Result<(Drawing, Precision)> {
-    load_limited(data, units, scale, &PaintOptions::OUTLINES, &Limits::NONE)
-}
-
-/// Load and normalise an SVG file within input budgets (see [`load_limited`]),
-/// the paint model read as `paint` says.
-///
-/// # Errors
-/// As [`load_file_with`], and [`Error::TooLarge`] past a budget.
-pub(crate) fn load_file_limited(
-    path: &Path,
-    units: Units,
-    scale: f64,
-    paint: &PaintOptions,
-    limits: &Limits,
-) -> Result<Drawing> {
-    let data = read_input(path)?;
-    load_limited(&data, units, scale, paint, limits).map(|(drawing, _)| drawing)
+///   user units) a root `viewBox` whose mapping to the viewport cannot be undone;
+/// - [`Error::TooLarge`]: past an input budget.
+pub fn load_bytes(data: &[u8], opts: &LoadOptions) -> Result<Drawing> {
+    load_with_precision(data, opts).map(|(drawing, _)| drawing)
 }
 
 /// A coordinate error that `--scale` caused says so.
@@ -281,20 +215,17 @@ fn blame_scale(e: Error, scale: f64) -> Error {
     }
 }
 
-/// [`load_bytes_painted`] within input budgets, and how the paths came out:
-/// XML entity expansion is checked on the raw text, segments, elements and the
-/// memory estimate on the XML tree before usvg builds its tree, and again on
-/// the drawing.
+/// [`load_bytes`], and how the paths came out (f64 from the document's text,
+/// or usvg's single precision and why): XML entity expansion is checked
+/// against the budgets on the raw text, segments, elements and the memory
+/// estimate on the XML tree before usvg builds its tree, and again on the
+/// drawing.
 ///
 /// # Errors
-/// As [`load_bytes_with`], and [`Error::TooLarge`] past a budget.
-pub(crate) fn load_limited(
-    data: &[u8],
-    units: Units,
-    scale: f64,
-    paint: &PaintOptions,
-    limits: &Limits,
-) -> Result<(Drawing, Precision)> {
+/// As [`load_bytes`].
+pub(crate) fn load_with_precision(data: &[u8], opts: &LoadOptions) -> Result<(Drawing, Precision)> {
+    let (units, scale, limits) = (opts.units, opts.scale, &opts.limits);
+    let paint = &opts.effective_paint();
     // checked before parsing, so a bad scale is reported whatever the input
     viewport::check_scale(scale)?;
     let (outlines, view_box) = load::parse(data, limits, |parsed| {

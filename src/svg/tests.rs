@@ -2,6 +2,8 @@
 
 use super::*;
 use crate::ErrorKind;
+use crate::budget::Limits;
+use crate::units::Units;
 use kurbo::{ParamCurve, Point};
 
 /// Wrap `body` in an `<svg>` root with a 100×100 user space (no viewBox scaling).
@@ -14,17 +16,20 @@ fn svg(body: &str) -> String {
 /// Load with strokes as centre lines (the outlines as written: most tests here
 /// are about geometry; the paint model has its own tests below).
 fn load(body: &str) -> Drawing {
-    load_bytes_painted(
-        svg(body).as_bytes(),
-        Units::User,
-        1.0,
-        &PaintOptions::OUTLINES,
-    )
-    .expect("test SVG loads")
+    load_bytes(svg(body).as_bytes(), &OUTLINES).expect("test SVG loads")
+}
+
+/// User units, scale 1, every outline as written ([`PaintOptions::OUTLINES`]).
+const OUTLINES: LoadOptions = LoadOptions::DEFAULT.with_paint(PaintOptions::OUTLINES);
+
+/// Load `data` in `units` at `scale`, every outline as written, with the
+/// precision report.
+fn load_outlines(data: &[u8], units: Units, scale: f64) -> Result<(Drawing, Precision)> {
+    load_with_precision(data, &OUTLINES.with_units(units).with_scale(scale))
 }
 
 fn load_err(doc: &str) -> Error {
-    load_bytes(doc.as_bytes()).expect_err("test SVG must be rejected")
+    load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT).expect_err("test SVG must be rejected")
 }
 
 fn count(sub: &Subpath) -> (usize, usize) {
@@ -223,6 +228,7 @@ fn fill_rule_colour_and_id() {
     // the stroke of shape 1 as the area it paints (the default)
     let d = load_bytes(
         svg(r##"<path d="M 0 0 L 10 0 L 5 10 Z" fill="url(#nope)" stroke="blue"/>"##).as_bytes(),
+        &LoadOptions::DEFAULT,
     )
     .expect("loads");
     assert_eq!(d.shapes[0].name(), "shape-0-stroke");
@@ -299,6 +305,7 @@ fn text_becomes_outlines_when_a_font_exists() {
     let d = load_bytes(
         svg(r#"<text id="hello" x="10" y="50" font-size="20" font-family="sans-serif">Hi</text>"#)
             .as_bytes(),
+        &LoadOptions::DEFAULT,
     );
     if super::load::font_database().is_empty() {
         // No font on this machine: the text is skipped with a warning.
@@ -335,7 +342,8 @@ fn the_fallback_font_keeps_the_weight_and_style() {
         let text = format!(
             r#"<text x="10" y="50" font-size="20" font-family="{family}" {style}>&#x645;&#x631;&#x62D;&#x628;&#x627;</text>"#
         );
-        let d = load_bytes(svg(&text).as_bytes()).expect("the text has outlines");
+        let d = load_bytes(svg(&text).as_bytes(), &LoadOptions::DEFAULT)
+            .expect("the text has outlines");
         let points: Vec<Point> = d
             .shapes
             .iter()
@@ -402,7 +410,7 @@ fn clip_paths_and_masks_limit_the_shape_and_their_outlines_are_features() {
 #[test]
 fn marker_none_beside_a_group_keeps_both_shapes() {
     let doc = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><rect fill="#85d8f6" marker="none" width="40" height="60" x="6" y="37"/><g><path fill="#9fc510" d="M6 71h40v26H6z"/></g></svg>"##;
-    let d = load_bytes(doc.as_bytes()).expect("loads");
+    let d = load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT).expect("loads");
     let colours: Vec<_> = d.shapes.iter().map(|s| s.fill_colour).collect();
     assert_eq!(
         colours,
@@ -488,7 +496,8 @@ fn invisible_elements_stay_dropped() {
 #[test]
 fn missing_file_is_a_read_error() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let err = load_file(&dir.path().join("nope.svg")).expect_err("missing file");
+    let err =
+        load_file(&dir.path().join("nope.svg"), &LoadOptions::DEFAULT).expect_err("missing file");
     assert!(matches!(err, Error::Read(_)));
     // A path that names no file is a bad argument (exit 2), not a failing disk.
     assert_eq!(err.kind(), ErrorKind::BadInput);
@@ -498,7 +507,10 @@ fn missing_file_is_a_read_error() {
 #[test]
 fn directory_is_rejected() {
     let dir = tempfile::tempdir().expect("tempdir");
-    assert!(matches!(load_file(dir.path()), Err(Error::IsDirectory)));
+    assert!(matches!(
+        load_file(dir.path(), &LoadOptions::DEFAULT),
+        Err(Error::IsDirectory)
+    ));
 }
 
 #[test]
@@ -506,8 +518,14 @@ fn empty_file_is_rejected() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("empty.svg");
     std::fs::write(&path, b"").expect("write");
-    assert!(matches!(load_file(&path), Err(Error::EmptyFile)));
-    assert!(matches!(load_bytes(b" \n\t "), Err(Error::EmptyFile)));
+    assert!(matches!(
+        load_file(&path, &LoadOptions::DEFAULT),
+        Err(Error::EmptyFile)
+    ));
+    assert!(matches!(
+        load_bytes(b" \n\t ", &LoadOptions::DEFAULT),
+        Err(Error::EmptyFile)
+    ));
 }
 
 #[test]
@@ -515,11 +533,17 @@ fn a_file_loads() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("ok.svg");
     std::fs::write(&path, svg(r#"<rect width="5" height="5"/>"#)).expect("write");
-    assert_eq!(load_file(&path).expect("loads").features.len(), 4);
+    assert_eq!(
+        load_file(&path, &LoadOptions::DEFAULT)
+            .expect("loads")
+            .features
+            .len(),
+        4
+    );
 }
 
 fn not_svg(doc: &[u8]) -> String {
-    match load_bytes(doc) {
+    match load_bytes(doc, &LoadOptions::DEFAULT) {
         Err(Error::NotSvg(cause)) => cause,
         other => panic!("expected NotSvg, got {other:?}"),
     }
@@ -542,7 +566,10 @@ fn non_svg_inputs_are_not_svg() {
     assert!(not_svg(png).contains("PNG"));
     assert!(not_svg(&[0x1f, 0x8b, 8, 0, 0, 0]).contains("gzip"));
     assert!(not_svg(&[0x3c, 0xff, 0xfe, 0x00]).contains("UTF-8"));
-    for e in [load_bytes(b"hello"), load_bytes(png)] {
+    for e in [
+        load_bytes(b"hello", &LoadOptions::DEFAULT),
+        load_bytes(png, &LoadOptions::DEFAULT),
+    ] {
         assert_eq!(e.expect_err("bad").kind(), ErrorKind::BadInput);
     }
 }
@@ -552,10 +579,16 @@ fn utf16_with_bom_is_decoded() {
     let text = svg(r#"<rect width="5" height="5"/>"#);
     let mut bytes = vec![0xff, 0xfe];
     bytes.extend(text.encode_utf16().flat_map(u16::to_le_bytes));
-    assert_eq!(load_bytes(&bytes).expect("utf-16 loads").features.len(), 4);
+    assert_eq!(
+        load_bytes(&bytes, &LoadOptions::DEFAULT)
+            .expect("utf-16 loads")
+            .features
+            .len(),
+        4
+    );
     let bom8 = format!("\u{feff}{text}");
     assert_eq!(
-        load_bytes(bom8.as_bytes())
+        load_bytes(bom8.as_bytes(), &LoadOptions::DEFAULT)
             .expect("bom loads")
             .features
             .len(),
@@ -604,7 +637,7 @@ fn nan_and_overflow_never_give_garbage() {
         r#"<polygon points="0 0 1e39 0 0 1e39"/>"#,
     ];
     for case in cases {
-        match load_bytes(svg(case).as_bytes()) {
+        match load_bytes(svg(case).as_bytes(), &LoadOptions::DEFAULT) {
             Ok(d) => {
                 for f in &d.features {
                     let pts: Vec<Point> = match f.geom {
@@ -716,7 +749,7 @@ fn deep_nesting_does_not_overflow_the_stack() {
             "<g>".repeat(depth),
             "</g>".repeat(depth)
         );
-        match load_bytes(svg(&body).as_bytes()) {
+        match load_bytes(svg(&body).as_bytes(), &LoadOptions::DEFAULT) {
             Ok(d) => assert_eq!(d.shapes.len(), 1),
             Err(e) => assert!(matches!(e, Error::NotSvg(_)), "{e:?}"),
         }
@@ -797,7 +830,7 @@ fn dev_corpus() {
         let t = std::time::Instant::now();
         let result = std::fs::read(path)
             .map_err(Error::Read)
-            .and_then(|data| load_with_precision(&data, Units::User, 1.0));
+            .and_then(|data| load_outlines(&data, Units::User, 1.0));
         let secs = t.elapsed().as_secs_f64();
         if secs > slowest.0 {
             slowest = (secs, name.clone());
@@ -1091,7 +1124,7 @@ mod fuzz {
     }
 
     fn check(data: &[u8]) {
-        match load_bytes(data) {
+        match load_bytes(data, &LoadOptions::DEFAULT) {
             Ok(d) => assert_sane(&d, "fuzz input"),
             Err(e) => assert_eq!(e.kind(), ErrorKind::BadInput, "{e}"),
         }
@@ -1099,7 +1132,7 @@ mod fuzz {
 
     #[test]
     fn seed_document_loads() {
-        let d = load_bytes(SEED_SVG.as_bytes()).expect("seed loads");
+        let d = load_bytes(SEED_SVG.as_bytes(), &LoadOptions::DEFAULT).expect("seed loads");
         assert!(d.shapes.len() >= 5);
     }
 
@@ -1137,7 +1170,11 @@ fn doc(attrs: &str, body: &str) -> String {
 }
 
 fn load_in(doc: &str, units: Units, scale: f64) -> Drawing {
-    load_bytes_with(doc.as_bytes(), units, scale).expect("test SVG loads")
+    load_bytes(
+        doc.as_bytes(),
+        &LoadOptions::DEFAULT.with_units(units).with_scale(scale),
+    )
+    .expect("test SVG loads")
 }
 
 /// The bbox as (x0, y0, x1, y1), output coordinates (y up).
@@ -1153,7 +1190,7 @@ fn root_viewbox_gives_user_units_by_default_and_px_on_request() {
     );
     // the document's numbers, exactly (y flipped)
     assert_eq!(
-        corners(&load_bytes(doc.as_bytes()).unwrap()),
+        corners(&load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT).unwrap()),
         [0.0, -10.0, 10.0, 0.0]
     );
     assert_eq!(
@@ -1313,7 +1350,7 @@ fn scale_multiplies_every_coordinate() {
     let px = load_in(&doc, Units::Px, 0.5);
     assert!((px.bbox.width() * 2.0 * 25.4 / 96.0 - one.bbox.width()).abs() < 1e-4);
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let e = load_bytes_with(doc.as_bytes(), Units::User, bad).unwrap_err();
+        let e = load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT.with_scale(bad)).unwrap_err();
         assert!(matches!(e, Error::InvalidParams(_)), "{bad}: {e}");
     }
 }
@@ -1326,7 +1363,7 @@ fn coordinates_are_checked_after_units_and_scale() {
         r#"<rect width="1e12" height="1e12"/>"#,
     );
     load_in(&doc, Units::User, 1.0);
-    let e = load_bytes_with(doc.as_bytes(), Units::User, 1e4).unwrap_err();
+    let e = load_bytes(doc.as_bytes(), &LoadOptions::DEFAULT.with_scale(1e4)).unwrap_err();
     assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
     // a viewport mapping that underflows f32 cannot be undone: a clear error in
     // user units, and in px too
@@ -1336,7 +1373,7 @@ fn coordinates_are_checked_after_units_and_scale() {
         r#"width="1e38" height="1e38""#,
     );
     let tiny = tiny.replace(r#"width="1" height="1""#, r#"width="1e-9" height="1e-9""#);
-    let e = load_bytes_with(tiny.as_bytes(), Units::User, 1.0).unwrap_err();
+    let e = load_bytes(tiny.as_bytes(), &LoadOptions::DEFAULT).unwrap_err();
     assert!(e.to_string().contains("root viewBox"), "{e}");
     assert!(matches!(e, Error::BadCoordinate(_)), "{e}");
     // in px the drawing collapses to a point

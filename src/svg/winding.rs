@@ -1028,7 +1028,8 @@ mod tests {
             <path d="M0 30 C 30 30 10 30 100 30 M 50 0 L 50 100" stroke="#000" stroke-width="0.001"/>
             <polyline points="0,70 20,70 60,70 40,70.001" fill="#ff0000"/>
         </svg>"##;
-        let drawing = crate::svg::load_bytes(svg.as_bytes()).expect("a drawing");
+        let drawing = crate::svg::load_bytes(svg.as_bytes(), &crate::svg::LoadOptions::DEFAULT)
+            .expect("a drawing");
         assert!(drawing.shapes.iter().all(|s| s.filled));
         let flags: Vec<bool> = drawing.shapes.iter().map(paints_nothing).collect();
         assert_eq!(flags, [false, true, true, true, false]);
@@ -1178,7 +1179,7 @@ mod tests {
                 ));
             }
             svg.push_str("</svg>");
-            let drawing = crate::svg::load_bytes(svg.as_bytes()).expect("a drawing");
+            let drawing = crate::svg::load_bytes(svg.as_bytes(), &crate::svg::LoadOptions::DEFAULT).expect("a drawing");
             let painting = Painting::new(&drawing);
             prop_assert!(painting.index.is_some());
             let eps = 2f64.powi(eps_exp);

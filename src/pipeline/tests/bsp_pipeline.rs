@@ -148,7 +148,8 @@ struct Outcome {
 /// Mesh `svg` to `out` with the BSP path, read it back and check it.
 fn mesh_and_check(svg: &Path, out: &Path) -> Result<Outcome, String> {
     let params = bsp_params();
-    let drawing = crate::svg::load_file(svg).map_err(|e| format!("load: {e}"))?;
+    let drawing = crate::svg::load_file(svg, &crate::svg::LoadOptions::DEFAULT)
+        .map_err(|e| format!("load: {e}"))?;
     let t = Instant::now();
     let report = pipeline::run_file(svg, out, &RunOptions::new(params.clone()))
         .map_err(|e| format!("mesh: {e}"))?;
@@ -270,7 +271,7 @@ fn devset_meshes_valid_and_conforming() {
     );
     for (i, f) in files.iter().enumerate() {
         let name = f.strip_prefix(&dir).unwrap_or(f).display().to_string();
-        if crate::svg::load_file(f).is_err() {
+        if crate::svg::load_file(f, &crate::svg::LoadOptions::DEFAULT).is_err() {
             unloadable += 1;
             continue;
         }
@@ -359,7 +360,7 @@ fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
     let f =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp/rounding-degenerate.svg");
     let svg = std::fs::read(&f).expect("fixture");
-    let drawing = crate::load_bytes(&svg).expect("load");
+    let drawing = crate::load_bytes(&svg, &crate::LoadOptions::DEFAULT).expect("load");
     let (raw, _, _) = pipeline::bsp_stage(&drawing, &bsp_params()).expect("bsp");
     let nodes: Vec<Point> = raw.vertices().map(|v| raw.position(v)).collect();
     let tris: Vec<[Point; 3]> = raw
@@ -371,7 +372,11 @@ fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
         degenerate + duplicate > 0,
         "the fixture no longer exercises the fix"
     );
-    let meshed = pipeline::mesh_svg(&svg, &bsp_params()).expect("the bsp mesh");
+    let params = bsp_params();
+    let opts = crate::LoadOptions::from_params(&params).expect("valid parameters");
+    let drawing = crate::load_bytes(&svg, &opts).expect("load");
+    let meshed = pipeline::mesh_drawing(&drawing, &params, &crate::RegionOptions::DEFAULT)
+        .expect("the bsp mesh");
     let m = &meshed.mesh;
     let tris: Vec<[Point; 3]> = (0..m.triangle_count()).map(|i| m.corners(i)).collect();
     assert_eq!(rejected_by_gmsh(&m.nodes, &tris), (0, 0));

@@ -1,7 +1,7 @@
 //! Exact conics through the whole pipeline: a hand-built
 //! [`Drawing`] holding a unit disk (four quarter-circle conics, w = √2/2) and a
 //! rotated ellipse (four conic pieces from [`Conic::ellipse_arc`]) is meshed by
-//! [`crate::mesh_drawing_with`] at orders 1, 2 and 3 and several `-l`. Every
+//! [`crate::mesh_drawing`] at orders 1, 2 and 3 and several `-l`. Every
 //! node of every feature line (corners and high-order edge nodes) lies on the
 //! true circle or ellipse to 1e-12·r, the order-3 disk has area π to 1e-10
 //! (relative) at a fine `-l`, and every mesh is written under
@@ -174,8 +174,7 @@ fn mesh_and_check(
     dir: &std::path::Path,
     name: &str,
 ) -> (f64, f64, f64, f64) {
-    let meshed =
-        crate::mesh_drawing_with(drawing, params, &RegionOptions::DEFAULT).expect("meshing");
+    let meshed = crate::mesh_drawing(drawing, params, &RegionOptions::DEFAULT).expect("meshing");
     let mesh = &meshed.mesh;
     let c = certify_fem(mesh, &crate::CertifyOptions::DEFAULT);
     assert!(c.is_valid(), "{name}: {c:?}");
@@ -303,8 +302,7 @@ fn odd_conics_never_panic() {
             let drawing = drawing_of(vec![shape("odd", 0, sp)]);
             for order in [Order::Linear, Order::Cubic] {
                 let params = Params::DEFAULT.with_order(order);
-                if let Ok(m) = crate::mesh_drawing_with(&drawing, &params, &RegionOptions::DEFAULT)
-                {
+                if let Ok(m) = crate::mesh_drawing(&drawing, &params, &RegionOptions::DEFAULT) {
                     let c = certify_fem(&m.mesh, &crate::CertifyOptions::DEFAULT);
                     assert!(c.is_valid(), "case {k} w {w}: {c:?}");
                 }

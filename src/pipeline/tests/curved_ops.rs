@@ -83,7 +83,9 @@ fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
         <path d="M 30 60 L 90 60" stroke="black" fill="none"/></svg>"#;
     let mut applied = [0usize; 4];
     let mut rejected: HashMap<Reject, usize> = HashMap::new();
-    let load = |svg: &[u8]| crate::svg::load_bytes(svg).expect("drawing loads");
+    let load = |svg: &[u8]| {
+        crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("drawing loads")
+    };
     let svg_cases = [
         (load(&disk[..]), Order::Cubic, EnergyRule::NoWorseMax),
         (load(&disk[..]), Order::Cubic, EnergyRule::Ignore),

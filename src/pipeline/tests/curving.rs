@@ -88,7 +88,7 @@ fn circle() -> Drawing {
         <path id="disk" fill="black" d="M 90 50 C 90 {a} {a} 90 50 90 C {b} 90 10 {a} 10 50
             C 10 {b} {b} 10 50 10 C {a} 10 90 {b} 90 50 Z"/></svg>"#
     );
-    crate::svg::load_bytes(svg.as_bytes()).expect("circle loads")
+    crate::svg::load_bytes(svg.as_bytes(), &crate::svg::LoadOptions::DEFAULT).expect("circle loads")
 }
 
 /// The exact area the drawing's cubics and conics enclose (Green's theorem on the
@@ -235,7 +235,7 @@ fn devset_curving() {
     let dir = out_dir("curving-devset");
     let (mut curved_sum, mut fitted_sum, mut straight_sum) = (0, 0, 0);
     for path in files.iter().step_by(every).take(limit) {
-        let Ok(drawing) = crate::svg::load_file(path) else {
+        let Ok(drawing) = crate::svg::load_file(path, &crate::svg::LoadOptions::DEFAULT) else {
             continue;
         };
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("x");
@@ -257,7 +257,11 @@ fn devset_curving() {
             Ok((cm, s)) => {
                 let fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
                 let c = certify_fem(&fem, &crate::CertifyOptions::VALIDITY);
-                let _ = output::write_preview(&fem, &dir.join(format!("{name}.svg")));
+                let _ = output::write_preview(
+                    &fem,
+                    &dir.join(format!("{name}.svg")),
+                    &output::PreviewOptions::DEFAULT,
+                );
                 let _ =
                     output::write_msh(&fem, &dir.join(format!("{name}.msh")), MshOptions::DEFAULT);
                 println!(

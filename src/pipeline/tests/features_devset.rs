@@ -46,7 +46,7 @@ fn check_files(dir: &Path, files: &[PathBuf]) {
     let start = Instant::now();
     println!("file\tsections\tprimary\tsecondary_segments\tpoints\tms");
     for f in files {
-        let Ok(drawing) = crate::svg::load_file(f) else {
+        let Ok(drawing) = crate::svg::load_file(f, &crate::svg::LoadOptions::DEFAULT) else {
             unloadable += 1;
             continue;
         };

@@ -80,7 +80,8 @@ struct Summary {
 
 /// Optimize `svg` and check it; the defects in words.
 fn optimize_and_check(svg: &Path) -> Result<Summary, Vec<String>> {
-    let drawing = crate::svg::load_file(svg).map_err(|e| vec![format!("load: {e}")])?;
+    let drawing = crate::svg::load_file(svg, &crate::svg::LoadOptions::DEFAULT)
+        .map_err(|e| vec![format!("load: {e}")])?;
     let d = drawing.diagonal();
     let params = Params::DEFAULT;
     let t = Instant::now();
@@ -189,7 +190,7 @@ fn devset_optimized_meshes_meet_the_invariants() {
     let (mut ok, mut bad_input, mut failed) = (0, 0, Vec::new());
     let (mut worst_p, mut worst_s, mut total) = (0f64, 0f64, 0f64);
     for f in &files {
-        if crate::svg::load_file(f).is_err() {
+        if crate::svg::load_file(f, &crate::svg::LoadOptions::DEFAULT).is_err() {
             bad_input += 1;
             continue;
         }

@@ -13,7 +13,7 @@ fn a_path_painted_3000_times_loads_as_one_shape() {
     let body: String = (0..3000)
         .map(|_| format!(r##"<path fill="#336699" d="{BLOB}"/>"##))
         .collect();
-    let d = load_bytes(doc(&body).as_bytes()).expect("loads");
+    let d = load_bytes(doc(&body).as_bytes(), &LoadOptions::DEFAULT).expect("loads");
     assert_eq!(d.shapes.len(), 1);
     assert_eq!(d.paint.duplicates_merged, 2999);
     assert_eq!(d.features.len(), 4);
@@ -29,7 +29,7 @@ fn the_topmost_copy_keeps_its_colour_and_other_paths_stay() {
         <path id="evenodd" fill="#0000ff" fill-rule="evenodd" d="{BLOB}"/>
         <path id="moved" fill="#0000ff" d="M30 30.001C40 20 60 20 70 30C80 40 80 60 70 70C60 80 40 80 30 70Z"/>"##
     );
-    let d = load_bytes(doc(&body).as_bytes()).expect("loads");
+    let d = load_bytes(doc(&body).as_bytes(), &LoadOptions::DEFAULT).expect("loads");
     let names: Vec<String> = d.shapes.iter().map(Shape::name).collect();
     // `under` is covered by `over`; the rect between them, the copy with
     // another rule and the moved copy stay.
@@ -42,7 +42,7 @@ fn the_topmost_copy_keeps_its_colour_and_other_paths_stay() {
 fn stroke_centre_lines_painted_twice_merge() {
     let body = r##"<path fill="none" stroke="#000" stroke-width="0.001" d="M10 10C30 0 60 20 90 10"/>
         <path fill="none" stroke="#000" stroke-width="0.001" d="M10 10C30 0 60 20 90 10"/>"##;
-    let d = load_bytes(doc(body).as_bytes()).expect("loads");
+    let d = load_bytes(doc(body).as_bytes(), &LoadOptions::DEFAULT).expect("loads");
     assert_eq!(d.shapes.len(), 1);
     assert_eq!(d.features.len(), 1);
     assert_eq!(d.paint.duplicates_merged, 1);

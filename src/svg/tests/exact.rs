@@ -8,12 +8,12 @@ use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 /// Load `body` in a 100×100 document (user units), with the precision report.
 fn load_p(body: &str) -> (Drawing, Precision) {
-    load_with_precision(svg(body).as_bytes(), Units::User, 1.0).expect("test SVG loads")
+    load_outlines(svg(body).as_bytes(), Units::User, 1.0).expect("test SVG loads")
 }
 
 /// Load and require every path to come out in f64.
 fn load_exact(doc: &str) -> Drawing {
-    let (d, p) = load_with_precision(doc.as_bytes(), Units::User, 1.0).expect("test SVG loads");
+    let (d, p) = load_outlines(doc.as_bytes(), Units::User, 1.0).expect("test SVG loads");
     assert_eq!(p.fallbacks(), 0, "{p:?} {:?}", d.warnings);
     assert_eq!(p.exact, painted(&d), "{p:?}");
     d
@@ -280,7 +280,7 @@ fn degenerate_arcs_never_panic() {
         "M 0 0 A 3e38 3e38 0 1 1 1 0",
         "M 0 0 A 1 1 0 0 1 0 0 L 5 5",
     ] {
-        let (drawing, p) = load_with_precision(
+        let (drawing, p) = load_outlines(
             svg(&format!(
                 r#"<path d="{d}" stroke="black"/><rect width="1" height="1"/>"#
             ))
@@ -387,12 +387,12 @@ fn markers_and_glyphs_keep_single_precision_silently() {
 fn px_units_map_the_root_viewbox_in_f64() {
     let doc = r#"<svg xmlns="http://www.w3.org/2000/svg" width="210mm" height="297mm"
         viewBox="0 0 210 297"><rect x="10" y="20" width="100" height="50"/></svg>"#;
-    let (d, p) = load_with_precision(doc.as_bytes(), Units::Px, 1.0).expect("loads");
+    let (d, p) = load_outlines(doc.as_bytes(), Units::Px, 1.0).expect("loads");
     assert_eq!(p.exact, 1);
     let px_per_mm = 96.0 / 25.4;
     let w = d.bbox.width();
     assert!((w / (100.0 * px_per_mm) - 1.0).abs() < 1e-14, "{w}");
-    let (d, _) = load_with_precision(doc.as_bytes(), Units::User, 1.0).expect("loads");
+    let (d, _) = load_outlines(doc.as_bytes(), Units::User, 1.0).expect("loads");
     assert_eq!(d.bbox, kurbo::Rect::new(10.0, -70.0, 110.0, -20.0));
 }
 
@@ -510,7 +510,7 @@ mod property {
             outer in proptest::collection::vec(transform(), 0..3),
         ) {
             let body = format!(r#"<g transform="{}">{}</g>"#, outer.join(" "), shapes.join(""));
-            match load_with_precision(svg(&body).as_bytes(), Units::User, 1.0) {
+            match load_outlines(svg(&body).as_bytes(), Units::User, 1.0) {
                 Ok((drawing, p)) => {
                     prop_assert_eq!(p.fallbacks(), 0, "{} {:?} {:?}", body, p, drawing.warnings);
                     prop_assert_eq!(p.exact, drawing.shapes.len());
@@ -546,7 +546,7 @@ mod property {
             };
             let body = format!(r#"<g transform="{}">{shape}</g>"#, outer.join(" "));
             let doc = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">{body}</svg>"#);
-            match load_with_precision(doc.as_bytes(), Units::User, 1.0) {
+            match load_outlines(doc.as_bytes(), Units::User, 1.0) {
                 Ok((drawing, p)) => {
                     prop_assert_eq!(p.fallbacks(), 0, "{} {:?} {:?}", doc, p, drawing.warnings);
                     prop_assert_eq!(p.exact, drawing.shapes.len());
