@@ -384,7 +384,7 @@ mod tests {
                 .map(|&(a, b, s)| Piece {
                     a,
                     b,
-                    shape: ShapeId(s),
+                    shape: ShapeId::from_index(s as usize),
                 })
                 .collect(),
             merged: 0,

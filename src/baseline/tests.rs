@@ -44,7 +44,7 @@ fn drawing(features: &[(u32, FeatureGeom)]) -> Drawing {
             .map(|(i, &(s, geom))| Feature {
                 geom,
                 source: FeatureSource {
-                    shape: ShapeId(s),
+                    shape: ShapeId::from_index(s as usize),
                     subpath: 0,
                     segment: i as u32,
                 },
@@ -219,7 +219,7 @@ fn checker_defects(mesh: &LinearMesh) -> (usize, usize) {
 fn feature_length(mesh: &LinearMesh, shape: u32) -> f64 {
     mesh.edges
         .iter()
-        .filter(|e| e.shape == ShapeId(shape))
+        .filter(|e| e.shape == ShapeId::from_index(shape as usize))
         .map(|e| (mesh.vertices[e.v[0] as usize] - mesh.vertices[e.v[1] as usize]).hypot())
         .sum()
 }
@@ -265,7 +265,7 @@ fn crossing_lines_are_split_at_the_crossing() {
         assert!(
             mesh.edges
                 .iter()
-                .any(|e| e.shape == ShapeId(s) && e.v.contains(&at_centre[0]))
+                .any(|e| e.shape == ShapeId::from_index(s as usize) && e.v.contains(&at_centre[0]))
         );
     }
 }
@@ -288,7 +288,10 @@ fn an_edge_shared_by_two_shapes_is_listed_for_each() {
     assert!(per_edge.values().all(|&k| k <= 2));
     assert_eq!(
         per_edge.values().filter(|&&k| k == 2).count(),
-        mesh.edges.iter().filter(|e| e.shape == ShapeId(1)).count()
+        mesh.edges
+            .iter()
+            .filter(|e| e.shape == ShapeId::from_index(1))
+            .count()
     );
 }
 

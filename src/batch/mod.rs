@@ -250,7 +250,7 @@ pub fn plan(inputs: &[PathBuf], opts: &BatchOptions) -> Result<Plan> {
 
 /// What a batch did.
 #[derive(Clone, Debug)]
-pub struct Outcome {
+pub struct BatchRun {
     /// One row per file of the plan (kept and new), sorted by key; after an
     /// [`interrupt`], the files not started have none.
     pub rows: Vec<Row>,
@@ -258,7 +258,7 @@ pub struct Outcome {
     pub wall: f64,
 }
 
-impl Outcome {
+impl BatchRun {
     /// The summary of the rows, with the run's wall time.
     pub fn summary(&self) -> Summary {
         Summary::of(&self.rows).with_batch_wall(self.wall)
@@ -276,7 +276,7 @@ impl Outcome {
 /// [`Error::Write`] if the output directory or the report cannot be
 /// written; the batch stops starting new files then. A file's failure is
 /// never an error: it is its row.
-pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Result<Outcome> {
+pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Result<BatchRun> {
     let t0 = Instant::now();
     std::fs::create_dir_all(&opts.out_dir).map_err(|e| {
         Error::Write(std::io::Error::new(
@@ -339,7 +339,7 @@ pub fn run(plan: &Plan, opts: &BatchOptions, on_row: &mut dyn FnMut(&Row)) -> Re
         return Err(e);
     }
     rows.sort_by(|a, b| a.file.cmp(&b.file));
-    Ok(Outcome {
+    Ok(BatchRun {
         rows,
         wall: t0.elapsed().as_secs_f64(),
     })

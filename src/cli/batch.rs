@@ -242,17 +242,17 @@ pub(crate) fn run(
         );
     }
     let mut progress = Progress::new(plan.todo.len(), quiet);
-    let outcome = batch::run(&plan, &opts, &mut |row: &Row| progress.row(row));
+    let ran = batch::run(&plan, &opts, &mut |row: &Row| progress.row(row));
     progress.finish();
-    match outcome {
-        Ok(outcome) => {
-            let summary = outcome.summary();
+    match ran {
+        Ok(ran) => {
+            let summary = ran.summary();
             outln!("{summary}");
             outln!("report: {}", plan.report.display());
             if !args.no_html {
                 let page = opts.page_path();
                 let popts = batch::PageOptions::new(opts.out_dir.clone());
-                match batch::write_page(&outcome.rows, &popts, &page) {
+                match batch::write_page(&ran.rows, &popts, &page) {
                     Ok(s) => outln!("{}", super::report::page_line(&page, &s)),
                     Err(e) => {
                         errln!("error: report page: {e}");

@@ -341,7 +341,7 @@ mod tests {
     }
 
     fn feature(_: &FeatureOn) -> [(ShapeId, LineKind); 1] {
-        [(ShapeId(0), LineKind::Primary)]
+        [(ShapeId::from_index(0), LineKind::Primary)]
     }
 
     /// Two triangles on the primary edge (0,0)–(1,0) (the cubic `c`), apex at

@@ -60,11 +60,11 @@ impl FeatureSet {
             for _ in 0..n {
                 match self.primary[start].prev {
                     Some(p)
-                        if continues(p.0 as usize, start)
-                            && chain_of[p.0 as usize] == u32::MAX
-                            && p.0 as usize != i =>
+                        if continues(p.index(), start)
+                            && chain_of[p.index()] == u32::MAX
+                            && p.index() != i =>
                     {
-                        start = p.0 as usize;
+                        start = p.index();
                     }
                     _ => break,
                 }
@@ -74,10 +74,8 @@ impl FeatureSet {
             chain_of[start] = id;
             for _ in 0..n {
                 match self.primary[last].next {
-                    Some(q)
-                        if continues(last, q.0 as usize) && chain_of[q.0 as usize] == u32::MAX =>
-                    {
-                        last = q.0 as usize;
+                    Some(q) if continues(last, q.index()) && chain_of[q.index()] == u32::MAX => {
+                        last = q.index();
                         chain_of[last] = id;
                     }
                     _ => break,

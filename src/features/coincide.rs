@@ -339,7 +339,7 @@ mod tests {
         Feature {
             geom: FeatureGeom::Point(Point::ZERO),
             source: FeatureSource {
-                shape: ShapeId(shape as u32),
+                shape: ShapeId::from_index(shape),
                 subpath: 0,
                 segment: 0,
             },
@@ -432,7 +432,7 @@ mod tests {
         );
         // the overlap is a's piece, shared with b's shape
         assert_eq!(m.shared, [None, Some(0), None, None]);
-        assert_eq!(m.sharers, [vec![ShapeId(1)]]);
+        assert_eq!(m.sharers, [vec![ShapeId::from_index(1)]]);
     }
 
     #[test]

@@ -239,7 +239,7 @@ mod tests {
         Feature {
             geom,
             source: FeatureSource {
-                shape: ShapeId(0),
+                shape: ShapeId::from_index(0),
                 subpath,
                 segment,
             },

@@ -1,6 +1,6 @@
 //! The [`FeatureSet`] as JSON (format documented in `docs/features-json.md`).
 
-use super::{FeatureSet, Parent};
+use super::{FeatureSet, Parent, SectionId};
 use kurbo::{CubicBez, Point};
 use serde_json::{Value, json};
 
@@ -35,8 +35,8 @@ pub(crate) fn to_json(fs: &FeatureSet) -> Value {
                 "t": s.t,
                 "source": s.source,
                 "parent": parent,
-                "prev": s.prev.map(|i| i.0),
-                "next": s.next.map(|i| i.0),
+                "prev": s.prev.map(SectionId::index),
+                "next": s.next.map(SectionId::index),
             })
         })
         .collect();

@@ -290,7 +290,7 @@ mod tests {
         SecondaryPolyline {
             points: points.iter().map(|&(x, y)| Point::new(x, y)).collect(),
             source: FeatureSource {
-                shape: ShapeId(0),
+                shape: ShapeId::from_index(0),
                 subpath: 0,
                 segment: 0,
             },

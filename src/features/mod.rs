@@ -114,23 +114,58 @@ pub(crate) enum CutFor {
     Secondary,
 }
 
-/// Index of a primary section in [`FeatureSet::primary`].
+/// Index of a primary section in [`FeatureSet::primary`]. `Debug` prints `p3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub(crate) struct SectionId(pub u32);
+pub(crate) struct SectionId(u32);
 
-impl std::fmt::Debug for SectionId {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "p{}", self.0)
+impl SectionId {
+    /// The id of primary section `i`.
+    ///
+    /// # Panics
+    /// If `i` does not fit in a `u32`.
+    pub(crate) fn from_index(i: usize) -> Self {
+        SectionId(u32::try_from(i).expect("internal: section count fits u32"))
+    }
+
+    /// The index into [`FeatureSet::primary`].
+    pub(crate) fn index(self) -> usize {
+        self.0 as usize
     }
 }
 
-/// Index of a secondary polyline in [`FeatureSet::secondary`].
+impl std::fmt::Debug for SectionId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "p{}", self.index())
+    }
+}
+
+/// Index of a secondary polyline in [`FeatureSet::secondary`]. `Debug` prints `q3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub(crate) struct PolylineId(pub u32);
+pub(crate) struct PolylineId(u32);
+
+impl PolylineId {
+    /// The id of secondary polyline `i`.
+    ///
+    /// # Panics
+    /// If `i` does not fit in a `u32`.
+    pub(crate) fn from_index(i: usize) -> Self {
+        PolylineId(u32::try_from(i).expect("internal: polyline count fits u32"))
+    }
+
+    /// The index into [`FeatureSet::secondary`].
+    pub(crate) fn index(self) -> usize {
+        self.0 as usize
+    }
+
+    /// The index as the `u32` a mesh edge's tag stores.
+    pub(crate) fn raw(self) -> u32 {
+        self.0
+    }
+}
 
 impl std::fmt::Debug for PolylineId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "q{}", self.0)
+        write!(f, "q{}", self.index())
     }
 }
 
@@ -462,9 +497,11 @@ pub(crate) struct SecondaryPolyline {
     pub shared: Option<u32>,
 }
 
-/// What a segment of [`ConformingInput`] represents.
+/// The piece of a feature that a segment of [`ConformingInput`] stands for:
+/// a primary section's chord or one segment of a secondary polyline (the
+/// pipeline makes the BSP's segment tag, copied onto mesh edges, from it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(crate) enum SegmentTag {
+pub(crate) enum FeaturePiece {
     /// The chord of a primary section.
     Primary(SectionId),
     /// Segment `index` (from `points[index]` to `points[index + 1]`) of a secondary polyline.
@@ -480,7 +517,7 @@ pub(crate) enum SegmentTag {
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct ConformingInput {
     /// Straight segments with what they represent; primary chords first.
-    pub segments: Vec<(Line, SegmentTag)>,
+    pub segments: Vec<(Line, FeaturePiece)>,
     /// Isolated points.
     pub points: Vec<Point>,
 }
@@ -1039,16 +1076,15 @@ impl FeatureSet {
     pub(crate) fn conforming_input(&self) -> ConformingInput {
         let mut segments = Vec::with_capacity(self.primary.len() + self.counts.secondary_segments);
         for (i, s) in self.primary.iter().enumerate() {
-            let id = SectionId(u32::try_from(i).expect("internal: section count fits u32"));
-            segments.push((s.chord(), SegmentTag::Primary(id)));
+            segments.push((s.chord(), FeaturePiece::Primary(SectionId::from_index(i))));
         }
         for (i, p) in self.secondary.iter().enumerate() {
-            let polyline = PolylineId(u32::try_from(i).expect("internal: polyline count fits u32"));
+            let polyline = PolylineId::from_index(i);
             for (k, w) in p.points.windows(2).enumerate() {
                 let index = u32::try_from(k).expect("internal: polyline length fits u32");
                 segments.push((
                     Line::new(w[0], w[1]),
-                    SegmentTag::Secondary { polyline, index },
+                    FeaturePiece::Secondary { polyline, index },
                 ));
             }
         }
@@ -1105,7 +1141,7 @@ fn assemble_primary(
         });
         same_subpath
             .or_else(|| (others.len() == 1).then(|| others[0]))
-            .map(SectionId)
+            .map(|j| SectionId::from_index(j as usize))
     };
     for i in 0..out.len() {
         let prev = pick(i, out[i].ctrl.p0, &out);

@@ -209,7 +209,7 @@ mod tests {
         Feature {
             geom,
             source: FeatureSource {
-                shape: crate::svg::ShapeId(0),
+                shape: crate::svg::ShapeId::from_index(0),
                 subpath: 0,
                 segment: 0,
             },

@@ -30,7 +30,7 @@ fn drawing(geoms: Vec<FeatureGeom>) -> Drawing {
             bbox = Some(bbox.map_or(Rect::from_points(p, p), |b| b.union_pt(p)));
         }
         let source = FeatureSource {
-            shape: ShapeId(0),
+            shape: ShapeId::from_index(0),
             subpath: 0,
             segment: k as u32,
         };
@@ -107,11 +107,15 @@ fn circle_splits_land_at_sixteenths_and_all_is_primary() {
     for (i, s) in fs.primary.iter().enumerate() {
         assert_eq!(s.t, [(i % 16) as f64 / 16.0, (i % 16 + 1) as f64 / 16.0]);
         assert_eq!(s.source.segment, (i / 16) as u32);
-        let n = fs.primary.len() as u32;
-        assert_eq!(s.next, Some(SectionId((i as u32 + 1) % n)), "next of {i}");
+        let n = fs.primary.len();
+        assert_eq!(
+            s.next,
+            Some(SectionId::from_index((i + 1) % n)),
+            "next of {i}"
+        );
         assert_eq!(
             s.prev,
-            Some(SectionId((i as u32 + n - 1) % n)),
+            Some(SectionId::from_index((i + n - 1) % n)),
             "prev of {i}"
         );
     }
@@ -553,7 +557,7 @@ proptest! {
                 prop_assert!(inside_hull(p, &hull, 1e-12 * size), "p{}: {:?} outside {:?}", i, p, hull);
             }
             if let Some(n) = s.next {
-                let n = &fs.primary[n.0 as usize];
+                let n = &fs.primary[n.index()];
                 prop_assert_eq!(s.ctrl.p3, n.ctrl.p0);
             }
         }

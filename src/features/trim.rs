@@ -106,7 +106,7 @@ impl Trimmer {
         // Each joined stroke and the fill it joins: (fill, stroke).
         let joined: Vec<(usize, usize)> = (0..drawing.shapes.len())
             .filter_map(|i| {
-                let stroke = ShapeId(u32::try_from(i).ok()?);
+                let stroke = ShapeId::from_index(i);
                 drawing.joined_fill(stroke).map(|f| (f.index(), i))
             })
             .collect();

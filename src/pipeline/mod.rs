@@ -836,12 +836,12 @@ fn bsp_input(fs: &FeatureSet, chains: &PrimaryChains) -> BspInput {
             a: line.p0,
             b: line.p1,
             tag: match *tag {
-                features::SegmentTag::Primary(id) => bsp::SegmentTag::Primary {
-                    section: chains.chain_of[id.0 as usize],
-                    t: fs.primary[id.0 as usize].t,
+                features::FeaturePiece::Primary(id) => bsp::SegmentTag::Primary {
+                    section: chains.chain_of[id.index()],
+                    t: fs.primary[id.index()].t,
                 },
-                features::SegmentTag::Secondary { polyline, .. } => bsp::SegmentTag::Secondary {
-                    polyline: polyline.0,
+                features::FeaturePiece::Secondary { polyline, .. } => bsp::SegmentTag::Secondary {
+                    polyline: polyline.raw(),
                 },
             },
         })

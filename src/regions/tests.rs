@@ -49,7 +49,7 @@ pub(crate) fn drawing(shapes: Vec<Shape>) -> Drawing {
     for (si, s) in shapes.iter().enumerate() {
         for (pi, sp) in s.subpaths.iter().enumerate() {
             let src = |segment| FeatureSource {
-                shape: ShapeId(si as u32),
+                shape: ShapeId::from_index(si),
                 subpath: pi as u32,
                 segment,
             };
@@ -553,7 +553,11 @@ fn feature_lines_run_one_way() {
     for i in (0..mesh.line_count()).step_by(3) {
         mesh.reverse_line(i);
     }
-    let shapes: Vec<ShapeId> = mesh.line_group.iter().map(|&g| ShapeId(g)).collect();
+    let shapes: Vec<ShapeId> = mesh
+        .line_group
+        .iter()
+        .map(|&g| ShapeId::from_index(g as usize))
+        .collect();
     orient_lines(&d, &mut mesh, &shapes, &Deadline::NONE);
     for g in [0, 1] {
         let lines = lines_of(&mesh, g);

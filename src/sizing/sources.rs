@@ -56,7 +56,7 @@ struct Sample {
     /// Curvature (1 / radius), 0 on straight pieces.
     curvature: f64,
     /// (shape, subpath) of the curve.
-    branch: (u32, u32),
+    branch: (ShapeId, u32),
     /// Arc length from the subpath's start.
     arc: f64,
     /// The subpath's length when it is closed (arc distances wrap), else ∞.
@@ -136,7 +136,7 @@ pub(super) fn strokes(drawing: &Drawing, mu: f64, slope: f64) -> Vec<Source> {
         if let Some(h) = stroke_size(s, mu) {
             along(
                 drawing,
-                &[ShapeId(i as u32)],
+                &[ShapeId::from_index(i)],
                 h,
                 slope.max(STROKE_SLOPE),
                 &mut out,
@@ -171,7 +171,7 @@ pub(super) fn shapes_named(input: &FieldInput<'_>, name: &str, flag: &str) -> Re
         .iter()
         .enumerate()
         .filter(|(_, n)| n.as_deref() == Some(name))
-        .map(|(i, _)| ShapeId(i as u32))
+        .map(|(i, _)| ShapeId::from_index(i))
         .collect();
     if found.is_empty() {
         let mut names: Vec<&str> = input
@@ -198,7 +198,7 @@ pub(super) fn shapes_named(input: &FieldInput<'_>, name: &str, flag: &str) -> Re
 fn filled(drawing: &Drawing) -> Vec<ShapeId> {
     (0..drawing.shapes.len())
         .filter(|&i| drawing.shapes[i].filled)
-        .map(|i| ShapeId(i as u32))
+        .map(ShapeId::from_index)
         .collect()
 }
 
@@ -263,10 +263,10 @@ pub(super) fn user(
 /// `turn` radians of turning apart on curves.
 fn feature_samples(drawing: &Drawing, step: f64, turn: f64) -> Vec<Sample> {
     // Arc length per (shape, subpath), accumulated in feature order.
-    let mut arc: FxHashMap<(u32, u32), f64> = FxHashMap::default();
+    let mut arc: FxHashMap<(ShapeId, u32), f64> = FxHashMap::default();
     let mut out = Vec::new();
     for f in &drawing.features {
-        let branch = (f.source.shape.0, f.source.subpath);
+        let branch = (f.source.shape, f.source.subpath);
         let seg = match f.geom {
             FeatureGeom::Point(_) => continue,
             FeatureGeom::Line(l) => Segment::Line(l),
@@ -324,7 +324,7 @@ fn feature_samples(drawing: &Drawing, step: f64, turn: f64) -> Vec<Sample> {
         let (shape, sub) = smp.branch;
         if let Some(sp) = drawing
             .shapes
-            .get(shape as usize)
+            .get(shape.index())
             .and_then(|s| s.subpaths.get(sub as usize))
             && (sp.closed || sp.segments.last().is_some_and(|l| l.end() == sp.start))
         {

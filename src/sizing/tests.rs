@@ -38,19 +38,19 @@ fn a_stroke_sizes_its_own_outline_not_the_curves_along_it() {
     let r = Params::DEFAULT.resolve(drawing.diagonal());
     let field = default_field(&drawing, &r);
     assert_eq!(field.report().fields, ["strokes"]);
-    let stroke = ShapeId(
+    let stroke = ShapeId::from_index(
         drawing
             .shapes
             .iter()
             .position(|s| s.paint.stroke_width.is_some_and(|w| (w - 0.3).abs() < 1e-6))
-            .expect("the stroke is meshed as an area") as u32,
+            .expect("the stroke is meshed as an area"),
     );
-    let rect = ShapeId(
+    let rect = ShapeId::from_index(
         drawing
             .shapes
             .iter()
             .position(|s| s.filled && s.paint.stroke_width.is_none())
-            .expect("the rect") as u32,
+            .expect("the rect"),
     );
     let width = drawing.shapes[stroke.index()].paint.stroke_width;
     let h_stroke = sources::STROKE_SIZE_PER_WIDTH * width.expect("a stroke");
@@ -119,7 +119,7 @@ fn without_strokes_the_curves_read_the_field() {
     assert!(matches!(field.curves, CurveField::Full));
     for s in 0..drawing.shapes.len() {
         assert_eq!(
-            field.for_curve(Point::new(50.0, 40.0), ShapeId(s as u32), CutFor::Any),
+            field.for_curve(Point::new(50.0, 40.0), ShapeId::from_index(s), CutFor::Any),
             r.l
         );
     }
@@ -156,20 +156,24 @@ fn beside_a_stroke_the_curves_read_the_users_field() {
             let p = sp.start;
             let (at, other) = (
                 field.at(p),
-                field.for_curve(p, ShapeId(rect as u32), CutFor::Any),
+                field.for_curve(p, ShapeId::from_index(rect), CutFor::Any),
             );
             assert!(
                 at <= 3.0 && (other - 3.0).abs() < 1e-9,
                 "{p:?}: {at} {other}"
             );
             assert_eq!(
-                field.for_curve(p, ShapeId(stroke as u32), CutFor::Any),
+                field.for_curve(p, ShapeId::from_index(stroke), CutFor::Any),
                 sources::STROKE_SIZE_PER_WIDTH * 0.25
             );
         }
     }
     assert!(
-        field.for_curve(Point::new(145.0, 145.0), ShapeId(rect as u32), CutFor::Any) <= 1.5 + 1e-9
+        field.for_curve(
+            Point::new(145.0, 145.0),
+            ShapeId::from_index(rect),
+            CutFor::Any
+        ) <= 1.5 + 1e-9
     );
 }
 
@@ -191,12 +195,12 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
     );
     let field = default_field(&drawing, &r);
     assert_eq!(field.report().fields, ["strokes"]);
-    let stroke = ShapeId(
+    let stroke = ShapeId::from_index(
         drawing
             .shapes
             .iter()
             .position(|s| s.paint.stroke_width.is_some())
-            .expect("the stroke is meshed as an area") as u32,
+            .expect("the stroke is meshed as an area"),
     );
     let fs = FeatureSet::build_sized(
         &drawing,

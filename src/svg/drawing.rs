@@ -3,11 +3,19 @@
 pub use super::conic::Conic;
 use kurbo::{CubicBez, Line, Point, Rect};
 
-/// Index of a [`Shape`] in [`Drawing::shapes`].
+/// Index of a [`Shape`] in [`Drawing::shapes`]. `Debug` prints `s3`.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
-pub struct ShapeId(pub(crate) u32);
+pub struct ShapeId(u32);
 
 impl ShapeId {
+    /// The id of shape `i`.
+    ///
+    /// # Panics
+    /// If `i` does not fit in a `u32`.
+    pub(crate) fn from_index(i: usize) -> Self {
+        ShapeId(u32::try_from(i).expect("internal: shape count fits u32"))
+    }
+
     /// The index into [`Drawing::shapes`].
     pub fn index(self) -> usize {
         self.0 as usize
@@ -474,7 +482,7 @@ impl Drawing {
                         && f.svg_id == s.svg_id
                 })
             })
-            .map(|j| ShapeId(u32::try_from(j).expect("internal: shape count fits u32")))
+            .map(ShapeId::from_index)
     }
 
     /// Largest accepted coordinate magnitude (output units, after `--units` and

@@ -247,7 +247,7 @@ pub(crate) fn load_with_precision(data: &[u8], opts: &LoadOptions) -> Result<(Dr
     drawing.view_box = view_box;
     // A stroke whose fill a copy on top replaced is its own region again.
     for i in 0..drawing.shapes.len() {
-        let id = ShapeId(u32::try_from(i).expect("internal: shape count fits u32"));
+        let id = ShapeId::from_index(i);
         if drawing.shapes[i].paint.joins_fill && drawing.joined_fill(id).is_none() {
             drawing.shapes[i].paint.joins_fill = false;
             drawing.paint.strokes_joined -= 1;

@@ -94,7 +94,7 @@ fn control_points(g: &FeatureGeom) -> impl Iterator<Item = kurbo::Point> {
 pub(super) fn features(shapes: &[Shape]) -> Vec<Feature> {
     let mut out = Vec::new();
     for (si, shape) in shapes.iter().enumerate() {
-        let shape_id = ShapeId(u32::try_from(si).unwrap_or(u32::MAX));
+        let shape_id = ShapeId::from_index(si);
         for (pi, sub) in shape.subpaths.iter().enumerate() {
             let source = |segment: u32| FeatureSource {
                 shape: shape_id,

@@ -247,7 +247,7 @@ fn filled_open_subpath_gets_implicit_close() {
         .filter(|f| f.source.segment == FeatureSource::IMPLICIT_CLOSE)
         .collect();
     assert_eq!(implicit.len(), 1);
-    assert_eq!(implicit[0].source.shape, ShapeId(0));
+    assert_eq!(implicit[0].source.shape, ShapeId::from_index(0));
     assert_eq!(
         implicit[0].geom,
         FeatureGeom::Line(kurbo::Line::new((10.0, -10.0), (0.0, 0.0)))

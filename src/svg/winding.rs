@@ -577,7 +577,7 @@ impl Painting {
             .filter_map(|(i, s)| {
                 let t = PaintTest::new(s);
                 let bb = t.bbox()?;
-                Some((s.paint_order, ShapeId(i as u32), t, bb))
+                Some((s.paint_order, ShapeId::from_index(i), t, bb))
             })
             .collect();
         layers.sort_by_key(|l| std::cmp::Reverse((l.0, l.1)));
@@ -1043,7 +1043,7 @@ mod tests {
         ] {
             assert_eq!(
                 painting.owner_at(p, 1e-6),
-                (Some(ShapeId(0)), true),
+                (Some(ShapeId::from_index(0)), true),
                 "{p:?}"
             );
         }

@@ -110,7 +110,7 @@ impl Schedule<'_> {
             .into_par_iter()
             .filter_map(|k| {
                 let len = self.mesh.distance(k.lo, k.hi);
-                (len < factor * self.edge_target(k) && self.edge_in_region(k.lo, k.hi))
+                (len < factor * self.edge_target(k) && self.edge_in_patch(k.lo, k.hi))
                     .then_some((len.to_bits(), k))
             })
             .collect();

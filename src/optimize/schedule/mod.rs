@@ -30,7 +30,7 @@
 //!
 //! Last, the worst-element phase (`repair.rs`) repairs the corners
 //! below α that the feature edges leave room for: targets halved around them,
-//! the passes run on that region only, round after round (a round that makes
+//! the passes run on that patch only, round after round (a round that makes
 //! the worst such corner worse is rolled back and run with energy-bounded
 //! splits); the statistics count the triangles left with one.
 //!
@@ -298,7 +298,7 @@ pub(crate) struct Schedule<'a> {
     swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
     /// In the worst-element phase (`repair.rs`): the vertices whose edges
     /// and moves the passes consider (`None`: every vertex).
-    region: Option<repair::Region>,
+    patch: Option<repair::Patch>,
     /// In the worst-element phase: splits may not make their faces worse
     /// than before or than a corner of α allows (`repair.rs`).
     split_bounded: bool,
@@ -396,7 +396,7 @@ impl<'a> Schedule<'a> {
             role_refused: rustc_hash::FxHashMap::default(),
             stretch: Stretch::uniform(SPLIT_ABOVE),
             swap_scan: None,
-            region: None,
+            patch: None,
             split_bounded: false,
             #[cfg(test)]
             ahead_tally: (0, 0),

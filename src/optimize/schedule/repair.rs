@@ -2,7 +2,7 @@
 //! that the drawing does not force are repaired locally, the way
 //! TetWild and TriWild reach their energies when the passes stall: the targets
 //! around each bad triangle are halved (graded as in `update_sizing`), and the
-//! split, collapse, swap and min-max smoothing passes run on that region only,
+//! split, collapse, swap and min-max smoothing passes run on that patch only,
 //! round after round while bad corners are left.
 //!
 //! A corner is **bad** when it is below α and not forced: the rule of the
@@ -10,14 +10,14 @@
 //! features, never from the mesh's angles. A corner between two feature edges
 //! is bad too when the features meet at an input angle the envelope lets the
 //! mesh open (two secondary polylines at a tip, each edge free to turn by
-//! `asin(2ε / |e|)`): the region's smoothing moves their vertices within ε.
+//! `asin(2ε / |e|)`): the patch's smoothing moves their vertices within ε.
 //! Deciding forced corners from the mesh's feature edges instead would excuse
 //! most corners below α, since the worst corner usually lies between two
 //! feature edges.
 //!
-//! The region's operations are the main passes' own (every invariant checked,
+//! The patch's operations are the main passes' own (every invariant checked,
 //! collapses, swaps and moves never raise the local largest energy); only
-//! their candidates are limited to the region, so the rest of the mesh keeps
+//! their candidates are limited to the patch, so the rest of the mesh keeps
 //! the sizes the coarsening left. Splits ignore the energy rule, so a round is
 //! checked as a whole: one that leaves the worst bad corner worse is rolled
 //! back (mesh and targets restored, the memos of refusals forgotten) and run
@@ -50,28 +50,28 @@ const REPAIR_ROUNDS: usize = 10;
 const REPAIR_FLOOR_DIVISOR: f64 = 16.0;
 /// Min-max smoothing passes per repair round.
 const REPAIR_SMOOTHS: usize = 3;
-/// [`Schedule::candidate_edges`] walks the region's vertices in parallel
+/// [`Schedule::candidate_edges`] walks the patch's vertices in parallel
 /// chunks of at least this many.
-const REGION_CHUNK: usize = 256;
+const PATCH_CHUNK: usize = 256;
 
-/// The worst-element phase's region: a flag per vertex slot, and its
+/// The worst-element phase's patch: a flag per vertex slot, and its
 /// vertices listed once each (in the order they joined). The passes' edges
 /// come from the list: a scan of the flags would go over every vertex slot the
 /// mesh ever had (on a large drawing several times the live vertices, for a
-/// region of a few thousand).
+/// patch of a few thousand).
 #[derive(Default)]
-pub(super) struct Region {
+pub(super) struct Patch {
     flags: Vec<bool>,
     list: Vec<VertexId>,
 }
 
-impl Region {
-    /// Whether `v` is in the region.
+impl Patch {
+    /// Whether `v` is in the patch.
     fn contains(&self, v: VertexId) -> bool {
         self.flags.get(v.index()).copied().unwrap_or(false)
     }
 
-    /// Put `v` in the region.
+    /// Put `v` in the patch.
     fn insert(&mut self, v: VertexId) {
         let flag = slot(&mut self.flags, v, false);
         if !*flag {
@@ -127,38 +127,38 @@ fn worst_corner(bad: &[(FaceId, f64)]) -> f64 {
 
 impl Schedule<'_> {
     /// Whether `v` may be touched by the passes: everywhere outside the
-    /// worst-element phase, in it only the region around the bad triangles.
-    pub(super) fn in_region(&self, v: VertexId) -> bool {
-        self.region.as_ref().is_none_or(|r| r.contains(v))
+    /// worst-element phase, in it only the patch around the bad triangles.
+    pub(super) fn in_patch(&self, v: VertexId) -> bool {
+        self.patch.as_ref().is_none_or(|r| r.contains(v))
     }
 
-    /// Whether the edge `a`–`b` touches the region ([`Self::in_region`]).
-    pub(super) fn edge_in_region(&self, a: VertexId, b: VertexId) -> bool {
-        self.in_region(a) || self.in_region(b)
+    /// Whether the edge `a`–`b` touches the patch ([`Self::in_patch`]).
+    pub(super) fn edge_in_patch(&self, a: VertexId, b: VertexId) -> bool {
+        self.in_patch(a) || self.in_patch(b)
     }
 
-    /// The edges the passes consider: those at the region's vertices in the
+    /// The edges the passes consider: those at the patch's vertices in the
     /// worst-element phase (sorted), every edge elsewhere.
     pub(super) fn candidate_edges(&self) -> Vec<EdgeKey> {
-        let Some(region) = &self.region else {
+        let Some(patch) = &self.patch else {
             return self.mesh.edge_list();
         };
         // Found in parallel and sorted (the set does not depend on how it was
-        // found). An edge between two region vertices is listed from its lower
+        // found). An edge between two patch vertices is listed from its lower
         // end only, so none is listed twice. On the ten slowest dev drawings this ran on the pipeline's
         // thread alone for 0.4 s in all at two threads.
         let mesh: &TriMesh = self.mesh;
-        let mut edges: Vec<EdgeKey> = region
+        let mut edges: Vec<EdgeKey> = patch
             .list
             .par_iter()
-            .with_min_len(REGION_CHUNK)
+            .with_min_len(PATCH_CHUNK)
             .filter(|&&v| mesh.is_vertex_alive(v))
             .fold(Vec::new, |mut edges, &v| {
                 let ring = crate::mesh::ScratchRing::of(mesh, v);
                 edges.extend(
                     ring.neighbours
                         .iter()
-                        .filter(|&&w| w > v || !self.in_region(w))
+                        .filter(|&&w| w > v || !self.in_patch(w))
                         .map(|&w| EdgeKey::new(v, w)),
                 );
                 edges
@@ -175,9 +175,9 @@ impl Schedule<'_> {
         edges
     }
 
-    /// Put `v` (a vertex a split made in the region) in the region.
-    pub(super) fn add_to_region(&mut self, v: VertexId) {
-        if let Some(r) = &mut self.region {
+    /// Put `v` (a vertex a split made in the patch) in the patch.
+    pub(super) fn add_to_patch(&mut self, v: VertexId) {
+        if let Some(r) = &mut self.patch {
             r.insert(v);
         }
     }
@@ -230,7 +230,7 @@ impl Schedule<'_> {
                 bad = now;
             }
         }
-        self.region = None;
+        self.patch = None;
         if self.timed_out() {
             return bad.len();
         }
@@ -239,22 +239,22 @@ impl Schedule<'_> {
         // (no change of topology after that).
         let new = self.split_multi_curved();
         if !new.is_empty() {
-            let mut region = Region::default();
+            let mut patch = Patch::default();
             for &m in &new {
                 if !self.mesh.is_vertex_alive(m) {
                     continue;
                 }
-                region.insert(m);
+                patch.insert(m);
                 for &w in &crate::mesh::ScratchRing::of(self.mesh, m).neighbours {
-                    region.insert(w);
+                    patch.insert(w);
                 }
             }
-            self.region = Some(region);
+            self.patch = Some(patch);
             self.failed_smooth.clear();
             for _ in 0..REPAIR_SMOOTHS {
                 self.smooth_pass_with(Objective::MinMax);
             }
-            self.region = None;
+            self.patch = None;
             bad = bad_faces(self.mesh, self.ctx, alpha);
         }
         bad.len()
@@ -264,7 +264,7 @@ impl Schedule<'_> {
     /// parent) as the curved stage would (thesis §4.4.2: at most one curved
     /// edge per element), through an edge that is not curved, the longest
     /// first: done here, the new vertex is smoothed with the rest of the
-    /// region instead of being left where the split put it. Returns the new
+    /// patch instead of being left where the split put it. Returns the new
     /// vertices.
     fn split_multi_curved(&mut self) -> Vec<VertexId> {
         let mesh: &TriMesh = self.mesh;
@@ -348,7 +348,7 @@ impl Schedule<'_> {
             smooths += self.smooth_pass_with(Objective::MinMax);
             swaps += self.swap_pass();
         }
-        self.region = None;
+        self.patch = None;
         self.split_bounded = false;
         self.swap_scan = None;
         tracing::debug!(
@@ -379,14 +379,14 @@ impl Schedule<'_> {
     /// Halve the targets at the vertices of `bad` (those within
     /// [`SIZING_RADIUS`](super::SIZING_RADIUS) of their target less the farther they are, as
     /// `update_sizing` grades them), and make those vertices and their
-    /// neighbours the region.
+    /// neighbours the patch.
     fn refine_around(&mut self, bad: &[(FaceId, f64)]) {
         self.failed_collapse.retain(|_, f| !f.by_length);
         let mut seeds: Vec<VertexId> = bad.iter().flat_map(|&(f, _)| self.mesh.face(f)).collect();
         seeds.sort_unstable();
         seeds.dedup();
         let (mult, touched) = self.refine_multipliers(&seeds, 1.0);
-        let mut region = Region::default();
+        let mut patch = Patch::default();
         for &v in &touched {
             let top = self.base_of(v);
             let floor = self.opts.l_floor / REPAIR_FLOOR_DIVISOR;
@@ -395,11 +395,11 @@ impl Schedule<'_> {
                 *slot(&mut self.refined, v, false) = true;
             }
             self.set_target(v, t);
-            region.insert(v);
+            patch.insert(v);
             for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
-                region.insert(w);
+                patch.insert(w);
             }
         }
-        self.region = Some(region);
+        self.patch = Some(patch);
     }
 }

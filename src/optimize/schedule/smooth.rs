@@ -29,11 +29,7 @@ impl Schedule<'_> {
 
     /// [`Self::smooth_pass`] minimising `objective`.
     pub(super) fn smooth_pass_with(&mut self, objective: Objective) -> u64 {
-        let mut verts: Vec<VertexId> = self
-            .mesh
-            .vertices()
-            .filter(|&v| self.in_region(v))
-            .collect();
+        let mut verts: Vec<VertexId> = self.mesh.vertices().filter(|&v| self.in_patch(v)).collect();
         self.rng.shuffle(&mut verts);
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next

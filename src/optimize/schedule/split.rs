@@ -22,7 +22,7 @@ impl Schedule<'_> {
             .into_par_iter()
             .filter_map(|k| {
                 let (len, t) = (self.mesh.distance(k.lo, k.hi), self.edge_target(k));
-                (len > SPLIT_ABOVE * t && self.edge_in_region(k.lo, k.hi)).then_some((len, k, t))
+                (len > SPLIT_ABOVE * t && self.edge_in_patch(k.lo, k.hi)).then_some((len, k, t))
             })
             .collect();
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -73,7 +73,7 @@ impl Schedule<'_> {
                     }
                     let refined = self.is_refined(k.lo) || self.is_refined(k.hi);
                     *slot(&mut self.refined, m, false) = refined;
-                    self.add_to_region(m);
+                    self.add_to_patch(m);
                 }
                 applied += 1;
             }

@@ -186,7 +186,7 @@ impl Schedule<'_> {
         let edges: Vec<EdgeKey> = self.candidate_edges();
         let deadline = &self.opts.deadline;
         let keep = |&k: &EdgeKey| {
-            if !self.edge_in_region(k.lo, k.hi) {
+            if !self.edge_in_patch(k.lo, k.hi) {
                 return false;
             }
             if let Some((at, found)) = last

@@ -14,7 +14,7 @@
 use super::support::devset::{devset_files, svg_files};
 
 use super::support::{Msh, check, out_dir, read_msh};
-use crate::features::SegmentTag;
+use crate::features::FeaturePiece;
 use crate::pipeline::{self, Report, RunOptions};
 use crate::{Drawing, Mesher, Params, Stage};
 use kurbo::{Line, Point};
@@ -61,8 +61,8 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
     let mut defects = Vec::new();
     for (line, tag) in fs.conforming_input().segments {
         let source = match tag {
-            SegmentTag::Primary(id) => fs.primary[id.0 as usize].source,
-            SegmentTag::Secondary { polyline, .. } => fs.secondary[polyline.0 as usize].source,
+            FeaturePiece::Primary(id) => fs.primary[id.index()].source,
+            FeaturePiece::Secondary { polyline, .. } => fs.secondary[polyline.index()].source,
         };
         let mut name = drawing.shapes[source.shape.index()].name();
         // Names are unique in a file: a curve named like a surface is written `<name>-curve`.
@@ -76,7 +76,7 @@ fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<Strin
             // A secondary feature is kept within its ε-envelope, not exactly: the
             // clean-up of degenerate rounded triangles may move its vertices
             // so its ends need only a node of its curve within ε.
-            let within_envelope = matches!(tag, SegmentTag::Secondary { .. })
+            let within_envelope = matches!(tag, FeaturePiece::Secondary { .. })
                 && [line.p0, line.p1].iter().all(|p| {
                     line_names.iter().any(|(&(a, b), names)| {
                         names.contains(name.as_str())

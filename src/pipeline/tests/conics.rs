@@ -98,7 +98,7 @@ pub(super) fn drawing_of(shapes: Vec<Shape>) -> Drawing {
                 features.push(Feature {
                     geom,
                     source: FeatureSource {
-                        shape: ShapeId(u32::try_from(si).expect("few shapes")),
+                        shape: ShapeId::from_index(si),
                         subpath: u32::try_from(pi).expect("few subpaths"),
                         segment: u32::try_from(k).expect("few segments"),
                     },
