@@ -126,61 +126,10 @@ impl<'a> Build<'a> {
     /// Step 2: splits (`split`), coincident outlines (`coincide`), crossings
     /// (`crossings`). `None` past the deadline.
     pub(super) fn split(&mut self, classified: Classified) -> Option<Split> {
+        let t = Instant::now();
+        let (pieces, as_drawn) = self.split_curves(classified);
         let (drawing, params, deadline) = (self.drawing, self.params, self.deadline);
         let (counts, timing) = (&mut self.counts, &mut self.timing);
-        let Classified { curves, drawn } = classified;
-        // 2. Splits (cubics at inflections and cusps, then cubics and conics where they
-        // turn too much).
-        let t = Instant::now();
-        let mut pieces: Vec<(u32, Parent, Vec<[f64; 2]>)> = Vec::with_capacity(curves.len());
-        // By piece: its curve as drawn, where snapping moved it (see `trim`).
-        let mut as_drawn: Vec<Option<Parent>> = Vec::with_capacity(curves.len());
-        // Each curve's splits on its own, in parallel; taken in order below.
-        let splits: Vec<Option<split::Splits>> = {
-            use rayon::prelude::*;
-            curves
-                .par_iter()
-                .map(|(_, class)| match class {
-                    classify::Class::Curve(c) => Some(split::split(c)),
-                    classify::Class::Conic(c) => Some(split::split_conic(c)),
-                    _ => None,
-                })
-                .collect()
-        };
-        for (((i, class), drawn), split) in curves.into_iter().zip(drawn).zip(splits) {
-            match class {
-                classify::Class::Point(_) => {}
-                classify::Class::Lines(lines) => {
-                    let drawn_lines = match drawn {
-                        Some(classify::Class::Lines(d)) if d.len() == lines.len() => Some(d),
-                        _ => None,
-                    };
-                    for (n, l) in lines.into_iter().enumerate() {
-                        pieces.push((i, Parent::Line(l), vec![[0.0, 1.0]]));
-                        as_drawn.push(drawn_lines.as_ref().map(|d| Parent::Line(d[n])));
-                    }
-                }
-                classify::Class::Curve(c) => {
-                    let s = split.expect("internal: a curve's splits");
-                    counts.inflection_splits += s.inflection_splits;
-                    counts.curvature_splits += s.curvature_splits;
-                    pieces.push((i, Parent::Cubic(c), s.intervals));
-                    as_drawn.push(match drawn {
-                        Some(classify::Class::Curve(d)) => Some(Parent::Cubic(d)),
-                        _ => None,
-                    });
-                }
-                classify::Class::Conic(c) => {
-                    let s = split.expect("internal: a conic's splits");
-                    counts.curvature_splits += s.curvature_splits;
-                    pieces.push((i, Parent::Conic(c), s.intervals));
-                    as_drawn.push(match drawn {
-                        Some(classify::Class::Conic(d)) => Some(Parent::Conic(d)),
-                        _ => None,
-                    });
-                }
-            }
-        }
         // 2a. Coincident outlines: collinear overlaps split, equal pieces once.
         let coincident = coincide::merge(
             pieces,
@@ -247,6 +196,69 @@ impl<'a> Build<'a> {
         })
     }
 
+    /// Step 2 proper: cubics split at inflections and cusps, then cubics and
+    /// conics where they turn too much; straight curves are pieces of one
+    /// interval. By piece, its curve as drawn where snapping moved it.
+    fn split_curves(
+        &mut self,
+        classified: Classified,
+    ) -> (Vec<coincide::Piece>, Vec<Option<Parent>>) {
+        let counts = &mut self.counts;
+        let Classified { curves, drawn } = classified;
+        // 2. Splits (cubics at inflections and cusps, then cubics and conics where they
+        // turn too much).
+        let mut pieces: Vec<(u32, Parent, Vec<[f64; 2]>)> = Vec::with_capacity(curves.len());
+        // By piece: its curve as drawn, where snapping moved it (see `trim`).
+        let mut as_drawn: Vec<Option<Parent>> = Vec::with_capacity(curves.len());
+        // Each curve's splits on its own, in parallel; taken in order below.
+        let splits: Vec<Option<split::Splits>> = {
+            use rayon::prelude::*;
+            curves
+                .par_iter()
+                .map(|(_, class)| match class {
+                    classify::Class::Curve(c) => Some(split::split(c)),
+                    classify::Class::Conic(c) => Some(split::split_conic(c)),
+                    _ => None,
+                })
+                .collect()
+        };
+        for (((i, class), drawn), split) in curves.into_iter().zip(drawn).zip(splits) {
+            match class {
+                classify::Class::Point(_) => {}
+                classify::Class::Lines(lines) => {
+                    let drawn_lines = match drawn {
+                        Some(classify::Class::Lines(d)) if d.len() == lines.len() => Some(d),
+                        _ => None,
+                    };
+                    for (n, l) in lines.into_iter().enumerate() {
+                        pieces.push((i, Parent::Line(l), vec![[0.0, 1.0]]));
+                        as_drawn.push(drawn_lines.as_ref().map(|d| Parent::Line(d[n])));
+                    }
+                }
+                classify::Class::Curve(c) => {
+                    let s = split.expect("internal: a curve's splits");
+                    counts.inflection_splits += s.inflection_splits;
+                    counts.curvature_splits += s.curvature_splits;
+                    pieces.push((i, Parent::Cubic(c), s.intervals));
+                    as_drawn.push(match drawn {
+                        Some(classify::Class::Curve(d)) => Some(Parent::Cubic(d)),
+                        _ => None,
+                    });
+                }
+                classify::Class::Conic(c) => {
+                    let s = split.expect("internal: a conic's splits");
+                    counts.curvature_splits += s.curvature_splits;
+                    pieces.push((i, Parent::Conic(c), s.intervals));
+                    as_drawn.push(match drawn {
+                        Some(classify::Class::Conic(d)) => Some(Parent::Conic(d)),
+                        _ => None,
+                    });
+                }
+            }
+        }
+        (pieces, as_drawn)
+    }
+
     /// Step 3: trimming and resampling against `size`; the sections, and by
     /// section whether it starts a window between cuts. `None` past the deadline.
     pub(super) fn resample(
@@ -256,15 +268,7 @@ impl<'a> Build<'a> {
     ) -> Option<(Vec<Section>, Vec<bool>)> {
         let (drawing, params, deadline) = (self.drawing, self.params, self.deadline);
         let (counts, timing) = (&mut self.counts, &mut self.timing);
-        let Split {
-            pieces,
-            as_drawn,
-            shared,
-            sharers,
-            flat,
-            trimmer,
-            found,
-        } = split;
+        let flat = &split.flat;
         // 3. Trimming (derived outlines only where they bound what is painted) and
         // resampling.
         let t = Instant::now();
@@ -272,62 +276,8 @@ impl<'a> Build<'a> {
         // after the other; `None` once the deadline passed). The trimming's
         // winding queries can take minutes on a dense dashed path (0182 of the
         // fuzz findings: 85 % of its run).
-        let per_piece = |idx: usize| -> Option<Resampled> {
-            if idx % 64 == 0 && deadline.expired() {
-                return None;
-            }
-            let (k, piece) = &flat[idx];
-            let (i, parent) = (pieces[*k].0, &pieces[*k].1);
-            let mut cuts = vec![piece.t[0]];
-            cuts.extend(found.splits[idx].iter().copied());
-            cuts.push(piece.t[1]);
-            let source = drawing.features[i as usize].source;
-            let shape = source.shape;
-            // Cut for the separation test no finer than SEPARATION_SIZE_PER_MU μ:
-            // primary sections are cut to the size asked after it.
-            let floor = SEPARATION_SIZE_PER_MU * params.mu;
-            let size = |p: Point| size(p, source, CutFor::Any).max(floor);
-            let mut out = Vec::new();
-            let mut trimmed = 0;
-            for w in cuts.windows(2) {
-                if let Some(trimmer) = &trimmer
-                    && !std::iter::once(shape)
-                        .chain(
-                            shared[*k]
-                                .iter()
-                                .flat_map(|&g| sharers[g as usize].iter().copied()),
-                        )
-                        .any(|s| trimmer.keeps(s, parent, as_drawn[*k].as_ref(), w[0], w[1]))
-                {
-                    trimmed += 1;
-                    continue;
-                }
-                for (n, p) in resample::resample(parent, w[0], w[1], params, &size)
-                    .into_iter()
-                    .enumerate()
-                {
-                    let mut ctrl = p.ctrl;
-                    // Sections meeting at a crossing share its point exactly.
-                    if let Some(&x) = found.points.get(&(idx, p.t0.to_bits())) {
-                        ctrl.p0 = x;
-                    }
-                    if let Some(&x) = found.points.get(&(idx, p.t1.to_bits())) {
-                        ctrl.p3 = x;
-                    }
-                    let section = Section {
-                        feature: i,
-                        shared: shared[*k],
-                        parent: *parent,
-                        t0: p.t0,
-                        t1: p.t1,
-                        ctrl,
-                        eligible: p.eligible,
-                    };
-                    out.push((section, n == 0));
-                }
-            }
-            Some((out, trimmed))
-        };
+        let inputs = (drawing, params, deadline);
+        let per_piece = |idx: usize| split.resample_piece(idx, inputs, size);
         // A block of pieces at a time, each block's pieces in parallel, so the
         // sections are held twice only for a block (all at once, a drawing of
         // 2 500 tiles peaks some 0.4 GB higher).
@@ -484,5 +434,82 @@ impl<'a> Build<'a> {
             counts,
             timing,
         }
+    }
+}
+
+impl Split {
+    /// Step 3 for the flat piece `idx`: its windows between cuts (its ends,
+    /// the crossings), each trimmed or resampled against `size`; the sections
+    /// with whether each starts its window, and how many windows were
+    /// trimmed. `None` once the deadline passed.
+    fn resample_piece(
+        &self,
+        idx: usize,
+        (drawing, params, deadline): (&Drawing, &Resolved, &Deadline),
+        size: &(dyn Fn(Point, FeatureSource, CutFor) -> f64 + Sync),
+    ) -> Option<Resampled> {
+        let Split {
+            pieces,
+            as_drawn,
+            shared,
+            sharers,
+            flat,
+            trimmer,
+            found,
+        } = self;
+        if idx % 64 == 0 && deadline.expired() {
+            return None;
+        }
+        let (k, piece) = &flat[idx];
+        let (i, parent) = (pieces[*k].0, &pieces[*k].1);
+        let mut cuts = vec![piece.t[0]];
+        cuts.extend(found.splits[idx].iter().copied());
+        cuts.push(piece.t[1]);
+        let source = drawing.features[i as usize].source;
+        let shape = source.shape;
+        // Cut for the separation test no finer than SEPARATION_SIZE_PER_MU μ:
+        // primary sections are cut to the size asked after it.
+        let floor = SEPARATION_SIZE_PER_MU * params.mu;
+        let size = |p: Point| size(p, source, CutFor::Any).max(floor);
+        let mut out = Vec::new();
+        let mut trimmed = 0;
+        for w in cuts.windows(2) {
+            if let Some(trimmer) = &trimmer
+                && !std::iter::once(shape)
+                    .chain(
+                        shared[*k]
+                            .iter()
+                            .flat_map(|&g| sharers[g as usize].iter().copied()),
+                    )
+                    .any(|s| trimmer.keeps(s, parent, as_drawn[*k].as_ref(), w[0], w[1]))
+            {
+                trimmed += 1;
+                continue;
+            }
+            for (n, p) in resample::resample(parent, w[0], w[1], params, &size)
+                .into_iter()
+                .enumerate()
+            {
+                let mut ctrl = p.ctrl;
+                // Sections meeting at a crossing share its point exactly.
+                if let Some(&x) = found.points.get(&(idx, p.t0.to_bits())) {
+                    ctrl.p0 = x;
+                }
+                if let Some(&x) = found.points.get(&(idx, p.t1.to_bits())) {
+                    ctrl.p3 = x;
+                }
+                let section = Section {
+                    feature: i,
+                    shared: shared[*k],
+                    parent: *parent,
+                    t0: p.t0,
+                    t1: p.t1,
+                    ctrl,
+                    eligible: p.eligible,
+                };
+                out.push((section, n == 0));
+            }
+        }
+        Some((out, trimmed))
     }
 }

@@ -670,9 +670,7 @@ fn region_warnings(
         out.push(warnings::lost_regions_warning(
             drawing,
             &regions.lost,
-            resolved.mu,
-            resolved.l_min,
-            resolved.eps_m,
+            resolved,
         ));
     }
     // The area check warns on cubic meshes: there a mesh that keeps the

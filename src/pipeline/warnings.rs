@@ -82,11 +82,10 @@ pub(super) fn periodic_warning(r: &PeriodicReport) -> Option<String> {
 pub(super) fn lost_regions_warning(
     drawing: &Drawing,
     lost: &[crate::svg::ShapeId],
-    mu: f64,
-    l_min: f64,
-    eps_m: f64,
+    resolved: &Resolved,
 ) -> String {
     const NAMED: usize = 5;
+    let (mu, l_min, eps_m) = (resolved.mu, resolved.l_min, resolved.eps_m);
     let shapes: Vec<&crate::svg::Shape> = lost.iter().map(|s| &drawing.shapes[s.index()]).collect();
     let names: Vec<String> = shapes.iter().take(NAMED).map(|s| s.name()).collect();
     let more = if lost.len() > NAMED { ", ..." } else { "" };
