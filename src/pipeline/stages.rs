@@ -1,4 +1,4 @@
-//! The stages of one run, each one call (docs/design.md "Pipeline"): the
+//! The stages of one run, each one call (docs/design.md "Data flow"): the
 //! periodic tile, the size field, then the CDT baseline or TriWild's
 //! features → BSP → optimization → curving, then regions, the periodic match,
 //! quality and the report.
