@@ -74,14 +74,26 @@ fn remove(mesh: &mut TriMesh, ctx: &Context, f: FaceId) -> bool {
 }
 
 /// Remove the triangles of `mesh` that are degenerate in f64, and refuse
-/// (naming the first) when some remain or two vertices coincide.
+/// (naming the first) when some remain or two vertices coincide: the
+/// rational vertices rounded or collapsed ([`round_rational`]), the
+/// degenerate faces removed ([`remove_degenerate`]), then what is left
+/// refused ([`refuse_degenerate`]). Returns how many vertices and faces were
+/// removed.
 ///
 /// # Errors
 /// [`Error::Meshing`] in [`Stage::Bsp`] naming what could not be removed.
 pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crate::Result<usize> {
+    let removed = round_rational(mesh, ctx) + remove_degenerate(mesh, ctx, d);
+    refuse_degenerate(mesh, d)?;
+    Ok(removed)
+}
+
+/// Round the vertices the BSP's own rounding left rational: the optimizer's
+/// rounding (which may move them a few ulps), else a collapse into a
+/// neighbour, else a smaller star (its edges split) rounded again. Returns
+/// how many were collapsed.
+fn round_rational(mesh: &mut TriMesh, ctx: &Context) -> usize {
     let mut removed = 0;
-    // Vertices the BSP's own rounding left rational: the optimizer's rounding
-    // (which may move them a few ulps), else a collapse into a neighbour.
     let rational: Vec<VertexId> = mesh.vertices().filter(|&v| mesh.is_rational(v)).collect();
     for v in rational {
         if !mesh.is_vertex_alive(v)
@@ -123,6 +135,13 @@ pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crat
             }
         }
     }
+    removed
+}
+
+/// Remove the faces degenerate in f64, in up to [`ROUNDS`] sweeps while one
+/// makes progress. Returns how many were removed.
+fn remove_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> usize {
+    let mut removed = 0;
     for _ in 0..ROUNDS {
         let bad = bad_faces(mesh, d);
         if bad.is_empty() {
@@ -142,6 +161,15 @@ pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crat
             break;
         }
     }
+    removed
+}
+
+/// Refuse a mesh with a degenerate face left, or two vertices that coincide
+/// within [`DUPLICATE_REL`] d.
+///
+/// # Errors
+/// [`Error::Meshing`] in [`Stage::Bsp`] naming the first.
+fn refuse_degenerate(mesh: &TriMesh, d: f64) -> crate::Result<()> {
     let bad = bad_faces(mesh, d);
     if let Some(&f) = bad.first() {
         let p = mesh.face(f).map(|v| mesh.position(v));
@@ -180,5 +208,5 @@ pub(super) fn snap_degenerate(mesh: &mut TriMesh, ctx: &Context, d: f64) -> crat
             }
         }
     }
-    Ok(removed)
+    Ok(())
 }

@@ -40,14 +40,6 @@ pub(crate) struct OptimizeOptions {
     pub deadline: Deadline,
 }
 
-impl OptimizeOptions {
-    /// Set [`OptimizeOptions::deadline`].
-    pub(crate) fn with_deadline(mut self, deadline: Deadline) -> Self {
-        self.deadline = deadline;
-        self
-    }
-}
-
 /// Improve `mesh` in place (see the module doc) with the size `opts.l`
 /// everywhere. `ctx.envelope` may be restaged (denser sampling, larger ε) when
 /// rational vertices are left.

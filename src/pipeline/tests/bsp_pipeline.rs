@@ -36,7 +36,8 @@ fn key(p: [f64; 2]) -> (u64, u64) {
 /// What the conformance check found wrong, in words (empty: all good).
 fn conformance_defects(drawing: &Drawing, params: &Params, m: &Msh) -> Vec<String> {
     let d = drawing.diagonal();
-    let fs = pipeline::sized_features(drawing, params).expect("the size field builds");
+    let (_, fs) = super::stages::front(drawing, params, crate::budget::Deadline::NONE)
+        .expect("the size field builds");
     let tol = 1e-9 * d;
     let pos: HashMap<u64, [f64; 2]> = m.nodes.iter().map(|&(t, x)| (t, [x[0], x[1]])).collect();
     let by_pos: HashMap<(u64, u64), u64> = m
@@ -361,7 +362,7 @@ fn rounding_degenerate_triangles_are_removed_from_the_bsp_output() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bsp/rounding-degenerate.svg");
     let svg = std::fs::read(&f).expect("fixture");
     let drawing = crate::load_bytes(&svg, &crate::LoadOptions::DEFAULT).expect("load");
-    let (raw, _, _) = pipeline::bsp_stage(&drawing, &bsp_params()).expect("bsp");
+    let (raw, _, _) = super::bsp_mesh(&drawing, &bsp_params()).expect("bsp");
     let nodes: Vec<Point> = raw.vertices().map(|v| raw.position(v)).collect();
     let tris: Vec<[Point; 3]> = raw
         .faces()

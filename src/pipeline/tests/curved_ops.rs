@@ -16,12 +16,11 @@ use std::collections::HashMap;
 /// rounded shape of cubics and lines), with its context in curved mode.
 fn curved_mode_mesh(drawing: &crate::Drawing, order: Order) -> (TriMesh, Context) {
     let params = crate::Params::DEFAULT.with_l(crate::Length::Rel(0.15));
-    let (mut mesh, _, mut ctx) = crate::pipeline::bsp_stage(drawing, &params).expect("bsp");
-    let resolved = params.resolve(drawing.diagonal());
+    let (mut mesh, _, mut ctx) = super::bsp_mesh(drawing, &params).expect("bsp");
     crate::optimize::optimize(
         &mut mesh,
         &mut ctx,
-        &crate::pipeline::optimize_options(&params, &resolved),
+        &super::optimize_options(drawing, &params),
     );
     (mesh, ctx.with_curved(CurvedRule::new(order)))
 }
@@ -73,26 +72,32 @@ fn random_ops_in_curved_mode_on_exact_conics_keep_every_element_certified() {
     ]);
 }
 
-/// Random collapses, swaps and smoothings in curved mode on the drawings of
-/// `cases` (the SVG cases below when empty), each checked.
-fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
+/// The SVG cases of [`run_curved_ops`]: a disk and a rounded shape of cubics
+/// and lines, cubic under either energy rule, and the shape quadratic.
+fn svg_cases() -> [(crate::Drawing, Order, EnergyRule); 5] {
     let disk = br#"<svg xmlns="http://www.w3.org/2000/svg" width="100" height="100">
         <circle cx="50" cy="50" r="40" fill="black"/></svg>"#;
     let blob = br#"<svg xmlns="http://www.w3.org/2000/svg" width="120" height="80">
         <path d="M 10 70 L 10 30 C 10 0 60 0 60 30 C 60 50 110 20 110 70 Z" fill="red"/>
         <path d="M 30 60 L 90 60" stroke="black" fill="none"/></svg>"#;
-    let mut applied = [0usize; 4];
-    let mut rejected: HashMap<Reject, usize> = HashMap::new();
     let load = |svg: &[u8]| {
         crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("drawing loads")
     };
-    let svg_cases = [
+    [
         (load(&disk[..]), Order::Cubic, EnergyRule::NoWorseMax),
         (load(&disk[..]), Order::Cubic, EnergyRule::Ignore),
         (load(&blob[..]), Order::Cubic, EnergyRule::NoWorseMax),
         (load(&blob[..]), Order::Cubic, EnergyRule::Ignore),
         (load(&blob[..]), Order::Quadratic, EnergyRule::Ignore),
-    ];
+    ]
+}
+
+/// Random collapses, swaps and smoothings in curved mode on the drawings of
+/// `cases` (the SVG cases below when empty), each checked.
+fn run_curved_ops(cases: &[(crate::Drawing, Order, EnergyRule)]) {
+    let mut applied = [0usize; 4];
+    let mut rejected: HashMap<Reject, usize> = HashMap::new();
+    let svg_cases = svg_cases();
     let cases = if cases.is_empty() {
         &svg_cases[..]
     } else {

@@ -1,5 +1,5 @@
 //! The curving stage through the library API: a linear TriWild mesh
-//! (the BSP mesh of `pipeline::bsp_stage`, optimized by `optimize::optimize` unless
+//! (the BSP mesh of `bsp_mesh`, optimized by `optimize::optimize` unless
 //! the parameters stop after the BSP) is curved to order 3 and 2, every element is certified by
 //! `curve::certify_fem` and by the independent checker of `tests/support`, and
 //! the meshed disk of a `<circle>` has exactly the area its four cubics enclose.
@@ -17,7 +17,6 @@ use crate::certify_fem;
 use crate::curve::{CurveOptions, CurveStats, curve_mesh};
 use crate::element::Order;
 use crate::output::{self, MshOptions};
-use crate::pipeline;
 use crate::regions::{self, RegionOptions};
 use crate::svg::FeatureGeom;
 use crate::{Drawing, FemMesh, Length, Params, Stage};
@@ -33,13 +32,12 @@ fn linear(
     crate::features::FeatureSet,
     crate::ops::Context,
 ) {
-    let (mut mesh, fs, mut ctx) = pipeline::bsp_stage(drawing, params).expect("linear mesh");
+    let (mut mesh, fs, mut ctx) = super::bsp_mesh(drawing, params).expect("linear mesh");
     if params.stop_after != Some(Stage::Bsp) {
-        let resolved = params.resolve(drawing.diagonal());
         crate::optimize::optimize(
             &mut mesh,
             &mut ctx,
-            &pipeline::optimize_options(params, &resolved),
+            &super::optimize_options(drawing, params),
         );
     }
     (mesh, fs, ctx)
@@ -55,7 +53,7 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
         .with_l_abs(resolved.l)
         .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
     let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| {
-        pipeline::feature_of(&fs, &ctx, t)
+        super::stages::feature_of(&fs, &ctx, t)
     })
     .expect("curving");
     let mut fem = FemMesh::from_curved(&cm, "domain", |s| drawing.shapes[s.index()].name());
@@ -251,7 +249,7 @@ fn devset_curving() {
         };
         let opts = CurveOptions::new(order, drawing.diagonal());
         let r = curve_mesh(&mut mesh, &ctx, &opts, |t| {
-            pipeline::feature_of(&fs, &ctx, t)
+            super::stages::feature_of(&fs, &ctx, t)
         });
         match r {
             Ok((cm, s)) => {

@@ -86,7 +86,7 @@ fn optimize_and_check(svg: &Path) -> Result<Summary, Vec<String>> {
     let params = Params::DEFAULT;
     let t = Instant::now();
     let (mesh, fs, ctx, stats) =
-        pipeline::optimize_stage(&drawing, &params).map_err(|e| vec![format!("mesh: {e}")])?;
+        super::optimized_mesh(&drawing, &params).map_err(|e| vec![format!("mesh: {e}")])?;
     let seconds = t.elapsed().as_secs_f64();
     let eps = params.resolve(d).eps;
     let mut defects: Vec<String> = mesh
