@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
 use std::cmp::Ordering;
 
-/// How [`emit_cell`] triangulates a convex cell (vertices counter-clockwise,
+/// How [`emit_cells`] triangulates a convex cell (vertices counter-clockwise,
 /// possibly with collinear runs): a fan from the first corner whose fan has
 /// no degenerate triangle, else a fan from the exact barycentre.
 pub(super) enum CellFan {

@@ -3,7 +3,7 @@
 //! It owns the rational point type [`PointQ`], the orientation predicate
 //! ([`orient2d`] for `f64` points, [`orient2d_q`] for rational points, both
 //! returning an [`Orientation`]), exact line/segment intersections
-//! ([`line_intersection`], [`segment_intersection`]) and the
+//! ([`line_intersection`](intersect::line_intersection), [`segment_intersection`]) and the
 //! barycentre of a convex polygon ([`PointQ::barycentre`]), and two tolerance
 //! tests decided exactly ([`near_line`], [`within`]: is a point within a distance
 //! of a line, of another point).

@@ -35,12 +35,12 @@
 //!   [`Drawing::warnings`] counts such paths by reason. Text glyph outlines and
 //!   marker contents come from fonts and usvg: they are always single precision
 //!   (their arcs are cubics), without a warning;
-//! - coordinates are in [`Units`]: by default the user units of the root
+//! - coordinates are in [`Units`](crate::Units): by default the user units of the root
 //!   `viewBox`, the numbers written in the document (an Inkscape drawing in mm
 //!   comes out in mm): the root `viewBox` → `width`/`height` mapping is not
 //!   applied (on the f32 fallback, where usvg folds it into every absolute
 //!   transform, `viewport.rs` undoes it once, in f64; a `transform` on the root
-//!   `<svg>` stays, expressed in user units). [`Units::Px`] gives the root
+//!   `<svg>` stays, expressed in user units). [`Units::Px`](crate::Units::Px) gives the root
 //!   viewport's CSS px (96 per inch), as usvg and the reference's nanosvg give
 //!   them, the root mapping computed in f64. Without a root `viewBox` both are
 //!   the same. A `scale` then multiplies every coordinate;

@@ -360,7 +360,7 @@ impl Schedule<'_> {
     /// Forget the refused collapses that the phase just entered (its
     /// collapses shorter than `factor` times the target) may allow: its
     /// sizes, stretch or energy floor differ. Keep the rest
-    /// ([`FailedCollapse::stands_under`]): re-planning them would refuse
+    /// ([`FailedCollapse::stands_under`](super::FailedCollapse::stands_under)): re-planning them would refuse
     /// them again (the tests re-plan every one kept and check).
     pub(super) fn keep_standing_refusals(&mut self, factor: f64) {
         let floor = self.ctx.energy_floor;
