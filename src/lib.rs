@@ -95,8 +95,8 @@ pub use output::{
     write_file, write_msh, write_msh_to, write_preview, write_vtu, write_vtu_to,
 };
 pub use params::{
-    BackgroundMesh, BoxSize, Length, Mesher, NearSize, Params, Periodic, PeriodicAxes, RegionSize,
-    SizeFn, SizeFnSignature, SizeSpec, defaults,
+    BackgroundMesh, BoxSize, Length, Mesher, NearSize, OptimizerParams, Params, Periodic,
+    PeriodicAxes, RegionSize, SizeFn, SizeFnSignature, SizeSpec, defaults,
 };
 pub use periodic::PeriodicReport;
 pub use pipeline::{FeatureAnalysis, Meshed, Report, RunOptions, mesh_drawing, run_file};

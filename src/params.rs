@@ -175,16 +175,11 @@ pub struct Params {
     /// Minimal angle α in degrees the optimizer aims for; also the turning bound of
     /// a primary section (Theorem 4.4). Default [`defaults::ALPHA_DEG`].
     pub alpha_deg: f64,
-    /// AMIPS energy (1 for equilateral) at which linear optimization stops.
-    /// Default [`defaults::STOP_ENERGY`] (the thesis's 10 in its normalization).
-    pub stop_energy: f64,
-    /// AMIPS energy (1 for equilateral) at which curved optimization stops.
-    /// Default [`defaults::STOP_ENERGY_CURVED`] (the thesis's 20).
-    pub stop_energy_curved: f64,
-    /// Maximum linear optimization passes. Default [`defaults::MAX_PASSES`].
-    pub max_passes: u32,
-    /// Maximum curved optimization passes. Default [`defaults::MAX_PASSES_CURVED`].
-    pub max_passes_curved: u32,
+    /// The mesh optimizer's stop rules and knobs, which the linear and the
+    /// curved optimization carry whole. Default [`OptimizerParams::DEFAULT`].
+    /// Serialized flat, beside the other fields.
+    #[serde(flatten)]
+    pub optimizer: OptimizerParams,
     /// Minimum angle (degrees) the CDT baseline refines to. Default
     /// [`defaults::CDT_MIN_ANGLE_DEG`].
     pub cdt_min_angle_deg: f64,
@@ -248,6 +243,52 @@ pub struct Params {
     /// cell with matching opposite sides and gmsh's `$Periodic` section.
     /// Default `None` (the padded box of the drawing).
     pub periodic: Option<Periodic>,
+}
+
+/// The mesh optimizer's stop rules and knobs: what the linear optimization
+/// (`optimize::schedule`) and the curved one (`curve::optimize`) read from the
+/// parameters. Both stages carry this value whole, so a knob added here (its
+/// field, its default, its check in [`OptimizerParams::validate`]) reaches
+/// every pass through `opts.params` with no other hop (docs/design.md
+/// "Coordinates and parameters").
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct OptimizerParams {
+    /// AMIPS energy (1 for equilateral) at which linear optimization stops.
+    /// Default [`defaults::STOP_ENERGY`] (the thesis's 10 in its normalization).
+    pub stop_energy: f64,
+    /// AMIPS energy (1 for equilateral) at which curved optimization stops.
+    /// Default [`defaults::STOP_ENERGY_CURVED`] (the thesis's 20).
+    pub stop_energy_curved: f64,
+    /// Maximum linear optimization passes. Default [`defaults::MAX_PASSES`].
+    pub max_passes: u32,
+    /// Maximum curved optimization passes. Default [`defaults::MAX_PASSES_CURVED`].
+    pub max_passes_curved: u32,
+}
+
+impl OptimizerParams {
+    /// The defaults of [`defaults`].
+    pub const DEFAULT: OptimizerParams = OptimizerParams {
+        stop_energy: defaults::STOP_ENERGY,
+        stop_energy_curved: defaults::STOP_ENERGY_CURVED,
+        max_passes: defaults::MAX_PASSES,
+        max_passes_curved: defaults::MAX_PASSES_CURVED,
+    };
+
+    /// Check the values; the error names the command-line flag.
+    pub fn validate(&self) -> Result<()> {
+        for (name, e) in [
+            ("stop-energy", self.stop_energy),
+            ("stop-energy-curved", self.stop_energy_curved),
+        ] {
+            if !(e.is_finite() && e >= 1.0) {
+                return Err(Error::InvalidParams(format!(
+                    "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
+                )));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Which directions of a [`Periodic`] cell repeat.
@@ -321,10 +362,7 @@ impl Params {
         l_min: Length::Rel(defaults::MIN_EDGE_LENGTH_REL),
         padding: Length::Rel(defaults::PADDING_REL),
         alpha_deg: defaults::ALPHA_DEG,
-        stop_energy: defaults::STOP_ENERGY,
-        stop_energy_curved: defaults::STOP_ENERGY_CURVED,
-        max_passes: defaults::MAX_PASSES,
-        max_passes_curved: defaults::MAX_PASSES_CURVED,
+        optimizer: OptimizerParams::DEFAULT,
         cdt_min_angle_deg: defaults::CDT_MIN_ANGLE_DEG,
         max_vertices: defaults::MAX_VERTICES,
         mesher: defaults::MESHER,
@@ -417,14 +455,19 @@ impl Params {
     }
     /// Set the optimization stop rules.
     pub fn with_stop(mut self, energy: f64, max_passes: u32) -> Self {
-        self.stop_energy = energy;
-        self.max_passes = max_passes;
+        self.optimizer.stop_energy = energy;
+        self.optimizer.max_passes = max_passes;
         self
     }
     /// Set the curved optimization stop rules.
     pub fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
-        self.stop_energy_curved = energy;
-        self.max_passes_curved = max_passes;
+        self.optimizer.stop_energy_curved = energy;
+        self.optimizer.max_passes_curved = max_passes;
+        self
+    }
+    /// Set the optimizer's stop rules and knobs at once.
+    pub fn with_optimizer(mut self, optimizer: OptimizerParams) -> Self {
+        self.optimizer = optimizer;
         self
     }
     /// Stop after `stage` (or run every stage, with `None`).
@@ -534,16 +577,7 @@ impl Params {
                 self.max_vertices
             )));
         }
-        for (name, e) in [
-            ("stop-energy", self.stop_energy),
-            ("stop-energy-curved", self.stop_energy_curved),
-        ] {
-            if !(e.is_finite() && e >= 1.0) {
-                return Err(Error::InvalidParams(format!(
-                    "--{name} must be at least 1 (the AMIPS energy of an equilateral triangle), got {e}"
-                )));
-            }
-        }
+        self.optimizer.validate()?;
         for (name, v) in [
             ("max-segments", self.max_segments),
             ("max-shapes", self.max_shapes),
@@ -672,6 +706,10 @@ mod tests {
             (json["units"].clone(), json["scale"].clone()),
             ("px".into(), 2.5.into())
         );
+        // the optimizer's parameters serialize flat, beside the others
+        assert_eq!(json["stop_energy"], defaults::STOP_ENERGY);
+        assert_eq!(json["max_passes_curved"], defaults::MAX_PASSES_CURVED);
+        assert!(json.get("optimizer").is_none());
         let r = serde_json::to_value(Params::DEFAULT.resolve(1.0)).unwrap();
         assert_eq!(
             (r["units"].clone(), r["scale"].clone()),

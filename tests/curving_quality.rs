@@ -72,7 +72,10 @@ fn the_curved_stage_keeps_the_linear_meshs_corners_on_a_butterfly() {
     let curve = meshed.report.curve.as_ref().expect("a curved mesh");
     let opt = &curve.optimization;
     assert!(
-        opt.max_corner_amips_after <= opt.max_corner_amips_before.max(params.stop_energy),
+        opt.max_corner_amips_after
+            <= opt
+                .max_corner_amips_before
+                .max(params.optimizer.stop_energy),
         "{opt:?}"
     );
     let linear = meshed.report.optimize.as_ref().expect("optimized");

@@ -8,7 +8,7 @@
 use clap::{Args, ValueEnum};
 use triwild::Order;
 use triwild::defaults;
-use triwild::{Length, Mesher, Params, SizeSpec, Stage, Units};
+use triwild::{Length, Mesher, OptimizerParams, Params, SizeSpec, Stage, Units};
 use triwild::{MshOptions, MshVersion};
 use triwild::{PaintOptions, StrokeMode};
 use triwild::{RegionMode, RegionOptions};
@@ -536,8 +536,7 @@ impl ParamArgs {
             .with_eps_m(len(self.eps_m, self.eps_m_abs))
             .with_padding(len(self.padding, self.padding_abs))
             .with_alpha_deg(self.alpha)
-            .with_stop(self.stop_energy, self.max_passes)
-            .with_stop_curved(self.stop_energy_curved, self.max_passes_curved)
+            .with_optimizer(self.optimizer())
             .with_cdt_min_angle_deg(self.cdt_min_angle)
             .with_max_vertices(self.max_vertices)
             .with_area_tolerance(self.area_tolerance)
@@ -561,6 +560,17 @@ impl ParamArgs {
 
     /// The size fields these flags ask for: their lengths take the edge
     /// length's form (relative to d, or absolute with --edge-length-abs).
+    /// The optimizer's stop rules and knobs (`Params::optimizer`): a knob's
+    /// flag above and its line here are all the command line adds.
+    fn optimizer(&self) -> OptimizerParams {
+        let mut o = OptimizerParams::DEFAULT;
+        o.stop_energy = self.stop_energy;
+        o.stop_energy_curved = self.stop_energy_curved;
+        o.max_passes = self.max_passes;
+        o.max_passes_curved = self.max_passes_curved;
+        o
+    }
+
     fn size_spec(&self) -> SizeSpec {
         let form = |v: f64| {
             if self.edge_length_abs.is_some() {

@@ -23,14 +23,14 @@
 //!    vertex opposite the curved edge, then split the curved edge at its
 //!    parameter midpoint (within [`CurveOptions::max_splits`], never below
 //!    [`CurveOptions::l_min_abs`], and only when no new triangle's energy exceeds
-//!    [`CurveOptions::stop_energy`] or the worst of the faces it replaces: a
+//!    [`OptimizerParams::stop_energy_curved`] or the worst of the faces it replaces: a
 //!    vertex almost on the curve's chord line would make the halves needles,
 //!    and such an element is better fitted in step 6), re-curving and
 //!    re-certifying what changed (`repair`);
 //! 5. curved optimization ([`super::optimize`]): collapse, swap and smoothing
 //!    with the invariants in curved mode (a primary edge's piece may turn up to
 //!    [`CurveOptions::curved_alpha`], every touched element certified with its
-//!    exact piece, curved energies), skipped when [`CurveOptions::max_passes`]
+//!    exact piece, curved energies), skipped when [`OptimizerParams::max_passes_curved`]
 //!    is 0; the exact shape is then taken again on the optimized mesh;
 //! 6. the elements still not certified get a constrained fit of their free
 //!    nodes (the curved edge's inner nodes, shared by both triangles on that
@@ -61,6 +61,7 @@ use crate::element::jacobian::CertifyOptions;
 use crate::fem::LineKind;
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::{Context, CurvedRule};
+use crate::params::OptimizerParams;
 use crate::svg::ShapeId;
 use kurbo::Point;
 
@@ -88,10 +89,11 @@ pub(crate) struct CurveOptions<'a> {
     pub certify: CertifyOptions,
     /// Target edge length `l` of the curved optimization (user units).
     pub l_abs: f64,
-    /// Curved AMIPS energy below which the curved optimization stops.
-    pub stop_energy: f64,
-    /// Passes of the curved optimization after its preliminary one; 0 skips it.
-    pub max_passes: u32,
+    /// The user's optimizer parameters, carried whole from
+    /// [`crate::Params::optimizer`]: the curved optimization stops below
+    /// `stop_energy_curved` or after `max_passes_curved` passes past its
+    /// preliminary one (0 skips it), and its passes read their knobs here.
+    pub params: OptimizerParams,
     /// The curved optimization's corner rule ([`CurvedRule::corner_floor`]): no
     /// operation makes a straight (corner) AMIPS energy larger than this and the
     /// worst of the faces it replaces. Default: the linear stop energy.
@@ -137,8 +139,7 @@ impl<'a> CurveOptions<'a> {
             fit_min_ratio: DEFAULT_FIT_MIN_RATIO,
             certify: rule.certify,
             l_abs: defaults.l.resolve(d),
-            stop_energy: defaults.stop_energy_curved,
-            max_passes: defaults.max_passes_curved,
+            params: defaults.optimizer,
             corner_floor: rule.corner_floor,
             curved_alpha: rule.alpha,
             deadline: Deadline::NONE,
@@ -173,9 +174,15 @@ impl<'a> CurveOptions<'a> {
         self
     }
     /// Set the curved optimization's stop energy and pass limit (0 skips it).
+    #[cfg(test)]
     pub(crate) fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
-        self.stop_energy = energy;
-        self.max_passes = max_passes;
+        self.params.stop_energy_curved = energy;
+        self.params.max_passes_curved = max_passes;
+        self
+    }
+    /// Set the optimizer parameters (the curved stop rule among them).
+    pub(crate) fn with_optimizer(mut self, params: OptimizerParams) -> Self {
+        self.params = params;
         self
     }
 }
@@ -265,7 +272,7 @@ pub(crate) fn curve_mesh<I: IntoIterator<Item = (ShapeId, LineKind)>>(
         let mut budget = opts.max_splits;
         stats.splits_multi_primary += split_multi_primary(mesh, ctx, &mut budget);
         repair(mesh, ctx, opts, &mut stats, &mut budget);
-        if opts.max_passes > 0 {
+        if opts.params.max_passes_curved > 0 {
             stats.optimization = curved_optimization(mesh, ctx, opts);
         }
         shape = exact_shape(mesh, ctx, order);
@@ -293,9 +300,10 @@ fn curved_optimization(
     let curved_opts = CurvedOptimizeOptions {
         l: opts.l_abs,
         field: opts.size,
-        stop_energy: opts.stop_energy,
-        max_passes: opts.max_passes,
+        stop_energy: opts.params.stop_energy_curved,
+        max_passes: opts.params.max_passes_curved,
         deadline: opts.deadline,
+        params: opts.params,
     };
     optimize_curved(mesh, &ctx.with_curved(rule), &curved_opts)
 }

@@ -40,6 +40,7 @@ use crate::ops::invariants::curved;
 use crate::ops::{self, Context};
 use crate::optimize::OptimizeOptions;
 use crate::optimize::schedule::{EnergyMeasure, OpTally, Phase, Schedule, measure_energy};
+use crate::params::OptimizerParams;
 use crate::sizing::SizeField;
 
 /// Collapse edges shorter than this fraction of `l` (the shared schedule's
@@ -68,6 +69,9 @@ pub(crate) struct CurvedOptimizeOptions<'a> {
     pub max_passes: u32,
     /// The run's wall-clock limit: no pass starts after it.
     pub deadline: Deadline,
+    /// The user's optimizer parameters, carried whole (the schedule's passes
+    /// read their knobs here).
+    pub params: OptimizerParams,
 }
 
 /// What the curved optimization did (part of [`super::CurveStats`]).
@@ -148,6 +152,7 @@ pub(crate) fn optimize_curved(
         max_passes: opts.max_passes,
         max_vertices: usize::MAX,
         deadline: opts.deadline,
+        params: opts.params,
     };
     let mut sched_ctx = ctx.clone();
     let uniform;

@@ -191,7 +191,7 @@ pub(super) fn repair(
             // worst of the faces it replaces when that is already worse.
             let mut on_edge = Vec::new();
             mesh.faces_on_edge(key.lo, key.hi, &mut on_edge);
-            let bound = ops::max_energy(mesh, ctx, &on_edge).max(opts.stop_energy);
+            let bound = ops::max_energy(mesh, ctx, &on_edge).max(opts.params.stop_energy_curved);
             if let Outcome::Applied(_) =
                 ops::try_split_bounded(mesh, ctx, key.lo, key.hi, Some(bound))
             {

@@ -29,6 +29,7 @@ fn options(l: f64) -> OptimizeOptions {
         max_passes: 40,
         max_vertices: 20_000,
         deadline: crate::budget::Deadline::NONE,
+        params: crate::params::OptimizerParams::DEFAULT,
     }
 }
 

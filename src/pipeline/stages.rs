@@ -99,11 +99,12 @@ impl<'a> StageOptions<'a> {
         OptimizeOptions {
             l: resolved.l,
             l_floor: resolved.eps.min(resolved.l),
-            stop_energy: params.stop_energy,
+            stop_energy: params.optimizer.stop_energy,
             alpha_deg: params.alpha_deg,
-            max_passes: params.max_passes,
+            max_passes: params.optimizer.max_passes,
             max_vertices: params.max_vertices as usize,
             deadline: self.deadline,
+            params: params.optimizer,
         }
     }
 
@@ -114,7 +115,7 @@ impl<'a> StageOptions<'a> {
         CurveOptions::new(params.order, resolved.d)
             .with_l_min_abs(resolved.l_min)
             .with_size(field)
-            .with_stop_curved(params.stop_energy_curved, params.max_passes_curved)
+            .with_optimizer(params.optimizer)
             .with_corner_floor(self.corner_floor())
             .with_deadline(self.deadline)
     }
@@ -126,6 +127,7 @@ impl<'a> StageOptions<'a> {
     /// with corners near 7°, below the default α of 10°).
     fn corner_floor(&self) -> f64 {
         self.params
+            .optimizer
             .stop_energy
             .min(crate::optimize::needle_energy(self.resolved.alpha))
     }

@@ -17,6 +17,7 @@ use crate::budget::Deadline;
 use crate::mesh::{TriMesh, VertexId};
 use crate::ops::invariants::on_curve;
 use crate::ops::{Context, Objective};
+use crate::params::OptimizerParams;
 use crate::sizing::SizeField;
 use rustc_hash::FxHashSet;
 
@@ -27,17 +28,23 @@ pub(crate) struct OptimizeOptions {
     pub l: f64,
     /// Lower bound of the sizing field (the thesis uses ε).
     pub l_floor: f64,
-    /// AMIPS energy (1 for equilateral) below which a mesh is good enough.
+    /// AMIPS energy (1 for equilateral) below which a mesh is good enough:
+    /// this stage's stop energy (the linear or the curved one of `params`).
     pub stop_energy: f64,
     /// Minimum angle, degrees, above which a mesh is good enough.
     pub alpha_deg: f64,
-    /// Maximum number of passes.
+    /// Maximum number of passes: this stage's (the linear or the curved
+    /// limit of `params`).
     pub max_passes: u32,
     /// No split once the mesh has this many vertices.
     pub max_vertices: usize,
     /// The run's wall-clock limit: past it the schedule stops at the next
     /// pass ([`StopReason::TimeLimit`]).
     pub deadline: Deadline,
+    /// The user's optimizer parameters, carried whole from
+    /// [`crate::Params::optimizer`]: a pass reads a knob as
+    /// `opts.params.<knob>`.
+    pub params: OptimizerParams,
 }
 
 /// Improve `mesh` in place (see the module doc) with the size `opts.l`

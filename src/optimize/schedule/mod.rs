@@ -146,7 +146,7 @@ const POLISH_MIN_GAIN: f64 = 1e-4;
 /// less than this (and the mean by less than [`SIZING_STALL_MEAN`]). The
 /// TriWild reference (`optimization.cpp`, `refine`) uses 5e-1 with its energy
 /// (2 for an equilateral triangle); halved for ours (1 for equilateral), as
-/// [`crate::Params::stop_energy`] halves the thesis's 10.
+/// [`crate::OptimizerParams::stop_energy`] halves the thesis's 10.
 const SIZING_STALL_MAX: f64 = 0.25;
 /// See [`SIZING_STALL_MAX`]: the reference's 5e-2 for the mean energy, halved.
 const SIZING_STALL_MEAN: f64 = 0.025;
@@ -485,6 +485,7 @@ fn test_options() -> OptimizeOptions {
         max_passes: 40,
         max_vertices: 20_000,
         deadline: Deadline::NONE,
+        params: crate::params::OptimizerParams::DEFAULT,
     }
 }
 

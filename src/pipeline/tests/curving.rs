@@ -51,7 +51,7 @@ fn curved(drawing: &Drawing, params: &Params, order: Order) -> (FemMesh, CurveSt
     let opts = CurveOptions::new(order, d)
         .with_l_min_abs(resolved.l_min)
         .with_l_abs(resolved.l)
-        .with_stop_curved(params.stop_energy_curved, params.max_passes_curved);
+        .with_optimizer(params.optimizer);
     let (cm, stats) = curve_mesh(&mut mesh, &ctx, &opts, |t| {
         super::stages::feature_of(&fs, &ctx, t)
     })
