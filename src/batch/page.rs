@@ -989,8 +989,11 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
             esc(&cmd.join(" "))
         );
         if let Some(stats) = &r.stats {
+            time_tables(h, stats);
             let mut kv = Vec::new();
             flatten("", stats, &mut kv);
+            // the phases have their table above
+            kv.retain(|(k, _)| !k.starts_with("optimize.phases"));
             // one line per top-level group: `curve  k v · k v · ...`
             let mut groups: Vec<(String, Vec<String>)> = Vec::new();
             for (k, v) in kv {
@@ -1028,6 +1031,65 @@ fn file_sections(h: &mut String, entries: &[Entry<'_>], opts: &PageOptions) {
         );
     }
     h.push_str("</div>\n");
+}
+
+/// A file's "Where the time went": its stages' seconds (`times`), then the
+/// optimizer's phases (`optimize.phases`: seconds, queues, items queued,
+/// operations applied and refused, triangles after), when the stats have them.
+fn time_tables(h: &mut String, stats: &serde_json::Value) {
+    let num = |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_f64());
+    let stages: Vec<(&String, f64)> = stats
+        .get("times")
+        .and_then(|t| t.as_object())
+        .map(|t| {
+            t.iter()
+                .filter(|(k, _)| k.as_str() != "total")
+                .filter_map(|(k, v)| Some((k, v.as_f64()?)))
+                .collect()
+        })
+        .unwrap_or_default();
+    let phases: &[serde_json::Value] = stats
+        .pointer("/optimize/phases")
+        .and_then(|p| p.as_array())
+        .map_or(&[], |a| a.as_slice());
+    if stages.is_empty() && phases.is_empty() {
+        return;
+    }
+    h.push_str("<h3>Where the time went</h3>");
+    if !stages.is_empty() {
+        let total: f64 = stages.iter().map(|s| s.1).sum::<f64>().max(1e-12);
+        h.push_str("<table class=\"t time\"><thead><tr><th>stage</th><th>seconds</th><th>share</th></tr></thead><tbody>");
+        let mut sorted = stages;
+        sorted.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(b.0)));
+        for (k, s) in sorted {
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{s:.3}</td><td>{:.0} %</td></tr>",
+                esc(k),
+                100.0 * s / total
+            );
+        }
+        h.push_str("</tbody></table>");
+    }
+    if !phases.is_empty() {
+        h.push_str("<table class=\"t phases\"><thead><tr><th>optimizer phase</th><th>seconds</th><th>queues</th><th>queued</th><th>largest queue</th><th>applied</th><th>refused</th><th>triangles after</th></tr></thead><tbody>");
+        for p in phases {
+            let cell = |k: &str| num(p, k).map_or("—".into(), |v| format!("{v:.0}"));
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(p.get("phase").and_then(|x| x.as_str()).unwrap_or("?")),
+                num(p, "seconds").map_or("—".into(), |v| format!("{v:.3}")),
+                cell("queues"),
+                cell("queued"),
+                cell("largest_queue"),
+                cell("applied"),
+                cell("refused"),
+                cell("triangles")
+            );
+        }
+        h.push_str("</tbody></table>");
+    }
 }
 
 /// A link shown as text: its percent-encoding undone where it is ASCII.
@@ -1271,5 +1333,52 @@ mod tests {
         );
         let (page, _) = render_page(&[row("quiet.svg", None, "")], &opts, dir.path());
         assert!(page.contains("Every region has its drawn area."));
+    }
+
+    #[test]
+    fn a_file_says_where_its_time_went() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let opts = PageOptions::new(dir.path().to_path_buf());
+        let mut timed = row("timed.svg", None, "");
+        if let Some(serde_json::Value::Object(m)) = timed.stats.as_mut() {
+            m.insert(
+                "times".into(),
+                serde_json::json!({"bsp": 0.25, "optimize": 0.75, "total": 1.0}),
+            );
+            m.insert(
+                "optimize".into(),
+                serde_json::json!({"passes": 3, "phases": [
+                    {"phase": "main", "seconds": 0.5, "queues": 12, "queued": 4000,
+                     "largest_queue": 900, "applied": 37, "refused": 1200, "triangles": 640},
+                    {"phase": "repair", "seconds": 0.125, "queues": 2, "queued": 80,
+                     "largest_queue": 50, "applied": 5, "refused": 9, "triangles": 650}]}),
+            );
+        }
+        let (page, _) = render_page(&[timed], &opts, dir.path());
+        let section = page
+            .split("Where the time went")
+            .nth(1)
+            .and_then(|t| t.split("<h3>").next())
+            .expect("the time tables");
+        // stages by time, with their shares of the stages' sum
+        let optimize = section.find("<td>optimize</td><td>0.750</td><td>75 %</td>");
+        let bsp = section.find("<td>bsp</td><td>0.250</td><td>25 %</td>");
+        assert!(
+            matches!((optimize, bsp), (Some(o), Some(b)) if o < b),
+            "{section}"
+        );
+        assert!(!section.contains("<td>total</td>"), "{section}");
+        assert!(section.contains(
+            "<td>main</td><td>0.500</td><td>12</td><td>4000</td><td>900</td><td>37</td><td>1200</td><td>640</td>"
+        ), "{section}");
+        assert!(
+            section.contains("<td>repair</td><td>0.125</td>"),
+            "{section}"
+        );
+        // the phases are not repeated among the flat figures
+        assert!(!page.contains("phases.0"), "phases flattened too");
+        // a row without timings has no such section
+        let (page, _) = render_page(&[row("plain.svg", None, "")], &opts, dir.path());
+        assert!(!page.contains("Where the time went"));
     }
 }

@@ -173,13 +173,6 @@ impl<'a> CurveOptions<'a> {
         self.corner_floor = energy;
         self
     }
-    /// Set the curved optimization's stop energy and pass limit (0 skips it).
-    #[cfg(test)]
-    pub(crate) fn with_stop_curved(mut self, energy: f64, max_passes: u32) -> Self {
-        self.params.stop_energy_curved = energy;
-        self.params.max_passes_curved = max_passes;
-        self
-    }
     /// Set the optimizer parameters (the curved stop rule among them).
     pub(crate) fn with_optimizer(mut self, params: OptimizerParams) -> Self {
         self.params = params;

@@ -115,6 +115,7 @@ impl Schedule<'_> {
             })
             .collect();
         queue.sort();
+        self.queued(queue.sorted.len());
         let mut budget = COLLAPSE_BUDGET_PER_EDGE * queue.sorted.len() + COLLAPSE_BUDGET_EXTRA;
         let mut applied = 0;
         // With more than one thread, the next `PLAN_AHEAD` edges of the sorted

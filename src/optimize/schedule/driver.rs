@@ -91,13 +91,14 @@ pub(crate) fn optimize_with_field(
     if let Some(out) = stopped(&s) {
         return out;
     }
-    let phases: [(fn(&mut _), &str); 4] = [
-        (Schedule::coarsen, "coarsening done"),
-        (Schedule::equalize, "equalizing done"),
-        (Schedule::polish, "polish done"),
-        (Schedule::minmax_polish, "min-max polish done"),
+    let phases: [(fn(&mut _), &str, &str); 4] = [
+        (Schedule::coarsen, "coarsen", "coarsening done"),
+        (Schedule::equalize, "equalize", "equalizing done"),
+        (Schedule::polish, "polish", "polish done"),
+        (Schedule::minmax_polish, "min_max", "min-max polish done"),
     ];
-    for (phase, done) in phases {
+    for (phase, name, done) in phases {
+        s.begin_phase(name);
         phase(&mut s);
         tracing::debug!(collapses_refused = s.stats.collapse.refused(), "{done}");
         if let Some(out) = stopped(&s) {
@@ -105,11 +106,13 @@ pub(crate) fn optimize_with_field(
         }
     }
     s.enter(Phase::Main);
+    s.begin_phase("repair");
     s.stats.bad_corners_left = s.repair_angles();
     if let Some(out) = stopped(&s) {
         return out;
     }
     // the splits of the worst-element phase may leave rational vertices
+    s.begin_phase("envelope");
     let rational = if rational > 0 || s.mesh.vertices().any(|v| s.mesh.is_rational(v)) {
         s.round_all()
     } else {
@@ -206,6 +209,7 @@ impl Schedule<'_> {
     /// or the pass limit. Returns how many vertices stay rational.
     fn improve(&mut self, ever_off: &mut FxHashSet<VertexId>) -> usize {
         let opts = self.opts;
+        self.begin_phase("start");
         let mut rational = self.round_all();
         let mut off = self.project_all(ever_off);
         let mut last = measure(self.mesh);
@@ -231,6 +235,7 @@ impl Schedule<'_> {
             }
             self.split_pass();
         }
+        self.begin_phase("main");
         for pass in 0..opts.max_passes {
             if opts.deadline.expired() {
                 self.stats.stop = StopReason::TimeLimit;
@@ -520,6 +525,7 @@ impl Schedule<'_> {
     /// that were ever off their curve).
     fn finish(mut self, rational: usize, ever_off: &mut FxHashSet<VertexId>) -> OptimizeStats {
         let off = self.project_all(ever_off);
+        self.end_phase();
         let (min_angle, max_e) = measure(self.mesh).all;
         self.stats.rational_left = rational;
         self.stats.off_curve_left = off;
@@ -571,6 +577,51 @@ mod standing_tests {
         // (most refusals of these small meshes are the length rule's or at
         // free vertices: 30 stand)
         assert!(checked > 10, "{checked} kept refusals planned again");
+    }
+
+    /// The phases' records account for the whole run: every phase once, in
+    /// the order it ran; their operations add up to the tallies; each ends
+    /// with the triangles the next starts from, the last with the mesh's.
+    #[test]
+    fn the_phases_account_for_every_operation_in_order() {
+        let mut seen_main_work = false;
+        for (mut mesh, mut ctx) in test_meshes(2, 1) {
+            let opts = test_options();
+            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let stats = optimize_with_field(&mut mesh, &mut ctx, &opts, &field).0;
+            let names: Vec<&str> = stats.phases.iter().map(|p| p.phase).collect();
+            assert_eq!(
+                names,
+                [
+                    "start", "main", "coarsen", "equalize", "polish", "min_max", "repair",
+                    "envelope"
+                ]
+            );
+            let tallies = [
+                &stats.split,
+                &stats.collapse,
+                &stats.swap,
+                &stats.reroute,
+                &stats.smooth,
+                &stats.round,
+                &stats.project,
+            ];
+            let applied: u64 = tallies.iter().map(|t| t.applied).sum();
+            let refused: u64 = tallies.iter().map(|t| t.refused()).sum();
+            assert_eq!(stats.phases.iter().map(|p| p.applied).sum::<u64>(), applied);
+            assert_eq!(stats.phases.iter().map(|p| p.refused).sum::<u64>(), refused);
+            for p in &stats.phases {
+                assert!(p.seconds >= 0.0 && p.largest_queue <= p.queued, "{p:?}");
+                assert!(p.queues > 0 || p.queued == 0, "{p:?}");
+            }
+            assert_eq!(stats.phases.last().unwrap().triangles, mesh.num_faces());
+            let main = &stats.phases[1];
+            seen_main_work |= main.queues > 0 && main.applied > 0;
+        }
+        assert!(
+            seen_main_work,
+            "the main passes did nothing on any test mesh"
+        );
     }
 
     /// Past the deadline every pass stops and says so: the swap pass after

@@ -302,6 +302,8 @@ pub(crate) struct Schedule<'a> {
     /// In the worst-element phase: splits may not make their faces worse
     /// than before or than a corner of α allows (`repair.rs`).
     split_bounded: bool,
+    /// The phase being timed (`None`: none is, as in the curved stage).
+    phase: Option<stats::OpenPhase>,
     /// Tests: the plans made ahead that were used, and those found stale.
     #[cfg(test)]
     ahead_tally: (usize, usize),
@@ -386,7 +388,9 @@ impl<'a> Schedule<'a> {
                 vertex_budget_reached: false,
                 min_angle_deg: 0.0,
                 max_amips: 0.0,
+                phases: Vec::new(),
             },
+            phase: None,
             rng: Shuffle(seed),
             clock: 1,
             stamp: Vec::new(),
@@ -417,6 +421,28 @@ impl<'a> Schedule<'a> {
     /// The tallies so far.
     pub(crate) fn stats(&self) -> &OptimizeStats {
         &self.stats
+    }
+
+    /// End the phase being timed (if any) and start timing `phase`
+    /// ([`stats::PhaseStats`]).
+    pub(super) fn begin_phase(&mut self, phase: &'static str) {
+        self.end_phase();
+        self.phase = Some(stats::OpenPhase::start(phase, &self.stats));
+    }
+
+    /// End the phase being timed, if any: its record joins the statistics.
+    pub(super) fn end_phase(&mut self) {
+        if let Some(open) = self.phase.take() {
+            let record = open.end(&self.stats, self.mesh.num_faces());
+            self.stats.phases.push(record);
+        }
+    }
+
+    /// Count a pass's queue of `n` items in the phase being timed.
+    pub(super) fn queued(&mut self, n: usize) {
+        if let Some(open) = &mut self.phase {
+            open.queue(n);
+        }
     }
 
     /// Record an applied operation: every vertex of the faces it created (or

@@ -31,6 +31,7 @@ impl Schedule<'_> {
     pub(super) fn smooth_pass_with(&mut self, objective: Objective) -> u64 {
         let mut verts: Vec<VertexId> = self.mesh.vertices().filter(|&v| self.in_patch(v)).collect();
         self.rng.shuffle(&mut verts);
+        self.queued(verts.len());
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next
         // `PLAN_AHEAD` moves are planned at once in parallel, and a plan is
@@ -116,6 +117,7 @@ impl Schedule<'_> {
             .collect();
         let mut left = 0;
         let count = rational.len();
+        self.queued(count);
         for (n, v) in rational.into_iter().enumerate() {
             if self.out_of_time_at(n) {
                 return left + count - n;
@@ -134,6 +136,7 @@ impl Schedule<'_> {
         let off = off_curve_vertices(self.mesh, self.ctx);
         let mut left = 0;
         let count = off.len();
+        self.queued(count);
         for (n, v) in off.into_iter().enumerate() {
             if self.out_of_time_at(n) {
                 return left + count - n;

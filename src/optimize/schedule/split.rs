@@ -27,6 +27,7 @@ impl Schedule<'_> {
             .collect();
         cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let n = cands.len();
+        self.queued(n);
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next
         // `PLAN_AHEAD` splits are planned at once in parallel (the plan reads

@@ -112,6 +112,108 @@ pub struct OptimizeStats {
     pub min_angle_deg: f64,
     /// Largest AMIPS energy at the end.
     pub max_amips: f64,
+    /// Where the time went: the phases in the order they ran.
+    pub phases: Vec<PhaseStats>,
+}
+
+impl OptimizeStats {
+    /// Operations applied and refused so far, every kind together.
+    fn totals(&self) -> (u64, u64) {
+        let tallies = [
+            &self.split,
+            &self.collapse,
+            &self.swap,
+            &self.reroute,
+            &self.smooth,
+            &self.round,
+            &self.project,
+        ];
+        tallies
+            .iter()
+            .fold((0, 0), |(a, r), t| (a + t.applied, r + t.refused()))
+    }
+}
+
+/// What one phase of the schedule did (`--stats` `optimize.phases[*]`): its
+/// time, the queues its passes worked through, and the operations they
+/// applied and refused. A pass queues the items it looks at (the edges to
+/// split, collapse or swap, the vertices to smooth, round or project), so
+/// `queued` against `applied` says how much of a phase's work changed the
+/// mesh.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PhaseStats {
+    /// The phase: `start` (the first rounding and projection of the BSP
+    /// mesh's vertices, and the split passes toward the size field before
+    /// the main passes), `main`, `coarsen`, `equalize`, `polish`,
+    /// `min_max`, `repair` (the worst-element phase) or `envelope` (the last
+    /// rounding and the envelope stages).
+    pub phase: &'static str,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// Queues its passes worked through (one per pass of one operation kind,
+    /// or per collapse round).
+    pub queues: u64,
+    /// Items in those queues, all together.
+    pub queued: u64,
+    /// Items in the largest of them.
+    pub largest_queue: u64,
+    /// Operations applied (every kind).
+    pub applied: u64,
+    /// Operations planned and refused (every kind); a queued item whose
+    /// refusal is remembered and still stands is skipped, neither applied
+    /// nor refused.
+    pub refused: u64,
+    /// Triangles at its end.
+    pub triangles: usize,
+}
+
+/// The phase being timed: its record so far, its start, and the totals of
+/// [`OptimizeStats`] then.
+#[derive(Debug)]
+pub(super) struct OpenPhase {
+    record: PhaseStats,
+    start: std::time::Instant,
+    totals: (u64, u64),
+}
+
+impl OpenPhase {
+    /// Start timing `phase` with `stats` as they are.
+    pub(super) fn start(phase: &'static str, stats: &OptimizeStats) -> OpenPhase {
+        OpenPhase {
+            record: PhaseStats {
+                phase,
+                seconds: 0.0,
+                queues: 0,
+                queued: 0,
+                largest_queue: 0,
+                applied: 0,
+                refused: 0,
+                triangles: 0,
+            },
+            start: std::time::Instant::now(),
+            totals: stats.totals(),
+        }
+    }
+
+    /// Count a pass's queue of `n` items.
+    pub(super) fn queue(&mut self, n: usize) {
+        let r = &mut self.record;
+        r.queues += 1;
+        r.queued += n as u64;
+        r.largest_queue = r.largest_queue.max(n as u64);
+    }
+
+    /// The phase's record, ended with `stats` and `triangles` as they are now.
+    pub(super) fn end(self, stats: &OptimizeStats, triangles: usize) -> PhaseStats {
+        let (applied, refused) = stats.totals();
+        PhaseStats {
+            seconds: self.start.elapsed().as_secs_f64(),
+            applied: applied - self.totals.0,
+            refused: refused - self.totals.1,
+            triangles,
+            ..self.record
+        }
+    }
 }
 
 /// Quality of a mesh for the stop rules.

@@ -65,6 +65,7 @@ impl Schedule<'_> {
             return 0;
         }
         self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
+        self.queued(cands.len());
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next
         // `PLAN_AHEAD` swaps are planned (and their invariants decided) at
