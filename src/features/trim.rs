@@ -112,6 +112,10 @@ pub(super) struct Trimmer {
 /// paths of 10 000 lines would pair every line with every other).
 const COVER_MAX_PIECES: usize = 256;
 
+/// Most boxes a piece's run has for the search of its covers (a longer
+/// piece's boxes are longer than a cell).
+const COVER_MAX_STEPS: f64 = 4096.0;
+
 /// The opaque shapes that may cover a stroke's outline (see the module doc):
 /// filled, fully opaque, not clipped, painting some area; each with its place
 /// in the paint order (paint order, then shape index: larger is on top) and
@@ -313,39 +317,52 @@ impl Trimmer {
         // Ranges shorter than this (a few times the paint test's own
         // tolerance) are not judged.
         let shortest = 8.0 * self.eps_abs / len;
+        // The shapes above whose boxes meet the piece: those met by its run
+        // of boxes about a grid cell long each (a long diagonal piece's own
+        // box would meet most of the grid).
+        let steps = (len / grid.cell()).ceil().clamp(1.0, COVER_MAX_STEPS);
+        let mut near: Vec<u32> = Vec::new();
+        for i in 0..steps as usize {
+            let u0 = a.lerp(b, i as f64 / steps);
+            let u1 = a.lerp(b, (i + 1) as f64 / steps);
+            grid.any_of(
+                Rect::from_points(u0, u1),
+                |k| covers.layers[k as usize].0 > below,
+                |k| {
+                    near.push(k);
+                    false
+                },
+            );
+        }
+        near.sort_unstable();
+        near.dedup();
         let mut found: Vec<[f64; 2]> = Vec::new();
         let (mut cuts, mut unsure) = (Vec::new(), Vec::new());
-        let bb = Rect::from_points(a, b);
-        grid.any_of(
-            bb,
-            |k| covers.layers[k as usize].0 > below,
-            |k| {
-                let test = &covers.layers[k as usize].1;
-                cuts.clear();
-                unsure.clear();
-                if test
-                    .outline()
-                    .meet_segment((a, b), COVER_MAX_PIECES, &mut cuts, &mut unsure)
-                    .is_none()
-                {
-                    return false;
+        for k in near {
+            let test = &covers.layers[k as usize].1;
+            cuts.clear();
+            unsure.clear();
+            if test
+                .outline()
+                .meet_segment((a, b), COVER_MAX_PIECES, &mut cuts, &mut unsure)
+                .is_none()
+            {
+                continue;
+            }
+            cuts.push(0.0);
+            cuts.push(1.0);
+            cuts.sort_by(f64::total_cmp);
+            for w in cuts.windows(2) {
+                let (u0, u1) = (w[0], w[1]);
+                if u1 - u0 <= shortest || unsure.iter().any(|r| r[0] <= u1 && r[1] >= u0) {
+                    continue;
                 }
-                cuts.push(0.0);
-                cuts.push(1.0);
-                cuts.sort_by(f64::total_cmp);
-                for w in cuts.windows(2) {
-                    let (u0, u1) = (w[0], w[1]);
-                    if u1 - u0 <= shortest || unsure.iter().any(|r| r[0] <= u1 && r[1] >= u0) {
-                        continue;
-                    }
-                    let (inside, clear) = test.paints(a.lerp(b, 0.5 * (u0 + u1)), self.eps_abs);
-                    if inside && clear {
-                        found.push([u0, u1]);
-                    }
+                let (inside, clear) = test.paints(a.lerp(b, 0.5 * (u0 + u1)), self.eps_abs);
+                if inside && clear {
+                    found.push([u0, u1]);
                 }
-                false
-            },
-        );
+            }
+        }
         found.sort_by(|x, y| x[0].total_cmp(&y[0]));
         let mut merged: Vec<[f64; 2]> = Vec::with_capacity(found.len());
         for r in found {
