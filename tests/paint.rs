@@ -260,6 +260,24 @@ fn lines_inside_one_region(m: &triwild::FemMesh) -> Vec<(String, [f64; 4])> {
 }
 
 #[test]
+fn a_stroke_outline_painted_over_is_trimmed() {
+    // Two crossing strokes: where the upper (blue) one paints over the lower
+    // (red) one, the red outline bounds nothing (blue on both sides): no
+    // feature there, no line inside the blue region, and the red region is
+    // its band less the square the blue one covers.
+    let body = r##"<line id="a" x1="20" y1="100" x2="180" y2="100" stroke="#f00" stroke-width="20"/>
+        <line id="b" x1="100" y1="20" x2="100" y2="180" stroke="#00f" stroke-width="20"/>"##;
+    let d = load(body);
+    let meshed =
+        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let stray = lines_inside_one_region(&meshed.mesh);
+    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    let r = regions_of(&d, RegionMode::Shape);
+    assert_close(area(&r, "a-stroke"), 160.0 * 20.0 - 20.0 * 20.0, 1e-9);
+    assert_close(area(&r, "b-stroke"), 160.0 * 20.0, 1e-9);
+}
+
+#[test]
 fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
     // A stroked triangle with a 29° corner (as resvg's M-L-L-Z test): the inner
     // offsets of the two edges at each corner overshoot one another inside the

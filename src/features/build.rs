@@ -293,8 +293,9 @@ impl<'a> Build<'a> {
                     .collect()
             };
             for piece in resampled {
-                let (out, trimmed) = piece?;
+                let (out, trimmed, cover_cuts) = piece?;
                 counts.trimmed_pieces += trimmed;
+                counts.cover_cuts += cover_cuts;
                 for (section, starts) in out {
                     sections.push(section);
                     window_start.push(starts);
@@ -467,6 +468,27 @@ impl Split {
         cuts.push(piece.t[1]);
         let source = drawing.features[i as usize].source;
         let shape = source.shape;
+        // A stroke's straight outline (not shared, not moved by snapping):
+        // the parameter ranges opaque shapes painted above it cover, cut
+        // where they start and end.
+        let covered: Vec<[f64; 2]> = match (trimmer, parent) {
+            (Some(tr), Parent::Line(_))
+                if shared[*k].is_none() && as_drawn[*k].is_none() && tr.judges_cover(shape) =>
+            {
+                let (t0, t1) = (piece.t[0], piece.t[1]);
+                tr.covered(shape, parent.eval(t0), parent.eval(t1))
+                    .into_iter()
+                    .map(|[u0, u1]| [t0 + u0 * (t1 - t0), t0 + u1 * (t1 - t0)])
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+        let cover_cuts = if covered.is_empty() {
+            0
+        } else {
+            let length = parent.eval(0.0).distance(parent.eval(1.0));
+            add_cover_cuts(&mut cuts, &covered, params.eps_m / length)
+        };
         // Cut for the separation test no finer than SEPARATION_SIZE_PER_MU μ:
         // primary sections are cut to the size asked after it.
         let floor = SEPARATION_SIZE_PER_MU * params.mu;
@@ -474,6 +496,11 @@ impl Split {
         let mut out = Vec::new();
         let mut trimmed = 0;
         for w in cuts.windows(2) {
+            let mid = 0.5 * (w[0] + w[1]);
+            if covered.iter().any(|r| r[0] <= mid && mid <= r[1]) {
+                trimmed += 1;
+                continue;
+            }
             if let Some(trimmer) = &trimmer
                 && !std::iter::once(shape)
                     .chain(
@@ -510,6 +537,25 @@ impl Split {
                 out.push((section, n == 0));
             }
         }
-        Some((out, trimmed))
+        Some((out, trimmed, cover_cuts))
     }
+}
+
+/// `cuts` (sorted parameters, the piece's ends first and last) with the ends
+/// of the `covered` ranges added: an end within `tol` (in parameter) of a cut
+/// is that cut, so a range that ends at a crossing ends at its shared point.
+/// Returns how many were added.
+fn add_cover_cuts(cuts: &mut Vec<f64>, covered: &[[f64; 2]], tol: f64) -> usize {
+    let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
+    let near = |cuts: &[f64], t: f64| cuts.iter().any(|&c| (c - t).abs() <= tol);
+    let mut added = Vec::new();
+    for &t in covered.iter().flatten() {
+        if t > first && t < last && !near(cuts, t) && !near(&added, t) {
+            added.push(t);
+        }
+    }
+    let n = added.len();
+    cuts.extend(added);
+    cuts.sort_by(f64::total_cmp);
+    n
 }

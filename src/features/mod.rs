@@ -103,8 +103,9 @@ const RESAMPLE_BLOCK: usize = 4096;
 
 /// One piece trimmed and resampled ([`FeatureSet::build_sized`], step 3): its
 /// sections, each with whether it starts a window (a crossing or a trimmed
-/// piece before it), and how many of its windows were trimmed.
-type Resampled = (Vec<(Section, bool)>, usize);
+/// piece before it), how many of its windows were trimmed, and how many cuts
+/// where a shape painted above starts or stops covering it were added.
+type Resampled = (Vec<(Section, bool)>, usize, usize);
 
 /// What a section's size is asked for (see [`FeatureSet::build_sized`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -561,6 +562,10 @@ pub struct FeatureCounts {
     /// Pieces of stroke areas, clipped fills, clip outlines and clipped centre
     /// lines dropped because they bound nothing painted (see `trim`).
     pub trimmed_pieces: usize,
+    /// Where a stroke's outline was cut because an opaque shape painted above
+    /// it starts or stops covering it (see `trim`): each a vertex where the
+    /// kept outline ends on the covering shape's.
+    pub cover_cuts: usize,
     /// Discrete curve sections after resampling.
     pub sections: usize,
     /// Sections not eligible because of curvature above 2/l_m (or a refinement budget).

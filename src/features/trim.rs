@@ -46,14 +46,29 @@
 //!   from both of the stroke's outlines: kept, it would make a stroke only
 //!   twice μ wide fail the μ-separation, whatever else the drawing holds.
 //!
+//! A stroke area's straight outline is also dropped where a shape painted
+//! above it covers it: a filled, fully opaque, unclipped shape later in the
+//! paint order (its region then owns both sides, whatever the region mode).
+//! Such a cover need not cross the outline where the crossing search split it
+//! (it splits a piece at most `MAX_PER_PIECE` times), so the covered stretches
+//! are found on their own ([`Trimmer::covered`]): the outline is cut where it
+//! meets each covering shape's outline (straight pieces decided exactly,
+//! curved ones kept clear of by their control boxes) and a stretch between two
+//! cuts is covered when the shape certainly paints its middle. A stroke soup
+//! many strokes deep (random lines, a fan of lines through one point) keeps
+//! only the outlines the picture shows, and with them the crossings the BSP
+//! meets (`pipeline::density` counts what is left, and each cut here as a
+//! vertex where a kept outline ends on another).
+//!
 //! Other unclipped fills and centre lines are never trimmed: every input curve
 //! of the drawing stays a feature, as in TriWild.
 
 use super::Parent;
+use super::grid::Grid;
 use crate::svg::drawing::{ShapeKind, collect_clips};
-use crate::svg::winding::{ClipTest, PaintTest, all_contain};
+use crate::svg::winding::{ClipTest, PaintTest, all_contain, paints_nothing};
 use crate::svg::{Clip, Drawing, ShapeId};
-use kurbo::Vec2;
+use kurbo::{Point, Rect, Vec2};
 use std::sync::Arc;
 
 /// Fractions of a piece where it is judged.
@@ -88,6 +103,83 @@ pub(super) struct Trimmer {
     tests: Vec<PaintTest>,
     eps_abs: f64,
     step: f64,
+    covers: Covers,
+}
+
+/// A covering shape's outline is examined against a straight piece only
+/// when at most this many of its pieces share the piece's vertical extent
+/// (else the piece is not judged against it: a crossed hatch drawn as two
+/// paths of 10 000 lines would pair every line with every other).
+const COVER_MAX_PIECES: usize = 256;
+
+/// Most boxes a piece's run has for the search of its covers (a longer
+/// piece's boxes are longer than a cell).
+const COVER_MAX_STEPS: f64 = 4096.0;
+
+/// The opaque shapes that may cover a stroke's outline (see the module doc):
+/// filled, fully opaque, not clipped, painting some area; each with its place
+/// in the paint order (paint order, then shape index: larger is on top) and
+/// its test, found through a grid of their boxes.
+struct Covers {
+    /// By shape index: its place in the paint order, and whether its
+    /// straight pieces are judged against the covers (a stroke's area).
+    order: Vec<(u64, bool)>,
+    /// The covering shapes: place in the paint order, test.
+    layers: Vec<(u64, PaintTest)>,
+    grid: Option<Grid>,
+}
+
+impl Covers {
+    fn new(drawing: &Drawing) -> Covers {
+        let order: Vec<(u64, bool)> = drawing
+            .shapes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                (
+                    (u64::from(s.paint_order) << 32) | i as u64,
+                    s.paint.kind == ShapeKind::Stroke,
+                )
+            })
+            .collect();
+        let mut layers: Vec<(u64, PaintTest)> = Vec::new();
+        let mut boxes: Vec<Rect> = Vec::new();
+        if order.iter().any(|o| o.1) {
+            for (i, s) in drawing.shapes.iter().enumerate() {
+                if !s.filled
+                    || s.paint.kind == ShapeKind::ClipOutline
+                    || s.paint.alpha < 1.0
+                    || !s.paint.clips.is_empty()
+                    || paints_nothing(s)
+                {
+                    continue;
+                }
+                let test = PaintTest::new(s);
+                let Some(bb) = test.bbox() else { continue };
+                if !bb.area().is_finite() {
+                    continue;
+                }
+                layers.push((order[i].0, test));
+                boxes.push(bb);
+            }
+        }
+        let grid = boxes.iter().copied().reduce(|a, b| a.union(b)).map(|all| {
+            let side = all.width().max(all.height()) / (boxes.len() as f64).sqrt().max(1.0);
+            let mut g = Grid::new(all, side, boxes.len());
+            for (k, b) in boxes.iter().enumerate() {
+                g.insert(
+                    u32::try_from(k).expect("internal: shape count fits u32"),
+                    *b,
+                );
+            }
+            g
+        });
+        Covers {
+            order,
+            layers,
+            grid,
+        }
+    }
 }
 
 impl Trimmer {
@@ -198,7 +290,88 @@ impl Trimmer {
             tests,
             eps_abs,
             step: STEP_REL * d,
+            covers: Covers::new(drawing),
         })
+    }
+
+    /// Whether the straight pieces of `shape` are judged against the shapes
+    /// painted above it ([`Trimmer::covered`]): a stroke's area.
+    pub(super) fn judges_cover(&self, shape: ShapeId) -> bool {
+        self.covers.grid.is_some() && self.covers.order.get(shape.index()).is_some_and(|o| o.1)
+    }
+
+    /// The parts of the straight piece `a b` of `shape`'s outline that an
+    /// opaque shape painted above `shape` covers, as sorted, disjoint ranges
+    /// of fractions along it: where one such shape certainly paints the
+    /// piece and its outline does not meet it (so it paints both sides).
+    pub(super) fn covered(&self, shape: ShapeId, a: Point, b: Point) -> Vec<[f64; 2]> {
+        let covers = &self.covers;
+        let (Some(grid), Some(&(below, _))) = (&covers.grid, covers.order.get(shape.index()))
+        else {
+            return Vec::new();
+        };
+        let len = a.distance(b);
+        if !(len > 0.0 && len.is_finite()) {
+            return Vec::new();
+        }
+        // Ranges shorter than this (a few times the paint test's own
+        // tolerance) are not judged.
+        let shortest = 8.0 * self.eps_abs / len;
+        // The shapes above whose boxes meet the piece: those met by its run
+        // of boxes about a grid cell long each (a long diagonal piece's own
+        // box would meet most of the grid).
+        let steps = (len / grid.cell()).ceil().clamp(1.0, COVER_MAX_STEPS);
+        let mut near: Vec<u32> = Vec::new();
+        for i in 0..steps as usize {
+            let u0 = a.lerp(b, i as f64 / steps);
+            let u1 = a.lerp(b, (i + 1) as f64 / steps);
+            grid.any_of(
+                Rect::from_points(u0, u1),
+                |k| covers.layers[k as usize].0 > below,
+                |k| {
+                    near.push(k);
+                    false
+                },
+            );
+        }
+        near.sort_unstable();
+        near.dedup();
+        let mut found: Vec<[f64; 2]> = Vec::new();
+        let (mut cuts, mut unsure) = (Vec::new(), Vec::new());
+        for k in near {
+            let test = &covers.layers[k as usize].1;
+            cuts.clear();
+            unsure.clear();
+            if test
+                .outline()
+                .meet_segment((a, b), COVER_MAX_PIECES, &mut cuts, &mut unsure)
+                .is_none()
+            {
+                continue;
+            }
+            cuts.push(0.0);
+            cuts.push(1.0);
+            cuts.sort_by(f64::total_cmp);
+            for w in cuts.windows(2) {
+                let (u0, u1) = (w[0], w[1]);
+                if u1 - u0 <= shortest || unsure.iter().any(|r| r[0] <= u1 && r[1] >= u0) {
+                    continue;
+                }
+                let (inside, clear) = test.paints(a.lerp(b, 0.5 * (u0 + u1)), self.eps_abs);
+                if inside && clear {
+                    found.push([u0, u1]);
+                }
+            }
+        }
+        found.sort_by(|x, y| x[0].total_cmp(&y[0]));
+        let mut merged: Vec<[f64; 2]> = Vec::with_capacity(found.len());
+        for r in found {
+            match merged.last_mut() {
+                Some(last) if r[0] <= last[1] => last[1] = last[1].max(r[1]),
+                _ => merged.push(r),
+            }
+        }
+        merged
     }
 
     /// Whether pieces of `shape` may be trimmed.

@@ -18,12 +18,23 @@
 //! crossing is a vertex of the exact arrangement the BSP computes, and past one
 //! crossing every μ/2 the sections between them are far shorter than the
 //! envelope: all secondary, moved within ε, the arrangement's millions of
-//! exact vertices collapsed again by the optimizer. 2 000 random stroked lines
-//! in a square (451 000 crossings, 1.2 per μ) mesh in about a minute; 5 000
-//! (2.8 million, 3.1 per μ) take past ten minutes and 2.5 GB, so they are
-//! refused here (`docs/tuning.md`). The crossings are counted on the
-//! outlines' chords (a curve's control polygon) in a grid, each where it lies,
-//! and the count stops at the budget.
+//! exact vertices collapsed again by the optimizer. It is judged on what is
+//! painted: the segments the features stage gives the BSP, after the outlines
+//! that bound nothing were trimmed (a stroke's outline under an opaque shape
+//! painted above it among them, `features::trim`) and the secondary ones
+//! merged and simplified, with each place where the trimming cut an outline at
+//! a covering shape's counted as a crossing (a kept outline ends on another
+//! there: a vertex all the same). 2 000 random opaque strokes of width 1 in a
+//! 100 × 100 square cross more than twice per μ with every outline kept, what
+//! is left of them 0.4 times: meshed. 5 000 random stroked lines in a square, narrower
+//! than μ (2.8 million crossings, 3.1 per μ), would take past ten minutes and
+//! 2.5 GB: refused (`docs/tuning.md`). The crossings are counted on the
+//! segments in a grid, each where it lies, and the count stops at eight times
+//! the budget. A refusal names the μ (`--mu-abs`) at which the same outlines
+//! pass: the depth is proportional to μ, taken from the segments or from the
+//! outlines as drawn (what the features stage keeps at a smaller μ, where it
+//! merges less), whichever is the denser; a mesh of every crossing then
+//! follows, slowly.
 
 use crate::error::{Error, Result};
 use crate::svg::{Drawing, FeatureGeom};
@@ -57,6 +68,22 @@ pub(super) fn depth(drawing: &Drawing, mu: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// The chords of `drawing`'s outlines as drawn: each line, and each curve's
+/// control polygon.
+pub(super) fn chords(drawing: &Drawing) -> Vec<[Point; 2]> {
+    let mut out = Vec::new();
+    let mut polygon = |ps: &[Point]| out.extend(ps.windows(2).map(|w| [w[0], w[1]]));
+    for f in &drawing.features {
+        match f.geom {
+            FeatureGeom::Point(_) => {}
+            FeatureGeom::Line(l) => polygon(&[l.p0, l.p1]),
+            FeatureGeom::Cubic(c) => polygon(&[c.p0, c.p1, c.p2, c.p3]),
+            FeatureGeom::Conic(c) => polygon(&[c.p0, c.p1, c.p2]),
+        }
+    }
+    out
 }
 
 /// The distinct chords among `chords` (an outline drawn twice, a `<line>`'s
@@ -168,40 +195,78 @@ fn crossings(chords: &[[Point; 2]], cap: u64) -> u64 {
     count
 }
 
-/// The crossing depth of `segments` at `mu` (see the module doc), counted up
-/// to a little past [`MAX_CROSSING_DEPTH`].
-pub(super) fn crossing_depth(segments: impl Iterator<Item = [Point; 2]>, mu: f64) -> f64 {
+/// The crossings are counted up to this many times [`MAX_CROSSING_DEPTH`]:
+/// far enough past the budget to say how much smaller μ would pass it.
+const COUNTED_DEPTH: f64 = 8.0 * MAX_CROSSING_DEPTH;
+
+/// The crossing depth of `segments` at `mu` (see the module doc), with
+/// `junctions` more vertices where an outline ends on another, counted up to
+/// [`COUNTED_DEPTH`].
+pub(super) fn crossing_depth(
+    segments: impl Iterator<Item = [Point; 2]>,
+    junctions: usize,
+    mu: f64,
+) -> f64 {
     let (chords, length) = distinct(segments);
     if !(length > 0.0 && mu > 0.0) {
         return 0.0;
     }
-    // Enough crossings to tell a depth past the budget.
-    let cap = (MAX_CROSSING_DEPTH * length / (2.0 * mu))
+    let cap = (COUNTED_DEPTH * length / (2.0 * mu))
         .ceil()
         .min(u64::MAX as f64) as u64
         + 1;
-    2.0 * crossings(&chords, cap) as f64 * mu / length
+    let junctions = junctions as u64;
+    let count = if junctions >= cap {
+        cap
+    } else {
+        crossings(&chords, cap - junctions) + junctions
+    };
+    2.0 * count as f64 * mu / length
 }
 
 /// `Err` with one line saying why when the segments the BSP is given (the
-/// features stage's output: what it merged and simplified no longer counts)
-/// cross more than [`MAX_CROSSING_DEPTH`] times per `mu` of their length.
+/// features stage's output: what it trimmed, merged and simplified no longer
+/// counts) cross, or meet at `junctions` where a trimmed outline ends on
+/// another, more than [`MAX_CROSSING_DEPTH`] times per `mu` of their length.
+/// The line names a feature envelope (`--mu-abs`) at which the same
+/// outlines pass: below the one at which these segments, or the outlines
+/// as `drawn` (their chords, asked for only then), would meet the budget.
 ///
 /// # Errors
 /// [`Error::TooLarge`] for such segments.
-pub(super) fn check_crossings(segments: impl Iterator<Item = [Point; 2]>, mu: f64) -> Result<()> {
-    let depth = crossing_depth(segments, mu);
+pub(super) fn check_crossings(
+    segments: impl Iterator<Item = [Point; 2]>,
+    junctions: usize,
+    mu: f64,
+    drawn: impl FnOnce() -> Vec<[Point; 2]>,
+) -> Result<()> {
+    let depth = crossing_depth(segments, junctions, mu);
     tracing::debug!(depth, "crossing density");
     if depth > MAX_CROSSING_DEPTH {
+        // The depth per μ of these segments and of the outlines as drawn
+        // (what the features stage keeps of them at a smaller μ, where it
+        // merges and simplifies less), the larger; a margin besides.
+        let per_mu = (depth / mu).max(crossing_depth(drawn().into_iter(), junctions, mu) / mu);
+        let smaller = SUGGESTED_MARGIN * MAX_CROSSING_DEPTH / per_mu;
+        let (at_least, or_below) = if depth >= COUNTED_DEPTH {
+            ("at least ", " or below")
+        } else {
+            ("", "")
+        };
         return Err(Error::TooLarge(format!(
-            "the outlines cross one another more than {MAX_CROSSING_DEPTH:.0} times per \
-             feature envelope μ = {mu:.3e} of their length: detail far finer than μ that no \
-             mesh can show, and an exact arrangement of millions of crossings; simplify the \
-             drawing or make μ smaller (--mu)"
+            "the outlines cross one another {at_least}{depth:.1} times per feature envelope \
+             μ = {mu:.3e} of their length (at most {MAX_CROSSING_DEPTH:.0}): detail far finer \
+             than μ that no mesh can show, and an exact arrangement of as many crossings; \
+             simplify the drawing, or mesh every crossing with --mu-abs {smaller:.3e}{or_below} \
+             (slow)"
         )));
     }
     Ok(())
 }
+
+/// The μ a refusal names is this fraction of the μ that would just meet the
+/// budget.
+const SUGGESTED_MARGIN: f64 = 0.8;
 
 /// `Err` with one line saying why when `drawing`'s outlines lie deeper than
 /// [`MAX_DEPTH`] within `mu`.
@@ -327,7 +392,7 @@ mod tests {
         };
         for (gap_in_mu, refused) in [(1.0, false), (0.6, false), (0.4, true), (0.1, true)] {
             let v = lines(200, gap_in_mu * mu);
-            let depth = crossing_depth(v.iter().copied(), mu);
+            let depth = crossing_depth(v.iter().copied(), 0, mu);
             if refused {
                 assert!(depth > MAX_CROSSING_DEPTH, "{gap_in_mu}: {depth}");
             } else {
@@ -336,8 +401,11 @@ mod tests {
                     "{gap_in_mu}: {depth}"
                 );
             }
-            assert_eq!(check_crossings(v.into_iter(), mu).is_err(), refused);
+            assert_eq!(
+                check_crossings(v.into_iter(), 0, mu, Vec::new).is_err(),
+                refused
+            );
         }
-        assert_eq!(crossing_depth(std::iter::empty(), mu), 0.0);
+        assert_eq!(crossing_depth(std::iter::empty(), 0, mu), 0.0);
     }
 }

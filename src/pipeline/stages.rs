@@ -444,7 +444,12 @@ pub(super) fn bsp_stage(
     let (drawing, field, resolved) = (front.drawing, front.field, &opts.resolved);
     let chains = front.features.primary_chains();
     let mut input = bsp_input(&front.features, &chains);
-    density::check_crossings(input.segments.iter().map(|s| [s.a, s.b]), resolved.mu)?;
+    density::check_crossings(
+        input.segments.iter().map(|s| [s.a, s.b]),
+        front.features.counts.cover_cuts,
+        resolved.mu,
+        || density::chords(drawing),
+    )?;
     let bbox = padded_box(drawing, resolved.padding);
     let cell = Cell::of_tile(drawing, opts.params);
     if let Some(cell) = &cell {

@@ -1218,6 +1218,8 @@ struct BoxGrid {
     cols: usize,
     rows: usize,
     cells: Vec<Vec<u32>>,
+    /// The mean length of a cell's list (rounded up).
+    per_cell: usize,
 }
 
 impl BoxGrid {
@@ -1239,6 +1241,7 @@ impl BoxGrid {
             cols,
             rows,
             cells: vec![Vec::new(); cols * rows],
+            per_cell: 1,
         };
         for (i, b) in g.boxes.iter().enumerate() {
             let (x0, y0, x1, y1) = g.range(b);
@@ -1248,6 +1251,8 @@ impl BoxGrid {
                 }
             }
         }
+        let entries: usize = g.cells.iter().map(Vec::len).sum();
+        g.per_cell = entries.div_ceil(g.cells.len().max(1)).max(1);
         g
     }
 
@@ -1261,11 +1266,23 @@ impl BoxGrid {
         )
     }
 
-    /// The boxes `j > i` that meet box `i`, each once.
+    /// The boxes `j > i` that meet box `i`, each once. A box over more cells
+    /// than there are boxes after it (a long diagonal segment's, among many
+    /// others: its cells list most boxes many times over) is compared with
+    /// those boxes directly instead, in order.
     fn candidates(&self, i: usize, out: &mut Vec<u32>) {
         out.clear();
         let b = self.boxes[i];
         let (x0, y0, x1, y1) = self.range(&b);
+        let cells = (x1 - x0 + 1) * (y1 - y0 + 1);
+        if cells.saturating_mul(self.per_cell) > self.boxes.len() - i {
+            out.extend(
+                (i + 1..self.boxes.len())
+                    .filter(|&j| b.overlaps(self.boxes[j]))
+                    .map(|j| j as u32),
+            );
+            return;
+        }
         for y in y0..=y1 {
             for x in x0..=x1 {
                 for &j in &self.cells[y * self.cols + x] {

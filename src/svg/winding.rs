@@ -225,6 +225,119 @@ impl Outline {
         Some(&self.bands[i])
     }
 
+    /// Where the segment `a b` meets the outline, as fractions along it
+    /// (`None`, with nothing added, when more than `max_pieces` pieces share
+    /// its vertical extent): `cuts` gets each point where it crosses or
+    /// touches a straight piece (decided exactly, placed in f64), `unsure` each
+    /// range where it runs along a straight piece or through a curved piece's
+    /// control box (where it may meet the curve). Between consecutive cuts and
+    /// off every unsure range the segment meets no piece, so the winding number
+    /// is the same all along it.
+    pub(crate) fn meet_segment(
+        &self,
+        (a, b): (Point, Point),
+        max_pieces: usize,
+        cuts: &mut Vec<f64>,
+        unsure: &mut Vec<[f64; 2]>,
+    ) -> Option<()> {
+        let Some(bb) = self.bbox else {
+            return Some(());
+        };
+        let sb = Rect::from_points(a, b);
+        if sb.x1 < bb.x0 || sb.x0 > bb.x1 || sb.y1 < bb.y0 || sb.y0 > bb.y1 {
+            return Some(());
+        }
+        // The bands the segment's vertical extent meets (a piece listed in
+        // several is examined in each: the answers repeat, harmlessly).
+        let k = self.bands.len();
+        let band = |y: f64| -> usize {
+            if k <= 1 {
+                0
+            } else {
+                (((y - self.band_y0) / self.band_h).floor().max(0.0) as usize).min(k - 1)
+            }
+        };
+        if k == 0 {
+            return Some(());
+        }
+        let bands = &self.bands[band(sb.y0)..=band(sb.y1)];
+        if bands.iter().map(Vec::len).sum::<usize>() > max_pieces {
+            return None;
+        }
+        let d = b - a;
+        let len2 = d.hypot2();
+        if !(len2 > 0.0 && len2.is_finite()) {
+            return None;
+        }
+        // The fraction range of the segment inside box `r` (Liang-Barsky).
+        let clip = |r: Rect| -> Option<[f64; 2]> {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for (p, q) in [
+                (-d.x, a.x - r.x0),
+                (d.x, r.x1 - a.x),
+                (-d.y, a.y - r.y0),
+                (d.y, r.y1 - a.y),
+            ] {
+                if p == 0.0 {
+                    if q < 0.0 {
+                        return None;
+                    }
+                } else {
+                    let t = q / p;
+                    if p < 0.0 {
+                        lo = lo.max(t);
+                    } else {
+                        hi = hi.min(t);
+                    }
+                }
+            }
+            (lo <= hi).then_some([lo, hi])
+        };
+        let along = |p: Point| ((p - a).dot(d) / len2).clamp(0.0, 1.0);
+        for &i in bands.iter().flatten() {
+            let piece = self.pieces[i as usize];
+            let pb = piece.bbox();
+            if pb.x1 < sb.x0 || pb.x0 > sb.x1 || pb.y1 < sb.y0 || pb.y0 > sb.y1 {
+                continue;
+            }
+            let (c, e) = match piece {
+                Piece::Line(c, e) => (c, e),
+                Piece::Cubic(_) | Piece::Conic(_) => {
+                    unsure.extend(clip(pb));
+                    continue;
+                }
+            };
+            let side = |p: Point, q: Point, r: Point| match orient2d(p, q, r) {
+                Orientation::CounterClockwise => 1i8,
+                Orientation::Clockwise => -1,
+                Orientation::Collinear => 0,
+            };
+            let (o1, o2) = (side(a, b, c), side(a, b, e));
+            if o1 * o2 > 0 {
+                continue;
+            }
+            let (o3, o4) = (side(c, e, a), side(c, e, b));
+            if o3 * o4 > 0 {
+                continue;
+            }
+            if o1 == 0 && o2 == 0 {
+                // Along the segment: the range it shares.
+                let (u, v) = (along(c), along(e));
+                unsure.push([u.min(v), u.max(v)]);
+                continue;
+            }
+            let f = e - c;
+            let den = d.cross(f);
+            let u = if den == 0.0 {
+                along(if o1 == 0 { c } else { e })
+            } else {
+                ((c - a).cross(f) / den).clamp(0.0, 1.0)
+            };
+            cuts.push(u);
+        }
+        Some(())
+    }
+
     /// The winding number of `p` around the outline. `eps_abs` (user units, > 0)
     /// is the distance to a curve below which the answer is only a best guess.
     ///
@@ -372,6 +485,11 @@ impl PaintTest {
     /// Bounding box of the outline, `None` for an empty outline.
     pub(crate) fn bbox(&self) -> Option<Rect> {
         self.outline.bbox()
+    }
+
+    /// The shape's outline (its clips aside).
+    pub(crate) fn outline(&self) -> &Outline {
+        &self.outline
     }
 
     /// Whether the shape paints `p`, and whether that answer is certain (`p`
@@ -539,7 +657,7 @@ impl LayerGrid {
 /// layer it would be tested at every query point its box holds (a drawing of
 /// 2 000 random `<line>`s would spend seconds in the regions stage for a mesh
 /// that is all background).
-fn paints_nothing(shape: &Shape) -> bool {
+pub(crate) fn paints_nothing(shape: &Shape) -> bool {
     shape.subpaths.iter().all(|sp| {
         let mut points = std::iter::once(sp.start).chain(sp.segments.iter().flat_map(|seg| {
             let (pts, n): ([Point; 4], usize) = match seg {
@@ -796,6 +914,51 @@ mod tests {
             closed: true,
             ..open(&pts)
         }
+    }
+
+    /// A segment through a square is cut where it enters and leaves it; one
+    /// along a side is unsure there; one through a curve's control box is
+    /// unsure across the box; one clear of the outline meets nothing.
+    #[test]
+    fn a_segment_meets_the_outline_where_it_crosses_or_may_touch_it() {
+        let square = Outline::new(&[closed(&[
+            Point::new(0.0, 0.0),
+            Point::new(4.0, 0.0),
+            Point::new(4.0, 4.0),
+            Point::new(0.0, 4.0),
+        ])]);
+        let meet = |outline: &Outline, a: (f64, f64), b: (f64, f64)| {
+            let (mut cuts, mut unsure) = (Vec::new(), Vec::new());
+            outline
+                .meet_segment((a.into(), b.into()), 64, &mut cuts, &mut unsure)
+                .expect("few pieces");
+            cuts.sort_by(f64::total_cmp);
+            (cuts, unsure)
+        };
+        let (cuts, unsure) = meet(&square, (-2.0, 2.0), (6.0, 2.0));
+        assert_eq!(cuts, [0.25, 0.75]);
+        assert!(unsure.is_empty());
+        let (_, unsure) = meet(&square, (-4.0, 0.0), (8.0, 0.0));
+        assert!(
+            unsure
+                .iter()
+                .any(|r| (r[0] - 1.0 / 3.0).abs() < 1e-12 && (r[1] - 2.0 / 3.0).abs() < 1e-12),
+            "{unsure:?}"
+        );
+        assert_eq!(meet(&square, (1.0, 1.0), (3.0, 3.0)), (vec![], vec![]));
+        let round = Outline::new(&[circle(Point::new(0.0, 0.0), 1.0)]);
+        let (cuts, unsure) = meet(&round, (-2.0, 0.5), (2.0, 0.5));
+        assert!(cuts.is_empty() && !unsure.is_empty());
+        assert!(
+            square
+                .meet_segment(
+                    (Point::new(-1.0, 2.0), Point::new(5.0, 2.0)),
+                    1,
+                    &mut Vec::new(),
+                    &mut Vec::new()
+                )
+                .is_none()
+        );
     }
 
     /// A circle as 4 cubics (the standard k = 0.5523 construction), counter-clockwise.
