@@ -230,8 +230,10 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
 /// The BSP's seeds from the field ([`SizeField::seed_points`]): where a
 /// formula asks for sizes from 0.5 (x = -200) up to `l` (15.1), every seed
 /// lies inside the box and at least h/2 (h the field at the seed) from every
-/// feature segment and point, no two seeds are closer than 3/4 of the smaller
-/// of their sizes (the nested lattices' levels are within 3^(±1/4) of h),
+/// feature segment and point, no two seeds are closer than 3/5 of the smaller
+/// of their sizes (a leaf's lattice level is within 3^(±1/4) of its smallest
+/// size, and the field grows by the grading across the leaf; h/2 from a
+/// point on the box's sides, as from a feature),
 /// and there are about as many as a mesh of the field has vertices (the
 /// integral of 1/(√3/2·h²), less the bands kept free along the features); deterministic;
 /// none past the vertex budget. With the open space left out (a drawing
@@ -266,7 +268,7 @@ fn seeds_follow_the_field_and_keep_off_the_features() {
         }
         assert!(p.distance(points[0]) >= 0.5 * h, "{p:?} at the point");
     }
-    // No two seeds closer than 3/4 of the smaller size (a grid of cells of
+    // No two seeds closer than 3/5 of the smaller size (a grid of cells of
     // the largest size, each seed against its own and the next cells).
     let cell = r.l;
     let key = |p: Point| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
@@ -283,7 +285,13 @@ fn seeds_follow_the_field_and_keep_off_the_features() {
         {
             if *q != p {
                 let h = field.at(p).min(field.at(*q));
-                assert!(p.distance(*q) >= 0.75 * h, "{p:?} and {q:?}: h {h}");
+                // (a point on the box's sides is to the lattice as a
+                // feature's vertex: at least h/2 away)
+                let on_side = |p: &Point| {
+                    p.x == bounds.x0 || p.x == bounds.x1 || p.y == bounds.y0 || p.y == bounds.y1
+                };
+                let least = if on_side(&p) || on_side(q) { 0.5 } else { 0.6 };
+                assert!(p.distance(*q) >= least * h, "{p:?} and {q:?}: h {h}");
             }
         }
     }
