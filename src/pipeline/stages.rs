@@ -428,8 +428,8 @@ fn baseline_stage(
 
 /// The exact BSP mesh of the front's features (TriWild §4.3-4.4 up to the
 /// conforming mesh): the conforming segments and points (with the periodic
-/// cell's side points, and free seed vertices where the field asks for a
-/// finer mesh than the features give) triangulated exactly in the drawing's
+/// cell's side points, and free seed vertices at the field's density
+/// where the optimizer would otherwise make them by splits) triangulated exactly in the drawing's
 /// padded box ([`bsp::build`]); refused first when the segments cross too
 /// densely ([`density`]). Vertices it could not round stay rational.
 ///
@@ -458,15 +458,17 @@ pub(super) fn bsp_stage(
     }
     let bsp_opts = opts.bsp();
     let (mut mesh, stats) = log.times.time("bsp", || {
-        // Free vertices where the size field asks for a finer mesh than the
-        // features give (`sizing::seeds`; none at the default settings).
+        // Free vertices at the size field's density (`sizing::seeds`): where
+        // an asked field is finer than l/2, and everywhere, the box's sides
+        // too, where open space outnumbers the features' vertices.
         let lines: Vec<kurbo::Line> = input
             .segments
             .iter()
             .map(|s| kurbo::Line::new(s.a, s.b))
             .collect();
         let max_vertices = opts.params.max_vertices as usize;
-        input.steiner = field.seed_points(bbox, &lines, &input.points, max_vertices);
+        input.steiner =
+            field.seed_points(bbox, &lines, &input.points, max_vertices, cell.is_none());
         bsp::build(&input, bbox, &bsp_opts)
     })?;
     if cell.is_some() {

@@ -228,13 +228,19 @@ fn a_stroke_that_is_not_kept_apart_is_cut_at_the_size_without_it() {
 }
 
 /// The BSP's seeds from the field ([`SizeField::seed_points`]): where a
-/// formula asks for sizes from 0.5 (x = -200) up to `l` (15.1), every seed lies
-/// at a leaf centre where the field is below half of `l`, inside the box by
-/// half its size, at least half its size from every feature segment and
-/// point; the default field (thin strokes only), a uniform field and a
-/// budget smaller than the seeds give none.
+/// formula asks for sizes from 0.5 (x = -200) up to `l` (15.1), every seed
+/// lies inside the box and at least h/2 (h the field at the seed) from every
+/// feature segment and point, no two seeds are closer than 3/5 of the smaller
+/// of their sizes (a leaf's lattice level is within 3^(±1/4) of its smallest
+/// size, and the field grows by the grading across the leaf; h/2 from a
+/// point on the box's sides, as from a feature),
+/// and there are about as many as a mesh of the field has vertices (the
+/// integral of 1/(√3/2·h²), less the bands kept free along the features); deterministic;
+/// none past the vertex budget. With the open space left out (a drawing
+/// whose features hold more vertices than [`seeds::SEED_OPEN_FROM`] asks)
+/// there are none where the field is above [`seeds::SEED_BELOW`]·l.
 #[test]
-fn seeds_follow_the_field_where_it_is_fine_and_keep_off_the_features() {
+fn seeds_follow_the_field_and_keep_off_the_features() {
     let svg = br##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="-200 -200 400 400">
         <rect x="-150" y="-20" width="300" height="40" fill="#58a"/></svg>"##;
     let drawing = crate::svg::load_bytes(svg, &crate::svg::LoadOptions::DEFAULT).expect("loads");
@@ -248,55 +254,138 @@ fn seeds_follow_the_field_where_it_is_fine_and_keep_off_the_features() {
         kurbo::Line::new((-150.0, -20.0), (-150.0, 20.0)),
     ];
     let points = [Point::new(-180.0, 100.0)];
-    let seeds = field.seed_points(bounds, &segments, &points, 1_000_000);
-    let half_l = seeds::SEED_BELOW * r.l;
-    assert!(seeds.len() > 100, "{} seeds", seeds.len());
+    let seeds = field.seed_points(bounds, &segments, &points, 1_000_000, true);
+    assert!(seeds.len() > 1000, "{} seeds", seeds.len());
     for &p in &seeds {
         let h = field.at(p);
-        // (the leaf's smallest corner is below half of l; its centre may be a
-        // little above, by the grading across half a leaf)
-        assert!(h < 1.5 * half_l, "{p:?}: h {h} vs l {}", r.l);
-        let m = 0.25 * h;
         assert!(
-            p.x - bounds.x0 > m
-                && bounds.x1 - p.x > m
-                && p.y - bounds.y0 > m
-                && bounds.y1 - p.y > m,
-            "{p:?} near the box"
+            (bounds.x0..=bounds.x1).contains(&p.x) && (bounds.y0..=bounds.y1).contains(&p.y),
+            "{p:?} outside the box"
         );
         for s in &segments {
             let d = crate::mesh::point_segment_distance(p, *s);
-            assert!(d > 0.25 * h, "{p:?} at {d} from {s:?}, h {h}");
+            assert!(d >= 0.5 * h, "{p:?} at {d} from {s:?}, h {h}");
         }
-        assert!(p.distance(points[0]) > 0.25 * h, "{p:?} at the point");
+        assert!(p.distance(points[0]) >= 0.5 * h, "{p:?} at the point");
     }
-    // Where the field is above half of l (x > -129), no seed (but for a
-    // leaf straddling that line).
-    assert!((r.l - 15.13).abs() < 0.01, "l = {}", r.l);
-    assert!(seeds.iter().all(|p| p.x < -120.0), "a seed where h > l/2");
+    // No two seeds closer than 3/5 of the smaller size (a grid of cells of
+    // the largest size, each seed against its own and the next cells).
+    let cell = r.l;
+    let key = |p: Point| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<Point>> = Default::default();
+    for &p in &seeds {
+        grid.entry(key(p)).or_default().push(p);
+    }
+    for &p in &seeds {
+        let (i, j) = key(p);
+        for q in (i - 1..=i + 1)
+            .flat_map(|a| (j - 1..=j + 1).map(move |b| (a, b)))
+            .filter_map(|k| grid.get(&k))
+            .flatten()
+        {
+            if *q != p {
+                let h = field.at(p).min(field.at(*q));
+                // (a point on the box's sides is to the lattice as a
+                // feature's vertex: at least h/2 away)
+                let on_side = |p: &Point| {
+                    p.x == bounds.x0 || p.x == bounds.x1 || p.y == bounds.y0 || p.y == bounds.y1
+                };
+                let least = if on_side(&p) || on_side(q) { 0.5 } else { 0.6 };
+                assert!(p.distance(*q) >= least * h, "{p:?} and {q:?}: h {h}");
+            }
+        }
+    }
+    // About as many as a mesh of the field has vertices, by the integral over
+    // a fine grid (the bands kept free along the features hold a few).
+    let n = 400;
+    let step = bounds.width() / f64::from(n);
+    let mut vertices = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let p = Point::new(
+                bounds.x0 + (f64::from(i) + 0.5) * step,
+                bounds.y0 + (f64::from(j) + 0.5) * step,
+            );
+            vertices += step * step / (0.866 * field.at(p).powi(2));
+        }
+    }
+    let ratio = seeds.len() as f64 / vertices;
+    assert!(
+        (0.7..=1.3).contains(&ratio),
+        "{} seeds for {vertices:.0} vertices",
+        seeds.len()
+    );
     // Deterministic.
     assert_eq!(
         seeds,
-        field.seed_points(bounds, &segments, &points, 1_000_000)
+        field.seed_points(bounds, &segments, &points, 1_000_000, true)
     );
-    // Past half the budget: none.
+    // Past the budget's share: none.
     assert!(
         field
-            .seed_points(bounds, &segments, &points, seeds.len())
+            .seed_points(bounds, &segments, &points, seeds.len(), true)
             .is_empty()
     );
-    // The default field (no size asked) and a uniform one: none.
-    let default = default_field(&drawing, &r);
+    // Below half of l only: none where the field is above it (x > -129),
+    // but for a leaf straddling that line.
+    assert_eq!(seeds::SEED_BELOW, 0.5);
+    assert!((r.l - 15.13).abs() < 0.01, "l = {}", r.l);
+    let fine = field.seeds(Some(false), bounds, &segments, &points, 1_000_000, true);
+    assert!(!fine.is_empty() && fine.len() < seeds.len());
+    assert!(fine.iter().all(|p| p.x < -120.0), "a seed where h > l/2");
+}
+
+/// A uniform field's seeds are one equilateral lattice of spacing `l`: every
+/// seed's nearest neighbour is `l` away, and the box's sides carry points
+/// `l` apart on them; as many as a mesh of edges `l` has vertices. With
+/// features of more than a quarter of that many vertices
+/// ([`seeds::SEED_OPEN_FROM`]), none.
+#[test]
+fn a_uniform_fields_seeds_are_an_equilateral_lattice() {
+    let bounds = Rect::new(-3.0, -2.0, 17.0, 10.0);
+    let l = 0.5;
+    let field = SizeField::uniform(l, bounds);
+    let seeds = field.seed_points(bounds, &[], &[], 1_000_000, true);
+    let inside: Vec<Point> = seeds
+        .iter()
+        .copied()
+        .filter(|p| p.x > bounds.x0 && p.x < bounds.x1 && p.y > bounds.y0 && p.y < bounds.y1)
+        .collect();
+    let on_sides = seeds.len() - inside.len();
+    // 2·(40 + 24) side pieces of 0.5: 128 less the 4 corners.
+    assert_eq!(on_sides, 124);
+    for &p in &inside {
+        let nearest = seeds
+            .iter()
+            .filter(|&&q| q != p)
+            .map(|q| p.distance(*q))
+            .fold(f64::INFINITY, f64::min);
+        let to_side = (p.x - bounds.x0)
+            .min(bounds.x1 - p.x)
+            .min(p.y - bounds.y0)
+            .min(bounds.y1 - p.y);
+        if to_side > 1.5 * l {
+            assert!((nearest - l).abs() < 1e-9 * l, "{p:?}: nearest {nearest}");
+        }
+    }
+    let vertices = bounds.area() / (0.866 * l * l);
+    let ratio = seeds.len() as f64 / vertices;
     assert!(
-        default
-            .seed_points(bounds, &segments, &points, 1_000_000)
-            .is_empty()
+        (0.9..=1.1).contains(&ratio),
+        "{} seeds for {vertices:.0}",
+        seeds.len()
     );
-    let uniform = field_of(&drawing, &r, &SizeSpec::DEFAULT.with_expr("1000"));
-    assert!(uniform.is_uniform());
+    // Feature points on a grid of 0.7 (some 490 of them, above a quarter
+    // of the seeds).
+    let points: Vec<Point> = (0..28)
+        .flat_map(|i| {
+            (0..17).map(move |j| Point::new(-2.5 + 0.7 * f64::from(i), -1.5 + 0.7 * f64::from(j)))
+        })
+        .collect();
+    assert!(4.0 * points.len() as f64 > vertices);
     assert!(
-        uniform
-            .seed_points(bounds, &segments, &points, 1_000_000)
+        field
+            .seed_points(bounds, &[], &points, 1_000_000, true)
             .is_empty()
     );
 }
