@@ -117,6 +117,16 @@ pub struct OptimizeStats {
 }
 
 impl OptimizeStats {
+    /// These statistics with the phases' seconds at 0: what two runs of one
+    /// input have in common.
+    #[cfg(test)]
+    pub(crate) fn without_times(mut self) -> OptimizeStats {
+        for p in &mut self.phases {
+            p.seconds = 0.0;
+        }
+        self
+    }
+
     /// Operations applied and refused so far, every kind together.
     fn totals(&self) -> (u64, u64) {
         let tallies = [
