@@ -90,7 +90,7 @@ fn the_goal_stops_the_passes_early_and_the_result_is_deterministic() {
     let sa = optimize(&mut a, &mut ca, &options(0.1));
     let sb = optimize(&mut b, &mut cb, &options(0.1));
     assert!(a == b, "two runs differ");
-    assert_eq!(sa.without_times(), sb.without_times());
+    assert_eq!(sa.clone().without_times(), sb.without_times());
     assert_ne!(sa.stop, StopReason::PassLimit, "{sa:?}");
     assert!(sa.min_angle_deg > 10.0 || sa.max_amips < 5.0, "{sa:?}");
     assert!(sa.split.applied > 0 && sa.smooth.applied > 0, "{sa:?}");
