@@ -164,6 +164,9 @@ struct Node {
     corners: [u32; 4],
     /// A leaf's own sources: `local[start..start + len]` (those within a side of it).
     local: (u32, u32),
+    /// A leaf's groups of its own sources: `groups[start..start + len]`
+    /// (none when it has fewer than [`GROUPED_FROM`]).
+    groups: (u32, u32),
     /// A leaf's corner values (copied from the corners once they are known).
     values: [f64; 4],
 }
@@ -175,6 +178,7 @@ impl Node {
             child: 0,
             corners,
             local: (0, 0),
+            groups: (0, 0),
             values: [0.0; 4],
         }
     }
@@ -194,11 +198,73 @@ pub(crate) struct Tree {
     values: Vec<f64>,
     /// The leaves' own sources (see [`Node::local`]).
     local: Vec<Source>,
+    /// The groups of the leaves' own sources (see [`Node::groups`]).
+    groups: Vec<Group>,
     lo: f64,
     hi: f64,
     /// Whether refinement stopped at the leaf budget (see [`Tree::build`]).
     capped: bool,
 }
+
+/// Consecutive sources of a leaf's own (along a curve, mostly: the sources
+/// come in the features' order) with a lower bound of what any of them asks
+/// for at a point: their smallest size and slope, and their bounding box.
+#[derive(Clone, Copy, Debug)]
+struct Group {
+    lo: Point,
+    hi: Point,
+    h: f64,
+    slope: f64,
+    /// The sources: `local[start..start + len]`.
+    start: u32,
+    len: u32,
+}
+
+impl Group {
+    /// The group of `sources`, which start at `start` in the tree's list.
+    fn of(sources: &[Source], start: usize) -> Group {
+        let mut g = Group {
+            lo: Point::new(f64::INFINITY, f64::INFINITY),
+            hi: Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+            h: f64::INFINITY,
+            slope: f64::INFINITY,
+            start: start as u32,
+            len: sources.len() as u32,
+        };
+        for s in sources {
+            for q in [s.a, s.b] {
+                g.lo = Point::new(g.lo.x.min(q.x), g.lo.y.min(q.y));
+                g.hi = Point::new(g.hi.x.max(q.x), g.hi.y.max(q.y));
+            }
+            g.h = g.h.min(s.h);
+            g.slope = g.slope.min(s.slope);
+        }
+        g
+    }
+
+    /// A lower bound of what its sources ask for at `p`.
+    fn bound(&self, p: Point) -> f64 {
+        let dx = (self.lo.x - p.x).max(p.x - self.hi.x).max(0.0);
+        let dy = (self.lo.y - p.y).max(p.y - self.hi.y).max(0.0);
+        self.h + self.slope * (dx * dx + dy * dy).sqrt()
+    }
+}
+
+/// A leaf with at least this many sources of its own groups them
+/// ([`Group`]): [`Tree::at`] then reads the groups nearest first and stops at
+/// the first that cannot ask for less than what it has. Near a curve drawn
+/// with many short segments a leaf holds a hundred.
+const GROUPED_FROM: usize = 24;
+/// Sources per group: at least this many, more where a leaf would have more
+/// than [`MAX_GROUPS`] groups.
+const GROUP_SIZE: usize = 8;
+/// A leaf has at most this many groups (their bounds are sorted on the stack).
+const MAX_GROUPS: usize = 32;
+/// A group is passed over only when its bound exceeds the size found by this
+/// relative margin: far more than the rounding of the distances, so a source
+/// passed over could not have asked for less, and the value is the one every
+/// source read would give.
+const GROUP_MARGIN: f64 = 1e-9;
 
 /// A box being refined: its node, its lower-left corner, its side and the
 /// sources that may still split it.
@@ -286,11 +352,13 @@ impl Tree {
                 child: 0,
                 corners: [0, 1, 2, 3],
                 local: (0, 0),
+                groups: (0, 0),
                 values: [hi; 4],
             }],
             child: vec![0],
             values: vec![hi; 4],
             local: Vec::new(),
+            groups: Vec::new(),
             lo: hi,
             hi,
             capped: false,
@@ -539,6 +607,7 @@ impl Tree {
             nodes,
             values: vec![hi; n],
             local,
+            groups: Vec::new(),
             lo,
             hi,
             capped,
@@ -641,6 +710,20 @@ impl Tree {
             node.local = (new_start, kept.len() as u32 - new_start);
         }
         self.local = kept;
+        let mut groups = Vec::new();
+        for node in &mut self.nodes {
+            let (start, len) = (node.local.0 as usize, node.local.1 as usize);
+            if len < GROUPED_FROM {
+                continue;
+            }
+            let size = GROUP_SIZE.max(len.div_ceil(MAX_GROUPS));
+            let first = groups.len() as u32;
+            for (i, chunk) in self.local[start..start + len].chunks(size).enumerate() {
+                groups.push(Group::of(chunk, start + i * size));
+            }
+            node.groups = (first, groups.len() as u32 - first);
+        }
+        self.groups = groups;
         for node in &mut self.nodes {
             node.values = node
                 .corners
@@ -685,10 +768,30 @@ impl Tree {
         let node = &self.nodes[leaf];
         let [a, b, c, d] = node.values;
         let mut h = (a * (1.0 - u) + b * u) * (1.0 - v) + (c * (1.0 - u) + d * u) * v;
+        let read = |h: f64, sources: &[Source]| {
+            sources
+                .iter()
+                .fold(h, |h, s| if s.h < h { h.min(s.at(p)) } else { h })
+        };
         let (start, len) = node.local;
-        for s in &self.local[start as usize..(start + len) as usize] {
-            if s.h < h {
-                h = h.min(s.at(p));
+        let (first, n) = node.groups;
+        if n == 0 {
+            h = read(h, &self.local[start as usize..(start + len) as usize]);
+        } else {
+            // the nearest group first, then the others whose bound is below
+            // what is found (a group above it cannot lower it)
+            let groups = &self.groups[first as usize..(first + n) as usize];
+            let bounds: smallvec::SmallVec<[f64; MAX_GROUPS]> =
+                groups.iter().map(|g| g.bound(p)).collect();
+            let nearest = (0..bounds.len())
+                .min_by(|&a, &b| bounds[a].total_cmp(&bounds[b]))
+                .unwrap_or(0);
+            let of = |g: &Group| &self.local[g.start as usize..(g.start + g.len) as usize];
+            h = read(h, of(&groups[nearest]));
+            for (i, (g, &bound)) in groups.iter().zip(&bounds).enumerate() {
+                if i != nearest && bound < h * (1.0 + GROUP_MARGIN) {
+                    h = read(h, of(g));
+                }
             }
         }
         h.clamp(self.lo, self.hi)
@@ -830,6 +933,60 @@ mod tests {
     /// The leaves ([`Tree::leaf_boxes`]) tile the grid: as many as the tree
     /// counts, their areas summing to the grid's, each centre in the leaf
     /// that `locate` finds for it, with that leaf's smallest corner value.
+    /// A leaf near a curve drawn with many short segments groups its
+    /// sources; the lookup, which reads only the groups that may ask for
+    /// less, gives exactly the minimum over all its sources.
+    #[test]
+    fn grouped_sources_give_the_value_of_every_source() {
+        let bounds = Rect::new(0.0, 0.0, 10.0, 10.0);
+        // a circle of 600 segments, sizes varying along it, and a second,
+        // concentric one close by
+        let ring = |r: f64, n: usize, h0: f64| {
+            (0..n).map(move |i| {
+                let at = |k: usize| {
+                    let t = std::f64::consts::TAU * k as f64 / n as f64;
+                    Point::new(5.0 + r * t.cos(), 5.0 + r * t.sin())
+                };
+                let h = h0 * (1.0 + 0.5 * (i as f64 * 0.05).sin());
+                Source {
+                    a: at(i),
+                    b: at(i + 1),
+                    h,
+                    slope: 0.5 + 0.1 * (i % 3) as f64,
+                }
+            })
+        };
+        let src: Vec<Source> = ring(3.0, 600, 0.3).chain(ring(3.2, 300, 0.2)).collect();
+        let t = from_sources(bounds, &src);
+        let grouped = t.nodes.iter().filter(|n| n.groups.1 > 0).count();
+        assert!(grouped > 0, "no leaf has groups");
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut read_grouped = 0;
+        for _ in 0..20_000 {
+            // (near the circles, where the leaves group their sources)
+            let (r, angle) = (2.6 + next(), std::f64::consts::TAU * next());
+            let p = Point::new(5.0 + r * angle.cos(), 5.0 + r * angle.sin());
+            let (leaf, u, v) = t.locate(p);
+            let node = &t.nodes[leaf];
+            let [a, b, c, d] = node.values;
+            let mut want = (a * (1.0 - u) + b * u) * (1.0 - v) + (c * (1.0 - u) + d * u) * v;
+            let (start, len) = node.local;
+            for s in &t.local[start as usize..(start + len) as usize] {
+                want = want.min(s.at(p));
+            }
+            assert_eq!(t.at(p), want.clamp(t.lo, t.hi), "at {p:?}");
+            read_grouped += usize::from(node.groups.1 > 0);
+        }
+        assert!(
+            read_grouped > 1000,
+            "{read_grouped} lookups in grouped leaves"
+        );
+    }
+
     #[test]
     fn the_leaf_boxes_tile_the_grid() {
         let bounds = Rect::new(0.0, 0.0, 100.0, 60.0);
