@@ -43,8 +43,8 @@ pub(super) struct Memos {
 struct FailedCollapse {
     /// The operation clock when it was refused.
     at: u64,
-    /// Whether the length rule (`keeps_lengths`, which reads the sizing
-    /// field) refused a direction.
+    /// Whether the length rule ([`lengths_kept`](super::sizing::lengths_kept),
+    /// which reads the targets) refused a direction.
     by_length: bool,
     /// The lowest energy floor ([`Context::energy_floor`](crate::ops::Context::energy_floor))
     /// under which the energy rule refused a direction with the floor

@@ -289,8 +289,11 @@ pub(crate) struct PassLimits {
 pub(crate) struct Schedule<'a, D> {
     mesh: &'a mut TriMesh,
     ctx: &'a mut Context,
+    /// What every pass reads.
     limits: PassLimits,
+    /// What only the driver reads (see above).
     driver: D,
+    /// The smoothing order's generator.
     rng: Shuffle,
     targets: Targets<'a>,
     memos: Memos,

@@ -153,3 +153,40 @@ impl<'a> Targets<'a> {
         h * ratio
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optimize::schedule::driver::mesh_bounds;
+    use crate::optimize::schedule::test_meshes;
+
+    /// Without a field the targets are those of a uniform field at `l`
+    /// (what the curved stage without a field measures against): every
+    /// lookup agrees, before and after a vertex is refined.
+    #[test]
+    fn no_field_is_a_uniform_field_at_l() {
+        let l = 0.1;
+        for (mesh, _) in test_meshes(2, 2) {
+            let field = SizeField::uniform(l, mesh_bounds(&mesh));
+            let mut with = Targets::new(&mesh, Some(&field), l);
+            let mut without = Targets::new(&mesh, None, l);
+            assert!(with.is_uniform() && without.is_uniform());
+            assert_eq!(with.is_asked(), without.is_asked());
+            let v = mesh.vertices().next().expect("a vertex");
+            for t in [&mut with, &mut without] {
+                t.set_target(v, 0.5 * l);
+                t.refresh(&mesh);
+            }
+            for k in mesh.edges() {
+                let (a, b) = (with.edge_target(&mesh, k), without.edge_target(&mesh, k));
+                assert_eq!(a.to_bits(), b.to_bits(), "{k:?}");
+            }
+            for u in mesh.vertices() {
+                assert_eq!(with.target_of(u), without.target_of(u));
+                assert_eq!(with.base_of(u), without.base_of(u));
+                let p = mesh.position(u);
+                assert_eq!(with.field_at(p), without.field_at(p));
+            }
+        }
+    }
+}
