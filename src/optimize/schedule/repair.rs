@@ -18,10 +18,11 @@
 //! The patch's operations are the main passes' own (every invariant checked,
 //! collapses, swaps and moves never raise the local largest energy); only
 //! their candidates are limited to the patch (the passes' [`Scope`]), so the
-//! rest of the mesh keeps the sizes the coarsening left. Splits ignore the energy rule, so a round is
-//! checked as a whole: one that leaves the worst bad corner worse is rolled
-//! back (mesh and targets restored, the memos of refusals forgotten) and run
-//! again with splits bounded by [`needle_energy`].
+//! rest of the mesh keeps the sizes the coarsening left. Splits ignore the
+//! energy rule, so a round is checked as a whole: one that leaves the worst
+//! bad corner worse is rolled back (mesh and targets restored, the memos of
+//! refusals forgotten) and run again with splits bounded by
+//! [`needle_energy`].
 //!
 //! Each round first splits the faces with two curved primary edges, the split
 //! the curved stage makes (at most one curved edge per element) without
