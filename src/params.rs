@@ -249,7 +249,8 @@ pub struct Params {
 /// (`optimize::schedule`) and the curved one (`curve::optimize`) read from the
 /// parameters. Both stages carry this value whole, so a knob added here (its
 /// field, its default, its check in [`OptimizerParams::validate`]) reaches
-/// every pass through `opts.params` with no other hop (docs/design.md
+/// every pass with no other hop (the optimizer's passes read it as
+/// `self.limits.params`, the curving stage's as `opts.params`; docs/design.md
 /// "Coordinates and parameters").
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 #[non_exhaustive]

@@ -38,8 +38,7 @@ use crate::element::Order;
 use crate::mesh::TriMesh;
 use crate::ops::invariants::curved;
 use crate::ops::{self, Context};
-use crate::optimize::OptimizeOptions;
-use crate::optimize::schedule::{EnergyMeasure, OpTally, Phase, Schedule, measure_energy};
+use crate::optimize::schedule::{CurvedPasses, EnergyMeasure, OpTally, PassLimits, measure_energy};
 use crate::params::OptimizerParams;
 use crate::sizing::SizeField;
 
@@ -143,33 +142,18 @@ pub(crate) fn optimize_curved(
         ..CurvedOptimizeStats::default()
     };
     // The linear schedule's collapse, swap and smoothing passes, with every
-    // target at the size field (its refinement and stop rules are not used here).
-    let sched_opts = OptimizeOptions {
+    // target at the size field (its refinement and stop rules are not used
+    // here), under the bounds of its main passes, not the linear stage's last
+    // ones.
+    let limits = PassLimits {
         l: opts.l,
-        l_floor: opts.l,
-        stop_energy: opts.stop_energy,
-        alpha_deg: 0.0,
-        max_passes: opts.max_passes,
-        max_vertices: usize::MAX,
         deadline: opts.deadline,
         params: opts.params,
     };
     let mut sched_ctx = ctx.clone();
-    let uniform;
-    let field = match opts.field {
-        Some(f) => f,
-        None => {
-            uniform = SizeField::uniform(opts.l, kurbo::Rect::ZERO);
-            &uniform
-        }
-    };
-    let mut s = Schedule::new(mesh, &mut sched_ctx, &sched_opts, SEED, field);
-    // Its own bounds, not the linear stage's last ones.
-    s.enter(Phase::Curved);
-    let mut pass = |s: &mut Schedule<'_>| {
-        let collapses = s.collapse_pass(COLLAPSE_BELOW);
-        let swaps = s.swap_pass();
-        let smooths = s.smooth_pass();
+    let mut s = CurvedPasses::new(mesh, &mut sched_ctx, limits, opts.field, SEED);
+    let mut pass = |s: &mut CurvedPasses<'_>| {
+        let (collapses, swaps, smooths) = s.pass(COLLAPSE_BELOW);
         stats.passes += 1;
         tracing::debug!(
             pass = stats.passes,

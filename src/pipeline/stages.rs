@@ -24,7 +24,7 @@ use crate::fem::{FemMesh, LineKind, LinearMesh};
 use crate::mesh::{FeatureOn, TriMesh};
 use crate::ops::Context;
 use crate::optimize::forced::ForcedCorners;
-use crate::optimize::{OptimizeOptions, OptimizeStats};
+use crate::optimize::{LinearOptions, OptimizeOptions, OptimizeStats, PassLimits};
 use crate::params::{Mesher, Params, Resolved, Stage};
 use crate::periodic::{Cell, PeriodicReport};
 use crate::quality::Quality;
@@ -97,14 +97,18 @@ impl<'a> StageOptions<'a> {
     pub(super) fn optimize(&self) -> OptimizeOptions {
         let (params, resolved) = (self.params, &self.resolved);
         OptimizeOptions {
-            l: resolved.l,
-            l_floor: resolved.eps.min(resolved.l),
-            stop_energy: params.optimizer.stop_energy,
-            alpha_deg: params.alpha_deg,
-            max_passes: params.optimizer.max_passes,
-            max_vertices: params.max_vertices as usize,
-            deadline: self.deadline,
-            params: params.optimizer,
+            limits: PassLimits {
+                l: resolved.l,
+                deadline: self.deadline,
+                params: params.optimizer,
+            },
+            linear: LinearOptions {
+                l_floor: resolved.eps.min(resolved.l),
+                stop_energy: params.optimizer.stop_energy,
+                alpha_deg: params.alpha_deg,
+                max_passes: params.optimizer.max_passes,
+                max_vertices: params.max_vertices as usize,
+            },
         }
     }
 

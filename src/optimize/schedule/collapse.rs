@@ -3,10 +3,11 @@
 //! collapses planned ahead in parallel.
 
 use super::queue::{PlanAhead, Popped, ShortestFirst, sort_unstable};
+use super::scope::Scope;
 use super::sizing::lengths_kept;
 use super::{
-    COLLAPSE_BUDGET_EXTRA, COLLAPSE_BUDGET_PER_EDGE, COLLAPSE_ROUNDS, FailedCollapse, PLAN_AHEAD,
-    STAGE_MIN, STAGE_PAR_MIN, Schedule,
+    COLLAPSE_BUDGET_EXTRA, COLLAPSE_BUDGET_PER_EDGE, COLLAPSE_ROUNDS, PLAN_AHEAD, STAGE_MIN,
+    STAGE_PAR_MIN, Schedule,
 };
 use crate::mesh::{EdgeKey, TriMesh, VertexId};
 use crate::ops::{CollapsePlan, Outcome, Reject, collapse_refusal, try_collapse_planned};
@@ -15,7 +16,7 @@ use rayon::prelude::*;
 /// One direction of a collapse planned ([`Schedule::plan_collapse`]).
 enum CollapseDirection {
     /// Its refusal by the role rules is remembered, and v's faces are
-    /// unchanged since ([`Schedule::role_refused`]): the same refusal,
+    /// unchanged since ([`Memos::role_refusal`](super::Memos::role_refusal)): the same refusal,
     /// without planning it again.
     Remembered(Reject),
     /// The length rule refused it.
@@ -43,7 +44,7 @@ type PlannedCollapse = (
 /// collapse round's order: it stands while neither end's stamp has passed
 /// `at` (no face around either end changed, no neighbour of either moved; the
 /// plans read nothing else that a pass changes, the reasoning of
-/// [`Schedule::failed_collapse`]).
+/// [`Memos::collapse_refused`](super::Memos::collapse_refused)).
 struct CollapseAhead {
     at: u64,
     /// `None`: the round skips the edge (an end is dead, its length changed
@@ -51,16 +52,17 @@ struct CollapseAhead {
     directions: Option<[CollapseDirection; 2]>,
 }
 
-impl Schedule<'_> {
-    /// Collapse edges shorter than `factor` times their mean target, shortest first.
-    pub(crate) fn collapse_pass(&mut self, factor: f64) -> u64 {
+impl<D: Sync> Schedule<'_, D> {
+    /// Collapse the edges of `scope` shorter than `factor` times their mean
+    /// target, shortest first.
+    pub(super) fn collapse_pass(&mut self, scope: &Scope, factor: f64) -> u64 {
         // Refused collapses are retried (in a new round) once a collapse has
         // changed their neighbourhood, as long as rounds make progress.
         let mut total = 0;
         let mut since = None;
         for _ in 0..COLLAPSE_ROUNDS {
-            let start = self.clock;
-            let n = self.collapse_round(factor, since);
+            let start = self.memos.clock();
+            let n = self.collapse_round(scope, factor, since);
             total += n;
             if n == 0 {
                 break;
@@ -73,23 +75,25 @@ impl Schedule<'_> {
     /// One round of [`Self::collapse_pass`]: every short edge once, shortest
     /// first. With `since`, only the edges at a vertex whose faces changed
     /// after that clock: a refused collapse elsewhere would be refused again
-    /// (its memo in `failed_collapse` still holds, and a collapse pass changes
-    /// no length or target), so the round skips the scan of the whole mesh.
-    fn collapse_round(&mut self, factor: f64, since: Option<u64>) -> u64 {
+    /// (its memo still holds, and a collapse pass changes no length or
+    /// target), so the round skips the scan of the whole mesh.
+    fn collapse_round(&mut self, scope: &Scope, factor: f64, since: Option<u64>) -> u64 {
         // Shortest first, by the bits of the (non-negative) length, which
         // order like the lengths: the short edges sorted once, and a min-heap
         // for the edges queued again during the round, popped together in
         // one order.
         let mut queue = ShortestFirst::default();
         let edges: Vec<EdgeKey> = match since {
-            None => self.candidate_edges(),
+            None => scope.edges(self.mesh),
             Some(at) => {
                 // The edges at the vertices stamped since `at`, found in
                 // parallel and sorted (the queue's order does not depend on
                 // how they were found).
                 let mesh: &TriMesh = self.mesh;
-                let touched: Vec<VertexId> =
-                    mesh.vertices().filter(|&v| self.stamp_of(v) > at).collect();
+                let touched: Vec<VertexId> = mesh
+                    .vertices()
+                    .filter(|&v| self.memos.stamp_of(v) > at)
+                    .collect();
                 let mut edges: Vec<EdgeKey> = touched
                     .into_par_iter()
                     .fold(Vec::new, |mut edges, v| {
@@ -110,7 +114,7 @@ impl Schedule<'_> {
             .into_par_iter()
             .filter_map(|k| {
                 let len = self.mesh.distance(k.lo, k.hi);
-                (len < factor * self.edge_target(k) && self.edge_in_patch(k.lo, k.hi))
+                (len < factor * self.targets.edge_target(self.mesh, k) && scope.touches(k.lo, k.hi))
                     .then_some((len.to_bits(), k))
             })
             .collect();
@@ -158,7 +162,7 @@ impl Schedule<'_> {
                 Popped::Staged(plan) => {
                     #[cfg(test)]
                     {
-                        self.staged_tally += usize::from(plan.is_some());
+                        self.tally.staged += usize::from(plan.is_some());
                     }
                     plan
                 }
@@ -172,7 +176,7 @@ impl Schedule<'_> {
                 // no copy of it while it was ahead there, so this is its
                 // first pop since its plan. A hash lookup per pop saved.)
                 let refused_since =
-                    |s: &Self| matches!(s.failed_collapse.get(&k), Some(f) if f.at >= a.at);
+                    |s: &Self| matches!(s.memos.collapse_refused_at(k), Some(at) if at >= a.at);
                 debug_assert!(
                     !(from_sorted && a.directions.is_some() && refused_since(self)),
                     "an edge popped from `sorted` refused since its plan"
@@ -231,11 +235,11 @@ impl Schedule<'_> {
                 if matches!(out, Outcome::Rejected(Reject::Energy)) && floored {
                     floor = floor.min(self.ctx.energy_floor);
                 }
-                self.touch(&out, true);
+                self.memos.touch(self.mesh, &out, true);
                 if let Outcome::Rejected(reason) = out
                     && by_role
                 {
-                    self.role_refused.insert((u, v), (self.clock, reason));
+                    self.memos.refuse_role(u, v, reason);
                 }
                 if self.stats.collapse.record(&out) {
                     applied_now = true;
@@ -248,15 +252,7 @@ impl Schedule<'_> {
                     .record(&Outcome::Rejected(Reject::EdgeLength));
             }
             if !applied_now {
-                let at = self.clock;
-                self.failed_collapse.insert(
-                    k,
-                    FailedCollapse {
-                        at,
-                        by_length,
-                        floor,
-                    },
-                );
+                self.memos.refuse_collapse(k, by_length, floor);
             }
             if applied_now {
                 applied += 1;
@@ -269,7 +265,7 @@ impl Schedule<'_> {
                 for &w in &ring.neighbours {
                     let e = EdgeKey::new(u, w);
                     let len = self.mesh.distance(e.lo, e.hi);
-                    if len < factor * self.edge_target(e) {
+                    if len < factor * self.targets.edge_target(self.mesh, e) {
                         queue.push_again((len.to_bits(), e));
                     }
                 }
@@ -283,7 +279,7 @@ impl Schedule<'_> {
     /// round would do with it now, short of applying it.
     fn plan_collapse(&self, bits: u64, k: EdgeKey, factor: f64) -> CollapseAhead {
         CollapseAhead {
-            at: self.clock,
+            at: self.memos.clock(),
             directions: self.plan_directions(bits, k, factor),
         }
     }
@@ -308,7 +304,9 @@ impl Schedule<'_> {
     #[cfg(test)]
     pub(super) fn refused_on_replanning(&self, k: EdgeKey, factor: f64) -> Option<bool> {
         let alive = self.mesh.is_vertex_alive(k.lo) && self.mesh.is_vertex_alive(k.hi);
-        if !alive || self.mesh.distance(k.lo, k.hi) >= factor * self.edge_target(k) {
+        if !alive
+            || self.mesh.distance(k.lo, k.hi) >= factor * self.targets.edge_target(self.mesh, k)
+        {
             return None;
         }
         Some(
@@ -326,9 +324,7 @@ impl Schedule<'_> {
         // other direction).
         let mut rings: [Option<crate::mesh::ScratchRing>; 2] = [None, None];
         let mut direction = |u: VertexId, v: VertexId| {
-            if let Some(&(at, reason)) = self.role_refused.get(&(u, v))
-                && self.topo_stamp_of(v) <= at
-            {
+            if let Some(reason) = self.memos.role_refusal(u, v) {
                 return CollapseDirection::Remembered(reason);
             }
             let [ring_lo, ring_hi] = &mut rings;
@@ -339,14 +335,7 @@ impl Schedule<'_> {
             };
             let ring_v: &crate::mesh::VertexRing =
                 slot_v.get_or_insert_with(|| crate::mesh::ScratchRing::of(mesh, v));
-            if !lengths_kept(
-                mesh,
-                |a, b| self.pair_target(a, b),
-                self.opts.l,
-                self.stretch,
-                u,
-                ring_v,
-            ) {
+            if !lengths_kept(mesh, &self.targets, self.stretch, u, ring_v) {
                 return CollapseDirection::Length;
             }
             let (plan, floored) =
@@ -379,11 +368,10 @@ impl Schedule<'_> {
             return false;
         }
         let len = self.mesh.distance(k.lo, k.hi);
-        if len.to_bits() != bits || len >= factor * self.edge_target(k) {
+        if len.to_bits() != bits || len >= factor * self.targets.edge_target(self.mesh, k) {
             return false;
         }
 
-        !matches!(self.failed_collapse.get(&k), Some(&FailedCollapse { at, .. })
-            if self.stamp_of(k.lo) <= at && self.stamp_of(k.hi) <= at)
+        !self.memos.collapse_refused(k)
     }
 }

@@ -1,53 +1,52 @@
-//! The schedule's driver: its options, the entry points
+//! The linear schedule's driver: its options, the entry points
 //! ([`optimize_with_field`], and `optimize` for the tests), the main passes
 //! with their stop rules, then the coarsening, the polish, the min-max polish,
 //! the worst-element phase (`repair.rs`), the envelope stages and the final
-//! statistics.
+//! statistics; and the deadline checks every pass makes.
 
+use super::scope::Scope;
 use super::smooth::off_curve_vertices;
 use super::stats::{Measure, OptimizeStats, StopReason, measure};
 use super::{
     COARSEN_ENERGY, COARSEN_FACTOR, COARSEN_STRETCH, COLLAPSE_FACTOR, ENVELOPE_EPS,
     ENVELOPE_ROUNDS, ENVELOPE_SPACING, EQUALIZE_COLLAPSE, EQUALIZE_ROUNDS, EQUALIZE_STRETCH,
-    FIELD_SPLIT_PASSES, MINMAX_MIN_GAIN, MINMAX_PASSES, OPEN_STRETCH, POLISH_MIN_GAIN,
-    POLISH_PASSES, Phase, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, SPLIT_ABOVE, STALL_PASSES,
-    STALL_TOLERANCE, STOP_STRETCH, Schedule, Stretch, UNDONE_PASSES,
+    FIELD_SPLIT_PASSES, MAIN_BOUNDS, MINMAX_MIN_GAIN, MINMAX_PASSES, OPEN_STRETCH, POLISH_MIN_GAIN,
+    POLISH_PASSES, PassLimits, Phase, SEED, SIZING_STALL_MAX, SIZING_STALL_MEAN, SPLIT_ABOVE,
+    STALL_PASSES, STALL_TOLERANCE, STOP_STRETCH, Schedule, Stretch, UNDONE_PASSES,
 };
-use crate::budget::Deadline;
 use crate::mesh::{TriMesh, VertexId};
 use crate::ops::invariants::on_curve;
 use crate::ops::{Context, Objective};
-use crate::params::OptimizerParams;
 use crate::sizing::SizeField;
 use rustc_hash::FxHashSet;
 
-/// Parameters of the schedule, in user units.
+/// Parameters of the linear schedule, in user units: what every pass reads,
+/// and what only its driver reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct OptimizeOptions {
-    /// Target edge length `l`: the sizing field's upper bound.
-    pub l: f64,
+    /// `l`, the deadline and the optimizer's parameters.
+    pub limits: PassLimits,
+    /// The sizing floor, the stop rules and the vertex budget.
+    pub linear: LinearOptions,
+}
+
+/// What only the linear schedule reads (its driver, the split pass, the
+/// refinement of the targets and the worst-element phase), in user units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LinearOptions {
     /// Lower bound of the sizing field (the thesis uses ε).
     pub l_floor: f64,
-    /// AMIPS energy (1 for equilateral) below which a mesh is good enough:
-    /// this stage's stop energy (the linear or the curved one of `params`).
+    /// AMIPS energy (1 for equilateral) below which a mesh is good enough.
     pub stop_energy: f64,
     /// Minimum angle, degrees, above which a mesh is good enough.
     pub alpha_deg: f64,
-    /// Maximum number of passes: this stage's (the linear or the curved
-    /// limit of `params`).
+    /// Maximum number of passes.
     pub max_passes: u32,
     /// No split once the mesh has this many vertices.
     pub max_vertices: usize,
-    /// The run's wall-clock limit: past it the schedule stops at the next
-    /// pass ([`StopReason::TimeLimit`]).
-    pub deadline: Deadline,
-    /// The user's optimizer parameters, carried whole from
-    /// [`crate::Params::optimizer`]: a pass reads a knob as
-    /// `opts.params.<knob>`.
-    pub params: OptimizerParams,
 }
 
-/// Improve `mesh` in place (see the module doc) with the size `opts.l`
+/// Improve `mesh` in place (see the module doc) with the size `opts.limits.l`
 /// everywhere. `ctx.envelope` may be restaged (denser sampling, larger ε) when
 /// rational vertices are left.
 #[cfg(test)]
@@ -56,7 +55,7 @@ pub(crate) fn optimize(
     ctx: &mut Context,
     opts: &OptimizeOptions,
 ) -> OptimizeStats {
-    let field = SizeField::uniform(opts.l, mesh_bounds(mesh));
+    let field = SizeField::uniform(opts.limits.l, mesh_bounds(mesh));
     optimize_with_field(mesh, ctx, opts, &field).0
 }
 
@@ -72,7 +71,7 @@ pub(super) fn mesh_bounds(mesh: &TriMesh) -> kurbo::Rect {
 }
 
 /// The optimization (the module doc) against the size field `field`: every
-/// target starts at the field (`opts.l` is its largest value); split passes
+/// target starts at the field (`opts.limits.l` is its largest value); split passes
 /// resolve it before the main passes where it asks for sizes below the BSP
 /// mesh's edges. Returns the statistics and the positions of the vertices the
 /// optimizer refined below the field (the size report leaves their edges out).
@@ -87,7 +86,8 @@ pub(crate) fn optimize_with_field(
     let rational = s.improve(&mut ever_off);
     // Past the deadline the run ends with the time limit's error, so the
     // phases left are not run (each is a pass or more over the whole mesh).
-    let stopped = |s: &Schedule| (s.timed_out()).then(|| (s.stats().clone(), Vec::new()));
+    let stopped =
+        |s: &Schedule<LinearOptions>| (s.timed_out()).then(|| (s.stats().clone(), Vec::new()));
     if let Some(out) = stopped(&s) {
         return out;
     }
@@ -125,7 +125,7 @@ pub(crate) fn optimize_with_field(
     let refined: Vec<kurbo::Point> = s
         .mesh
         .vertices()
-        .filter(|&v| s.is_refined(v))
+        .filter(|&v| s.targets.is_refined(v))
         .map(|v| s.mesh.position(v))
         .collect();
     (s.finish(rational, &mut ever_off), refined)
@@ -136,13 +136,14 @@ pub(crate) fn optimize_with_field(
 /// below the stop energy (over the triangles not locked).
 fn quality_reached(
     m: &Measure,
-    opts: &OptimizeOptions,
+    l: f64,
+    linear: &LinearOptions,
     rational: usize,
     off: usize,
     stretch: impl FnOnce() -> f64,
 ) -> bool {
-    let good = m.min_angle > opts.alpha_deg || m.max_energy < opts.stop_energy;
-    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * opts.l && {
+    let good = m.min_angle > linear.alpha_deg || m.max_energy < linear.stop_energy;
+    good && rational == 0 && off == 0 && m.longest <= STOP_STRETCH * l && {
         stretch() <= STOP_STRETCH
     }
 }
@@ -168,7 +169,7 @@ fn stalled(history: &[(f64, f64)]) -> bool {
 /// Items of a pass between two checks of the deadline inside it.
 pub(super) const DEADLINE_EVERY: usize = 64;
 
-impl Schedule<'_> {
+impl<D> Schedule<'_, D> {
     /// Inside a pass's loop, at its `n`-th item: whether the time limit has
     /// passed (or a memory overrun is latched; the memory itself is read
     /// between the passes), asked every [`DEADLINE_EVERY`] items (one item on a vertex of a
@@ -182,7 +183,7 @@ impl Schedule<'_> {
     /// [`Self::out_of_time_at`] now, whatever the item: the time and a
     /// latched overrun only (then the stop reason says so).
     pub(super) fn out_of_time_in_loop(&mut self) -> bool {
-        if !self.opts.deadline.expired_in_loop() {
+        if !self.limits.deadline.expired_in_loop() {
             return false;
         }
         self.stats.stop = StopReason::TimeLimit;
@@ -197,18 +198,20 @@ impl Schedule<'_> {
 
     /// Whether the deadline has passed (then the stop reason says so).
     pub(super) fn out_of_time(&mut self) -> bool {
-        let expired = self.opts.deadline.expired();
+        let expired = self.limits.deadline.expired();
         if expired {
             self.stats.stop = StopReason::TimeLimit;
         }
         expired
     }
+}
 
+impl Schedule<'_, LinearOptions> {
     /// The main passes (split, collapse, swap, smooth, round, project), the
     /// sizing field refined when they stop paying off, until a stop rule holds
     /// or the pass limit. Returns how many vertices stay rational.
     fn improve(&mut self, ever_off: &mut FxHashSet<VertexId>) -> usize {
-        let opts = self.opts;
+        let (limits, linear) = (self.limits, self.driver);
         self.begin_phase("start");
         let mut rational = self.round_all();
         let mut off = self.project_all(ever_off);
@@ -233,16 +236,16 @@ impl Schedule<'_> {
             if !self.sizes_pending() || self.out_of_time() {
                 break;
             }
-            self.split_pass();
+            self.split_pass(&mut Scope::Whole);
         }
         self.begin_phase("main");
-        for pass in 0..opts.max_passes {
-            if opts.deadline.expired() {
+        for pass in 0..linear.max_passes {
+            if limits.deadline.expired() {
                 self.stats.stop = StopReason::TimeLimit;
                 break;
             }
-            let uniform = self.field.is_uniform();
-            if quality_reached(&last, &opts, rational, off, || {
+            let uniform = self.targets.is_uniform();
+            if quality_reached(&last, limits.l, &linear, rational, off, || {
                 if uniform || last_splits == 0 || undone >= UNDONE_PASSES {
                     0.0
                 } else {
@@ -253,24 +256,24 @@ impl Schedule<'_> {
                 break;
             }
             self.stats.passes = pass + 1;
-            self.refresh_bases();
+            self.targets.refresh(self.mesh);
             // The deadline is also checked between the sub-passes: one pass of
             // a large mesh can take seconds, more on a loaded machine.
-            let (long, splits) = self.split_pass();
+            let (long, splits) = self.split_pass(&mut Scope::Whole);
             last_splits = splits;
             let splits_of_pass = splits;
             if self.out_of_time() {
                 break;
             }
-            let collapses = self.collapse_pass(COLLAPSE_FACTOR);
+            let collapses = self.collapse_pass(&Scope::Whole, COLLAPSE_FACTOR);
             if self.out_of_time() {
                 break;
             }
-            let swaps = self.swap_pass();
+            let swaps = self.swap_pass(&Scope::Whole);
             if self.out_of_time() {
                 break;
             }
-            let smooths = self.smooth_pass();
+            let smooths = self.smooth_pass(&Scope::Whole);
             rational = self.round_all();
             off = self.project_all(ever_off);
             let now = measure(self.mesh);
@@ -325,15 +328,15 @@ impl Schedule<'_> {
     /// user asked for sizes). Collapses never make the local worst triangle
     /// worse than the floor below.
     fn coarsen(&mut self) {
-        self.refresh_bases();
+        self.targets.refresh(self.mesh);
         let all: Vec<VertexId> = self.mesh.vertices().collect();
         for v in all {
-            let b = self.base_of(v);
-            self.set_target(v, b);
+            let b = self.targets.base_of(v);
+            self.targets.set_target(v, b);
         }
         self.enter(Phase::Coarsen);
         self.keep_standing_refusals(COARSEN_FACTOR);
-        self.collapse_pass(COARSEN_FACTOR);
+        self.collapse_pass(&Scope::Whole, COARSEN_FACTOR);
     }
 
     /// Equalise edge lengths against the field (isotropic remeshing's
@@ -346,15 +349,15 @@ impl Schedule<'_> {
         // Refusals under the earlier phases' rules are forgotten once; within
         // the rounds a refusal stands until its vertices move or their faces
         // change (the memos' stamps).
-        self.failed_smooth.clear();
+        self.memos.forget_smooth_refusals();
         self.keep_standing_refusals(EQUALIZE_COLLAPSE);
         for _ in 0..EQUALIZE_ROUNDS {
             if self.out_of_time() {
                 break;
             }
-            let relaxed = self.smooth_pass_with(Objective::Relax);
-            let collapsed = self.collapse_pass(EQUALIZE_COLLAPSE);
-            let swaps = self.swap_pass();
+            let relaxed = self.smooth_pass_with(&Scope::Whole, Objective::Relax);
+            let collapsed = self.collapse_pass(&Scope::Whole, EQUALIZE_COLLAPSE);
+            let swaps = self.swap_pass(&Scope::Whole);
             tracing::debug!(
                 relaxed,
                 collapsed,
@@ -366,29 +369,26 @@ impl Schedule<'_> {
                 break;
             }
         }
-        self.failed_smooth.clear();
+        self.memos.forget_smooth_refusals();
     }
 
     /// Forget the refused collapses that the phase just entered (its
     /// collapses shorter than `factor` times the target) may allow: its
     /// sizes, stretch or energy floor differ. Keep the rest
-    /// ([`FailedCollapse::stands_under`](super::FailedCollapse::stands_under)): re-planning them would refuse
-    /// them again (the tests re-plan every one kept and check).
+    /// ([`Memos::keep_refusals_standing_under`](super::Memos::keep_refusals_standing_under)):
+    /// re-planning them would refuse them again (the tests re-plan every one
+    /// kept and check).
     pub(super) fn keep_standing_refusals(&mut self, factor: f64) {
         let floor = self.ctx.energy_floor;
-        self.failed_collapse.retain(|_, f| f.stands_under(floor));
+        self.memos.keep_refusals_standing_under(floor);
         #[cfg(test)]
         {
-            let kept: Vec<(crate::mesh::EdgeKey, u64)> = self
-                .failed_collapse
-                .iter()
-                .map(|(&k, f)| (k, f.at))
-                .collect();
+            let kept = self.memos.collapse_refusals();
             for (k, at) in kept {
                 let unchanged = self.mesh.is_vertex_alive(k.lo)
                     && self.mesh.is_vertex_alive(k.hi)
-                    && self.stamp_of(k.lo) <= at
-                    && self.stamp_of(k.hi) <= at;
+                    && self.memos.stamp_of(k.lo) <= at
+                    && self.memos.stamp_of(k.hi) <= at;
                 if !unchanged {
                     continue;
                 }
@@ -397,7 +397,7 @@ impl Schedule<'_> {
                         refused,
                         "a refusal kept across phases is not refused: {k:?}"
                     );
-                    self.standing_checked += 1;
+                    self.tally.standing_checked += 1;
                 }
             }
         }
@@ -406,7 +406,7 @@ impl Schedule<'_> {
 
     /// Enter `phase`: its energy floor, its longest new edge and its
     /// collapses' stretch (see [`Phase`]).
-    pub(crate) fn enter(&mut self, phase: Phase) {
+    pub(super) fn enter(&mut self, phase: Phase) {
         // The floor of the phases that coarsen: a ring may get as bad as the
         // stop energy (the quality asked for) but never worse than the mesh's
         // worst triangle (outside the locked ones) or COARSEN_ENERGY,
@@ -417,21 +417,21 @@ impl Schedule<'_> {
             measure(self.mesh)
                 .max_energy
                 .max(COARSEN_ENERGY)
-                .min(self.opts.stop_energy)
+                .min(self.driver.stop_energy)
         };
         // Near size sources the user asked for, collapses keep the split
         // bound in every phase; near the drawing's own (thin strokes) the
         // coarsening stretches as it did before the size field.
-        let asked = self.field.is_asked();
+        let asked = self.targets.is_asked();
         let below = |s: f64| if asked { SPLIT_ABOVE } else { s };
         // After the main passes no operation stretches an edge past 2 l (the
         // collapses by their length rule, smoothing and swaps by the
         // context's bound), except the min-max polish: quality first.
         let (floor, max_new_edge, stretch) = match phase {
-            Phase::Main | Phase::Curved => (0.0, f64::INFINITY, Stretch::uniform(SPLIT_ABOVE)),
+            Phase::Main => MAIN_BOUNDS,
             Phase::Coarsen => (
                 coarsen_floor(),
-                STOP_STRETCH * self.opts.l,
+                STOP_STRETCH * self.limits.l,
                 Stretch {
                     open: OPEN_STRETCH,
                     below: below(COARSEN_STRETCH),
@@ -439,7 +439,7 @@ impl Schedule<'_> {
             ),
             Phase::Equalize => (
                 coarsen_floor(),
-                STOP_STRETCH * self.opts.l,
+                STOP_STRETCH * self.limits.l,
                 Stretch {
                     open: EQUALIZE_STRETCH,
                     below: below(EQUALIZE_STRETCH),
@@ -447,14 +447,12 @@ impl Schedule<'_> {
             ),
             Phase::Polish => (
                 0.0,
-                STOP_STRETCH * self.opts.l,
+                STOP_STRETCH * self.limits.l,
                 Stretch::uniform(SPLIT_ABOVE),
             ),
             Phase::MinMax => (0.0, f64::INFINITY, Stretch::uniform(SPLIT_ABOVE)),
         };
-        self.ctx.energy_floor = floor;
-        self.ctx.max_new_edge = max_new_edge;
-        self.stretch = stretch;
+        self.bound((floor, max_new_edge, stretch));
     }
 
     /// Polish: swaps and smoothing only (no change of size), each never making
@@ -463,7 +461,7 @@ impl Schedule<'_> {
         self.enter(Phase::Polish);
         let mut before = measure(self.mesh);
         for _ in 0..POLISH_PASSES {
-            let changed = self.swap_pass() + self.smooth_pass();
+            let changed = self.swap_pass(&Scope::Whole) + self.smooth_pass(&Scope::Whole);
             if self.timed_out() {
                 return;
             }
@@ -480,10 +478,11 @@ impl Schedule<'_> {
     /// swaps), while the worst triangle still improves.
     fn minmax_polish(&mut self) {
         self.enter(Phase::MinMax);
-        self.failed_smooth.clear();
+        self.memos.forget_smooth_refusals();
         let mut worst = measure(self.mesh).max_energy;
         for _ in 0..MINMAX_PASSES {
-            let changed = self.smooth_pass_with(Objective::MinMax) + self.swap_pass();
+            let changed = self.smooth_pass_with(&Scope::Whole, Objective::MinMax)
+                + self.swap_pass(&Scope::Whole);
             if self.timed_out() {
                 return;
             }
@@ -510,7 +509,7 @@ impl Schedule<'_> {
             self.stats.envelope_stages += 1;
             self.ctx.envelope = self.ctx.envelope.restaged(eps, sp);
             for _ in 0..ENVELOPE_ROUNDS {
-                self.smooth_pass();
+                self.smooth_pass(&Scope::Whole);
                 rational = self.round_all();
                 if rational == 0 || self.timed_out() {
                     return rational;
@@ -567,12 +566,12 @@ mod standing_tests {
         let mut checked = 0;
         for (mut mesh, mut ctx) in test_meshes(10, 5) {
             let opts = test_options();
-            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
             s.improve(&mut FxHashSet::default());
             s.coarsen();
             s.equalize();
-            checked += s.standing_checked;
+            checked += s.tally.standing_checked;
         }
         // (most refusals of these small meshes are the length rule's or at
         // free vertices: 30 stand)
@@ -587,7 +586,7 @@ mod standing_tests {
         let mut seen_main_work = false;
         for (mut mesh, mut ctx) in test_meshes(2, 1) {
             let opts = test_options();
-            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
             let stats = optimize_with_field(&mut mesh, &mut ctx, &opts, &field).0;
             let names: Vec<&str> = stats.phases.iter().map(|p| p.phase).collect();
             assert_eq!(
@@ -636,27 +635,25 @@ mod standing_tests {
             {
                 let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
                 let opts = test_options();
-                let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+                let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
                 let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
-                swapped_without += s.swap_pass();
+                swapped_without += s.swap_pass(&Scope::Whole);
             }
-            let opts = OptimizeOptions {
-                deadline: Deadline::after(Some(0.0)),
-                ..test_options()
-            };
-            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let mut opts = test_options();
+            opts.limits.deadline = crate::budget::Deadline::after(Some(0.0));
+            let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
             let (mut fresh, mut fresh_ctx) = (mesh.clone(), ctx.clone());
             {
                 let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, SEED, &field);
-                assert_eq!(s.swap_pass(), 0);
+                assert_eq!(s.swap_pass(&Scope::Whole), 0);
                 assert!(s.timed_out());
                 let limit = (DEADLINE_EVERY - 1) as u64;
                 for pass in 0..3 {
                     s.stats.stop = StopReason::PassLimit;
                     let applied = match pass {
-                        0 => s.split_pass().1,
-                        1 => s.collapse_pass(COLLAPSE_FACTOR),
-                        _ => s.smooth_pass(),
+                        0 => s.split_pass(&mut Scope::Whole).1,
+                        1 => s.collapse_pass(&Scope::Whole, COLLAPSE_FACTOR),
+                        _ => s.smooth_pass(&Scope::Whole),
                     };
                     assert!(s.timed_out() || applied < limit, "pass {pass}");
                     assert!(applied <= limit, "pass {pass}: {applied} applied");

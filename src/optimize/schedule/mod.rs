@@ -49,37 +49,48 @@
 //! rounding and smoothing); a vertex left rational after them makes the mesh
 //! unusable, which the caller reports as an error.
 //!
-//! The schedule's files, by phase: `driver.rs` (the entry points, the phases,
-//! the stop rules), one file per pass (`split.rs`, `collapse.rs`, `swap.rs`,
-//! `smooth.rs` with rounding and projection), `repair.rs` (the worst-element
-//! phase), `sizing.rs` (the targets against
-//! the size field), `queue.rs` (the edge queue, the plans made ahead) and
-//! `stats.rs` (tallies, statistics, measures). This file holds the tuning
-//! constants and the optimizer's state ([`Schedule`]).
+//! The schedule's files, by phase: `driver.rs` (the linear entry points, the
+//! phases, the stop rules), `curved.rs` (the curved stage's entry:
+//! [`CurvedPasses`]), one file per pass (`split.rs`, `collapse.rs`,
+//! `swap.rs`, `smooth.rs` with rounding and projection), `repair.rs` (the
+//! worst-element phase), `sizing.rs` (the refinement of the targets, the
+//! collapses' length rule), `queue.rs` (the edge queue, the plans made ahead).
+//! The state has one owner per kind: `targets.rs` ([`Targets`]: each vertex's
+//! target and the size field at it), `memo.rs` ([`Memos`]: the operation
+//! clock, the stamps and the memos of refused operations), `scope.rs`
+//! ([`Scope`](scope::Scope): what a pass works on, the whole mesh or the worst-element
+//! phase's patch, passed to each pass) and `stats.rs` (tallies, statistics,
+//! measures). This file holds the tuning constants and [`Schedule`], which
+//! owns the mesh, its context, the limits and one value of each.
 
 mod collapse;
+mod curved;
 mod driver;
+mod memo;
 mod queue;
 mod repair;
+mod scope;
 mod sizing;
 mod smooth;
 mod split;
 mod stats;
 mod swap;
+mod targets;
 
+pub(crate) use curved::CurvedPasses;
 #[cfg(test)]
 pub(crate) use driver::optimize;
-pub(crate) use driver::{OptimizeOptions, optimize_with_field};
+pub(crate) use driver::{LinearOptions, OptimizeOptions, optimize_with_field};
 pub(crate) use repair::needle_energy;
 pub(crate) use stats::{EnergyMeasure, OpTally, OptimizeStats, StopReason, measure_energy};
 
-#[cfg(test)]
 use crate::budget::Deadline;
-use crate::mesh::{EdgeKey, TriMesh, VertexId};
-use crate::ops::{Context, Outcome, Reject};
+use crate::mesh::{TriMesh, VertexId};
+use crate::ops::Context;
+use crate::params::OptimizerParams;
 use crate::sizing::SizeField;
-use rustc_hash::FxHashSet;
-use sizing::bases;
+use memo::Memos;
+use targets::Targets;
 
 /// Edges longer than this multiple of their mean target are split, and a
 /// collapse may not create an edge longer than this multiple (else splits and
@@ -167,7 +178,7 @@ const SIZING_WORST_DIVISOR: f64 = 100.0;
 /// See [`SIZING_WORST_DIVISOR`]: the reference's `stop_energy * 0.9`.
 const SIZING_STOP_FRACTION: f64 = 0.9;
 /// Along an edge whose ends' field values differ by less than this factor the
-/// field at the midpoint is taken as their mean (see `Schedule::edge_target`).
+/// field at the midpoint is taken as their mean (see `Targets::edge_target`).
 const FIELD_LINEAR: f64 = 1.1;
 /// A vertex whose target falls below this fraction of the field counts as
 /// refined by the optimizer (the size report leaves its edges out).
@@ -252,94 +263,55 @@ impl Shuffle {
     }
 }
 
-/// The optimizer's state: the sizing field, the retry stamps and the tallies.
-/// The curved stage (the curved mesh optimization, one layer up) drives its collapse, swap and
-/// smoothing passes too, with a uniform target.
-pub(crate) struct Schedule<'a> {
+/// What every pass reads, in the linear schedule and the curved stage alike,
+/// in user units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PassLimits {
+    /// Target edge length `l`: the sizing field's upper bound, and every
+    /// target without a field.
+    pub l: f64,
+    /// The run's wall-clock limit: past it a pass stops and the schedule
+    /// says so ([`StopReason::TimeLimit`]).
+    pub deadline: Deadline,
+    /// The user's optimizer parameters, carried whole from
+    /// [`crate::Params::optimizer`]: a pass reads a knob as
+    /// `self.limits.params.<knob>`.
+    pub params: OptimizerParams,
+}
+
+/// The optimizer's state: the mesh and its context, the limits, the targets
+/// ([`Targets`]), the memos of the passes ([`Memos`]) and the statistics.
+/// What a pass works on is its argument ([`Scope`](scope::Scope)).
+///
+/// `D` is what only the driver reads: [`LinearOptions`] for the linear
+/// schedule ([`Schedule::new`]); `()` for the curved stage, which runs the
+/// collapse, swap and smoothing passes alone ([`CurvedPasses`]).
+pub(crate) struct Schedule<'a, D> {
     mesh: &'a mut TriMesh,
     ctx: &'a mut Context,
-    opts: OptimizeOptions,
-    /// Target edge length by vertex slot.
-    target: Vec<f64>,
-    /// The size field at the vertex by vertex slot (the largest target: the
-    /// optimizer's refinement relaxes and the coarsening resets to it).
-    base: Vec<f64>,
-    /// The size field (`crate::sizing`): what every edge is measured against.
-    field: &'a SizeField,
-    /// By vertex slot: whether the optimizer refined the vertex's target below
-    /// the field (around a triangle it could not improve at the field's size).
-    refined: Vec<bool>,
-    stats: OptimizeStats,
+    /// What every pass reads.
+    limits: PassLimits,
+    /// What only the driver reads (see above).
+    driver: D,
+    /// The smoothing order's generator.
     rng: Shuffle,
-    /// Operation clock: advanced by every applied operation.
-    clock: u64,
-    /// By vertex slot: the clock when a face around the vertex last changed.
-    stamp: Vec<u64>,
-    /// Collapses refused, with the clock then and whether the length rule
-    /// refused some direction: retried only once a face around either end has
-    /// changed (the outcome depends on nothing else), or, for a length
-    /// refusal, once the sizing field changed.
-    failed_collapse: rustc_hash::FxHashMap<EdgeKey, FailedCollapse>,
-    /// Smoothing refused, by vertex slot, with the clock then.
-    failed_smooth: Vec<u64>,
-    /// By vertex slot: the clock when the faces around the vertex last changed
-    /// (split, collapse, swap; not a move).
-    topo_stamp: Vec<u64>,
-    /// Collapses of `.1` into `.0` refused by the role rules alone (a
-    /// [`CollapsePlan::new`](crate::ops::CollapsePlan::new) refusal that says so), with the clock then and
-    /// the reason: they stay refused until the faces around `.1` change.
-    role_refused: rustc_hash::FxHashMap<(VertexId, VertexId), (u64, Reject)>,
-    /// Longest edge a collapse may create, relative to its target.
+    targets: Targets<'a>,
+    memos: Memos,
+    /// Longest edge a collapse may create, relative to its target: the
+    /// phase's ([`Schedule::enter`]).
     stretch: Stretch,
-
-    /// The clock when the last swap pass scanned the edges, and the edges it
-    /// found a gain on: an edge whose ends' faces have not changed since
-    /// (so neither has its quad) and that had no gain then has none now.
-    swap_scan: Option<(u64, FxHashSet<EdgeKey>)>,
-    /// In the worst-element phase (`repair.rs`): the vertices whose edges
-    /// and moves the passes consider (`None`: every vertex).
-    patch: Option<repair::Patch>,
-    /// In the worst-element phase: splits may not make their faces worse
-    /// than before or than a corner of α allows (`repair.rs`).
-    split_bounded: bool,
+    stats: OptimizeStats,
     /// The phase being timed (`None`: none is, as in the curved stage).
     phase: Option<stats::OpenPhase>,
-    /// Tests: the plans made ahead that were used, and those found stale.
+    /// Tests: what the plans made ahead and the refusals kept did.
     #[cfg(test)]
-    ahead_tally: (usize, usize),
-    /// Tests: the plans of edges queued again and staged that were popped.
-    #[cfg(test)]
-    staged_tally: usize,
-    /// Tests: the refusals kept across a phase change that were planned
-    /// again and found refused ([`Schedule::keep_standing_refusals`]).
-    #[cfg(test)]
-    standing_checked: usize,
+    tally: stats::TestTally,
 }
 
-/// A refused collapse in [`Schedule::failed_collapse`].
-#[derive(Clone, Copy)]
-struct FailedCollapse {
-    /// The operation clock when it was refused.
-    at: u64,
-    /// Whether the length rule (`keeps_lengths`, which reads the sizing
-    /// field) refused a direction.
-    by_length: bool,
-    /// The lowest energy floor ([`Context::energy_floor`](crate::ops::Context::energy_floor))
-    /// under which the energy rule refused a direction with the floor
-    /// applied (`+∞`: none did). The refusal stands under that floor or a
-    /// lower one; every other refusal but the length rule's reads only
-    /// positions, tags and faces, whatever the phase.
-    floor: f64,
-}
-
-impl FailedCollapse {
-    /// Whether the refusal stands in a phase whose rules are those of the
-    /// last one but for the sizes, the stretch and the energy floor, now
-    /// `floor`.
-    fn stands_under(&self, floor: f64) -> bool {
-        !self.by_length && floor <= self.floor
-    }
-}
+/// The bounds of the main passes (and of the curved stage's): no energy
+/// floor ([`Context::energy_floor`]), no bound on a new edge
+/// ([`Context::max_new_edge`]), collapses within the split bound.
+const MAIN_BOUNDS: (f64, f64, Stretch) = (0.0, f64::INFINITY, Stretch::uniform(SPLIT_ABOVE));
 
 /// The entry of `v` in a per-vertex-slot array, grown with `fill` as needed.
 fn slot<T: Copy>(values: &mut Vec<T>, v: VertexId, fill: T) -> &mut T {
@@ -350,10 +322,10 @@ fn slot<T: Copy>(values: &mut Vec<T>, v: VertexId, fill: T) -> &mut T {
     &mut values[i]
 }
 
-impl<'a> Schedule<'a> {
-    /// A schedule over `mesh` with every target at `opts.l`, collapses that
-    /// make no edge longer than 4/3 of its target, and the smoothing order
-    /// drawn from `seed`.
+impl<'a> Schedule<'a, LinearOptions> {
+    /// The linear schedule over `mesh` with every target at the size field
+    /// `field`, the bounds of [`Phase::Main`], and the smoothing order drawn
+    /// from `seed`.
     pub(crate) fn new(
         mesh: &'a mut TriMesh,
         ctx: &'a mut Context,
@@ -361,66 +333,58 @@ impl<'a> Schedule<'a> {
         seed: u64,
         field: &'a SizeField,
     ) -> Self {
-        let base = bases(mesh, field, opts.l);
+        Schedule::with_driver(mesh, ctx, opts.limits, opts.linear, seed, Some(field))
+    }
+}
+
+impl<'a, D> Schedule<'a, D> {
+    /// A schedule over `mesh` with every target at `field` (`None`:
+    /// `limits.l` everywhere), the bounds of the main passes
+    /// ([`MAIN_BOUNDS`]), and the smoothing order drawn from `seed`.
+    fn with_driver(
+        mesh: &'a mut TriMesh,
+        ctx: &'a mut Context,
+        limits: PassLimits,
+        driver: D,
+        seed: u64,
+        field: Option<&'a SizeField>,
+    ) -> Self {
+        let targets = Targets::new(mesh, field, limits.l);
         let mut s = Schedule {
-            target: base.clone(),
-            base,
-            field,
-            refined: Vec::new(),
             mesh,
             ctx,
-            opts: *opts,
-            stats: OptimizeStats {
-                passes: 0,
-                stop: StopReason::PassLimit,
-                split: OpTally::default(),
-                collapse: OpTally::default(),
-                swap: OpTally::default(),
-                reroute: OpTally::default(),
-                smooth: OpTally::default(),
-                round: OpTally::default(),
-                project: OpTally::default(),
-                projected_vertices: 0,
-                off_curve_left: 0,
-                rational_left: 0,
-                envelope_stages: 0,
-                bad_corners_left: 0,
-                vertex_budget_reached: false,
-                min_angle_deg: 0.0,
-                max_amips: 0.0,
-                phases: Vec::new(),
-            },
-            phase: None,
+            limits,
+            driver,
             rng: Shuffle(seed),
-            clock: 1,
-            stamp: Vec::new(),
-            failed_collapse: rustc_hash::FxHashMap::default(),
-            failed_smooth: Vec::new(),
-            topo_stamp: Vec::new(),
-            role_refused: rustc_hash::FxHashMap::default(),
-            stretch: Stretch::uniform(SPLIT_ABOVE),
-            swap_scan: None,
-            patch: None,
-            split_bounded: false,
+            targets,
+            memos: Memos::new(),
+            stretch: MAIN_BOUNDS.2,
+            stats: OptimizeStats::start(),
+            phase: None,
             #[cfg(test)]
-            ahead_tally: (0, 0),
-            #[cfg(test)]
-            staged_tally: 0,
-            #[cfg(test)]
-            standing_checked: 0,
+            tally: stats::TestTally::default(),
         };
-        s.enter(Phase::Main);
+        s.bound(MAIN_BOUNDS);
         s
     }
 
     /// The mesh being improved.
-    pub(crate) fn mesh(&self) -> &TriMesh {
+    pub(super) fn mesh(&self) -> &TriMesh {
         self.mesh
     }
 
     /// The tallies so far.
-    pub(crate) fn stats(&self) -> &OptimizeStats {
+    pub(super) fn stats(&self) -> &OptimizeStats {
         &self.stats
+    }
+
+    /// Bound what the operations may do: the energy a free vertex's ring may
+    /// reach, the longest edge a swap or a move may create, and the
+    /// collapses' stretch (what the phases differ by: [`Phase`]).
+    fn bound(&mut self, (energy_floor, max_new_edge, stretch): (f64, f64, Stretch)) {
+        self.ctx.energy_floor = energy_floor;
+        self.ctx.max_new_edge = max_new_edge;
+        self.stretch = stretch;
     }
 
     /// End the phase being timed (if any) and start timing `phase`
@@ -445,44 +409,16 @@ impl<'a> Schedule<'a> {
         }
     }
 
-    /// Record an applied operation: every vertex of the faces it created (or
-    /// moved) gets the new clock, and with `topology` (a split, collapse or
-    /// swap, not a move) the new clock as its topology stamp too.
-    fn touch(&mut self, outcome: &Outcome, topology: bool) {
-        let Outcome::Applied(ch) = outcome else {
-            return;
-        };
-        self.clock += 1;
-        for &f in &ch.created {
-            if !self.mesh.is_face_alive(f) {
-                continue;
-            }
-            for v in self.mesh.face(f) {
-                *slot(&mut self.stamp, v, 0) = self.clock;
-                if topology {
-                    *slot(&mut self.topo_stamp, v, 0) = self.clock;
-                }
-            }
-        }
-    }
-
-    fn topo_stamp_of(&self, v: VertexId) -> u64 {
-        self.topo_stamp.get(v.index()).copied().unwrap_or(0)
-    }
-
-    fn stamp_of(&self, v: VertexId) -> u64 {
-        self.stamp.get(v.index()).copied().unwrap_or(0)
-    }
-
-    /// Whether a plan made ahead at clock `at`, which read the vertices
-    /// `read` (and their rings), still stands: none of them changed since.
+    /// [`Memos::fresh`]: whether a plan made ahead at clock `at`, which read
+    /// the vertices `read` (and their rings), still stands (the tests count
+    /// the answers).
     fn fresh(&mut self, at: u64, read: &[VertexId]) -> bool {
-        let fresh = read.iter().all(|&x| self.stamp_of(x) <= at);
+        let fresh = self.memos.fresh(at, read);
         #[cfg(test)]
         if fresh {
-            self.ahead_tally.0 += 1;
+            self.tally.ahead.0 += 1;
         } else {
-            self.ahead_tally.1 += 1;
+            self.tally.ahead.1 += 1;
         }
         fresh
     }
@@ -504,14 +440,18 @@ fn test_meshes(bsp: u64, delaunay: u64) -> impl Iterator<Item = (TriMesh, crate:
 #[cfg(test)]
 fn test_options() -> OptimizeOptions {
     OptimizeOptions {
-        l: 0.1,
-        l_floor: 0.01,
-        stop_energy: 5.0,
-        alpha_deg: 10.0,
-        max_passes: 40,
-        max_vertices: 20_000,
-        deadline: Deadline::NONE,
-        params: crate::params::OptimizerParams::DEFAULT,
+        limits: PassLimits {
+            l: 0.1,
+            deadline: Deadline::NONE,
+            params: OptimizerParams::DEFAULT,
+        },
+        linear: LinearOptions {
+            l_floor: 0.01,
+            stop_energy: 5.0,
+            alpha_deg: 10.0,
+            max_passes: 40,
+            max_vertices: 20_000,
+        },
     }
 }
 
@@ -533,13 +473,14 @@ impl Stretch {
     }
 }
 
-/// The phases of a schedule, each with its own bounds on what the operations
-/// may do: the energy a free vertex's ring may reach ([`Context::energy_floor`]),
-/// the longest edge a swap or a move may create ([`Context::max_new_edge`]),
-/// and the collapses' [`Stretch`]. [`Schedule::enter`] sets all three, so no
-/// phase inherits another's.
+/// The phases of the linear schedule, each with its own bounds on what the
+/// operations may do: the energy a free vertex's ring may reach
+/// ([`Context::energy_floor`]), the longest edge a swap or a move may create
+/// ([`Context::max_new_edge`]), and the collapses' [`Stretch`].
+/// [`Schedule::enter`] sets all three, so no phase inherits another's. The
+/// curved stage's passes keep the bounds of the main passes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Phase {
+pub(super) enum Phase {
     /// The main passes (and the split passes before them): every operation
     /// keeps the worst energy of its ring, collapses keep the split bound.
     Main,
@@ -551,6 +492,4 @@ pub(crate) enum Phase {
     Polish,
     /// The min-max polish: quality first, no length bound.
     MinMax,
-    /// The curved stage's passes, in curved mode: as [`Phase::Main`].
-    Curved,
 }

@@ -637,6 +637,7 @@ mod plan_ahead_tests {
     use crate::mesh::TriMesh;
     use crate::ops::{Context, Objective};
     use crate::optimize::schedule::driver::mesh_bounds;
+    use crate::optimize::schedule::scope::Scope;
     use crate::optimize::schedule::stats::measure;
     use crate::optimize::schedule::{COARSEN_FACTOR, Schedule, test_meshes, test_options};
     use crate::sizing::SizeField;
@@ -655,18 +656,19 @@ mod plan_ahead_tests {
                 .expect("a pool");
             pool.install(|| {
                 let (mut mesh, mut ctx) = (mesh.clone(), ctx.clone());
-                let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+                let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
                 let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
+                let whole = &mut Scope::Whole;
                 for pass in 0..6 {
-                    s.split_pass();
-                    s.collapse_pass(if pass < 3 { 0.8 } else { COARSEN_FACTOR });
-                    s.swap_pass();
-                    s.smooth_pass();
-                    s.smooth_pass_with(Objective::MinMax);
+                    s.split_pass(whole);
+                    s.collapse_pass(whole, if pass < 3 { 0.8 } else { COARSEN_FACTOR });
+                    s.swap_pass(whole);
+                    s.smooth_pass(whole);
+                    s.smooth_pass_with(whole, Objective::MinMax);
                     let worst = measure(s.mesh).max_energy;
                     s.update_sizing(worst);
                 }
-                let (stats, tally) = (s.stats().clone(), (s.ahead_tally, s.staged_tally));
+                let (stats, tally) = (s.stats().clone(), (s.tally.ahead, s.tally.staged));
                 (mesh, stats, tally)
             })
         };

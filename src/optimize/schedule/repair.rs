@@ -17,11 +17,12 @@
 //!
 //! The patch's operations are the main passes' own (every invariant checked,
 //! collapses, swaps and moves never raise the local largest energy); only
-//! their candidates are limited to the patch, so the rest of the mesh keeps
-//! the sizes the coarsening left. Splits ignore the energy rule, so a round is
-//! checked as a whole: one that leaves the worst bad corner worse is rolled
-//! back (mesh and targets restored, the memos of refusals forgotten) and run
-//! again with splits bounded by [`needle_energy`].
+//! their candidates are limited to the patch (the passes' [`Scope`]), so the
+//! rest of the mesh keeps the sizes the coarsening left. Splits ignore the
+//! energy rule, so a round is checked as a whole: one that leaves the worst
+//! bad corner worse is rolled back (mesh and targets restored, the memos of
+//! refusals forgotten) and run again with splits bounded by
+//! [`needle_energy`].
 //!
 //! Each round first splits the faces with two curved primary edges, the split
 //! the curved stage makes (at most one curved edge per element) without
@@ -35,7 +36,9 @@
 //! (a fan from a vertex to a curve sampled within α, a strip between two close
 //! features) that only new vertices between the features resolve.
 
-use super::{REFINED_BELOW, Schedule, slot};
+use super::scope::{Patch, Scope};
+use super::targets::Targets;
+use super::{LinearOptions, REFINED_BELOW, Schedule};
 use crate::mesh::{EdgeKey, FaceId, TriMesh, VertexId, corner_angles};
 use crate::ops::{Context, Objective};
 use crate::optimize::forced::corner_forced;
@@ -50,37 +53,6 @@ const REPAIR_ROUNDS: usize = 10;
 const REPAIR_FLOOR_DIVISOR: f64 = 16.0;
 /// Min-max smoothing passes per repair round.
 const REPAIR_SMOOTHS: usize = 3;
-/// [`Schedule::candidate_edges`] walks the patch's vertices in parallel
-/// chunks of at least this many.
-const PATCH_CHUNK: usize = 256;
-
-/// The worst-element phase's patch: a flag per vertex slot, and its
-/// vertices listed once each (in the order they joined). The passes' edges
-/// come from the list: a scan of the flags would go over every vertex slot the
-/// mesh ever had (on a large drawing several times the live vertices, for a
-/// patch of a few thousand).
-#[derive(Default)]
-pub(super) struct Patch {
-    flags: Vec<bool>,
-    list: Vec<VertexId>,
-}
-
-impl Patch {
-    /// Whether `v` is in the patch.
-    fn contains(&self, v: VertexId) -> bool {
-        self.flags.get(v.index()).copied().unwrap_or(false)
-    }
-
-    /// Put `v` in the patch.
-    fn insert(&mut self, v: VertexId) {
-        let flag = slot(&mut self.flags, v, false);
-        if !*flag {
-            *flag = true;
-            self.list.push(v);
-        }
-    }
-}
-
 /// The smallest AMIPS energy of a triangle with a corner of `alpha` (radians,
 /// below 60°): the isosceles needle with that apex. A triangle of lower energy
 /// has every corner above `alpha`.
@@ -92,11 +64,9 @@ pub(crate) fn needle_energy(alpha: f64) -> f64 {
 }
 
 /// What a worst-element round restores when it is rolled back.
-struct RepairSnapshot {
+struct RepairSnapshot<'a> {
     mesh: TriMesh,
-    target: Vec<f64>,
-    base: Vec<f64>,
-    refined: Vec<bool>,
+    targets: Targets<'a>,
 }
 
 /// The faces with a bad corner (see the module doc), `alpha` in radians,
@@ -125,63 +95,7 @@ fn worst_corner(bad: &[(FaceId, f64)]) -> f64 {
     bad.iter().map(|b| b.1).fold(f64::INFINITY, f64::min)
 }
 
-impl Schedule<'_> {
-    /// Whether `v` may be touched by the passes: everywhere outside the
-    /// worst-element phase, in it only the patch around the bad triangles.
-    pub(super) fn in_patch(&self, v: VertexId) -> bool {
-        self.patch.as_ref().is_none_or(|r| r.contains(v))
-    }
-
-    /// Whether the edge `a`–`b` touches the patch ([`Self::in_patch`]).
-    pub(super) fn edge_in_patch(&self, a: VertexId, b: VertexId) -> bool {
-        self.in_patch(a) || self.in_patch(b)
-    }
-
-    /// The edges the passes consider: those at the patch's vertices in the
-    /// worst-element phase (sorted), every edge elsewhere.
-    pub(super) fn candidate_edges(&self) -> Vec<EdgeKey> {
-        let Some(patch) = &self.patch else {
-            return self.mesh.edge_list();
-        };
-        // Found in parallel and sorted (the set does not depend on how it was
-        // found). An edge between two patch vertices is listed from its lower
-        // end only, so none is listed twice. On the ten slowest dev drawings this ran on the pipeline's
-        // thread alone for 0.4 s in all at two threads.
-        let mesh: &TriMesh = self.mesh;
-        let mut edges: Vec<EdgeKey> = patch
-            .list
-            .par_iter()
-            .with_min_len(PATCH_CHUNK)
-            .filter(|&&v| mesh.is_vertex_alive(v))
-            .fold(Vec::new, |mut edges, &v| {
-                let ring = crate::mesh::ScratchRing::of(mesh, v);
-                edges.extend(
-                    ring.neighbours
-                        .iter()
-                        .filter(|&&w| w > v || !self.in_patch(w))
-                        .map(|&w| EdgeKey::new(v, w)),
-                );
-                edges
-            })
-            .reduce(Vec::new, |mut a, mut b| {
-                a.append(&mut b);
-                a
-            });
-        super::queue::sort_unstable(&mut edges);
-        debug_assert!(
-            edges.windows(2).all(|w| w[0] < w[1]),
-            "an edge listed twice"
-        );
-        edges
-    }
-
-    /// Put `v` (a vertex a split made in the patch) in the patch.
-    pub(super) fn add_to_patch(&mut self, v: VertexId) {
-        if let Some(r) = &mut self.patch {
-            r.insert(v);
-        }
-    }
-
+impl Schedule<'_, LinearOptions> {
     /// The worst-element phase (see the module doc). Returns the bad faces
     /// left.
     ///
@@ -192,9 +106,9 @@ impl Schedule<'_> {
     /// as a whole and run again with splits that may not make their faces
     /// worse than before or than a corner of α allows.
     pub(super) fn repair_angles(&mut self) -> usize {
-        let alpha = self.opts.alpha_deg.to_radians();
+        let alpha = self.driver.alpha_deg.to_radians();
         let mut bad = Vec::new();
-        self.failed_smooth.clear();
+        self.memos.forget_smooth_refusals();
         for round in 0..REPAIR_ROUNDS {
             // faces with two curved edges first: the round smooths what their
             // splits leave
@@ -208,9 +122,7 @@ impl Schedule<'_> {
             let worst = worst_corner(&bad);
             let snap = RepairSnapshot {
                 mesh: self.mesh.clone(),
-                target: self.target.clone(),
-                base: self.base.clone(),
-                refined: self.refined.clone(),
+                targets: self.targets.clone(),
             };
             self.repair_round(round, &bad, false);
             if self.timed_out() {
@@ -220,17 +132,14 @@ impl Schedule<'_> {
             if worst_corner(&now) < worst {
                 tracing::debug!(round, "worst-element round rolled back");
                 *self.mesh = snap.mesh;
-                self.target = snap.target;
-                self.base = snap.base;
-                self.refined = snap.refined;
-                self.forget_memos();
+                self.targets = snap.targets;
+                self.memos.forget();
                 self.repair_round(round, &bad, true);
                 bad = bad_faces(self.mesh, self.ctx, alpha);
             } else {
                 bad = now;
             }
         }
-        self.patch = None;
         if self.timed_out() {
             return bad.len();
         }
@@ -249,12 +158,14 @@ impl Schedule<'_> {
                     patch.insert(w);
                 }
             }
-            self.patch = Some(patch);
-            self.failed_smooth.clear();
+            let scope = Scope::Patch {
+                patch,
+                bounded_splits: false,
+            };
+            self.memos.forget_smooth_refusals();
             for _ in 0..REPAIR_SMOOTHS {
-                self.smooth_pass_with(Objective::MinMax);
+                self.smooth_pass_with(&scope, Objective::MinMax);
             }
-            self.patch = None;
             bad = bad_faces(self.mesh, self.ctx, alpha);
         }
         bad.len()
@@ -301,18 +212,15 @@ impl Schedule<'_> {
             edges.sort_by(|a, b| b.0.total_cmp(&a.0));
             let k = edges[0].1;
             let out = crate::ops::try_split(self.mesh, self.ctx, k.lo, k.hi);
-            self.touch(&out, true);
+            self.memos.touch(self.mesh, &out, true);
             if let crate::ops::Outcome::Applied(ch) = &out
                 && let Some(m) = ch.new_vertex
             {
-                let t = 0.5 * (self.target_of(k.lo) + self.target_of(k.hi));
-                let h = if self.field.is_uniform() {
-                    self.opts.l
-                } else {
-                    self.field.at(self.mesh.position(m))
-                };
-                self.set_base(m, h);
-                self.set_target(m, t.min(h));
+                let targets = &mut self.targets;
+                let t = 0.5 * (targets.target_of(k.lo) + targets.target_of(k.hi));
+                let h = targets.field_at(self.mesh.position(m));
+                targets.set_base(m, h);
+                targets.set_target(m, t.min(h));
                 new.push(m);
             }
             self.stats.split.record(&out);
@@ -320,37 +228,26 @@ impl Schedule<'_> {
         new
     }
 
-    /// The memos of refused operations and the swap scan, after the mesh
-    /// was restored to an earlier state (they describe the abandoned one).
-    fn forget_memos(&mut self) {
-        self.clock += 1;
-        self.failed_collapse.clear();
-        self.failed_smooth.clear();
-        self.role_refused.clear();
-        self.swap_scan = None;
-        let clock = self.clock;
-        for s in self.stamp.iter_mut().chain(self.topo_stamp.iter_mut()) {
-            *s = clock;
-        }
-    }
-
     /// One round of [`Self::repair_angles`] around the faces `bad`, with
     /// `bounded` splits or not.
     fn repair_round(&mut self, round: usize, bad: &[(FaceId, f64)], bounded: bool) {
-        self.refine_around(bad);
-        self.split_bounded = bounded;
-        self.swap_scan = None;
-        let (_, splits) = self.split_pass();
-        let collapses = self.collapse_pass(super::COLLAPSE_FACTOR);
-        let mut swaps = self.swap_pass();
+        let patch = self.refine_around(bad);
+        let mut scope = Scope::Patch {
+            patch,
+            bounded_splits: bounded,
+        };
+        // The swap scan's memo holds for the scope it scanned: the patch's
+        // passes scan afresh, and so does the next pass over the whole mesh.
+        self.memos.forget_swap_scan();
+        let (_, splits) = self.split_pass(&mut scope);
+        let collapses = self.collapse_pass(&scope, super::COLLAPSE_FACTOR);
+        let mut swaps = self.swap_pass(&scope);
         let mut smooths = 0;
         for _ in 0..REPAIR_SMOOTHS {
-            smooths += self.smooth_pass_with(Objective::MinMax);
-            swaps += self.swap_pass();
+            smooths += self.smooth_pass_with(&scope, Objective::MinMax);
+            swaps += self.swap_pass(&scope);
         }
-        self.patch = None;
-        self.split_bounded = false;
-        self.swap_scan = None;
+        self.memos.forget_swap_scan();
         tracing::debug!(
             round,
             bounded,
@@ -373,33 +270,33 @@ impl Schedule<'_> {
         let mut faces = Vec::new();
         self.mesh.faces_on_edge(a, b, &mut faces);
         let old = crate::ops::max_energy(self.mesh, self.ctx, &faces);
-        old.max(needle_energy(self.opts.alpha_deg.to_radians()))
+        old.max(needle_energy(self.driver.alpha_deg.to_radians()))
     }
 
     /// Halve the targets at the vertices of `bad` (those within
     /// [`SIZING_RADIUS`](super::SIZING_RADIUS) of their target less the farther they are, as
-    /// `update_sizing` grades them), and make those vertices and their
-    /// neighbours the patch.
-    fn refine_around(&mut self, bad: &[(FaceId, f64)]) {
-        self.failed_collapse.retain(|_, f| !f.by_length);
+    /// `update_sizing` grades them). Returns the patch: those vertices and
+    /// their neighbours.
+    fn refine_around(&mut self, bad: &[(FaceId, f64)]) -> Patch {
+        self.memos.forget_length_refusals();
         let mut seeds: Vec<VertexId> = bad.iter().flat_map(|&(f, _)| self.mesh.face(f)).collect();
         seeds.sort_unstable();
         seeds.dedup();
         let (mult, touched) = self.refine_multipliers(&seeds, 1.0);
         let mut patch = Patch::default();
         for &v in &touched {
-            let top = self.base_of(v);
-            let floor = self.opts.l_floor / REPAIR_FLOOR_DIVISOR;
-            let t = (self.target_of(v) * mult[v.index()]).clamp(floor.min(top), top);
+            let top = self.targets.base_of(v);
+            let floor = self.driver.l_floor / REPAIR_FLOOR_DIVISOR;
+            let t = (self.targets.target_of(v) * mult[v.index()]).clamp(floor.min(top), top);
             if t < top * REFINED_BELOW {
-                *slot(&mut self.refined, v, false) = true;
+                self.targets.set_refined(v, true);
             }
-            self.set_target(v, t);
+            self.targets.set_target(v, t);
             patch.insert(v);
             for &w in &crate::mesh::ScratchRing::of(self.mesh, v).neighbours {
                 patch.insert(w);
             }
         }
-        self.patch = Some(patch);
+        patch
     }
 }

@@ -4,6 +4,7 @@
 
 use super::Schedule;
 use super::queue::PlanAhead;
+use super::scope::Scope;
 use crate::mesh::{FeatureOn, TriMesh, VertexId};
 use crate::ops::invariants::on_curve;
 use crate::ops::{
@@ -21,15 +22,20 @@ struct SmoothAhead {
     verdict: Option<Result<(), Reject>>,
 }
 
-impl Schedule<'_> {
-    /// Smooth every vertex that may move, in a fixed pseudo-random order.
-    pub(crate) fn smooth_pass(&mut self) -> u64 {
-        self.smooth_pass_with(Objective::Sum)
+impl<D: Sync> Schedule<'_, D> {
+    /// Smooth every vertex of `scope` that may move, in a fixed pseudo-random
+    /// order.
+    pub(super) fn smooth_pass(&mut self, scope: &Scope) -> u64 {
+        self.smooth_pass_with(scope, Objective::Sum)
     }
 
     /// [`Self::smooth_pass`] minimising `objective`.
-    pub(super) fn smooth_pass_with(&mut self, objective: Objective) -> u64 {
-        let mut verts: Vec<VertexId> = self.mesh.vertices().filter(|&v| self.in_patch(v)).collect();
+    pub(super) fn smooth_pass_with(&mut self, scope: &Scope, objective: Objective) -> u64 {
+        let mut verts: Vec<VertexId> = self
+            .mesh
+            .vertices()
+            .filter(|&v| scope.contains(v))
+            .collect();
         self.rng.shuffle(&mut verts);
         self.queued(verts.len());
         let mut applied = 0;
@@ -41,12 +47,7 @@ impl Schedule<'_> {
             if self.out_of_time_at(n) {
                 break;
             }
-            let i = v.index();
-            if i >= self.failed_smooth.len() {
-                self.failed_smooth.resize(i + 1, u64::MAX);
-            }
-            let at = self.failed_smooth[i];
-            if at != u64::MAX && self.stamp_of(v) <= at {
+            if self.memos.smooth_refused(v) {
                 continue;
             }
             let this = &*self;
@@ -61,12 +62,8 @@ impl Schedule<'_> {
                     None => continue,
                 },
             };
-            self.touch(&out, false);
-            self.failed_smooth[i] = if out.is_applied() {
-                u64::MAX
-            } else {
-                self.clock
-            };
+            self.memos.touch(self.mesh, &out, false);
+            self.memos.smoothed(v, out.is_applied());
             match out {
                 // Fixed vertices are the common case: not worth a tally.
                 Outcome::Rejected(Reject::FixedVertex) => {}
@@ -83,10 +80,7 @@ impl Schedule<'_> {
     /// Plan the smoothing of `v` ahead, on the mesh as it is: `None` where the
     /// pass would skip it (its refusal is remembered).
     fn plan_smooth(&self, v: VertexId, objective: Objective) -> Option<SmoothAhead> {
-        if let Some(&at) = self.failed_smooth.get(v.index())
-            && at != u64::MAX
-            && self.stamp_of(v) <= at
-        {
+        if self.memos.smooth_refused(v) {
             return None;
         }
         let plan = SmoothPlan::with_objective(self.mesh, self.ctx, v, objective);
@@ -102,7 +96,7 @@ impl Schedule<'_> {
             _ => (plan, verdict),
         };
         Some(SmoothAhead {
-            at: self.clock,
+            at: self.memos.clock(),
             plan,
             verdict,
         })
@@ -123,7 +117,7 @@ impl Schedule<'_> {
                 return left + count - n;
             }
             let out = try_round(self.mesh, self.ctx, v);
-            self.touch(&out, false);
+            self.memos.touch(self.mesh, &out, false);
             if !self.stats.round.record(&out) {
                 left += 1;
             }
@@ -143,7 +137,7 @@ impl Schedule<'_> {
             }
             ever_off.insert(v);
             let out = try_project(self.mesh, self.ctx, v);
-            self.touch(&out, false);
+            self.memos.touch(self.mesh, &out, false);
             self.stats.project.record(&out);
             if on_curve::off_curve(self.mesh, self.ctx, v).unwrap_or(0.0) > self.ctx.on_curve_abs {
                 left += 1;

@@ -117,6 +117,31 @@ pub struct OptimizeStats {
 }
 
 impl OptimizeStats {
+    /// Nothing done yet, stopped by the pass limit unless something else
+    /// stops the schedule.
+    pub(super) fn start() -> OptimizeStats {
+        OptimizeStats {
+            passes: 0,
+            stop: StopReason::PassLimit,
+            split: OpTally::default(),
+            collapse: OpTally::default(),
+            swap: OpTally::default(),
+            reroute: OpTally::default(),
+            smooth: OpTally::default(),
+            round: OpTally::default(),
+            project: OpTally::default(),
+            projected_vertices: 0,
+            off_curve_left: 0,
+            rational_left: 0,
+            envelope_stages: 0,
+            bad_corners_left: 0,
+            vertex_budget_reached: false,
+            min_angle_deg: 0.0,
+            max_amips: 0.0,
+            phases: Vec::new(),
+        }
+    }
+
     /// These statistics with the phases' seconds at 0: what two runs of one
     /// input have in common.
     #[cfg(test)]
@@ -142,6 +167,19 @@ impl OptimizeStats {
             .iter()
             .fold((0, 0), |(a, r), t| (a + t.applied, r + t.refused()))
     }
+}
+
+/// Tests: what the schedule's machinery did, beside the statistics.
+#[cfg(test)]
+#[derive(Default)]
+pub(super) struct TestTally {
+    /// The plans made ahead that were used, and those found stale.
+    pub(super) ahead: (usize, usize),
+    /// The plans of edges queued again and staged that were popped.
+    pub(super) staged: usize,
+    /// The refusals kept across a phase change that were planned again and
+    /// found refused (`Schedule::keep_standing_refusals`).
+    pub(super) standing_checked: usize,
 }
 
 /// What one phase of the schedule did (`--stats` `optimize.phases[*]`): its

@@ -3,6 +3,7 @@
 //! last scan; and the gain of a swap.
 
 use super::queue::PlanAhead;
+use super::scope::Scope;
 use super::{SWAP_MIN_GAIN, Schedule};
 use crate::mesh::{EdgeKey, EdgeQuad, FeatureOn, TriMesh, VertexId};
 use crate::ops;
@@ -53,18 +54,20 @@ enum SwapWhat {
     Reroute(ReroutePlan, Option<Result<(), Reject>>),
 }
 
-impl Schedule<'_> {
-    /// Swap edges where that lowers the larger energy of their two triangles;
-    /// on secondary feature edges, the same change is a reroute (`ops::swap`).
-    pub(crate) fn swap_pass(&mut self) -> u64 {
-        let scanned_at = self.clock;
-        let last = self.swap_scan.take();
-        let cands = self.swap_candidates(last.as_ref());
+impl<D: Sync> Schedule<'_, D> {
+    /// Swap the edges of `scope` where that lowers the larger energy of their
+    /// two triangles; on secondary feature edges, the same change is a
+    /// reroute (`ops::swap`).
+    pub(super) fn swap_pass(&mut self, scope: &Scope) -> u64 {
+        let scanned_at = self.memos.clock();
+        let last = self.memos.take_swap_scan();
+        let cands = self.swap_candidates(scope, last.as_ref());
         if self.out_of_time_in_loop() {
             // (the scan may have skipped blocks: the run ends here)
             return 0;
         }
-        self.swap_scan = Some((scanned_at, cands.iter().map(|&(_, k)| k).collect()));
+        self.memos
+            .set_swap_scan(scanned_at, cands.iter().map(|&(_, k)| k).collect());
         self.queued(cands.len());
         let mut applied = 0;
         // As in the collapse round: with more than one thread the next
@@ -94,8 +97,8 @@ impl Schedule<'_> {
                     // Earlier swaps may have changed the quad (else it still
                     // has the gain the scan found: a change of either face, or
                     // a move of any of its four vertices, stamps both ends).
-                    let changed =
-                        self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
+                    let changed = self.memos.stamp_of(k.lo) > scanned_at
+                        || self.memos.stamp_of(k.hi) > scanned_at;
                     if changed && swap_gain(self.mesh, self.ctx, k).is_none() {
                         continue;
                     }
@@ -124,7 +127,7 @@ impl Schedule<'_> {
                 }
             };
             let counted = tally.record(&out);
-            self.touch(&out, true);
+            self.memos.touch(self.mesh, &out, true);
             if counted {
                 applied += 1;
             }
@@ -137,8 +140,9 @@ impl Schedule<'_> {
     /// `None` where that is left to the pass (the plan refused it: cheap).
     fn plan_swap(&self, k: EdgeKey, scanned_at: u64) -> Option<SwapAhead> {
         let (mesh, ctx): (&TriMesh, &Context) = (self.mesh, self.ctx);
-        let at = self.clock;
-        let changed = self.stamp_of(k.lo) > scanned_at || self.stamp_of(k.hi) > scanned_at;
+        let at = self.memos.clock();
+        let changed =
+            self.memos.stamp_of(k.lo) > scanned_at || self.memos.stamp_of(k.hi) > scanned_at;
         if changed && swap_gain(mesh, ctx, k).is_none() {
             // The gain depends on the quad alone: both ends are stamped when
             // it changes.
@@ -176,23 +180,28 @@ impl Schedule<'_> {
         }
     }
 
-    /// The swap pass's candidates, longest first: the edges off primary
-    /// features where a swap lowers the larger energy of their two triangles.
+    /// The swap pass's candidates in `scope`, longest first: the edges off
+    /// primary features where a swap lowers the larger energy of their two
+    /// triangles.
     /// With `last` (the clock of the previous scan and the edges it found),
     /// an edge whose ends' faces have not changed since and that was not
     /// found then is not evaluated again: its quad is the same (a change of
     /// either face, or a move of any of its four vertices, stamps both ends),
     /// and so is the answer.
-    fn swap_candidates(&self, last: Option<&(u64, FxHashSet<EdgeKey>)>) -> Vec<(f64, EdgeKey)> {
-        let edges: Vec<EdgeKey> = self.candidate_edges();
-        let deadline = &self.opts.deadline;
+    fn swap_candidates(
+        &self,
+        scope: &Scope,
+        last: Option<&(u64, FxHashSet<EdgeKey>)>,
+    ) -> Vec<(f64, EdgeKey)> {
+        let edges: Vec<EdgeKey> = scope.edges(self.mesh);
+        let deadline = &self.limits.deadline;
         let keep = |&k: &EdgeKey| {
-            if !self.edge_in_patch(k.lo, k.hi) {
+            if !scope.touches(k.lo, k.hi) {
                 return false;
             }
             if let Some((at, found)) = last
-                && self.stamp_of(k.lo) <= *at
-                && self.stamp_of(k.hi) <= *at
+                && self.memos.stamp_of(k.lo) <= *at
+                && self.memos.stamp_of(k.hi) <= *at
                 && !found.contains(&k)
             {
                 return false;
@@ -264,28 +273,31 @@ mod swap_memo_tests {
         let (mut checked, mut skipped) = (0, 0);
         for (i, (mut mesh, mut ctx)) in test_meshes(3, 2).enumerate() {
             let opts = test_options();
-            let field = SizeField::uniform(opts.l, mesh_bounds(&mesh));
+            let field = SizeField::uniform(opts.limits.l, mesh_bounds(&mesh));
             let mut s = Schedule::new(&mut mesh, &mut ctx, &opts, 7, &field);
+            let whole = &mut Scope::Whole;
             for pass in 0..8 {
-                s.split_pass();
-                s.collapse_pass(0.8);
+                s.split_pass(whole);
+                s.collapse_pass(whole, 0.8);
                 // A full scan, then the memo's, against the state the last
                 // swap pass left (none before the first).
-                let full = s.swap_candidates(None);
-                let memo = s.swap_candidates(s.swap_scan.as_ref());
+                let full = s.swap_candidates(whole, None);
+                let memo = s.swap_candidates(whole, s.memos.swap_scan());
                 assert_eq!(full, memo, "mesh {i}, pass {pass}");
                 checked += full.len();
-                if let Some((at, found)) = &s.swap_scan {
+                if let Some((at, found)) = s.memos.swap_scan() {
                     skipped += s
                         .mesh
                         .edges()
                         .filter(|k| {
-                            s.stamp_of(k.lo) <= *at && s.stamp_of(k.hi) <= *at && !found.contains(k)
+                            s.memos.stamp_of(k.lo) <= *at
+                                && s.memos.stamp_of(k.hi) <= *at
+                                && !found.contains(k)
                         })
                         .count();
                 }
-                s.swap_pass();
-                s.smooth_pass();
+                s.swap_pass(whole);
+                s.smooth_pass(whole);
             }
         }
         // The check saw candidates and skipped edges (it would pass vacuously
