@@ -76,7 +76,7 @@ impl CollapsePlan {
         v: VertexId,
         ring_v: Option<&VertexRing>,
     ) -> Result<Self, (Reject, bool)> {
-        Self::new_noting_floor(mesh, ctx, u, v, ring_v, None).0
+        Self::new_noting_floor(mesh, ctx, u, v, ring_v, None, None).0
     }
 
     /// [`Self::new`], and whether the context's energy floor applied to its
@@ -85,7 +85,11 @@ impl CollapsePlan {
     /// (here or in [`Self::verdict`]) depends on positions alone: it stands
     /// under any floor, where one with the floor stands under a lower floor
     /// only. `ring_u`: a slot for `u`'s ring, filled when the plan reads
-    /// it (unless the caller had filled it).
+    /// it (unless the caller had filled it). `lengths`: the caller's length
+    /// rule on v's ring, asked after the role rules and the linear energy
+    /// rule (which refuse most collapses, and cost less than the size
+    /// field's lookups a length rule makes) and before the rest; its
+    /// refusal is [`Reject::EdgeLength`].
     pub(crate) fn new_noting_floor(
         mesh: &TriMesh,
         ctx: &Context,
@@ -93,9 +97,10 @@ impl CollapsePlan {
         v: VertexId,
         ring_v: Option<&VertexRing>,
         ring_u: Option<&mut Option<ScratchRing>>,
+        lengths: Option<&dyn Fn(&VertexRing) -> bool>,
     ) -> (Result<Self, (Reject, bool)>, bool) {
         let mut floored = false;
-        let plan = Self::plan(mesh, ctx, u, v, (ring_v, ring_u), &mut floored);
+        let plan = Self::plan(mesh, ctx, u, v, (ring_v, ring_u), lengths, &mut floored);
         (plan, floored)
     }
 
@@ -106,6 +111,7 @@ impl CollapsePlan {
         u: VertexId,
         v: VertexId,
         (ring_v, ring_u): (Option<&VertexRing>, Option<&mut Option<ScratchRing>>),
+        lengths: Option<&dyn Fn(&VertexRing) -> bool>,
         floored: &mut bool,
     ) -> Result<Self, (Reject, bool)> {
         let eps = ctx.envelope.eps();
@@ -164,6 +170,9 @@ impl CollapsePlan {
         } else {
             None
         };
+        if lengths.is_some_and(|kept| !kept(rv)) {
+            return Err((Reject::EdgeLength, false));
+        }
         let mut own = None;
         let ru: &VertexRing = ring_u
             .unwrap_or(&mut own)

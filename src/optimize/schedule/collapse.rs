@@ -335,11 +335,23 @@ impl<D: Sync> Schedule<'_, D> {
             };
             let ring_v: &crate::mesh::VertexRing =
                 slot_v.get_or_insert_with(|| crate::mesh::ScratchRing::of(mesh, v));
-            if !lengths_kept(mesh, &self.targets, self.stretch, u, ring_v) {
+            // (the length rule is asked inside the plan, after the rules that
+            // refuse most collapses for less)
+            let kept = |ring: &crate::mesh::VertexRing| {
+                lengths_kept(mesh, &self.targets, self.stretch, u, ring)
+            };
+            let (plan, floored) = CollapsePlan::new_noting_floor(
+                mesh,
+                self.ctx,
+                u,
+                v,
+                Some(ring_v),
+                Some(slot_u),
+                Some(&kept),
+            );
+            if let Err((Reject::EdgeLength, _)) = plan {
                 return CollapseDirection::Length;
             }
-            let (plan, floored) =
-                CollapsePlan::new_noting_floor(mesh, self.ctx, u, v, Some(ring_v), Some(slot_u));
             let verdict = plan.as_ref().ok().and_then(|p| p.verdict(mesh, self.ctx));
             // A refused plan is dropped here, in parallel, not on the
             // pipeline's thread (most plans are refused).
