@@ -4,7 +4,7 @@
 //! in `f64` and on its curve, improve the worst triangle, and are
 //! deterministic. Fixed seeds.
 
-use super::schedule::{LinearOptions, OptimizeOptions, PassLimits, StopReason, optimize};
+use super::schedule::{OptimizeOptions, PassLimits, StopReason, optimize, test_options};
 use crate::element::energy::amips;
 use crate::mesh::TriMesh;
 use crate::ops::tests::{assert_invariants, bsp_mesh, delaunay_mesh};
@@ -20,20 +20,12 @@ fn max_energy(mesh: &TriMesh) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The schedule's test options ([`test_options`]) at the edge length `l`.
 fn options(l: f64) -> OptimizeOptions {
+    let opts = test_options();
     OptimizeOptions {
-        limits: PassLimits {
-            l,
-            deadline: crate::budget::Deadline::NONE,
-            params: crate::params::OptimizerParams::DEFAULT,
-        },
-        linear: LinearOptions {
-            l_floor: 0.01,
-            stop_energy: 5.0,
-            alpha_deg: 10.0,
-            max_passes: 40,
-            max_vertices: 20_000,
-        },
+        limits: PassLimits { l, ..opts.limits },
+        ..opts
     }
 }
 

@@ -50,17 +50,7 @@ pub(super) const MAX_CROSSING_DEPTH: f64 = 2.0;
 
 /// The depth of `drawing`'s outlines within `mu` (see the module doc).
 pub(super) fn depth(drawing: &Drawing, mu: f64) -> f64 {
-    let polygon = |ps: &[Point]| -> f64 { ps.windows(2).map(|w| w[0].distance(w[1])).sum() };
-    let length: f64 = drawing
-        .features
-        .iter()
-        .map(|f| match f.geom {
-            FeatureGeom::Point(_) => 0.0,
-            FeatureGeom::Line(l) => l.p0.distance(l.p1),
-            FeatureGeom::Cubic(c) => polygon(&[c.p0, c.p1, c.p2, c.p3]),
-            FeatureGeom::Conic(c) => polygon(&[c.p0, c.p1, c.p2]),
-        })
-        .sum();
+    let length: f64 = chords(drawing).iter().map(|c| c[0].distance(c[1])).sum();
     let b = drawing.bbox;
     let area = (b.width() + 2.0 * mu) * (b.height() + 2.0 * mu);
     if length > 0.0 && area > 0.0 {

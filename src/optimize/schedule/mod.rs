@@ -438,7 +438,7 @@ fn test_meshes(bsp: u64, delaunay: u64) -> impl Iterator<Item = (TriMesh, crate:
 
 /// The options of the schedule's whole-pass tests: `l` 0.1 on the unit box.
 #[cfg(test)]
-fn test_options() -> OptimizeOptions {
+pub(super) fn test_options() -> OptimizeOptions {
     OptimizeOptions {
         limits: PassLimits {
             l: 0.1,
