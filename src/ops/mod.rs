@@ -357,9 +357,16 @@ pub(crate) enum Role {
     },
 }
 
-pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) -> Role {
+/// Whether `v`'s tag alone makes it [`Role::Fixed`] (a box corner, a feature
+/// point, a section's end): [`role`] without the ring.
+pub(crate) fn fixed_by_tag(mesh: &TriMesh, v: VertexId) -> bool {
     let tag = mesh.vertex_tag(v);
-    if tag.box_corner || tag.feature_point || tag.section_endpoint {
+    tag.box_corner || tag.feature_point || tag.section_endpoint
+}
+
+/// What `v` may do, from its tag and the feature edges of its ring `ring`.
+pub(crate) fn role(mesh: &TriMesh, v: VertexId, ring: &crate::mesh::VertexRing) -> Role {
+    if fixed_by_tag(mesh, v) {
         return Role::Fixed;
     }
     if !mesh.may_have_tagged_edges(v) {

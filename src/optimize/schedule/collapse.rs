@@ -327,6 +327,11 @@ impl<D: Sync> Schedule<'_, D> {
             if let Some(reason) = self.memos.role_refusal(u, v) {
                 return CollapseDirection::Remembered(reason);
             }
+            // (what the plan's role rule says of a vertex fixed by its tag,
+            // without reading its ring)
+            if crate::ops::fixed_by_tag(mesh, v) {
+                return CollapseDirection::Refused(Reject::FixedVertex, true, false);
+            }
             let [ring_lo, ring_hi] = &mut rings;
             let (slot_v, slot_u) = if v == k.hi {
                 (ring_hi, ring_lo)
