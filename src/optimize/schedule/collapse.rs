@@ -340,11 +340,18 @@ impl<D: Sync> Schedule<'_, D> {
             };
             let ring_v: &crate::mesh::VertexRing =
                 slot_v.get_or_insert_with(|| crate::mesh::ScratchRing::of(mesh, v));
-            // (the length rule is asked inside the plan, after the rules that
-            // refuse most collapses for less)
+            // The length rule: against a uniform field it reads no field and
+            // is asked first; else inside the plan, after the role and energy
+            // rules, which refuse most collapses for less than its lookups.
+            // (The same collapses are refused either way; only the reason
+            // recorded differs.)
             let kept = |ring: &crate::mesh::VertexRing| {
                 lengths_kept(mesh, &self.targets, self.stretch, u, ring)
             };
+            let lookups = !self.targets.is_uniform();
+            if !lookups && !kept(ring_v) {
+                return CollapseDirection::Length;
+            }
             let (plan, floored) = CollapsePlan::new_noting_floor(
                 mesh,
                 self.ctx,
@@ -352,7 +359,7 @@ impl<D: Sync> Schedule<'_, D> {
                 v,
                 Some(ring_v),
                 Some(slot_u),
-                Some(&kept),
+                lookups.then_some(&kept as &dyn Fn(&crate::mesh::VertexRing) -> bool),
             );
             if let Err((Reject::EdgeLength, _)) = plan {
                 return CollapseDirection::Length;
