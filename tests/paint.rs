@@ -226,6 +226,16 @@ fn a_gradient_is_named_by_its_id_and_a_mostly_transparent_one_is_decoration() {
     assert_close(area(&r, "fill-g"), 20000.0, 1e-12);
 }
 
+/// `d` meshed at the defaults, checked to have no line element inside one
+/// region ([`lines_inside_one_region`]).
+fn mesh_without_lines_inside(d: &Drawing) -> triwild::Meshed {
+    let meshed =
+        mesh_drawing(d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let stray = lines_inside_one_region(&meshed.mesh);
+    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    meshed
+}
+
 /// The mesh's line elements that do not separate two regions: each is named by
 /// its physical curve, with its end nodes' coordinates. A line on the outer
 /// boundary (one triangle) separates its region from the outside.
@@ -268,10 +278,7 @@ fn a_stroke_outline_painted_over_is_trimmed() {
     let body = r##"<line id="a" x1="20" y1="100" x2="180" y2="100" stroke="#f00" stroke-width="20"/>
         <line id="b" x1="100" y1="20" x2="100" y2="180" stroke="#00f" stroke-width="20"/>"##;
     let d = load(body);
-    let meshed =
-        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
-    let stray = lines_inside_one_region(&meshed.mesh);
-    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    mesh_without_lines_inside(&d);
     let r = regions_of(&d, RegionMode::Shape);
     assert_close(area(&r, "a-stroke"), 160.0 * 20.0 - 20.0 * 20.0, 1e-9);
     assert_close(area(&r, "b-stroke"), 160.0 * 20.0, 1e-9);
@@ -286,12 +293,9 @@ fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
     let body = r##"<path id="t" d="M 30 40 L 100 150 L 160 110 z" fill="none" stroke="#080"
                      stroke-width="5"/>"##;
     let d = load(body);
-    let meshed =
-        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
+    let meshed = mesh_without_lines_inside(&d);
     let trimmed = meshed.report.features.map(|f| f.trimmed_pieces);
     assert!(trimmed.unwrap_or(0) >= 6, "trimmed pieces: {trimmed:?}");
-    let stray = lines_inside_one_region(&meshed.mesh);
-    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
     // the ring's area is still exact: the outer miter triangle minus the inner
     // one; nothing was lost with the trimmed pieces
     let r = regions_of(&d, RegionMode::Shape);
@@ -310,10 +314,7 @@ fn stroke_and_clip_outlines_are_trimmed_to_what_they_bound() {
     let body = r##"<defs><clipPath id="c"><rect x="100" y="10" width="90" height="180"/></clipPath></defs>
         <circle id="disk" cx="100" cy="100" r="50" fill="#0c0" clip-path="url(#c)"/>"##;
     let d = load(body);
-    let meshed =
-        mesh_drawing(&d, &Params::DEFAULT, &RegionOptions::DEFAULT).expect("meshing succeeds");
-    let stray = lines_inside_one_region(&meshed.mesh);
-    assert!(stray.is_empty(), "lines inside one region: {stray:?}");
+    mesh_without_lines_inside(&d);
     let r = regions_of(&d, RegionMode::Shape);
     assert_close(area(&r, "disk"), PI * 2500.0 / 2.0, 1e-6);
 }
